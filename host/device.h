@@ -1,0 +1,95 @@
+/* device.h — the OpenCL runtime: discovery, choice, program build, buffers, error strings.
+ *
+ * Devices are numbered across all platforms in platform order (what `idmr devices` lists);
+ * device_open() takes that number, or -1 for the default: $IDMR_DEVICE if set, else the first
+ * GPU, else device 0. Kernels are OpenCL C 1.2 sources under kernels/, built with
+ * "-I kernels -I include" and the options of device_build_options() (the one place options
+ * are made; -v logs them). A failed build reports the build log and the options. */
+#ifndef IDMR_DEVICE_H
+#define IDMR_DEVICE_H
+
+#ifndef CL_TARGET_OPENCL_VERSION
+#define CL_TARGET_OPENCL_VERSION 120
+#endif
+#include <CL/cl.h>
+#ifndef CL_PLATFORM_NOT_FOUND_KHR
+#define CL_PLATFORM_NOT_FOUND_KHR -1001 /* cl_khr_icd: the ICD loader found no platform */
+#endif
+#include <stddef.h>
+#include <stdint.h>
+
+typedef struct device_info {
+    int index; /* across all platforms */
+    cl_platform_id platform;
+    cl_device_id id;
+    char platform_name[128];
+    char name[128];
+    char kind[16]; /* gpu, cpu, accelerator, other */
+    cl_uint compute_units;
+    cl_ulong global_memory;
+    cl_ulong max_allocation;
+    char opencl_c_version[64];
+    int int64_atomics; /* cl_khr_int64_base_atomics */
+} device_info;
+
+typedef struct device {
+    device_info info;
+    cl_context context;
+    cl_command_queue queue;
+} device;
+
+/* Lists every device of every platform. Returns 0, or -1 with the error set: no platform (exit
+ * code IDMR_EXIT_INPUT, the message says how to install PoCL). *devices is malloc'd. */
+int device_list(device_info **devices, size_t *count);
+
+/* Opens device `index` (-1: default, see above) with a context and an in-order queue. */
+int device_open(device *d, int index);
+void device_close(device *d);
+
+/* The directory holding kernels/ and include/: $IDMR_ROOT, else the source tree idmr was
+ * built from. */
+const char *device_source_root(void);
+
+/* Kernel build options for a scene with feature bits `features` plus `extra` defines (may be
+ * NULL), as one malloc'd string. */
+char *device_build_options(const device *d, unsigned int features, const char *extra);
+
+/* Builds kernels/<file> with `options`. On failure the error holds the build log. */
+int device_build_program(device *d, const char *file, const char *options, cl_program *program);
+
+/* Creates kernel `name`, with the error naming it on failure. */
+int device_create_kernel(cl_program program, const char *name, cl_kernel *kernel);
+
+/* A buffer of `bytes` (copied from `host` when not NULL); `what` names it in errors
+ * (e.g. "BVH nodes"), which also say how much memory the device has. */
+int device_buffer(device *d, cl_mem_flags flags, size_t bytes, const void *host, const char *what,
+                  cl_mem *buffer);
+
+/* Blocking read of `bytes` from `buffer` into `host`. */
+int device_read(device *d, cl_mem buffer, size_t bytes, void *host, const char *what);
+
+/* One kernel argument: DEVICE_ARG(x) passes sizeof x and &x. */
+typedef struct device_arg {
+    size_t size;
+    const void *value;
+} device_arg;
+#define DEVICE_ARG(x) ((device_arg){sizeof(x), &(x)})
+
+/* Sets all arguments of `kernel` in order: DEVICE_SET_ARGS(k, "name", DEVICE_ARG(a), ...). */
+int device_set_args(cl_kernel kernel, const char *kernel_name, const device_arg *args,
+                    size_t count);
+#define DEVICE_SET_ARGS(kernel, name, ...)                                                  \
+    device_set_args(kernel, name, (const device_arg[]){__VA_ARGS__},                        \
+                    sizeof((const device_arg[]){__VA_ARGS__}) / sizeof(device_arg))
+
+/* Enqueues a 1-D range of `global` work-items (rounded up to `local`, 0 = let the runtime
+ * choose) and waits for it. */
+int device_run(device *d, cl_kernel kernel, const char *kernel_name, size_t global, size_t local);
+
+/* "CL_OUT_OF_RESOURCES" etc. */
+const char *device_error_string(cl_int code);
+
+/* Records "call: CL_ERROR_NAME" as the error when err != CL_SUCCESS; returns -1 then, else 0. */
+int device_check(cl_int err, const char *call);
+
+#endif

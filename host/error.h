@@ -1,0 +1,45 @@
+/* error.h — the one error path of the host.
+ *
+ * A failing function records what failed (with the file, element, line or call it concerns)
+ * through error_set() and returns its failure value; the caller either adds nothing and
+ * passes the failure up, or prefixes context with error_prefix(). main() prints the message
+ * once and chooses the exit code from error_code(). The message is thread-local, so meshes
+ * decimated on worker threads keep their own. */
+#ifndef IDMR_ERROR_H
+#define IDMR_ERROR_H
+
+/* Exit codes of the CLI. */
+enum {
+    IDMR_EXIT_OK = 0,
+    IDMR_EXIT_FAILURE = 1, /* a runtime failure: OpenCL, Embree, out of memory, writing output */
+    IDMR_EXIT_INPUT = 2,   /* bad input or usage: scene, mesh, option, no OpenCL platform */
+};
+
+/* Records a printf-style message with exit code `code`; always returns -1. */
+int error_set(int code, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+/* Prepends "prefix: " to the recorded message; returns -1. */
+int error_prefix(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+
+/* The recorded message ("" if none) and its exit code (IDMR_EXIT_FAILURE if none). */
+const char *error_message(void);
+int error_code(void);
+void error_clear(void);
+
+/* Prints "idmr: warning: ..." on stderr (unless warnings are silenced). */
+void warn(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+void warn_silence(int silent);
+
+/* Allocation that ends the process with a message when memory runs out. */
+#include <stddef.h>
+void *xmalloc(size_t size);
+void *xcalloc(size_t count, size_t size);
+void *xrealloc(void *ptr, size_t size);
+char *xstrdup(const char *s);
+
+/* Verbose log ("idmr: ..." on stderr), printed only after log_set_verbose(1) (the -v flag). */
+void log_verbose(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+void log_set_verbose(int verbose);
+int log_is_verbose(void);
+
+#endif

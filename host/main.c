@@ -1,0 +1,321 @@
+/* main.c — the idmr command line: global options, subcommands, exit codes.
+ *
+ *   idmr [-v] devices [--json]
+ *   idmr [-v] info SCENE [--json] [--no-bvh]
+ *
+ * Exit codes (error.h): 0 success, 1 runtime failure, 2 bad input or usage. Every failure
+ * prints one "idmr: ..." message naming the file, element or call that failed. */
+#include <getopt.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bvh.h"
+#include "device.h"
+#include "error.h"
+#include "mitsuba.h"
+#include "report.h"
+#include "scene.h"
+
+#define IDMR_VERSION "0.1.0"
+
+static void print_usage(FILE *out)
+{
+    fputs("usage: idmr [-v] COMMAND [options]\n"
+          "\n"
+          "Illumination-driven mesh reduction: learn which triangles carry the light a camera\n"
+          "sees, then decimate a Mitsuba scene to a vertex budget.\n"
+          "\n"
+          "commands:\n"
+          "  devices [--json]          list OpenCL platforms and devices\n"
+          "  info SCENE [--json]       meshes, materials, lights, camera, bounding box, feature\n"
+          "                            bits and device memory of a Mitsuba scene\n"
+          "      --no-bvh              skip the BVH build (memory then excludes the BVH)\n"
+          "\n"
+          "global options:\n"
+          "  -v, --verbose             log progress, kernel build options and timings\n"
+          "  -h, --help                this text\n"
+          "      --version             print the version\n"
+          "\n"
+          "environment:\n"
+          "  IDMR_DEVICE=N             default OpenCL device (see `idmr devices`)\n"
+          "  IDMR_ROOT=DIR             directory holding kernels/ and include/\n",
+          out);
+}
+
+static int fail(void)
+{
+    fprintf(stderr, "idmr: %s\n", error_message());
+    return error_code();
+}
+
+static int usage_error(const char *fmt, const char *arg)
+{
+    fputs("idmr: ", stderr);
+    fprintf(stderr, fmt, arg);
+    fputs("\n(see `idmr --help`)\n", stderr);
+    return IDMR_EXIT_INPUT;
+}
+
+/* ---- devices ---- */
+
+static int command_devices(int argc, char **argv)
+{
+    int json = 0;
+    static const struct option options[] = {{"json", no_argument, NULL, 'j'}, {0, 0, 0, 0}};
+    int c;
+    while ((c = getopt_long(argc, argv, "", options, NULL)) != -1) {
+        if (c == 'j')
+            json = 1;
+        else
+            return usage_error("devices: unknown option %s", argv[optind - 1]);
+    }
+    device_info *list;
+    size_t count;
+    if (device_list(&list, &count))
+        return fail();
+    if (json) {
+        cJSON *root = cJSON_CreateArray();
+        for (size_t i = 0; i < count; i++) {
+            cJSON *d = cJSON_CreateObject();
+            cJSON_AddNumberToObject(d, "index", list[i].index);
+            cJSON_AddStringToObject(d, "platform", list[i].platform_name);
+            cJSON_AddStringToObject(d, "name", list[i].name);
+            cJSON_AddStringToObject(d, "kind", list[i].kind);
+            cJSON_AddNumberToObject(d, "compute_units", list[i].compute_units);
+            cJSON_AddNumberToObject(d, "global_memory", (double)list[i].global_memory);
+            cJSON_AddStringToObject(d, "opencl_c_version", list[i].opencl_c_version);
+            cJSON_AddBoolToObject(d, "int64_atomics", list[i].int64_atomics);
+            cJSON_AddItemToArray(root, d);
+        }
+        report_print_json(root);
+        cJSON_Delete(root);
+    } else {
+        printf("%-3s %-12s %-5s %5s %10s  %-22s %s\n", "#", "platform", "kind", "CUs", "memory",
+               "OpenCL C", "device");
+        for (size_t i = 0; i < count; i++)
+            printf("%-3d %-12.12s %-5s %5u %7.1f GiB  %-22.22s %s%s\n", list[i].index,
+                   list[i].platform_name, list[i].kind, list[i].compute_units,
+                   list[i].global_memory / 1073741824.0, list[i].opencl_c_version, list[i].name,
+                   list[i].int64_atomics ? "" : " (no 64-bit atomics)");
+        const char *env = getenv("IDMR_DEVICE");
+        printf("default: %s\n", env && *env ? "IDMR_DEVICE" : "first GPU, else device 0");
+    }
+    free(list);
+    return 0;
+}
+
+/* ---- info ---- */
+
+static cJSON *features_json(unsigned int features)
+{
+    cJSON *array = cJSON_CreateArray();
+    for (unsigned int bit = 0; bit < IDMR_FEATURE_COUNT; bit++)
+        if (features & (1u << bit))
+            cJSON_AddItemToArray(array, cJSON_CreateString(scene_feature_name(1u << bit)));
+    return array;
+}
+
+static cJSON *info_json(const scene *s, const bvh *b)
+{
+    cJSON *root = cJSON_CreateObject();
+    cJSON_AddStringToObject(root, "scene", s->file);
+    cJSON *meshes = cJSON_AddArrayToObject(root, "meshes");
+    for (size_t i = 0; i < s->mesh_count; i++) {
+        const scene_mesh *m = &s->meshes[i];
+        cJSON *o = cJSON_CreateObject();
+        cJSON_AddStringToObject(o, "name", m->name);
+        cJSON_AddStringToObject(o, "shape", m->shape_type);
+        if (m->file)
+            cJSON_AddStringToObject(o, "file", m->file);
+        cJSON_AddNumberToObject(o, "vertices", m->vertex_count);
+        cJSON_AddNumberToObject(o, "triangles", m->triangle_count);
+        cJSON_AddStringToObject(o, "material", s->material_info[m->material].name);
+        cJSON_AddStringToObject(o, "material_kind",
+                                scene_material_kind_name(s->materials[m->material].kind));
+        cJSON_AddBoolToObject(o, "emitter", m->light >= 0);
+        cJSON_AddItemToArray(meshes, o);
+    }
+    cJSON *materials = cJSON_AddArrayToObject(root, "materials");
+    for (size_t i = 0; i < s->material_count; i++) {
+        cJSON *o = cJSON_CreateObject();
+        cJSON_AddStringToObject(o, "name", s->material_info[i].name);
+        cJSON_AddStringToObject(o, "bsdf", s->material_info[i].bsdf_type);
+        cJSON_AddStringToObject(o, "kind", scene_material_kind_name(s->materials[i].kind));
+        cJSON_AddItemToArray(materials, o);
+    }
+    cJSON *lights = cJSON_AddArrayToObject(root, "lights");
+    for (size_t i = 0; i < s->light_count; i++) {
+        const idmr_light *l = &s->lights[i];
+        cJSON *o = cJSON_CreateObject();
+        cJSON_AddStringToObject(o, "type", scene_light_kind_name(l->kind));
+        report_add_vec3(o, "emission", l->emission);
+        cJSON_AddNumberToObject(o, "power", l->power);
+        if (l->kind == IDMR_LIGHT_AREA)
+            cJSON_AddNumberToObject(o, "area", l->area);
+        cJSON_AddItemToArray(lights, o);
+    }
+    if (s->has_camera) {
+        cJSON *cam = cJSON_AddObjectToObject(root, "camera");
+        report_add_vec3(cam, "origin", s->camera.origin);
+        report_add_vec3(cam, "forward", s->camera.forward);
+        report_add_vec3(cam, "up", s->camera.up);
+        cJSON_AddNumberToObject(cam, "fov", s->camera_info.fov_degrees);
+        cJSON_AddStringToObject(cam, "fov_axis", s->camera_info.fov_axis);
+        cJSON_AddNumberToObject(cam, "width", s->camera.width);
+        cJSON_AddNumberToObject(cam, "height", s->camera.height);
+    }
+    cJSON *bbox = cJSON_AddObjectToObject(root, "bbox");
+    report_add_vec3(bbox, "min", s->bbox_min);
+    report_add_vec3(bbox, "max", s->bbox_max);
+    cJSON_AddItemToObject(root, "features", features_json(s->features));
+    cJSON_AddNumberToObject(root, "vertices", (double)s->vertex_count);
+    cJSON_AddNumberToObject(root, "triangles", (double)s->triangle_count);
+    cJSON *memory = cJSON_AddObjectToObject(root, "device_memory");
+    cJSON_AddNumberToObject(memory, "geometry", (double)scene_geometry_device_bytes(s));
+    if (b) {
+        cJSON_AddNumberToObject(memory, "bvh", (double)bvh_device_bytes(b));
+        cJSON_AddNumberToObject(memory, "total",
+                                (double)(scene_geometry_device_bytes(s) + bvh_device_bytes(b)));
+        cJSON *tree = cJSON_AddObjectToObject(root, "bvh");
+        cJSON_AddNumberToObject(tree, "nodes", (double)b->node_count);
+        cJSON_AddNumberToObject(tree, "triangle_references", (double)b->triangle_count);
+        cJSON_AddNumberToObject(tree, "degenerate_triangles", (double)b->degenerate_count);
+        cJSON_AddNumberToObject(tree, "depth", b->depth);
+        cJSON_AddNumberToObject(tree, "build_seconds", b->build_seconds);
+    }
+    return root;
+}
+
+static void print_bytes(const char *label, double bytes)
+{
+    printf("  %-10s %10.2f MiB\n", label, bytes / 1048576.0);
+}
+
+static void info_print(const scene *s, const bvh *b)
+{
+    printf("scene %s\n\n", s->file);
+    printf("meshes (%zu): %llu vertices, %llu triangles\n", s->mesh_count,
+           (unsigned long long)s->vertex_count, (unsigned long long)s->triangle_count);
+    printf("  %-24s %-10s %10s %10s  %-22s %s\n", "name", "shape", "vertices", "triangles",
+           "material", "kind");
+    for (size_t i = 0; i < s->mesh_count; i++) {
+        const scene_mesh *m = &s->meshes[i];
+        printf("  %-24.24s %-10.10s %10u %10u  %-22.22s %s%s\n", m->name, m->shape_type,
+               m->vertex_count, m->triangle_count, s->material_info[m->material].name,
+               scene_material_kind_name(s->materials[m->material].kind),
+               m->light >= 0 ? ", emitter" : "");
+    }
+    printf("\nmaterials (%zu):", s->material_count);
+    for (unsigned int kind = 0; kind < IDMR_MATERIAL_KIND_COUNT; kind++) {
+        size_t n = 0;
+        for (size_t i = 0; i < s->material_count; i++)
+            n += s->materials[i].kind == kind;
+        if (n)
+            printf(" %zu %s", n, scene_material_kind_name(kind));
+    }
+    printf("\nlights (%zu):", s->light_count);
+    for (unsigned int kind = 0; kind < IDMR_LIGHT_KIND_COUNT; kind++) {
+        size_t n = 0;
+        for (size_t i = 0; i < s->light_count; i++)
+            n += s->lights[i].kind == kind;
+        if (n)
+            printf(" %zu %s", n, scene_light_kind_name(kind));
+    }
+    printf("\n");
+    if (s->has_camera) {
+        const idmr_camera *c = &s->camera;
+        printf("camera: %ux%u, fov %g (%s), at (%g, %g, %g) looking (%g, %g, %g)\n", c->width,
+               c->height, s->camera_info.fov_degrees, s->camera_info.fov_axis, c->origin[0],
+               c->origin[1], c->origin[2], c->forward[0], c->forward[1], c->forward[2]);
+    } else {
+        printf("camera: none\n");
+    }
+    printf("bbox: (%g, %g, %g) .. (%g, %g, %g)\n", s->bbox_min[0], s->bbox_min[1], s->bbox_min[2],
+           s->bbox_max[0], s->bbox_max[1], s->bbox_max[2]);
+    printf("features:");
+    for (unsigned int bit = 0; bit < IDMR_FEATURE_COUNT; bit++)
+        if (s->features & (1u << bit))
+            printf(" %s", scene_feature_name(1u << bit));
+    printf("\ndevice memory:\n");
+    print_bytes("geometry", (double)scene_geometry_device_bytes(s));
+    if (b) {
+        print_bytes("bvh", (double)bvh_device_bytes(b));
+        print_bytes("total", (double)(scene_geometry_device_bytes(s) + bvh_device_bytes(b)));
+        printf("bvh: %zu nodes, %zu triangle references, depth %d, built in %.2f s\n",
+               b->node_count, b->triangle_count, b->depth, b->build_seconds);
+    }
+}
+
+static int command_info(int argc, char **argv)
+{
+    int json = 0, build = 1;
+    static const struct option options[] = {
+        {"json", no_argument, NULL, 'j'}, {"no-bvh", no_argument, NULL, 'n'}, {0, 0, 0, 0}};
+    int c;
+    while ((c = getopt_long(argc, argv, "", options, NULL)) != -1) {
+        if (c == 'j')
+            json = 1;
+        else if (c == 'n')
+            build = 0;
+        else
+            return usage_error("info: unknown option %s", argv[optind - 1]);
+    }
+    if (optind != argc - 1)
+        return usage_error("info: expected one SCENE argument%s", "");
+    scene *s = mitsuba_load(argv[optind]);
+    if (!s)
+        return fail();
+    bvh b;
+    if (build && bvh_build(s, &b)) {
+        scene_free(s);
+        return fail();
+    }
+    if (json) {
+        cJSON *root = info_json(s, build ? &b : NULL);
+        report_print_json(root);
+        cJSON_Delete(root);
+    } else {
+        info_print(s, build ? &b : NULL);
+    }
+    if (build)
+        bvh_free(&b);
+    scene_free(s);
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    int first = 1;
+    for (; first < argc && argv[first][0] == '-'; first++) {
+        const char *arg = argv[first];
+        if (!strcmp(arg, "-v") || !strcmp(arg, "--verbose")) {
+            log_set_verbose(1);
+        } else if (!strcmp(arg, "-h") || !strcmp(arg, "--help")) {
+            print_usage(stdout);
+            return 0;
+        } else if (!strcmp(arg, "--version")) {
+            printf("idmr %s\n", IDMR_VERSION);
+            return 0;
+        } else {
+            return usage_error("unknown option %s", arg);
+        }
+    }
+    if (first >= argc) {
+        print_usage(stderr);
+        return IDMR_EXIT_INPUT;
+    }
+    const char *command = argv[first];
+    int sub_argc = argc - first;
+    char **sub_argv = argv + first;
+    optind = 1;
+    if (!strcmp(command, "devices"))
+        return command_devices(sub_argc, sub_argv);
+    if (!strcmp(command, "info"))
+        return command_info(sub_argc, sub_argv);
+    if (!strcmp(command, "help")) {
+        print_usage(stdout);
+        return 0;
+    }
+    return usage_error("unknown command '%s'", command);
+}

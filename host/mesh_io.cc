@@ -1,0 +1,108 @@
+// mesh_io.cc — the OpenMesh bridge behind mesh_io.h: reads a mesh file into flat C arrays.
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <OpenMesh/Core/System/omstream.hh>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <sys/stat.h>
+
+extern "C" {
+#include "error.h"
+#include "mesh_io.h"
+}
+
+namespace {
+
+typedef OpenMesh::TriMesh_ArrayKernelT<> TriMesh;
+
+// OpenMesh reports every non-manifold face it has to split on its log streams; idmr reports
+// what matters itself, so they stay quiet.
+void silence_openmesh_logs()
+{
+    static bool silenced = false;
+    if (!silenced) {
+        omlog().disable();
+        omout().disable();
+        omerr().disable();
+        silenced = true;
+    }
+}
+
+int check_readable(const char *path)
+{
+    struct stat info;
+    if (stat(path, &info) != 0)
+        return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': %s", path, strerror(errno));
+    if (!S_ISREG(info.st_mode))
+        return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': not a regular file", path);
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': %s", path, strerror(errno));
+    fclose(f);
+    return 0;
+}
+
+} // namespace
+
+extern "C" int mesh_io_read(const char *path, mesh_data *out)
+{
+    std::memset(out, 0, sizeof *out);
+    if (check_readable(path) != 0)
+        return -1;
+    silence_openmesh_logs();
+
+    TriMesh mesh;
+    mesh.request_vertex_texcoords2D();
+    OpenMesh::IO::Options options = OpenMesh::IO::Options::VertexTexCoord;
+    bool ok;
+    try {
+        ok = OpenMesh::IO::read_mesh(mesh, path, options);
+    } catch (const std::exception &e) {
+        return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': %s", path, e.what());
+    }
+    if (!ok)
+        return error_set(IDMR_EXIT_INPUT,
+                         "cannot read mesh '%s': OpenMesh could not parse it (unknown "
+                         "extension or malformed file)",
+                         path);
+    if (mesh.n_faces() == 0)
+        return error_set(IDMR_EXIT_INPUT, "mesh '%s' has no faces", path);
+    if (mesh.n_vertices() > UINT32_MAX || mesh.n_faces() > UINT32_MAX / 3)
+        return error_set(IDMR_EXIT_INPUT, "mesh '%s' is too large for 32-bit indices", path);
+
+    out->vertex_count = (uint32_t)mesh.n_vertices();
+    out->triangle_count = (uint32_t)mesh.n_faces();
+    out->positions = (float *)xmalloc(3 * sizeof(float) * out->vertex_count);
+    out->indices = (uint32_t *)xmalloc(3 * sizeof(uint32_t) * out->triangle_count);
+    for (auto v : mesh.vertices()) {
+        const TriMesh::Point &p = mesh.point(v);
+        for (int k = 0; k < 3; k++)
+            out->positions[3 * (size_t)v.idx() + k] = p[k];
+    }
+    size_t corner = 0;
+    for (auto f : mesh.faces())
+        for (auto v : mesh.fv_range(f))
+            out->indices[corner++] = (uint32_t)v.idx();
+    if (options.check(OpenMesh::IO::Options::VertexTexCoord)) {
+        out->texcoords = (float *)xmalloc(2 * sizeof(float) * out->vertex_count);
+        for (auto v : mesh.vertices()) {
+            const TriMesh::TexCoord2D &uv = mesh.texcoord2D(v);
+            out->texcoords[2 * (size_t)v.idx()] = uv[0];
+            out->texcoords[2 * (size_t)v.idx() + 1] = uv[1];
+        }
+    }
+    return 0;
+}
+
+extern "C" void mesh_data_free(mesh_data *mesh)
+{
+    if (!mesh)
+        return;
+    std::free(mesh->positions);
+    std::free(mesh->indices);
+    std::free(mesh->texcoords);
+    std::memset(mesh, 0, sizeof *mesh);
+}

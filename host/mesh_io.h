@@ -1,0 +1,35 @@
+/* mesh_io.h — the OpenMesh bridge: reading (and later writing) triangle meshes from C.
+ *
+ * Reads every format OpenMesh reads (OBJ, PLY ascii/binary, OFF, STL, OM); polygons are
+ * fan-triangulated. OpenMesh builds a half-edge mesh: a vertex where the surface is not
+ * manifold is split into copies, so vertex_count may exceed the file's. Positions are as
+ * stored in the file (object space). */
+#ifndef IDMR_MESH_IO_H
+#define IDMR_MESH_IO_H
+
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct mesh_data {
+    uint32_t vertex_count;
+    uint32_t triangle_count;
+    float *positions;  /* xyz per vertex, malloc'd */
+    uint32_t *indices; /* three per triangle, malloc'd */
+    float *texcoords;  /* uv per vertex if the file has them, else NULL; malloc'd */
+} mesh_data;
+
+/* Reads `path` into `out`. Returns 0, or -1 with the error set (error.h) naming the file:
+ * missing, unreadable, unknown format, or no triangles. `out` is zeroed on failure. */
+int mesh_io_read(const char *path, mesh_data *out);
+
+/* Frees what mesh_io_read() allocated; `mesh` may be NULL. */
+void mesh_data_free(mesh_data *mesh);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,126 @@
+/* scene.h — the in-memory scene every pass works on.
+ *
+ * A scene is what a Mitsuba file describes, reduced to what idmr simulates: triangle meshes in
+ * world space (every shape is tessellated on load), materials (idmr/material.h), lights
+ * (idmr/light.h), one pinhole camera (idmr/camera.h) and textures. Triangles are numbered
+ * scene-globally: mesh m's triangle t is scene triangle meshes[m].first_triangle + t; the
+ * importance buffers, the BVH and area lights all use that numbering.
+ *
+ * Building: scene_create(), then scene_add_*() from a loader (host/mitsuba.c), then
+ * scene_finalize(), which numbers the triangles, fills the area lights' triangle ranges,
+ * areas and powers, the bounding box and the feature bits. */
+#ifndef IDMR_SCENE_H
+#define IDMR_SCENE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "idmr/camera.h"
+#include "idmr/features.h"
+#include "idmr/light.h"
+#include "idmr/material.h"
+
+typedef struct scene_mesh {
+    char *name;       /* unique in the scene: the shape's id, else the file's stem, else type+n */
+    char *shape_type; /* Mitsuba shape type: obj, ply, rectangle, cube, sphere, disk, ... */
+    char *file;       /* resolved path of the mesh file; NULL for built-in shapes */
+    int xml_line;     /* line of the <shape> element in the scene file */
+    uint32_t vertex_count;
+    uint32_t triangle_count;
+    float *positions;  /* world space, xyz per vertex */
+    uint32_t *indices; /* three vertex indices per triangle */
+    float *texcoords;  /* uv per vertex, or NULL */
+    uint32_t material; /* index into scene.materials */
+    int light;         /* index into scene.lights if the shape is an area emitter, else -1 */
+    uint32_t first_triangle; /* set by scene_finalize() */
+} scene_mesh;
+
+typedef struct scene_material_info {
+    char *name;      /* the bsdf's id, or "<shape name>/bsdf" for an inline one */
+    char *bsdf_type; /* the innermost Mitsuba type, e.g. roughplastic */
+} scene_material_info;
+
+typedef struct scene_texture {
+    char *file; /* resolved path */
+    int width;
+    int height;
+    float *rgb;      /* linear RGB, row-major, top row first */
+    float mean[3];
+} scene_texture;
+
+typedef struct scene_camera_info {
+    float fov_degrees; /* as given */
+    char fov_axis[16]; /* x, y, diagonal, smaller, larger */
+    float to_world[16]; /* row-major 4x4 */
+} scene_camera_info;
+
+typedef struct scene {
+    char *file; /* the scene file as given */
+    char *dir;  /* its directory: relative paths in the file resolve from here */
+
+    scene_mesh *meshes;
+    size_t mesh_count;
+
+    idmr_material *materials;
+    scene_material_info *material_info;
+    size_t material_count;
+
+    idmr_light *lights;
+    size_t light_count;
+
+    scene_texture *textures;
+    size_t texture_count;
+
+    idmr_camera camera;
+    scene_camera_info camera_info;
+    int has_camera;
+
+    /* Set by scene_finalize(). */
+    uint64_t vertex_count;
+    uint64_t triangle_count;
+    float bbox_min[3];
+    float bbox_max[3];
+    unsigned int features; /* IDMR_FEATURE_* bits */
+} scene;
+
+scene *scene_create(const char *file);
+void scene_free(scene *s);
+
+/* Adds a mesh and takes ownership of positions, indices and texcoords (malloc'd, may be NULL
+ * when the counts are 0). name is copied and made unique. Returns the new mesh. */
+scene_mesh *scene_add_mesh(scene *s, const char *name, const char *shape_type, const char *file,
+                           int xml_line, uint32_t vertex_count, float *positions,
+                           uint32_t triangle_count, uint32_t *indices, float *texcoords);
+
+/* Adds a material; returns its index. */
+uint32_t scene_add_material(scene *s, const char *name, const char *bsdf_type,
+                            const idmr_material *material);
+
+/* Adds a light; returns its index. For an area light, set the mesh's `light` to it; the
+ * triangle range, area and power are filled by scene_finalize(). */
+int scene_add_light(scene *s, const idmr_light *light);
+
+/* Reads an image through OpenImageIO (host/image.h) and adds it, or returns the index of the
+ * same file added before. Returns -1 with the error set if the image cannot be read. */
+int scene_add_texture(scene *s, const char *file);
+
+/* Numbers triangles, completes area lights, computes bbox and feature bits. Returns 0, or -1
+ * with the error set (for example a scene with more than 2^32 - 1 triangles). */
+int scene_finalize(scene *s);
+
+/* Area of scene triangle `triangle` (0 for degenerate ones). */
+double scene_triangle_area(const scene *s, uint64_t triangle);
+
+/* Which mesh holds scene triangle `triangle` (binary search over first_triangle). */
+size_t scene_mesh_of_triangle(const scene *s, uint64_t triangle);
+
+/* Names, for reports. */
+const char *scene_feature_name(unsigned int feature_bit);
+const char *scene_material_kind_name(unsigned int kind);
+const char *scene_light_kind_name(unsigned int kind);
+
+/* Bytes the geometry takes on the device (vertices, indices, per-triangle data), without the
+ * BVH (see bvh_device_bytes()). */
+uint64_t scene_geometry_device_bytes(const scene *s);
+
+#endif

@@ -1,0 +1,235 @@
+/* test_cli.c — bin/idmr end to end: exit codes, messages, and the JSON of `devices` and
+ * `info` on the shipped Cornell box and on real scenes from ../shared/data.
+ * Runs from the repository root (as `make test` does). */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cjson/cJSON.h>
+#include <cmocka.h>
+
+typedef struct run_result {
+    int status;
+    char *out;
+    char *err;
+} run_result;
+
+static char *slurp(FILE *f)
+{
+    size_t size = 0, capacity = 4096;
+    char *text = malloc(capacity);
+    size_t got;
+    while ((got = fread(text + size, 1, capacity - size - 1, f)) > 0) {
+        size += got;
+        if (capacity - size < 2) {
+            capacity *= 2;
+            text = realloc(text, capacity);
+        }
+    }
+    text[size] = '\0';
+    return text;
+}
+
+/* Runs a shell command line; captures stdout, stderr and the exit status. */
+static run_result run(const char *command)
+{
+    char err_path[] = "/tmp/idmr-test-cli-XXXXXX";
+    int fd = mkstemp(err_path);
+    close(fd);
+    char line[4096];
+    snprintf(line, sizeof line, "%s 2>%s", command, err_path);
+    FILE *p = popen(line, "r");
+    run_result r;
+    r.out = slurp(p);
+    int status = pclose(p);
+    r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    FILE *e = fopen(err_path, "r");
+    r.err = slurp(e);
+    fclose(e);
+    unlink(err_path);
+    return r;
+}
+
+static void run_free(run_result *r)
+{
+    free(r->out);
+    free(r->err);
+}
+
+static cJSON *parse_or_fail(const char *text)
+{
+    cJSON *json = cJSON_Parse(text);
+    if (!json)
+        fail_msg("not JSON: %.200s", text);
+    return json;
+}
+
+static int array_has_string(const cJSON *array, const char *value)
+{
+    const cJSON *item;
+    cJSON_ArrayForEach(item, array) if (cJSON_IsString(item) && !strcmp(item->valuestring, value))
+        return 1;
+    return 0;
+}
+
+static void test_devices_json(void **state)
+{
+    run_result r = run("bin/idmr devices --json");
+    assert_int_equal(r.status, 0);
+    cJSON *json = parse_or_fail(r.out);
+    assert_true(cJSON_IsArray(json));
+    assert_true(cJSON_GetArraySize(json) >= 1);
+    const cJSON *d = cJSON_GetArrayItem(json, 0);
+    assert_true(cJSON_IsString(cJSON_GetObjectItem(d, "kind")));
+    assert_true(cJSON_GetObjectItem(d, "compute_units")->valuedouble >= 1);
+    assert_true(cJSON_GetObjectItem(d, "global_memory")->valuedouble > 0);
+    assert_non_null(strstr(cJSON_GetObjectItem(d, "opencl_c_version")->valuestring, "OpenCL C"));
+    cJSON_Delete(json);
+    run_free(&r);
+}
+
+/* With no ICD registered the loader finds no platform: exit 2 and advice to install PoCL. */
+static void test_no_platform(void **state)
+{
+    char dir[] = "/tmp/idmr-no-icd-XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    char command[256];
+    snprintf(command, sizeof command, "OCL_ICD_VENDORS=%s bin/idmr devices", dir);
+    run_result r = run(command);
+    rmdir(dir);
+    assert_int_equal(r.status, 2);
+    assert_non_null(strstr(r.err, "no OpenCL platform"));
+    assert_non_null(strstr(r.err, "pocl-opencl-icd"));
+    run_free(&r);
+}
+
+static void test_info_shipped_scene(void **state)
+{
+    run_result r = run("bin/idmr info --json data/cornell/scene.xml");
+    assert_int_equal(r.status, 0);
+    cJSON *json = parse_or_fail(r.out);
+    const cJSON *meshes = cJSON_GetObjectItem(json, "meshes");
+    assert_int_equal(cJSON_GetArraySize(meshes), 8);
+    int found_knot = 0;
+    const cJSON *m;
+    cJSON_ArrayForEach(m, meshes)
+    {
+        assert_true(cJSON_IsString(cJSON_GetObjectItem(m, "name")));
+        assert_true(cJSON_IsString(cJSON_GetObjectItem(m, "material")));
+        assert_true(cJSON_IsNumber(cJSON_GetObjectItem(m, "vertices")));
+        if (!strcmp(cJSON_GetObjectItem(m, "name")->valuestring, "knot")) {
+            found_knot = 1;
+            assert_int_equal(cJSON_GetObjectItem(m, "vertices")->valueint, 48000);
+            assert_int_equal(cJSON_GetObjectItem(m, "triangles")->valueint, 96000);
+        }
+    }
+    assert_true(found_knot);
+    const cJSON *lights = cJSON_GetObjectItem(json, "lights");
+    assert_int_equal(cJSON_GetArraySize(lights), 1);
+    assert_string_equal(cJSON_GetObjectItem(cJSON_GetArrayItem(lights, 0), "type")->valuestring,
+                        "area");
+    const cJSON *features = cJSON_GetObjectItem(json, "features");
+    assert_true(array_has_string(features, "diffuse"));
+    assert_true(array_has_string(features, "area"));
+    assert_false(array_has_string(features, "dielectric"));
+    assert_false(array_has_string(features, "spot"));
+    const cJSON *bbox = cJSON_GetObjectItem(json, "bbox");
+    const cJSON *lo = cJSON_GetObjectItem(bbox, "min"), *hi = cJSON_GetObjectItem(bbox, "max");
+    for (int k = 0; k < 3; k++) {
+        assert_float_equal(cJSON_GetArrayItem(lo, k)->valuedouble, -1.0, 1e-5);
+        assert_float_equal(cJSON_GetArrayItem(hi, k)->valuedouble, 1.0, 1e-5);
+    }
+    const cJSON *memory = cJSON_GetObjectItem(json, "device_memory");
+    assert_true(cJSON_GetObjectItem(memory, "bvh")->valuedouble > 96000 * 48.0);
+    cJSON_Delete(json);
+    run_free(&r);
+}
+
+static void test_info_glass_of_water(void **state)
+{
+    run_result r =
+        run("bin/idmr info --json ../shared/data/scenes/glass-of-water/scene-without-mesh000.xml");
+    assert_int_equal(r.status, 0);
+    cJSON *json = parse_or_fail(r.out);
+    const cJSON *features = cJSON_GetObjectItem(json, "features");
+    assert_true(array_has_string(features, "dielectric"));
+    assert_true(array_has_string(features, "glossy"));
+    assert_true(array_has_string(features, "area"));
+    cJSON_Delete(json);
+    run_free(&r);
+}
+
+static void test_info_living_room_warns_about_envmap(void **state)
+{
+    run_result r = run("bin/idmr info --json ../shared/data/scenes/living-room/scene.xml");
+    assert_int_equal(r.status, 0);
+    assert_non_null(strstr(r.err, "envmap"));
+    cJSON *json = parse_or_fail(r.out);
+    assert_true(cJSON_GetArraySize(cJSON_GetObjectItem(json, "meshes")) >= 60);
+    assert_true(array_has_string(cJSON_GetObjectItem(json, "features"), "textured"));
+    cJSON_Delete(json);
+    run_free(&r);
+}
+
+static void test_missing_mesh_is_named(void **state)
+{
+    run_result r = run("bin/idmr info ../shared/data/scenes/glass-of-water/scene.xml");
+    assert_int_equal(r.status, 2);
+    assert_non_null(strstr(r.err, "models/Mesh000.obj"));
+    assert_string_equal(r.out, "");
+    run_free(&r);
+}
+
+static void test_malformed_xml(void **state)
+{
+    char path[] = "/tmp/idmr-bad-XXXXXX.xml";
+    int fd = mkstemps(path, 4);
+    const char text[] = "<scene version=\"3.0.0\">\n  <shape type=\"obj\">\n</scene>\n";
+    assert_int_equal(write(fd, text, sizeof text - 1), (ssize_t)(sizeof text - 1));
+    close(fd);
+    char command[256];
+    snprintf(command, sizeof command, "bin/idmr info %s", path);
+    run_result r = run(command);
+    unlink(path);
+    assert_int_equal(r.status, 2);
+    assert_non_null(strstr(r.err, path));
+    run_free(&r);
+}
+
+static void test_usage_errors(void **state)
+{
+    run_result r = run("bin/idmr frobnicate");
+    assert_int_equal(r.status, 2);
+    assert_non_null(strstr(r.err, "unknown command"));
+    run_free(&r);
+    r = run("bin/idmr info");
+    assert_int_equal(r.status, 2);
+    run_free(&r);
+    r = run("bin/idmr info --bogus data/cornell/scene.xml");
+    assert_int_equal(r.status, 2);
+    run_free(&r);
+    r = run("bin/idmr info /nonexistent/scene.xml");
+    assert_int_equal(r.status, 2);
+    assert_non_null(strstr(r.err, "/nonexistent/scene.xml"));
+    run_free(&r);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_devices_json),
+        cmocka_unit_test(test_no_platform),
+        cmocka_unit_test(test_info_shipped_scene),
+        cmocka_unit_test(test_info_glass_of_water),
+        cmocka_unit_test(test_info_living_room_warns_about_envmap),
+        cmocka_unit_test(test_missing_mesh_is_named),
+        cmocka_unit_test(test_malformed_xml),
+        cmocka_unit_test(test_usage_errors),
+    };
+    return cmocka_run_group_tests_name("cli", tests, NULL, NULL);
+}
