@@ -2,7 +2,7 @@
  * spatial splits, the SBVH of the paper) and flattened into the node and triangle arrays of
  * include/idmr/bvh.h that the kernels traverse.
  *
- * Triangle records carry their scene-global triangle index; scene_mesh_of_triangle() maps
+ * Leaf packets carry the scene-global index of each triangle; scene_mesh_of_triangle() maps
  * that to (mesh, triangle in mesh). Degenerate (zero-area) triangles are left out: no ray can
  * hit them. */
 #ifndef IDMR_BVH_HOST_H
@@ -17,8 +17,9 @@
 typedef struct bvh {
     idmr_bvh_node *nodes;
     size_t node_count;
-    idmr_triangle *triangles; /* leaf order; may repeat a scene triangle (spatial splits) */
-    size_t triangle_count;
+    idmr_triangle4 *leaves; /* one packet per leaf */
+    size_t leaf_count;
+    size_t reference_count;  /* triangles in all leaves: may repeat one (spatial splits) */
     size_t degenerate_count; /* scene triangles left out */
     int depth;               /* levels of nodes, root = 1 */
     double build_seconds;
@@ -29,7 +30,7 @@ typedef struct bvh {
 int bvh_build(const scene *s, bvh *out);
 void bvh_free(bvh *b);
 
-/* Bytes the node and triangle arrays take on the device. */
+/* Bytes the node and leaf arrays take on the device. */
 uint64_t bvh_device_bytes(const bvh *b);
 
 /* The process-wide Embree device (created on first use, with the error callback that feeds

@@ -179,7 +179,8 @@ static cJSON *info_json(const scene *s, const bvh *b)
                                 (double)(scene_geometry_device_bytes(s) + bvh_device_bytes(b)));
         cJSON *tree = cJSON_AddObjectToObject(root, "bvh");
         cJSON_AddNumberToObject(tree, "nodes", (double)b->node_count);
-        cJSON_AddNumberToObject(tree, "triangle_references", (double)b->triangle_count);
+        cJSON_AddNumberToObject(tree, "leaves", (double)b->leaf_count);
+        cJSON_AddNumberToObject(tree, "triangle_references", (double)b->reference_count);
         cJSON_AddNumberToObject(tree, "degenerate_triangles", (double)b->degenerate_count);
         cJSON_AddNumberToObject(tree, "depth", b->depth);
         cJSON_AddNumberToObject(tree, "build_seconds", b->build_seconds);
@@ -242,8 +243,8 @@ static void info_print(const scene *s, const bvh *b)
     if (b) {
         print_bytes("bvh", (double)bvh_device_bytes(b));
         print_bytes("total", (double)(scene_geometry_device_bytes(s) + bvh_device_bytes(b)));
-        printf("bvh: %zu nodes, %zu triangle references, depth %d, built in %.2f s\n",
-               b->node_count, b->triangle_count, b->depth, b->build_seconds);
+        printf("bvh: %zu nodes, %zu leaves, %zu triangle references, depth %d, built in %.2f s\n",
+               b->node_count, b->leaf_count, b->reference_count, b->depth, b->build_seconds);
     }
 }
 

@@ -4,7 +4,7 @@
 #include "traverse.h"
 
 kernel void trace_closest(global const idmr_ray *rays, global idmr_hit *hits, uint ray_count,
-                          global const idmr_bvh_node *nodes, global const idmr_triangle *triangles)
+                          global const idmr_bvh_node *nodes, global const idmr_triangle4 *leaves)
 {
     uint i = get_global_id(0);
     if (i >= ray_count)
@@ -12,11 +12,11 @@ kernel void trace_closest(global const idmr_ray *rays, global idmr_hit *hits, ui
     global const idmr_ray *ray = rays + i;
     float4 o = vload4(0, ray->origin);
     float4 d = vload4(0, ray->direction);
-    hits[i] = traverse_closest(nodes, triangles, o.xyz, d.xyz, o.w, d.w);
+    hits[i] = traverse_closest(nodes, leaves, o.xyz, d.xyz, o.w, d.w);
 }
 
 kernel void trace_any(global const idmr_ray *rays, global idmr_hit *hits, uint ray_count,
-                      global const idmr_bvh_node *nodes, global const idmr_triangle *triangles)
+                      global const idmr_bvh_node *nodes, global const idmr_triangle4 *leaves)
 {
     uint i = get_global_id(0);
     if (i >= ray_count)
@@ -28,6 +28,6 @@ kernel void trace_any(global const idmr_ray *rays, global idmr_hit *hits, uint r
     hit.t = d.w;
     hit.u = 0.0f;
     hit.v = 0.0f;
-    hit.triangle = traverse_any(nodes, triangles, o.xyz, d.xyz, o.w, d.w) ? 1u : IDMR_NO_HIT;
+    hit.triangle = traverse_any(nodes, leaves, o.xyz, d.xyz, o.w, d.w) ? 1u : IDMR_NO_HIT;
     hits[i] = hit;
 }

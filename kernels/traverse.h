@@ -9,9 +9,12 @@
  * a box face are not culled by rounding. Self-intersection of secondary rays is the caller's
  * business: start them with tmin > 0 or an offset origin.
  *
- * Closest hit visits hit children nearest first: leaves are intersected at once (shrinking
- * tmax), inner nodes are pushed far-to-near with their entry distance, and a popped node
- * that starts beyond the current tmax is skipped. Any hit stops at the first intersection. */
+ * Traversal works on references (idmr/bvh.h: >= 0 a node, < 0 a leaf). At a node the hit
+ * children are taken in slot order with a bit scan; one hit is followed at once, two are
+ * ordered by entry distance (the far one pushed), three or four go through a sorting network
+ * and all but the nearest are pushed. A popped reference that starts beyond the current hit
+ * is skipped. Any hit stops at the first intersection. The stack holds at most
+ * 3 * IDMR_BVH_MAX_DEPTH + 1 entries (the builder enforces the depth). */
 #ifndef IDMR_TRAVERSE_H
 #define IDMR_TRAVERSE_H
 
@@ -29,7 +32,7 @@ typedef struct traverse_ray {
     int near_x, near_y, near_z; /* 1 when the direction component is negative */
     /* watertight test: permutation and shear */
     int kx, ky, kz;
-    uint4 permutation; /* (kx, ky, kz, 3) */
+    float ox, oy, oz; /* origin in the permuted frame */
     float sx, sy;
 } traverse_ray;
 
@@ -62,49 +65,68 @@ inline traverse_ray traverse_setup(float3 origin, float3 direction)
         r.kx = r.ky;
         r.ky = swap;
     }
-    r.permutation = (uint4)(r.kx, r.ky, r.kz, 3);
+    r.ox = component(origin, r.kx);
+    r.oy = component(origin, r.ky);
+    r.oz = component(origin, r.kz);
     float dz = component(direction, r.kz);
     r.sx = component(direction, r.kx) / dz;
     r.sy = component(direction, r.ky) / dz;
     return r;
 }
 
-/* On a hit inside (tmin, *tmax) updates *tmax, *u, *v (barycentrics of v1 and v2).
- * Inside/outside is decided by the watertight test; the distance is then computed in the
- * triangle's own frame, t = e2·((o - v0) × e1) / e1·(d × e2), which stays accurate for long
- * thin triangles, where the sheared-frame distance of the watertight paper loses digits. */
-inline bool traverse_triangle(const traverse_ray *r, global const idmr_triangle *tri, float tmin,
-                              float *tmax, float *u, float *v)
+/* Index of the lowest set bit (OpenCL C 1.2 has clz but no ctz). */
+inline int traverse_lowest_bit(int mask)
 {
-    float4 o4 = (float4)(r->origin, 0.0f);
-    float4 v0 = vload4(0, tri->v0), v1 = vload4(0, tri->v1), v2 = vload4(0, tri->v2);
-    float4 a = shuffle(v0 - o4, r->permutation);
-    float4 b = shuffle(v1 - o4, r->permutation);
-    float4 c = shuffle(v2 - o4, r->permutation);
-    float ax = a.x - r->sx * a.z, ay = a.y - r->sy * a.z;
-    float bx = b.x - r->sx * b.z, by = b.y - r->sy * b.z;
-    float cx = c.x - r->sx * c.z, cy = c.y - r->sy * c.z;
-    float e0 = cx * by - cy * bx;
-    float e1 = ax * cy - ay * cx;
-    float e2 = bx * ay - by * ax;
-    if ((e0 < 0.0f || e1 < 0.0f || e2 < 0.0f) && (e0 > 0.0f || e1 > 0.0f || e2 > 0.0f))
-        return false;
-    float det = e0 + e1 + e2;
-    if (det == 0.0f)
-        return false;
-    float3 edge1 = v1.xyz - v0.xyz, edge2 = v2.xyz - v0.xyz;
-    float3 to_origin = r->origin - v0.xyz;
-    float plane_det = dot(edge1, cross(r->direction, edge2));
-    if (plane_det == 0.0f)
-        return false;
-    float t = dot(edge2, cross(to_origin, edge1)) / plane_det;
-    if (!(t > tmin && t < *tmax))
-        return false;
-    float inv_det = 1.0f / det;
-    *tmax = t;
-    *u = e1 * inv_det;
-    *v = e2 * inv_det;
-    return true;
+    return 31 - clz(mask & -mask);
+}
+
+/* Tests the four triangles of a leaf packet at once. Inside/outside is decided by the
+ * watertight test, in the ray's sheared frame; the distance of a triangle found inside is
+ * then computed in its own frame, t = e2·((o - v0) × e1) / e1·(d × e2), which stays accurate
+ * for long thin triangles, where the sheared-frame distance of the watertight paper loses
+ * digits. Returns the lanes hit within (tmin, tmax) as a mask and their distances. */
+inline int traverse_packet(const traverse_ray *r, global const idmr_triangle4 *p, float tmin,
+                           float tmax, float4 *t_out, float4 *det_out, float4 *e1_out,
+                           float4 *e2_out)
+{
+    /* vload4(axis, v) is coordinate `axis` of the four triangles: the permutation is a choice
+     * of rows, no shuffles. */
+    float4 az = vload4(r->kz, p->v0) - r->oz;
+    float4 bz = vload4(r->kz, p->v1) - r->oz;
+    float4 cz = vload4(r->kz, p->v2) - r->oz;
+    float4 ax = (vload4(r->kx, p->v0) - r->ox) - r->sx * az;
+    float4 ay = (vload4(r->ky, p->v0) - r->oy) - r->sy * az;
+    float4 bx = (vload4(r->kx, p->v1) - r->ox) - r->sx * bz;
+    float4 by = (vload4(r->ky, p->v1) - r->oy) - r->sy * bz;
+    float4 cx = (vload4(r->kx, p->v2) - r->ox) - r->sx * cz;
+    float4 cy = (vload4(r->ky, p->v2) - r->oy) - r->sy * cz;
+    float4 e0 = cx * by - cy * bx;
+    float4 e1 = ax * cy - ay * cx;
+    float4 e2 = bx * ay - by * ax;
+    float4 zero = (float4)(0.0f);
+    int4 negative = e0 < zero || e1 < zero || e2 < zero;
+    int4 positive = e0 > zero || e1 > zero || e2 > zero;
+    float4 det = e0 + e1 + e2;
+    int4 inside = !(negative && positive) && det != zero;
+    if (!any(inside))
+        return 0;
+
+    float4 v0x = vload4(0, p->v0), v0y = vload4(1, p->v0), v0z = vload4(2, p->v0);
+    float4 f1x = vload4(0, p->v1) - v0x, f1y = vload4(1, p->v1) - v0y, f1z = vload4(2, p->v1) - v0z;
+    float4 f2x = vload4(0, p->v2) - v0x, f2y = vload4(1, p->v2) - v0y, f2z = vload4(2, p->v2) - v0z;
+    float4 dx = (float4)(r->direction.x), dy = (float4)(r->direction.y), dz = (float4)(r->direction.z);
+    /* pvec = d x f2, qvec = (o - v0) x f1 */
+    float4 px = dy * f2z - dz * f2y, py = dz * f2x - dx * f2z, pz = dx * f2y - dy * f2x;
+    float4 plane_det = f1x * px + f1y * py + f1z * pz;
+    float4 tx = r->origin.x - v0x, ty = r->origin.y - v0y, tz = r->origin.z - v0z;
+    float4 qx = ty * f1z - tz * f1y, qy = tz * f1x - tx * f1z, qz = tx * f1y - ty * f1x;
+    float4 t = (f2x * qx + f2y * qy + f2z * qz) / plane_det;
+    int4 hit = inside && plane_det != zero && t > (float4)(tmin) && t < (float4)(tmax);
+    *t_out = t;
+    *det_out = det;
+    *e1_out = e1;
+    *e2_out = e2;
+    return (hit.x & 1) | (hit.y & 2) | (hit.z & 4) | (hit.w & 8);
 }
 
 /* Slab test of a node's four child boxes; returns the entry distances, and in *hit_mask
@@ -124,17 +146,66 @@ inline float4 traverse_node_boxes(const traverse_ray *r, global const idmr_bvh_n
     float4 t0x = (near_x - o.x) * inv.x, t1x = (far_x - o.x) * inv.x;
     float4 t0y = (near_y - o.y) * inv.y, t1y = (far_y - o.y) * inv.y;
     float4 t0z = (near_z - o.z) * inv.z, t1z = (far_z - o.z) * inv.z;
-    float4 t_enter = fmax(fmax(t0x, t0y), fmax(t0z, (float4)(tmin)));
-    float4 t_exit = fmin(fmin(t1x, t1y), fmin(t1z, (float4)(tmax)));
+    /* min/max, not fmin/fmax: no operand is NaN (no zero direction, no 0 * inf), and the
+     * IEEE NaN rules of fmin/fmax cost two extra instructions each on a CPU. */
+    float4 t_enter = max(max(t0x, t0y), max(t0z, (float4)(tmin)));
+    float4 t_exit = min(min(t1x, t1y), min(t1z, (float4)(tmax)));
     t_exit *= 1.0f + 4.0f * FLT_EPSILON;
     int4 hit = t_enter <= t_exit;
     *hit_mask = (hit.x & 1) | (hit.y & 2) | (hit.z & 4) | (hit.w & 8);
     return t_enter;
 }
 
+/* Intersects the leaf packet of reference `ref`, keeping the nearest hit; true if any. */
+inline bool traverse_leaf(const traverse_ray *r, global const idmr_triangle4 *leaves, int ref,
+                          float tmin, idmr_hit *hit)
+{
+    global const idmr_triangle4 *p = leaves + ~ref;
+    float4 t, det, e1, e2;
+    int mask = traverse_packet(r, p, tmin, hit->t, &t, &det, &e1, &e2);
+    if (mask == 0)
+        return false;
+    float lane_t[4] = {t.x, t.y, t.z, t.w};
+    int best = traverse_lowest_bit(mask);
+    for (mask &= mask - 1; mask != 0; mask &= mask - 1) {
+        int lane = traverse_lowest_bit(mask);
+        if (lane_t[lane] < lane_t[best])
+            best = lane;
+    }
+    float lane_det[4] = {det.x, det.y, det.z, det.w};
+    float lane_e1[4] = {e1.x, e1.y, e1.z, e1.w};
+    float lane_e2[4] = {e2.x, e2.y, e2.z, e2.w};
+    float inv_det = 1.0f / lane_det[best];
+    hit->t = lane_t[best];
+    hit->u = lane_e1[best] * inv_det;
+    hit->v = lane_e2[best] * inv_det;
+    hit->triangle = p->triangle[best];
+    return true;
+}
+
+/* True if any triangle of the leaf packet lies within (tmin, tmax). */
+inline bool traverse_leaf_any(const traverse_ray *r, global const idmr_triangle4 *leaves, int ref,
+                              float tmin, float tmax)
+{
+    float4 t, det, e1, e2;
+    return traverse_packet(r, leaves + ~ref, tmin, tmax, &t, &det, &e1, &e2) != 0;
+}
+
+/* Orders two (distance, reference) pairs so that the nearer comes first; no branches. */
+#define TRAVERSE_ORDER(ta, ra, tb, rb)                                                      \
+    do {                                                                                     \
+        bool swap_ = (tb) < (ta);                                                            \
+        float t_ = swap_ ? (tb) : (ta);                                                      \
+        int r_ = swap_ ? (rb) : (ra);                                                        \
+        (tb) = swap_ ? (ta) : (tb);                                                          \
+        (rb) = swap_ ? (ra) : (rb);                                                          \
+        (ta) = t_;                                                                           \
+        (ra) = r_;                                                                           \
+    } while (0)
+
 /* Closest hit along origin + t*direction, t in (tmin, tmax). */
 inline idmr_hit traverse_closest(global const idmr_bvh_node *nodes,
-                                 global const idmr_triangle *triangles, float3 origin,
+                                 global const idmr_triangle4 *leaves, float3 origin,
                                  float3 direction, float tmin, float tmax)
 {
     traverse_ray r = traverse_setup(origin, direction);
@@ -144,101 +215,108 @@ inline idmr_hit traverse_closest(global const idmr_bvh_node *nodes,
     hit.v = 0.0f;
     hit.triangle = IDMR_NO_HIT;
 
-    int stack_node[IDMR_BVH_STACK_SIZE];
+    int stack_ref[IDMR_BVH_STACK_SIZE];
     float stack_t[IDMR_BVH_STACK_SIZE];
     int top = 0;
-    int node_index = 0;
+    int ref = 0;
     for (;;) {
-        global const idmr_bvh_node *node = nodes + node_index;
-        int mask;
-        float4 t_enter = traverse_node_boxes(&r, node, tmin, hit.t, &mask);
-        float entry[4] = {t_enter.x, t_enter.y, t_enter.z, t_enter.w};
-        /* Order the hit children by entry distance (insertion sort of at most four). */
-        int order[4];
-        int n = 0;
-        for (int k = 0; k < 4; k++) {
-            if (!(mask & (1 << k)))
+        if (ref >= 0) {
+            global const idmr_bvh_node *node = nodes + ref;
+            int mask;
+            float4 t4 = traverse_node_boxes(&r, node, tmin, hit.t, &mask);
+            if (mask != 0) {
+                float entry[4] = {t4.x, t4.y, t4.z, t4.w};
+                int k0 = traverse_lowest_bit(mask);
+                mask &= mask - 1;
+                int r0 = node->child[k0];
+                if (mask == 0) {
+                    ref = r0;
+                    continue;
+                }
+                float t0 = entry[k0];
+                int k1 = traverse_lowest_bit(mask);
+                mask &= mask - 1;
+                int r1 = node->child[k1];
+                float t1 = entry[k1];
+                if (mask == 0) {
+                    TRAVERSE_ORDER(t0, r0, t1, r1);
+                    stack_ref[top] = r1;
+                    stack_t[top++] = t1;
+                    ref = r0;
+                    continue;
+                }
+                int k2 = traverse_lowest_bit(mask);
+                mask &= mask - 1;
+                int r2 = node->child[k2];
+                float t2 = entry[k2];
+                int r3 = 0;
+                float t3 = INFINITY;
+                if (mask != 0) {
+                    int k3 = traverse_lowest_bit(mask);
+                    r3 = node->child[k3];
+                    t3 = entry[k3];
+                }
+                TRAVERSE_ORDER(t0, r0, t1, r1);
+                TRAVERSE_ORDER(t2, r2, t3, r3);
+                TRAVERSE_ORDER(t0, r0, t2, r2);
+                TRAVERSE_ORDER(t1, r1, t3, r3);
+                TRAVERSE_ORDER(t1, r1, t2, r2);
+                if (t3 != INFINITY) {
+                    stack_ref[top] = r3;
+                    stack_t[top++] = t3;
+                }
+                stack_ref[top] = r2;
+                stack_t[top++] = t2;
+                stack_ref[top] = r1;
+                stack_t[top++] = t1;
+                ref = r0;
                 continue;
-            int j = n++;
-            while (j > 0 && entry[order[j - 1]] > entry[k]) {
-                order[j] = order[j - 1];
-                j--;
             }
-            order[j] = k;
+        } else {
+            traverse_leaf(&r, leaves, ref, tmin, &hit);
         }
-        /* Leaves now, nearest first; inner nodes collected for the stack. */
-        int inner[4];
-        int inner_count = 0;
-        for (int i = 0; i < n; i++) {
-            int k = order[i];
-            if (entry[k] > hit.t)
-                break;
-            unsigned int count = node->count[k];
-            int child = node->child[k];
-            if (count == 0) {
-                inner[inner_count++] = k;
-                continue;
-            }
-            for (unsigned int j = 0; j < count; j++) {
-                global const idmr_triangle *tri = triangles + child + j;
-                if (traverse_triangle(&r, tri, tmin, &hit.t, &hit.u, &hit.v))
-                    hit.triangle = tri->triangle;
-            }
-        }
-        for (int i = inner_count - 1; i >= 1; i--) {
-            stack_node[top] = node->child[inner[i]];
-            stack_t[top] = entry[inner[i]];
-            top++;
-        }
-        if (inner_count > 0 && entry[inner[0]] <= hit.t) {
-            node_index = node->child[inner[0]];
-            continue;
-        }
-        /* Pop the next node that can still hold a closer hit. */
-        node_index = -1;
-        while (top > 0) {
+        /* Pop the next reference that can still hold a closer hit. */
+        for (;;) {
+            if (top == 0)
+                return hit;
             top--;
             if (stack_t[top] <= hit.t) {
-                node_index = stack_node[top];
+                ref = stack_ref[top];
                 break;
             }
         }
-        if (node_index < 0)
-            break;
     }
-    return hit;
 }
 
 /* True when anything lies along the ray within (tmin, tmax). */
-inline bool traverse_any(global const idmr_bvh_node *nodes, global const idmr_triangle *triangles,
+inline bool traverse_any(global const idmr_bvh_node *nodes, global const idmr_triangle4 *leaves,
                          float3 origin, float3 direction, float tmin, float tmax)
 {
     traverse_ray r = traverse_setup(origin, direction);
-    int stack_node[IDMR_BVH_STACK_SIZE];
+    int stack_ref[IDMR_BVH_STACK_SIZE];
     int top = 0;
-    int node_index = 0;
+    int ref = 0;
     for (;;) {
-        global const idmr_bvh_node *node = nodes + node_index;
-        int mask;
-        traverse_node_boxes(&r, node, tmin, tmax, &mask);
-        for (int k = 0; k < 4; k++) {
-            if (!(mask & (1 << k)))
-                continue;
-            unsigned int count = node->count[k];
-            int child = node->child[k];
-            if (count == 0) {
-                stack_node[top++] = child;
+        if (ref >= 0) {
+            global const idmr_bvh_node *node = nodes + ref;
+            int mask;
+            traverse_node_boxes(&r, node, tmin, tmax, &mask);
+            if (mask != 0) {
+                ref = node->child[traverse_lowest_bit(mask)];
+                mask &= mask - 1;
+                while (mask != 0) {
+                    stack_ref[top++] = node->child[traverse_lowest_bit(mask)];
+                    mask &= mask - 1;
+                }
                 continue;
             }
-            for (unsigned int j = 0; j < count; j++) {
-                float t = tmax, u, v;
-                if (traverse_triangle(&r, triangles + child + j, tmin, &t, &u, &v))
-                    return true;
-            }
+        } else {
+            if (traverse_leaf_any(&r, leaves, ref, tmin, tmax))
+                return true;
         }
         if (top == 0)
             return false;
-        node_index = stack_node[--top];
+        ref = stack_ref[--top];
     }
 }
 

@@ -11,7 +11,7 @@
 
 #include "trace_common.h"
 
-#define REPEATS 3
+#define REPEATS 5
 
 static double best_opencl(trace_device *t, const trace_geometry *g, const idmr_ray *rays,
                           idmr_hit *hits, size_t count)
@@ -79,9 +79,10 @@ int main(void)
     int threads = (int)sysconf(_SC_NPROCESSORS_ONLN);
     if (threads < 1)
         threads = 1;
-    printf("traversal: scene=%s triangles=%llu bvh_nodes=%zu bvh_refs=%zu device=\"%s\"\n", path,
-           (unsigned long long)s->triangle_count, g.tree.node_count, g.tree.triangle_count,
-           t.dev.info.name);
+    printf("traversal: scene=%s triangles=%llu bvh_nodes=%zu bvh_leaves=%zu bvh_refs=%zu "
+           "device=\"%s\"\n",
+           path, (unsigned long long)s->triangle_count, g.tree.node_count, g.tree.leaf_count,
+           g.tree.reference_count, t.dev.info.name);
 
     size_t count = 1u << 20;
     idmr_ray *rays = malloc(count * sizeof *rays);

@@ -296,7 +296,7 @@ static void test_degenerate_triangle(void **state)
     bvh b;
     assert_int_equal(bvh_build(s, &b), 0);
     assert_int_equal(b.degenerate_count, 1);
-    assert_int_equal(b.triangle_count, 2);
+    assert_int_equal(b.reference_count, 2);
     bvh_free(&b);
     idmr_ray ray = {{0.0f, 0.0f, 1.0f + 0.5f}, 0.0f, {0.0f, 0.0f, -1.0f}, INFINITY};
     idmr_hit hit;
@@ -313,7 +313,7 @@ static void test_empty_scene(void **state)
     bvh b;
     assert_int_equal(bvh_build(s, &b), 0);
     assert_int_equal(b.node_count, 1);
-    assert_int_equal(b.triangle_count, 0);
+    assert_int_equal(b.leaf_count, 0);
     bvh_free(&b);
     idmr_ray ray = {{0, 0, 0}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY};
     idmr_hit hit;
@@ -331,32 +331,45 @@ static void test_bvh_covers_every_triangle(void **state)
     bvh b;
     assert_int_equal(bvh_build(s, &b), 0);
     unsigned char *seen = calloc(s->triangle_count, 1);
+    size_t references = 0;
     for (size_t n = 0; n < b.node_count; n++)
         for (int k = 0; k < 4; k++) {
             const idmr_bvh_node *node = &b.nodes[n];
-            if (node->count[k] == 0) {
-                if (node->child[k] >= 0)
-                    assert_true((size_t)node->child[k] > n && (size_t)node->child[k] < b.node_count);
+            int ref = node->child[k];
+            if (node->min_x[k] > node->max_x[k]) { /* empty slot */
+                assert_int_equal(ref, IDMR_BVH_EMPTY);
                 continue;
             }
-            assert_true(node->child[k] >= 0);
-            assert_true((size_t)node->child[k] + node->count[k] <= b.triangle_count);
-            for (unsigned j = 0; j < node->count[k]; j++) {
-                const idmr_triangle *t = &b.triangles[node->child[k] + j];
-                assert_true(t->triangle < s->triangle_count);
-                seen[t->triangle] = 1;
+            if (ref >= 0) { /* inner: stored after its parent (depth-first order) */
+                assert_true((size_t)ref > n && (size_t)ref < b.node_count);
+                continue;
+            }
+            assert_true((size_t)~ref < b.leaf_count);
+            const idmr_triangle4 *packet = &b.leaves[~ref];
+            unsigned lanes = 0;
+            for (unsigned lane = 0; lane < 4; lane++) {
+                unsigned t = packet->triangle[lane];
+                if (t == IDMR_BVH_NO_TRIANGLE)
+                    continue;
+                lanes++;
+                assert_true(t < s->triangle_count);
+                seen[t] = 1;
                 /* the leaf's box holds the triangle's part in it: at least overlaps its box */
-                float lo = fminf(fminf(t->v0[0], t->v1[0]), t->v2[0]);
-                float hi = fmaxf(fmaxf(t->v0[0], t->v1[0]), t->v2[0]);
+                const float *x0 = packet->v0, *x1 = packet->v1, *x2 = packet->v2;
+                float lo = fminf(fminf(x0[lane], x1[lane]), x2[lane]);
+                float hi = fmaxf(fmaxf(x0[lane], x1[lane]), x2[lane]);
                 assert_true(node->min_x[k] <= hi && node->max_x[k] >= lo);
             }
+            assert_true(lanes >= 1);
+            references += lanes;
         }
+    assert_int_equal(references, b.reference_count);
     size_t missing = 0;
     for (size_t t = 0; t < s->triangle_count; t++)
         missing += !seen[t] && scene_triangle_area(s, t) > 0;
     assert_int_equal(missing, 0);
-    print_message("  %zu nodes, %zu references for %llu triangles, depth %d\n", b.node_count,
-                  b.triangle_count, (unsigned long long)s->triangle_count, b.depth);
+    print_message("  %zu nodes, %zu leaves, %zu references for %llu triangles, depth %d\n",
+                  b.node_count, b.leaf_count, b.reference_count, (unsigned long long)s->triangle_count, b.depth);
     free(seen);
     bvh_free(&b);
     scene_free(s);

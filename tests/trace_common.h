@@ -211,7 +211,7 @@ static inline void trace_device_close(trace_device *t)
 typedef struct trace_geometry {
     bvh tree;
     cl_mem nodes;
-    cl_mem triangles;
+    cl_mem leaves;
 } trace_geometry;
 
 static inline int trace_geometry_upload(trace_device *t, const scene *s, trace_geometry *g)
@@ -221,8 +221,8 @@ static inline int trace_geometry_upload(trace_device *t, const scene *s, trace_g
         return -1;
     if (device_buffer(&t->dev, CL_MEM_READ_ONLY, g->tree.node_count * sizeof(idmr_bvh_node),
                       g->tree.nodes, "BVH nodes", &g->nodes) ||
-        device_buffer(&t->dev, CL_MEM_READ_ONLY, g->tree.triangle_count * sizeof(idmr_triangle),
-                      g->tree.triangles, "BVH triangles", &g->triangles))
+        device_buffer(&t->dev, CL_MEM_READ_ONLY, g->tree.leaf_count * sizeof(idmr_triangle4),
+                      g->tree.leaves, "BVH leaves", &g->leaves))
         return -1;
     return 0;
 }
@@ -231,8 +231,8 @@ static inline void trace_geometry_release(trace_geometry *g)
 {
     if (g->nodes)
         clReleaseMemObject(g->nodes);
-    if (g->triangles)
-        clReleaseMemObject(g->triangles);
+    if (g->leaves)
+        clReleaseMemObject(g->leaves);
     bvh_free(&g->tree);
 }
 
@@ -252,7 +252,7 @@ static inline int trace_device_run(trace_device *t, const trace_geometry *g, con
     const char *name = any ? "trace_any" : "trace_closest";
     cl_uint n = (cl_uint)count;
     int status = DEVICE_SET_ARGS(k, name, DEVICE_ARG(ray_buffer), DEVICE_ARG(hit_buffer),
-                                 DEVICE_ARG(n), DEVICE_ARG(g->nodes), DEVICE_ARG(g->triangles));
+                                 DEVICE_ARG(n), DEVICE_ARG(g->nodes), DEVICE_ARG(g->leaves));
     double start = trace_seconds();
     if (!status)
         status = device_run(&t->dev, k, name, count, local);
