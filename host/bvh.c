@@ -235,18 +235,6 @@ static double seconds_now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static int triangle_is_degenerate(const float v[3][3])
-{
-    double e1[3], e2[3];
-    for (int k = 0; k < 3; k++) {
-        e1[k] = (double)v[1][k] - v[0][k];
-        e2[k] = (double)v[2][k] - v[0][k];
-    }
-    double c[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                   e1[0] * e2[1] - e1[1] * e2[0]};
-    return c[0] == 0 && c[1] == 0 && c[2] == 0;
-}
-
 int bvh_build(const scene *s, bvh *out)
 {
     memset(out, 0, sizeof *out);
@@ -272,7 +260,7 @@ int bvh_build(const scene *s, bvh *out)
             for (int k = 0; k < 3; k++)
                 memcpy(v[k], &mesh->positions[3 * (size_t)mesh->indices[3 * (size_t)t + k]],
                        sizeof v[k]);
-            if (triangle_is_degenerate((const float(*)[3])v)) {
+            if (scene_mesh_triangle_area(mesh, t) == 0.0) {
                 out->degenerate_count++;
                 continue;
             }

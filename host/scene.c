@@ -142,8 +142,7 @@ static void triangle_vertices(const scene_mesh *m, uint32_t t, const float *v[3]
         v[k] = &m->positions[3 * (size_t)m->indices[3 * (size_t)t + k]];
 }
 
-/* Area from the cross product in double: exact enough for slivers, 0 for degenerate ones. */
-static double mesh_triangle_area(const scene_mesh *m, uint32_t t)
+double scene_mesh_triangle_area(const scene_mesh *m, uint32_t t)
 {
     const float *v[3];
     triangle_vertices(m, t, v);
@@ -186,7 +185,7 @@ static void finalize_lights(scene *s)
         l->triangle_count = m->triangle_count;
         double area = 0;
         for (uint32_t t = 0; t < m->triangle_count; t++)
-            area += mesh_triangle_area(m, t);
+            area += scene_mesh_triangle_area(m, t);
         l->area = (float)area;
     }
     double radius = 0.5 * scene_diagonal(s);
@@ -293,7 +292,7 @@ size_t scene_mesh_of_triangle(const scene *s, uint64_t triangle)
 double scene_triangle_area(const scene *s, uint64_t triangle)
 {
     size_t m = scene_mesh_of_triangle(s, triangle);
-    return mesh_triangle_area(&s->meshes[m], (uint32_t)(triangle - s->meshes[m].first_triangle));
+    return scene_mesh_triangle_area(&s->meshes[m], (uint32_t)(triangle - s->meshes[m].first_triangle));
 }
 
 const char *scene_feature_name(unsigned int feature_bit)

@@ -108,6 +108,10 @@ int scene_add_texture(scene *s, const char *file);
  * with the error set (for example a scene with more than 2^32 - 1 triangles). */
 int scene_finalize(scene *s);
 
+/* Area of triangle t of mesh m, from the cross product in double: accurate for slivers, and
+ * exactly 0 for degenerate triangles (collinear or repeated vertices). */
+double scene_mesh_triangle_area(const scene_mesh *m, uint32_t t);
+
 /* Area of scene triangle `triangle` (0 for degenerate ones). */
 double scene_triangle_area(const scene *s, uint64_t triangle);
 
