@@ -3,12 +3,16 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 
+#include <cerrno>
 #include <cstdlib>
 #include <cstring>
 #include <string>
+#include <unistd.h>
+#include <vector>
 
 extern "C" {
 #include "error.h"
+#include "report.h"
 #include "image.h"
 }
 
@@ -53,4 +57,53 @@ extern "C" int image_read_rgb(const char *path, int *width, int *height, float *
     *height = spec.height;
     *rgb = out;
     return 0;
+}
+
+extern "C" int image_write_rgb8(const char *path, int width, int height, const unsigned char *rgb)
+{
+    std::string target(path);
+    size_t dot = target.find_last_of('.');
+    std::string extension = dot == std::string::npos ? "" : target.substr(dot);
+    std::vector<char> name(target.size() + extension.size() + 32);
+    int fd = report_create_temporary(path, extension.c_str(), name.data(), name.size());
+    if (fd < 0)
+        return -1;
+    close(fd);
+    auto out = OIIO::ImageOutput::create(name.data());
+    if (!out) {
+        unlink(name.data());
+        return error_set(IDMR_EXIT_FAILURE, "cannot write image '%s': %s", path,
+                         OIIO::geterror().c_str());
+    }
+    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    bool ok = out->open(name.data(), spec) && out->write_image(OIIO::TypeDesc::UINT8, rgb) &&
+              out->close();
+    std::string reason = out->geterror();
+    out.reset();
+    if (!ok || rename(name.data(), path) != 0) {
+        unlink(name.data());
+        return error_set(IDMR_EXIT_FAILURE, "cannot write image '%s': %s", path,
+                         ok ? strerror(errno) : reason.c_str());
+    }
+    return 0;
+}
+
+extern "C" void image_false_colour(float t, unsigned char rgb[3])
+{
+    static const float stops[5][3] = {{0.0f, 0.0f, 0.02f},
+                                      {0.35f, 0.05f, 0.55f},
+                                      {0.85f, 0.15f, 0.25f},
+                                      {0.98f, 0.55f, 0.05f},
+                                      {1.0f, 0.98f, 0.75f}};
+    if (!(t > 0.0f))
+        t = 0.0f;
+    if (t > 1.0f)
+        t = 1.0f;
+    float x = t * 4.0f;
+    int i = x >= 4.0f ? 3 : (int)x;
+    float f = x - (float)i;
+    for (int c = 0; c < 3; c++) {
+        float v = stops[i][c] + f * (stops[i + 1][c] - stops[i][c]);
+        rgb[c] = (unsigned char)(v * 255.0f + 0.5f);
+    }
 }

@@ -13,6 +13,14 @@ extern "C" {
  * Returns 0, or -1 with the error set (error.h) naming the file and OpenImageIO's reason. */
 int image_read_rgb(const char *path, int *width, int *height, float **rgb);
 
+/* Writes an 8-bit RGB image (format by extension: .png, .jpg, ...) through a temporary file
+ * and rename. Returns 0, or -1 with the error set naming the file. */
+int image_write_rgb8(const char *path, int width, int height, const unsigned char *rgb);
+
+/* A false-colour ramp for t in [0, 1] (clamped): black, violet, red, orange, pale yellow;
+ * brightness rises monotonically, so it reads in grey too. NaN maps to black. */
+void image_false_colour(float t, unsigned char rgb[3]);
+
 #ifdef __cplusplus
 }
 #endif

@@ -2,6 +2,7 @@
  *
  *   idmr [-v] devices [--json]
  *   idmr [-v] info SCENE [--json] [--no-bvh]
+ *   idmr [-v] importance SCENE -o DIR [options]
  *
  * Exit codes (error.h): 0 success, 1 runtime failure, 2 bad input or usage. Every failure
  * prints one "idmr: ..." message naming the file, element or call that failed. */
@@ -10,9 +11,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <errno.h>
+#include <math.h>
+
 #include "bvh.h"
 #include "device.h"
 #include "error.h"
+#include "importance.h"
+#include "importance_report.h"
 #include "mitsuba.h"
 #include "report.h"
 #include "scene.h"
@@ -31,6 +37,19 @@ static void print_usage(FILE *out)
           "  info SCENE [--json]       meshes, materials, lights, camera, bounding box, feature\n"
           "                            bits and device memory of a Mitsuba scene\n"
           "      --no-bvh              skip the BVH build (memory then excludes the BVH)\n"
+          "  importance SCENE -o DIR   learn which triangles carry the light the camera sees;\n"
+          "                            writes DIR/report.json, convergence.csv, importance.png\n"
+          "                            and importance/<mesh>.ply\n"
+          "      --iterations N        iterations (default 100)\n"
+          "      --tolerance E         stop once the change per iteration stays below E\n"
+          "      --photons P           photon paths per iteration (default 1,000,000 on a GPU,\n"
+          "                            200,000 on a CPU)\n"
+          "      --gamma G             weight of camera paths against light paths (default 1)\n"
+          "      --alpha A             SPPM radius reduction (default 0.7)\n"
+          "      --resolution F        scale of the scene's film for hit points (default 1)\n"
+          "      --seed S              random seed (default 1)\n"
+          "      --device N            OpenCL device (see `idmr devices`)\n"
+          "      --quiet               no progress on stderr\n"
           "\n"
           "global options:\n"
           "  -v, --verbose             log progress, kernel build options and timings\n"
@@ -55,6 +74,33 @@ static int usage_error(const char *fmt, const char *arg)
     fprintf(stderr, fmt, arg);
     fputs("\n(see `idmr --help`)\n", stderr);
     return IDMR_EXIT_INPUT;
+}
+
+/* Strict number parsing for options: the whole argument, finite, in range. */
+static int parse_unsigned(const char *option, const char *text, unsigned long min,
+                          unsigned long max, unsigned int *out)
+{
+    char *end;
+    errno = 0;
+    unsigned long value = strtoul(text, &end, 10);
+    if (errno || end == text || *end || text[0] == '-' || value < min || value > max)
+        return error_set(IDMR_EXIT_INPUT, "%s: '%s' is not a whole number from %lu to %lu", option,
+                         text, min, max);
+    *out = (unsigned int)value;
+    return 0;
+}
+
+static int parse_double(const char *option, const char *text, double min, double max,
+                        double *out)
+{
+    char *end;
+    errno = 0;
+    double value = strtod(text, &end);
+    if (errno || end == text || *end || !isfinite(value) || value < min || value > max)
+        return error_set(IDMR_EXIT_INPUT, "%s: '%s' is not a number from %g to %g", option, text,
+                         min, max);
+    *out = value;
+    return 0;
 }
 
 /* ---- devices ---- */
@@ -91,10 +137,10 @@ static int command_devices(int argc, char **argv)
         report_print_json(root);
         cJSON_Delete(root);
     } else {
-        printf("%-3s %-12s %-5s %5s %10s  %-22s %s\n", "#", "platform", "kind", "CUs", "memory",
+        printf("%-3s %-20s %-5s %5s %10s  %-22s %s\n", "#", "platform", "kind", "CUs", "memory",
                "OpenCL C", "device");
         for (size_t i = 0; i < count; i++)
-            printf("%-3d %-12.12s %-5s %5u %7.1f GiB  %-22.22s %s%s\n", list[i].index,
+            printf("%-3d %-20.20s %-5s %5u %7.1f GiB  %-22.22s %s%s\n", list[i].index,
                    list[i].platform_name, list[i].kind, list[i].compute_units,
                    list[i].global_memory / 1073741824.0, list[i].opencl_c_version, list[i].name,
                    list[i].int64_atomics ? "" : " (no 64-bit atomics)");
@@ -285,6 +331,126 @@ static int command_info(int argc, char **argv)
     return 0;
 }
 
+/* ---- importance ---- */
+
+enum {
+    OPT_ITERATIONS = 256,
+    OPT_TOLERANCE,
+    OPT_PHOTONS,
+    OPT_GAMMA,
+    OPT_ALPHA,
+    OPT_RESOLUTION,
+    OPT_SEED,
+    OPT_DEVICE,
+    OPT_QUIET,
+    OPT_LOCAL_SIZE,
+};
+
+static int command_importance(int argc, char **argv)
+{
+    static const struct option options[] = {{"output", required_argument, NULL, 'o'},
+                                            {"iterations", required_argument, NULL, OPT_ITERATIONS},
+                                            {"tolerance", required_argument, NULL, OPT_TOLERANCE},
+                                            {"photons", required_argument, NULL, OPT_PHOTONS},
+                                            {"gamma", required_argument, NULL, OPT_GAMMA},
+                                            {"alpha", required_argument, NULL, OPT_ALPHA},
+                                            {"resolution", required_argument, NULL, OPT_RESOLUTION},
+                                            {"seed", required_argument, NULL, OPT_SEED},
+                                            {"device", required_argument, NULL, OPT_DEVICE},
+                                            {"quiet", no_argument, NULL, OPT_QUIET},
+                                            {"local-size", required_argument, NULL, OPT_LOCAL_SIZE},
+                                            {0, 0, 0, 0}};
+    importance_options o;
+    importance_options_default(&o);
+    o.progress = 1;
+    const char *output = NULL;
+    int device_index = -1;
+    int c;
+    while ((c = getopt_long(argc, argv, "o:", options, NULL)) != -1) {
+        double value;
+        unsigned int whole;
+        int status = 0;
+        switch (c) {
+        case 'o':
+            output = optarg;
+            break;
+        case OPT_ITERATIONS:
+            status = parse_unsigned("--iterations", optarg, 1, 1000000, &o.iterations);
+            break;
+        case OPT_TOLERANCE:
+            status = parse_double("--tolerance", optarg, 0, 1e30, &o.tolerance);
+            break;
+        case OPT_PHOTONS:
+            status = parse_unsigned("--photons", optarg, 1, 1u << 26, &o.photons);
+            break;
+        case OPT_GAMMA:
+            status = parse_double("--gamma", optarg, 0, 1e6, &value);
+            o.gamma = (float)value;
+            break;
+        case OPT_ALPHA:
+            status = parse_double("--alpha", optarg, 1e-3, 1, &value);
+            o.alpha = (float)value;
+            break;
+        case OPT_RESOLUTION:
+            status = parse_double("--resolution", optarg, 1e-3, 16, &value);
+            o.resolution = (float)value;
+            break;
+        case OPT_SEED:
+            status = parse_unsigned("--seed", optarg, 0, 0xffffffffu, &o.seed);
+            break;
+        case OPT_DEVICE:
+            status = parse_unsigned("--device", optarg, 0, 1000, &whole);
+            device_index = (int)whole;
+            break;
+        case OPT_QUIET:
+            o.progress = 0;
+            break;
+        case OPT_LOCAL_SIZE:
+            status = parse_unsigned("--local-size", optarg, 0, 4096, &whole);
+            o.local_size = whole;
+            break;
+        default:
+            return usage_error("importance: unknown option %s", argv[optind - 1]);
+        }
+        if (status)
+            return fail();
+    }
+    if (optind != argc - 1)
+        return usage_error("importance: expected one SCENE argument%s", "");
+    if (!output)
+        return usage_error("importance: -o DIR is required%s", "");
+    scene *s = mitsuba_load(argv[optind]);
+    if (!s)
+        return fail();
+    device d;
+    bvh b;
+    importance_result r;
+    memset(&r, 0, sizeof r);
+    int status = device_open(&d, device_index);
+    if (!status) {
+        status = bvh_build(s, &b);
+        if (!status) {
+            status = importance_run(&d, s, &b, &o, &r);
+            if (!status) {
+                cJSON *report = importance_report_json(s, &d, &o, &r);
+                status = importance_write_outputs(output, report, s, &b, &d, &o, &r);
+                cJSON_Delete(report);
+            }
+            bvh_free(&b);
+        }
+        device_close(&d);
+    }
+    int code = status ? fail() : 0;
+    if (!status)
+        fprintf(stderr,
+                "idmr: %u iterations of %u photon paths in %.1f s; outputs in %s/ (report.json, "
+                "importance.png, importance/*.ply, convergence.csv)\n",
+                r.iterations, r.photons, r.seconds.total, output);
+    importance_result_free(&r);
+    scene_free(s);
+    return code;
+}
+
 int main(int argc, char **argv)
 {
     int first = 1;
@@ -314,6 +480,8 @@ int main(int argc, char **argv)
         return command_devices(sub_argc, sub_argv);
     if (!strcmp(command, "info"))
         return command_info(sub_argc, sub_argv);
+    if (!strcmp(command, "importance"))
+        return command_importance(sub_argc, sub_argv);
     if (!strcmp(command, "help")) {
         print_usage(stdout);
         return 0;

@@ -7,10 +7,14 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <string>
 #include <sys/stat.h>
+#include <unistd.h>
+#include <vector>
 
 extern "C" {
 #include "error.h"
+#include "report.h"
 #include "mesh_io.h"
 }
 
@@ -93,6 +97,60 @@ extern "C" int mesh_io_read(const char *path, mesh_data *out)
             out->texcoords[2 * (size_t)v.idx()] = uv[0];
             out->texcoords[2 * (size_t)v.idx() + 1] = uv[1];
         }
+    }
+    return 0;
+}
+
+extern "C" int mesh_io_write_ply(const char *path, const mesh_data *mesh, const float *values,
+                                 const char *value_name, const unsigned char *colors)
+{
+    silence_openmesh_logs();
+    TriMesh out;
+    OpenMesh::IO::Options options = OpenMesh::IO::Options::Binary;
+    if (colors) {
+        out.request_vertex_colors();
+        options += OpenMesh::IO::Options::VertexColor;
+    }
+    OpenMesh::VPropHandleT<float> property;
+    if (values) {
+        out.add_property(property, value_name);
+        out.property(property).set_persistent(true);
+        options += OpenMesh::IO::Options::Custom;
+    }
+    std::vector<TriMesh::VertexHandle> handles(mesh->vertex_count);
+    auto add_vertex = [&](uint32_t v) {
+        const float *p = &mesh->positions[3 * (size_t)v];
+        TriMesh::VertexHandle h = out.add_vertex(TriMesh::Point(p[0], p[1], p[2]));
+        if (colors)
+            out.set_color(h, TriMesh::Color(colors[3 * (size_t)v], colors[3 * (size_t)v + 1],
+                                            colors[3 * (size_t)v + 2]));
+        if (values)
+            out.property(property, h) = values[v];
+        return h;
+    };
+    for (uint32_t v = 0; v < mesh->vertex_count; v++)
+        handles[v] = add_vertex(v);
+    for (uint32_t t = 0; t < mesh->triangle_count; t++) {
+        const uint32_t *ix = &mesh->indices[3 * (size_t)t];
+        if (out.add_face(handles[ix[0]], handles[ix[1]], handles[ix[2]]).is_valid())
+            continue;
+        out.add_face(add_vertex(ix[0]), add_vertex(ix[1]), add_vertex(ix[2]));
+    }
+
+    std::vector<char> name(std::strlen(path) + 32);
+    int fd = report_create_temporary(path, ".ply", name.data(), name.size());
+    if (fd < 0)
+        return -1;
+    close(fd);
+    bool ok;
+    try {
+        ok = OpenMesh::IO::write_mesh(out, name.data(), options);
+    } catch (const std::exception &e) {
+        ok = false;
+    }
+    if (!ok || rename(name.data(), path) != 0) {
+        unlink(name.data());
+        return error_set(IDMR_EXIT_FAILURE, "cannot write mesh '%s'", path);
     }
     return 0;
 }

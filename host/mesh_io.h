@@ -25,6 +25,14 @@ typedef struct mesh_data {
  * missing, unreadable, unknown format, or no triangles. `out` is zeroed on failure. */
 int mesh_io_read(const char *path, mesh_data *out);
 
+/* Writes `mesh` as a binary PLY through OpenMesh, with an optional per-vertex float property
+ * `value_name` (values may be NULL) and optional per-vertex RGB colours (colors: 3 bytes per
+ * vertex, may be NULL). The file is written under a temporary name and renamed. A face that
+ * OpenMesh cannot attach (a non-manifold spot) is written with copies of its vertices, as
+ * OpenMesh's reader does. Returns 0, or -1 with the error set. */
+int mesh_io_write_ply(const char *path, const mesh_data *mesh, const float *values,
+                      const char *value_name, const unsigned char *colors);
+
 /* Frees what mesh_io_read() allocated; `mesh` may be NULL. */
 void mesh_data_free(mesh_data *mesh);
 

@@ -5,31 +5,40 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "error.h"
 
+int report_create_temporary(const char *path, const char *suffix, char *temporary, size_t size)
+{
+    int written = snprintf(temporary, size, "%s.tmpXXXXXX%s", path, suffix);
+    if (written < 0 || (size_t)written >= size)
+        return error_set(IDMR_EXIT_FAILURE, "path too long: '%s'", path);
+    int fd = mkstemps(temporary, (int)strlen(suffix));
+    if (fd < 0)
+        return error_set(IDMR_EXIT_FAILURE, "cannot create '%s': %s", temporary, strerror(errno));
+    mode_t mask = umask(0);
+    umask(mask);
+    fchmod(fd, 0666 & ~mask);
+    return fd;
+}
+
 int report_write_file(const char *path, const void *bytes, size_t size)
 {
-    size_t length = strlen(path) + 16;
-    char *temporary = xmalloc(length);
-    snprintf(temporary, length, "%s.tmpXXXXXX", path);
-    int fd = mkstemp(temporary);
-    if (fd < 0) {
-        error_set(IDMR_EXIT_FAILURE, "cannot create '%s': %s", temporary, strerror(errno));
-        free(temporary);
+    char temporary[4096];
+    int fd = report_create_temporary(path, "", temporary, sizeof temporary);
+    if (fd < 0)
         return -1;
-    }
     FILE *f = fdopen(fd, "wb");
     int ok = f && fwrite(bytes, 1, size, f) == size;
     ok = (f && fclose(f) == 0) && ok;
     if (!ok || rename(temporary, path) != 0) {
         error_set(IDMR_EXIT_FAILURE, "cannot write '%s': %s", path, strerror(errno));
         unlink(temporary);
-        free(temporary);
         return -1;
     }
-    free(temporary);
     return 0;
 }
 
@@ -61,4 +70,50 @@ cJSON *report_add_vec3(cJSON *object, const char *name, const float v[3])
     cJSON *array = cJSON_CreateDoubleArray(values, 3);
     cJSON_AddItemToObject(object, name, array);
     return array;
+}
+
+static double progress_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+void progress_begin(progress *p, const char *label, unsigned int total, int enabled)
+{
+    p->label = label;
+    p->total = total ? total : 1;
+    p->enabled = enabled;
+    p->terminal = isatty(STDERR_FILENO);
+    p->next_line = 0;
+    p->start = progress_now();
+}
+
+void progress_update(progress *p, unsigned int done, const char *detail)
+{
+    if (!p->enabled)
+        return;
+    double elapsed = progress_now() - p->start;
+    double fraction = (double)done / p->total;
+    double remaining = done ? elapsed * (p->total - done) / done : 0;
+    if (p->terminal) {
+        char bar[31];
+        int filled = (int)(fraction * 30 + 0.5);
+        for (int i = 0; i < 30; i++)
+            bar[i] = i < filled ? '#' : '.';
+        bar[30] = '\0';
+        fprintf(stderr, "\r%s [%s] %u/%u  %.1fs, %.1fs left  %s\033[K", p->label, bar, done,
+                p->total, elapsed, remaining, detail ? detail : "");
+        fflush(stderr);
+    } else if (done >= p->next_line || done == p->total) {
+        fprintf(stderr, "%s: %u/%u (%.0f%%) %.1fs %s\n", p->label, done, p->total,
+                100.0 * fraction, elapsed, detail ? detail : "");
+        p->next_line = done + (p->total + 9) / 10;
+    }
+}
+
+void progress_end(progress *p)
+{
+    if (p->enabled && p->terminal)
+        fputc('\n', stderr);
 }

@@ -10,8 +10,10 @@
 #ifdef __OPENCL_VERSION__
 #define IDMR_STATIC_ASSERT(cond, msg)
 #define IDMR_OFFSET_ASSERT(type, member, offset)
+#define IDMR_INLINE inline /* functions shared by host and kernels */
 #else
 #include <stddef.h>
+#define IDMR_INLINE static inline
 #define IDMR_STATIC_ASSERT(cond, msg) _Static_assert(cond, msg)
 #define IDMR_OFFSET_ASSERT(type, member, offset) \
     _Static_assert(offsetof(type, member) == (offset), #type "." #member " must be at byte " #offset)

@@ -1,4 +1,4 @@
-/* idmr/light.h — one emitter (64 bytes).
+/* idmr/light.h — one emitter (80 bytes).
  *
  *   AREA         radiance [W/(m² sr)] leaving the front side of every triangle of one mesh:
  *                scene triangles first_triangle .. first_triangle + triangle_count, total area
@@ -7,7 +7,9 @@
  *                width), smooth falloff to zero at cos_cutoff (the cutoff angle)
  *   DIRECTIONAL  irradiance [W/m²] travelling along `direction`
  * `emission` holds radiance, intensity or irradiance by kind; `power` is the total emitted
- * power (luminance-weighted), used to choose lights in proportion to power. */
+ * power (luminance-weighted), used to choose lights in proportion to power. An area light's
+ * triangles are chosen by area through its stretch of the emitter CDF, which starts at
+ * entry cdf_offset (filled by the importance pass). */
 #ifndef IDMR_LIGHT_H
 #define IDMR_LIGHT_H
 
@@ -30,11 +32,14 @@ typedef struct idmr_light {
     unsigned int triangle_count;
     float area;
     float power;
+    unsigned int cdf_offset;
+    unsigned int pad[3];
 } idmr_light;
 
-IDMR_STATIC_ASSERT(sizeof(idmr_light) == 64, "idmr_light must be 64 bytes");
+IDMR_STATIC_ASSERT(sizeof(idmr_light) == 80, "idmr_light must be 80 bytes");
 IDMR_OFFSET_ASSERT(idmr_light, direction, 16);
 IDMR_OFFSET_ASSERT(idmr_light, emission, 32);
 IDMR_OFFSET_ASSERT(idmr_light, first_triangle, 48);
+IDMR_OFFSET_ASSERT(idmr_light, cdf_offset, 64);
 
 #endif
