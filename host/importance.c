@@ -41,7 +41,7 @@ void importance_options_default(importance_options *o)
 
 unsigned int importance_default_photons(const device *d)
 {
-    return strcmp(d->info.kind, "gpu") == 0 ? 1000000u : 200000u;
+    return strcmp(d->info.kind, "gpu") == 0 ? 1000000u : 500000u;
 }
 
 /* The pass's kernels and buffers. */
@@ -214,6 +214,46 @@ static int pass_iterate(pass *p, const scene *s, const importance_options *o,
     return 0;
 }
 
+void importance_snapshot_free(importance_snapshot *snapshot)
+{
+    free(snapshot->hit_points);
+    free(snapshot->vertices);
+    free(snapshot->path_length);
+    free(snapshot->gathered);
+    free(snapshot->camera_fixed);
+    free(snapshot->light_fixed);
+    memset(snapshot, 0, sizeof *snapshot);
+}
+
+static int pass_snapshot(pass *p, const idmr_importance_params *params, size_t triangles,
+                         importance_snapshot *out)
+{
+    importance_snapshot_free(out);
+    out->params = *params;
+    size_t slots = (size_t)params->path_count * IDMR_PATH_VERTICES;
+    size_t t = triangles ? triangles : 1;
+    out->hit_points = xmalloc(p->pixels * sizeof *out->hit_points);
+    out->vertices = xmalloc(slots * sizeof *out->vertices);
+    out->path_length = xmalloc(params->path_count * sizeof *out->path_length);
+    out->gathered = xmalloc(slots * sizeof *out->gathered);
+    out->camera_fixed = xmalloc(t * sizeof *out->camera_fixed);
+    out->light_fixed = xmalloc(t * sizeof *out->light_fixed);
+    return device_read(p->dev, p->hit_points, p->pixels * sizeof *out->hit_points,
+                       out->hit_points, "hit points") ||
+                   device_read(p->dev, p->vertices, slots * sizeof *out->vertices, out->vertices,
+                               "photon paths") ||
+                   device_read(p->dev, p->path_length, params->path_count * sizeof(uint32_t),
+                               out->path_length, "path lengths") ||
+                   device_read(p->dev, p->gathered, slots * sizeof(uint32_t), out->gathered,
+                               "gather counts") ||
+                   device_read(p->dev, p->camera_importance, t * 8, out->camera_fixed,
+                               "camera importance") ||
+                   device_read(p->dev, p->light_importance, t * 8, out->light_fixed,
+                               "light importance")
+               ? -1
+               : 0;
+}
+
 /* Reads the fixed-point accumulators into the double sums, checks saturation, clears them. */
 static int pass_collect(pass *p, const scene *s, importance_result *r, uint64_t *scratch)
 {
@@ -366,7 +406,9 @@ int importance_run(device *d, const scene *s, const bvh *b, const importance_opt
         r->radius[n] = params.radius;
         memcpy(previous_camera, r->camera, r->triangle_count * sizeof *r->camera);
         memcpy(previous_light, r->light, r->triangle_count * sizeof *r->light);
-        if (pass_iterate(&p, s, o, &params, r) || pass_collect(&p, s, r, scratch) ||
+        if (pass_iterate(&p, s, o, &params, r) ||
+            (o->snapshot && pass_snapshot(&p, &params, r->triangle_count, o->snapshot)) ||
+            pass_collect(&p, s, r, scratch) ||
             (n == 0 && pass_statistics(&p, r->photons, r))) {
             status = -1;
             break;

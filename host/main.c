@@ -43,7 +43,7 @@ static void print_usage(FILE *out)
           "      --iterations N        iterations (default 100)\n"
           "      --tolerance E         stop once the change per iteration stays below E\n"
           "      --photons P           photon paths per iteration (default 1,000,000 on a GPU,\n"
-          "                            200,000 on a CPU)\n"
+          "                            500,000 on a CPU)\n"
           "      --gamma G             weight of camera paths against light paths (default 1)\n"
           "      --alpha A             SPPM radius reduction (default 0.7)\n"
           "      --resolution F        scale of the scene's film for hit points (default 1)\n"

@@ -22,6 +22,7 @@
 #include <libxml/tree.h>
 
 #include "error.h"
+#include "image.h"
 #include "mesh_io.h"
 #include "shapes.h"
 #include "spectrum.h"
@@ -1395,13 +1396,46 @@ static int emitter_area(loader *ld, xmlNodePtr node, idmr_light *light)
     return prop_color(ld, node, "radiance", 1.0f, light->emission, NULL);
 }
 
-static void emitter_warn_environment(loader *ld, xmlNodePtr node, const char *type)
+/* constant (radiance) and envmap (filename, scale): an environment light of uniform radiance,
+ * an envmap's being the map's mean. */
+static int emitter_environment(loader *ld, xmlNodePtr node, const char *type, idmr_light *light)
 {
-    if (ld->environment_warned)
-        return;
-    warn_at(node, "%s emitter not supported: ignored; the scene is lit only by its other emitters",
-            type);
+    light->kind = IDMR_LIGHT_ENVIRONMENT;
+    if (strcmp(type, "constant") == 0)
+        return prop_color(ld, node, "radiance", 1.0f, light->emission, NULL);
+    const char *file;
+    double scale;
+    if (prop_string(node, "filename", NULL, &file) || prop_float(node, "scale", 1.0, &scale))
+        return -1;
+    if (!file)
+        return fail(node, "an envmap needs a filename");
+    char *path = resolve_path(ld, node, file);
+    int width, height;
+    float *rgb;
+    if (image_read_rgb(path, &width, &height, &rgb)) {
+        free(path);
+        return fail_prefix(node);
+    }
+    /* The mean radiance over the sphere: rows of an equirectangular map weighted by sin θ. */
+    double sum[3] = {0, 0, 0}, weight = 0;
+    for (int y = 0; y < height; y++) {
+        double w = sin(M_PI * (y + 0.5) / height);
+        for (int x = 0; x < width; x++)
+            for (int c = 0; c < 3; c++)
+                sum[c] += w * rgb[3 * ((size_t)y * width + x) + c];
+        weight += w * width;
+    }
+    for (int c = 0; c < 3; c++)
+        light->emission[c] = weight > 0 ? (float)(scale * sum[c] / weight) : 0.0f;
+    free(rgb);
+    free(path);
+    if (!ld->environment_warned)
+        warn_at(node,
+                "envmap emitter: simulated as uniform light of its mean radiance (%.3g, %.3g, "
+                "%.3g) from all directions; the map's directional structure is ignored",
+                light->emission[0], light->emission[1], light->emission[2]);
     ld->environment_warned = 1;
+    return 0;
 }
 
 static int load_emitter(loader *ld, xmlNodePtr node)
@@ -1423,10 +1457,9 @@ static int load_emitter(loader *ld, xmlNodePtr node)
         if (!attr(node, "id"))
             return fail(node, "an area emitter must be inside a shape (or have an id)");
         return emitter_area(ld, node, &light) || id_register(ld, node) ? -1 : 0;
-    } else if (strcmp(type, "envmap") == 0 || strcmp(type, "constant") == 0) {
-        emitter_warn_environment(ld, node, type);
-        return 0;
-    } else
+    } else if (strcmp(type, "envmap") == 0 || strcmp(type, "constant") == 0)
+        status = emitter_environment(ld, node, type, &light);
+    else
         return fail(node, "unsupported emitter type '%s'", type);
     if (status)
         return -1;

@@ -19,8 +19,10 @@
  *             conductor, roughconductor, plastic, roughplastic, twosided, mask (opacity
  *             ignored), bumpmap/normalmap (inner bsdf, warned). A bitmap texture is accepted for
  *             the diffuse reflectance (reflectance / diffuse_reflectance).
- *   emitter   point, spot, directional, area (inside a shape, or by id); constant and envmap
- *             are not simulated: a warning, and the scene is lit by its other emitters.
+ *   emitter   point, spot, directional, area (inside a shape, or by id), constant (radiance),
+ *             envmap (filename, scale): simulated as uniform light of the map's mean radiance
+ *             (weighted by solid angle), with a warning that its directional structure is
+ *             ignored.
  *   texture   bitmap (top level with an id, or inline).
  *   include   <include filename=...>: the fragment's elements are read in place.
  *   ignored   integrator, sampler, rfilter, other film settings, unknown properties.

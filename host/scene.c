@@ -207,6 +207,10 @@ static void finalize_lights(scene *s)
         case IDMR_LIGHT_DIRECTIONAL:
             l->power = (float)(M_PI * radius * radius * y);
             break;
+        case IDMR_LIGHT_ENVIRONMENT:
+            /* Uniform radiance y into the bounding sphere: 4π r² × π y. */
+            l->power = (float)(4.0 * M_PI * M_PI * radius * radius * y);
+            break;
         }
     }
 }
@@ -266,7 +270,8 @@ int scene_finalize(scene *s)
             features |= IDMR_FEATURE_TEXTURED;
     }
     static const unsigned int light_feature[IDMR_LIGHT_KIND_COUNT] = {
-        IDMR_FEATURE_AREA, IDMR_FEATURE_POINT, IDMR_FEATURE_SPOT, IDMR_FEATURE_DIRECTIONAL};
+        IDMR_FEATURE_AREA, IDMR_FEATURE_POINT, IDMR_FEATURE_SPOT, IDMR_FEATURE_DIRECTIONAL,
+        IDMR_FEATURE_ENVIRONMENT};
     for (size_t i = 0; i < s->light_count; i++)
         features |= light_feature[s->lights[i].kind];
     s->features = features;
@@ -307,6 +312,7 @@ const char *scene_feature_name(unsigned int feature_bit)
     case IDMR_FEATURE_POINT: return "point";
     case IDMR_FEATURE_SPOT: return "spot";
     case IDMR_FEATURE_DIRECTIONAL: return "directional";
+    case IDMR_FEATURE_ENVIRONMENT: return "environment";
     default: return "unknown";
     }
 }
@@ -320,7 +326,8 @@ const char *scene_material_kind_name(unsigned int kind)
 
 const char *scene_light_kind_name(unsigned int kind)
 {
-    static const char *names[IDMR_LIGHT_KIND_COUNT] = {"area", "point", "spot", "directional"};
+    static const char *names[IDMR_LIGHT_KIND_COUNT] = {"area", "point", "spot", "directional",
+                                                       "environment"};
     return kind < IDMR_LIGHT_KIND_COUNT ? names[kind] : "unknown";
 }
 

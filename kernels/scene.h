@@ -254,10 +254,12 @@ inline bool emit(global const idmr_light *lights, global const float *light_cdf,
         return idmr_rng_float(rng) < keep;
     }
 #endif
-#if HAS_FEATURE(IDMR_FEATURE_DIRECTIONAL)
-    if (light->kind == IDMR_LIGHT_DIRECTIONAL) {
-        /* From a disc covering the scene's bounding sphere, outside it. */
-        float3 d = vload3(0, light->direction);
+#if HAS_FEATURE(IDMR_FEATURE_DIRECTIONAL) || HAS_FEATURE(IDMR_FEATURE_ENVIRONMENT)
+    if (light->kind == IDMR_LIGHT_DIRECTIONAL || light->kind == IDMR_LIGHT_ENVIRONMENT) {
+        /* Parallel light from a disc covering the scene's bounding sphere, outside it; an
+         * environment's direction is uniform over the sphere. */
+        float3 d = light->kind == IDMR_LIGHT_DIRECTIONAL ? vload3(0, light->direction)
+                                                         : sample_sphere(rng);
         float3 t, b;
         frame_around(d, &t, &b);
         float r = scene_radius * sqrt(idmr_rng_float(rng));

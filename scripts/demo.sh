@@ -14,4 +14,11 @@ bin/idmr info "$scene"
 bin/idmr info --json "$scene" > "$out/info.json.tmp"
 mv "$out/info.json.tmp" "$out/info.json"
 echo
-echo "demo: scene summary written to $out/info.json"
+echo "== idmr importance $scene -o $out/importance --iterations 20"
+bin/idmr importance "$scene" -o "$out/importance" --iterations 20
+echo
+echo "demo: outputs in $out/:"
+echo "  info.json                      the scene summary"
+echo "  importance/importance.png      what the camera sees, coloured by importance"
+echo "  importance/importance/*.ply    each mesh with per-vertex importance (any mesh viewer)"
+echo "  importance/report.json         timings, per-mesh importance, convergence"

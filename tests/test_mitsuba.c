@@ -23,6 +23,7 @@
 #include <unistd.h>
 
 #include "error.h"
+#include "image.h"
 #include "mitsuba.h"
 #include "scene.h"
 #include "shapes.h"
@@ -1035,24 +1036,72 @@ static void test_error_missing_scene_file(void **state)
     assert_int_equal(error_code(), IDMR_EXIT_INPUT);
 }
 
-static void test_envmap_warns_but_loads(void **state)
+/* An envmap becomes a uniform environment light of the map's mean radiance times scale: a
+ * white 8-bit map (sRGB 255 = linear 1) with scale 2 gives radiance 2. */
+static void test_envmap_is_uniform_environment(void **state)
 {
-    char log[4096];
+    char log[4096], sky[512];
+    unsigned char white[4 * 2 * 3];
+    memset(white, 255, sizeof white);
+    snprintf(sky, sizeof sky, "%s/sky.png", temp_dir);
+    assert_int_equal(image_write_rgb8(sky, 4, 2, white), 0);
     const char *path = write_file("scene.xml",
                                   "<scene version=\"3.0.0\">\n"
                                   "  <shape type=\"cube\"/>\n"
                                   "  <emitter type=\"envmap\">\n"
-                                  "    <string name=\"filename\" value=\"sky.exr\"/>\n"
+                                  "    <string name=\"filename\" value=\"sky.png\"/>\n"
+                                  "    <float name=\"scale\" value=\"2\"/>\n"
                                   "  </emitter>\n"
                                   "</scene>\n");
     scene *s = load_capturing_stderr(path, log, sizeof log);
     if (!s)
         fail_msg("load failed: %s", error_message());
-    assert_int_equal(s->light_count, 0);
+    assert_int_equal(s->light_count, 1);
+    assert_int_equal(s->lights[0].kind, IDMR_LIGHT_ENVIRONMENT);
+    for (int c = 0; c < 3; c++)
+        assert_float_equal(s->lights[0].emission[c], 2.0f, 1e-4f);
+    assert_true(s->features & IDMR_FEATURE_ENVIRONMENT);
     if (!strstr(log, "scene.xml:3:") || !strstr(log, "<emitter type=\"envmap\">") ||
-        !strstr(log, "envmap emitter not supported"))
+        !strstr(log, "directional structure is ignored"))
         fail_msg("warning '%s' lacks file:line, element or reason", log);
     scene_free(s);
+}
+
+static void test_constant_environment(void **state)
+{
+    const char *path = write_file("scene.xml",
+                                  "<scene version=\"3.0.0\">\n"
+                                  "  <shape type=\"cube\"/>\n"
+                                  "  <emitter type=\"constant\">\n"
+                                  "    <rgb name=\"radiance\" value=\"0.5, 1, 2\"/>\n"
+                                  "  </emitter>\n"
+                                  "</scene>\n");
+    warn_silence(1);
+    scene *s = mitsuba_load(path);
+    warn_silence(0);
+    if (!s)
+        fail_msg("load failed: %s", error_message());
+    assert_int_equal(s->light_count, 1);
+    assert_int_equal(s->lights[0].kind, IDMR_LIGHT_ENVIRONMENT);
+    assert_float_equal(s->lights[0].emission[2], 2.0f, 1e-6f);
+    assert_true(s->lights[0].power > 0);
+    scene_free(s);
+}
+
+static void test_error_envmap_missing_file(void **state)
+{
+    const char *path = write_file("scene.xml",
+                                  "<scene version=\"3.0.0\">\n"
+                                  "  <emitter type=\"envmap\">\n"
+                                  "    <string name=\"filename\" value=\"absent-sky.exr\"/>\n"
+                                  "  </emitter>\n"
+                                  "</scene>\n");
+    error_clear();
+    assert_null(mitsuba_load(path));
+    const char *message = error_message();
+    if (!strstr(message, "absent-sky.exr") || !strstr(message, "scene.xml:2"))
+        fail_msg("unexpected message: %s", message);
+    assert_int_equal(error_code(), IDMR_EXIT_INPUT);
 }
 
 /* ---------------------------------------------------------------------------------------- */
@@ -1147,8 +1196,12 @@ static void test_real_living_room(void **state)
     assert_true(s->mesh_count >= 60);
     assert_true(s->features & IDMR_FEATURE_TEXTURED);
     assert_true(s->texture_count >= 1);
-    assert_int_equal(s->light_count, 0);
-    if (!strstr(log, "envmap emitter not supported"))
+    /* The sky map becomes one environment light of its mean radiance. */
+    assert_int_equal(s->light_count, 1);
+    assert_int_equal(s->lights[0].kind, IDMR_LIGHT_ENVIRONMENT);
+    assert_true(s->lights[0].emission[0] > 0 && s->lights[0].emission[2] > 0);
+    assert_true(s->features & IDMR_FEATURE_ENVIRONMENT);
+    if (!strstr(log, "directional structure is ignored"))
         fail_msg("no envmap warning in: %s", log);
     scene_free(s);
 }
@@ -1196,7 +1249,9 @@ int main(void)
         cmocka_unit_test(test_error_missing_ref),
         cmocka_unit_test(test_error_undefined_parameter),
         cmocka_unit_test(test_error_missing_scene_file),
-        cmocka_unit_test(test_envmap_warns_but_loads),
+        cmocka_unit_test(test_envmap_is_uniform_environment),
+        cmocka_unit_test(test_constant_environment),
+        cmocka_unit_test(test_error_envmap_missing_file),
         cmocka_unit_test(test_real_cbox),
         cmocka_unit_test(test_real_glass_of_water_without_mesh000),
         cmocka_unit_test(test_real_glass_of_water_missing_mesh),

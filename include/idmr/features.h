@@ -15,7 +15,8 @@
 #define IDMR_FEATURE_POINT (1u << 6)       /* point lights */
 #define IDMR_FEATURE_SPOT (1u << 7)        /* spot lights */
 #define IDMR_FEATURE_DIRECTIONAL (1u << 8) /* directional lights */
-#define IDMR_FEATURE_COUNT 9
+#define IDMR_FEATURE_ENVIRONMENT (1u << 9) /* constant and envmap emitters */
+#define IDMR_FEATURE_COUNT 10
 
 /* Surfaces that continue a camera path instead of ending it in a hit point. */
 #define IDMR_FEATURES_SPECULAR (IDMR_FEATURE_MIRROR | IDMR_FEATURE_DIELECTRIC)

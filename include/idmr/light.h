@@ -6,6 +6,9 @@
  *   SPOT         intensity on the axis `direction`; full inside cos_falloff_start (the beam
  *                width), smooth falloff to zero at cos_cutoff (the cutoff angle)
  *   DIRECTIONAL  irradiance [W/m²] travelling along `direction`
+ *   ENVIRONMENT  radiance [W/(m² sr)] arriving from every direction: Mitsuba's `constant`, and
+ *                its `envmap` by the map's mean radiance (the map's directional structure is
+ *                not simulated)
  * `emission` holds radiance, intensity or irradiance by kind; `power` is the total emitted
  * power (luminance-weighted), used to choose lights in proportion to power. An area light's
  * triangles are chosen by area through its stretch of the emitter CDF, which starts at
@@ -19,7 +22,8 @@
 #define IDMR_LIGHT_POINT 1u
 #define IDMR_LIGHT_SPOT 2u
 #define IDMR_LIGHT_DIRECTIONAL 3u
-#define IDMR_LIGHT_KIND_COUNT 4u
+#define IDMR_LIGHT_ENVIRONMENT 4u
+#define IDMR_LIGHT_KIND_COUNT 5u
 
 typedef struct idmr_light {
     float position[3];

@@ -1,0 +1,87 @@
+/* bench_importance.c — `make bench`: one importance iteration against the same camera and
+ * photon work without the importance bookkeeping (IDMR_BOOKKEEPING=0: no Eq. 2 atomics in the
+ * camera pass, no reverse path walk), on the DRAGON CORNELL BOX (bench_common.h).
+ *
+ *   importance-iteration: seconds=<s> plain=<s> ratio=<importance/plain> photons=<n> ...
+ *
+ * Each variant runs one iteration first (the runtime compiles kernels lazily on first use),
+ * then ITERATIONS; the variants alternate ROUNDS times and the best per-iteration time of each
+ * counts (shared machines are noisy; the least disturbed run is the truest). */
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "bench_common.h"
+#include "bvh.h"
+#include "device.h"
+#include "error.h"
+#include "importance.h"
+#include "mitsuba.h"
+
+#define ITERATIONS 3
+#define ROUNDS 2
+
+static double seconds_per_iteration(device *d, const scene *s, const bvh *b, int bookkeeping,
+                                    unsigned int iterations, importance_result *r)
+{
+    importance_options o;
+    importance_options_default(&o);
+    o.iterations = iterations;
+    o.bookkeeping = bookkeeping;
+    if (importance_run(d, s, b, &o, r)) {
+        fprintf(stderr, "bench_importance: %s\n", error_message());
+        exit(1);
+    }
+    return r->seconds.total / r->iterations;
+}
+
+int main(void)
+{
+    const char *path = bench_write_dragon_box();
+    scene *s = path ? mitsuba_load(path) : NULL;
+    if (!s) {
+        fprintf(stderr, "bench_importance: %s\n", path ? error_message() : "cannot write scene");
+        return 1;
+    }
+    device d;
+    bvh b;
+    if (device_open(&d, -1) || bvh_build(s, &b)) {
+        fprintf(stderr, "bench_importance: %s\n", error_message());
+        return 1;
+    }
+    double best[2] = {1e30, 1e30};
+    importance_result r;
+    for (int variant = 0; variant < 2; variant++) {
+        seconds_per_iteration(&d, s, &b, variant, 1, &r);
+        importance_result_free(&r);
+    }
+    double stage[2][5] = {{0}};
+    for (int round = 0; round < ROUNDS; round++)
+        for (int variant = 0; variant < 2; variant++) {
+            double seconds = seconds_per_iteration(&d, s, &b, variant, ITERATIONS, &r);
+            if (seconds < best[variant]) {
+                best[variant] = seconds;
+                double *st = stage[variant];
+                st[0] = r.seconds.camera / r.iterations;
+                st[1] = r.seconds.photon / r.iterations;
+                st[2] = r.seconds.grid / r.iterations;
+                st[3] = r.seconds.gather / r.iterations;
+                st[4] = r.seconds.path / r.iterations;
+            }
+            importance_result_free(&r);
+        }
+    importance_options o;
+    importance_options_default(&o);
+    printf("importance-iteration: seconds=%.3f plain=%.3f ratio=%.2f photons=%u triangles=%llu "
+           "device=\"%s\"\n",
+           best[1], best[0], best[1] / best[0], importance_default_photons(&d),
+           (unsigned long long)s->triangle_count, d.info.name);
+    printf("importance-iteration: stages camera=%.3f photon=%.3f grid=%.3f gather=%.3f "
+           "path=%.3f (plain: camera=%.3f photon=%.3f)\n",
+           stage[1][0], stage[1][1], stage[1][2], stage[1][3], stage[1][4], stage[0][0],
+           stage[0][1]);
+    bvh_free(&b);
+    device_close(&d);
+    scene_free(s);
+    bench_remove_dragon_box(path);
+    return 0;
+}
