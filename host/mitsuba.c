@@ -1643,6 +1643,7 @@ static int load_shape(loader *ld, xmlNodePtr node)
     /* scene_add_* may move the mesh array; index it afresh. */
     scene_mesh *mesh_record = &ld->s->meshes[ld->s->mesh_count - 1];
     mesh_record->material = (uint32_t)material;
+    mesh_record->xml_file = xstrdup(node_file(node));
     mesh_record->light = emitter ? scene_add_light(ld->s, &light) : -1;
     return 0;
 }

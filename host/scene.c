@@ -30,6 +30,7 @@ void scene_free(scene *s)
         free(m->name);
         free(m->shape_type);
         free(m->file);
+        free(m->xml_file);
         free(m->positions);
         free(m->indices);
         free(m->texcoords);
