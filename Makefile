@@ -29,7 +29,7 @@ else
   $(error config must be release, debug or sanitize)
 endif
 
-LDLIBS := -lOpenCL -lembree3 -lOpenMeshCore -lOpenImageIO -lOpenImageIO_Util \
+LDLIBS := -lOpenCL -lembree3 -lOpenMeshTools -lOpenMeshCore -lOpenImageIO -lOpenImageIO_Util \
           $(shell pkg-config --libs libxml-2.0 libcjson 2>/dev/null) -lstdc++ -lm -pthread
 
 LIB_SOURCES := $(filter-out host/main.c,$(wildcard host/*.c)) $(wildcard host/*.cc)
@@ -64,6 +64,11 @@ $(BUILD)/host/%.cc.o: host/%.cc | deps
 $(BUILD)/tests/%: tests/%.c $(BUILD)/libidmr.a | deps
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) -Itests $(CFLAGS) $(LDFLAGS) -o $@ $< $(BUILD)/libidmr.a -lcmocka $(LDLIBS)
+
+# The decimation benchmark compares with meshoptimizer (a reference, not a dependency of idmr).
+$(BUILD)/tests/bench_decimation: tests/bench_decimation.c $(BUILD)/libidmr.a | deps
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) -Itests $(CFLAGS) $(LDFLAGS) -o $@ $< $(BUILD)/libidmr.a -lmeshoptimizer $(LDLIBS)
 
 # Runs every test program; scripts/run-tests.sh prints one closing "N passed, N failed" line.
 test: bin/idmr $(TEST_PROGRAMS)

@@ -3,6 +3,7 @@
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Tools/Decimater/BaseDecimaterT.hh>
+#include <OpenMesh/Tools/Decimater/DecimaterT.hh>
 #include <OpenMesh/Tools/Decimater/ModBaseT.hh>
 #include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
 
@@ -152,6 +153,58 @@ class ReductionDecimater : public OpenMesh::Decimater::BaseDecimaterT<Mesh> {
         }
     };
 
+    // The legality test of BaseDecimaterT::is_collapse_legal, with our own topology check in
+    // place of OpenMesh's TriConnectivity::is_collapse_ok (Debian's library spends a third of
+    // the decimation there on property type-name checks). The conditions: the link condition
+    // (the one-rings of v0 and v1 share exactly the opposite vertices vl, vr), no triangle
+    // whose other two edges are both boundary, a boundary vertex only into a boundary vertex
+    // along a boundary edge, no collapse that leaves two valence-3 neighbours joined, and v0
+    // keeps at least two faces.
+    bool collapse_legal(const CollapseInfo &ci)
+    {
+        Mesh::VertexHandle v0 = ci.v0, v1 = ci.v1;
+        if (mesh_.status(v0).locked() || mesh_.status(v0).deleted() || mesh_.status(v1).deleted() ||
+            mesh_.status(mesh_.edge_handle(ci.v0v1)).deleted())
+            return false;
+        Mesh::HalfedgeHandle v0v1 = ci.v0v1, v1v0 = ci.v1v0;
+        Mesh::VertexHandle vl, vr;
+        if (!mesh_.is_boundary(v0v1)) {
+            Mesh::HalfedgeHandle h1 = mesh_.next_halfedge_handle(v0v1);
+            Mesh::HalfedgeHandle h2 = mesh_.next_halfedge_handle(h1);
+            vl = mesh_.to_vertex_handle(h1);
+            if (mesh_.is_boundary(mesh_.opposite_halfedge_handle(h1)) &&
+                mesh_.is_boundary(mesh_.opposite_halfedge_handle(h2)))
+                return false;
+        }
+        if (!mesh_.is_boundary(v1v0)) {
+            Mesh::HalfedgeHandle h1 = mesh_.next_halfedge_handle(v1v0);
+            Mesh::HalfedgeHandle h2 = mesh_.next_halfedge_handle(h1);
+            vr = mesh_.to_vertex_handle(h1);
+            if (mesh_.is_boundary(mesh_.opposite_halfedge_handle(h1)) &&
+                mesh_.is_boundary(mesh_.opposite_halfedge_handle(h2)))
+                return false;
+        }
+        if (vl == vr)
+            return false;
+        bool b0 = mesh_.is_boundary(v0), b1 = mesh_.is_boundary(v1);
+        if (b0 && b1 && !mesh_.is_boundary(v0v1) && !mesh_.is_boundary(v1v0))
+            return false;
+        ring_.clear();
+        for (auto w : mesh_.vv_range(v1))
+            ring_.push_back(w);
+        for (auto w : mesh_.vv_range(v0))
+            if (w != vl && w != vr && std::find(ring_.begin(), ring_.end(), w) != ring_.end())
+                return false;
+        if (vl.is_valid() && vr.is_valid() && mesh_.find_halfedge(vl, vr).is_valid() &&
+            mesh_.valence(vl) == 3 && mesh_.valence(vr) == 3)
+            return false;
+        if (b0 && (!b1 || (vl.is_valid() && vr.is_valid())))
+            return false;
+        if (mesh_.cw_rotated_halfedge_handle(mesh_.cw_rotated_halfedge_handle(v0v1)) == v0v1)
+            return false;
+        return true;
+    }
+
     // The best collapse of v: least priority, then least important target.
     bool best_collapse(Mesh::VertexHandle v, Entry *entry, Mesh::HalfedgeHandle *target)
     {
@@ -160,7 +213,7 @@ class ReductionDecimater : public OpenMesh::Decimater::BaseDecimaterT<Mesh> {
         bool found = false;
         for (auto h : mesh_.voh_range(v)) {
             CollapseInfo ci(mesh_, h);
-            if (!is_collapse_legal(ci))
+            if (!collapse_legal(ci))
                 continue;
             float priority = collapse_priority(ci);
             if (priority < 0)
@@ -190,7 +243,7 @@ class ReductionDecimater : public OpenMesh::Decimater::BaseDecimaterT<Mesh> {
                   });
         for (const auto &candidate : candidates_) {
             CollapseInfo ci(mesh_, candidate.second);
-            if (!is_collapse_legal(ci))
+            if (!collapse_legal(ci))
                 continue;
             float priority = collapse_priority(ci);
             if (priority < 0)
@@ -259,7 +312,7 @@ class ReductionDecimater : public OpenMesh::Decimater::BaseDecimaterT<Mesh> {
             live_[top.vertex] = false;
             Mesh::HalfedgeHandle h = target_[top.vertex];
             CollapseInfo ci(mesh_, h);
-            if (!is_collapse_legal(ci) || collapse_priority(ci) < 0) {
+            if (!collapse_legal(ci) || collapse_priority(ci) < 0) {
                 heap_vertex(ci.v0);
                 continue;
             }
@@ -294,6 +347,7 @@ class ReductionDecimater : public OpenMesh::Decimater::BaseDecimaterT<Mesh> {
     std::vector<bool> live_;
     std::vector<Entry> stored_;
     std::vector<std::pair<double, Mesh::HalfedgeHandle>> candidates_;
+    std::vector<Mesh::VertexHandle> ring_;
 };
 
 struct PositionKey {
@@ -488,6 +542,33 @@ extern "C" int decimate_measure(const decimate_input *in, uint32_t *vertices,
     *uncollapsible = out.vertices_uncollapsible;
     decimate_output_free(&out);
     return 0;
+}
+
+extern "C" long decimate_stock_quadric(const decimate_input *in)
+{
+    try {
+        Mesh mesh;
+        std::vector<Mesh::VertexHandle> handles(in->vertex_count);
+        for (uint32_t v = 0; v < in->vertex_count; v++) {
+            const float *p = &in->positions[3 * (size_t)v];
+            handles[v] = mesh.add_vertex(Mesh::Point(p[0], p[1], p[2]));
+        }
+        for (uint32_t t = 0; t < in->triangle_count; t++) {
+            const uint32_t *ix = &in->indices[3 * (size_t)t];
+            mesh.add_face(handles[ix[0]], handles[ix[1]], handles[ix[2]]);
+        }
+        OpenMesh::Decimater::DecimaterT<Mesh> decimater(mesh);
+        OpenMesh::Decimater::ModQuadricT<Mesh>::Handle quadric;
+        decimater.add(quadric);
+        if (!decimater.initialize())
+            return error_set(IDMR_EXIT_FAILURE, "mesh '%s': DecimaterT did not initialise",
+                             in->name);
+        decimater.decimate_to((size_t)in->target_vertices);
+        mesh.garbage_collection();
+        return (long)mesh.n_vertices();
+    } catch (const std::exception &e) {
+        return error_set(IDMR_EXIT_FAILURE, "mesh '%s': OpenMesh failed: %s", in->name, e.what());
+    }
 }
 
 extern "C" void decimate_output_free(decimate_output *out)

@@ -76,6 +76,11 @@ int decimate_measure(const decimate_input *in, uint32_t *vertices, uint32_t *unc
 int decimate_mesh(const decimate_input *in, decimate_method method, decimate_output *out);
 void decimate_output_free(decimate_output *out);
 
+/* The benchmark's baseline: stock OpenMesh (DecimaterT with ModQuadricT, nothing else) on the
+ * mesh as OpenMesh builds it, to target_vertices of in->vertex_count. Returns the output vertex
+ * count, or -1 with the error set. */
+long decimate_stock_quadric(const decimate_input *in);
+
 /* Decimates `count` meshes on `threads` threads, largest first. status[i] is 0 or -1;
  * messages[i] (may be NULL) gets the error of a failed mesh. Returns the number that failed. */
 size_t decimate_many(const decimate_input *in, decimate_output *out, int *status,

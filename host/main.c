@@ -3,6 +3,7 @@
  *   idmr [-v] devices [--json]
  *   idmr [-v] info SCENE [--json] [--no-bvh]
  *   idmr [-v] importance SCENE -o DIR [options]
+ *   idmr [-v] reduce SCENE --target D -o OUTDIR [options]
  *
  * Exit codes (error.h): 0 success, 1 runtime failure, 2 bad input or usage. Every failure
  * prints one "idmr: ..." message naming the file, element or call that failed. */
@@ -20,6 +21,7 @@
 #include "importance.h"
 #include "importance_report.h"
 #include "mitsuba.h"
+#include "reduce.h"
 #include "report.h"
 #include "scene.h"
 
@@ -50,6 +52,15 @@ static void print_usage(FILE *out)
           "      --seed S              random seed (default 1)\n"
           "      --device N            OpenCL device (see `idmr devices`)\n"
           "      --quiet               no progress on stderr\n"
+          "  reduce SCENE --target D -o OUTDIR\n"
+          "                            the reduced scene: OUTDIR/scene.xml and meshes/*.ply with\n"
+          "                            about D of all vertices; takes the options of importance\n"
+          "      --method M            importance (default) or quadric (view-independent)\n"
+          "      --min-vertices N      meshes this small are not decimated (default 16)\n"
+          "      --max-normal-angle A  no collapse turns a face more than A degrees (default 60)\n"
+          "      --keep NAME           never decimate mesh NAME (repeatable; emitters never are)\n"
+          "      --threads N           decimation threads (default: all cores)\n"
+          "      --force               write into a non-empty OUTDIR\n"
           "\n"
           "global options:\n"
           "  -v, --verbose             log progress, kernel build options and timings\n"
@@ -344,22 +355,79 @@ enum {
     OPT_DEVICE,
     OPT_QUIET,
     OPT_LOCAL_SIZE,
+    OPT_TARGET,
+    OPT_METHOD,
+    OPT_MIN_VERTICES,
+    OPT_MAX_NORMAL_ANGLE,
+    OPT_KEEP,
+    OPT_FORCE,
+    OPT_THREADS,
 };
+
+/* Options of the importance pass, shared by `importance` and `reduce`. */
+#define IMPORTANCE_LONG_OPTIONS                                                             \
+    {"output", required_argument, NULL, 'o'},                                               \
+        {"iterations", required_argument, NULL, OPT_ITERATIONS},                            \
+        {"tolerance", required_argument, NULL, OPT_TOLERANCE},                              \
+        {"photons", required_argument, NULL, OPT_PHOTONS},                                  \
+        {"gamma", required_argument, NULL, OPT_GAMMA},                                      \
+        {"alpha", required_argument, NULL, OPT_ALPHA},                                      \
+        {"resolution", required_argument, NULL, OPT_RESOLUTION},                            \
+        {"seed", required_argument, NULL, OPT_SEED},                                        \
+        {"device", required_argument, NULL, OPT_DEVICE},                                    \
+        {"quiet", no_argument, NULL, OPT_QUIET},                                            \
+        {"local-size", required_argument, NULL, OPT_LOCAL_SIZE}
+
+/* Applies importance option `c`; returns 1 if it was one, 0 if not, -1 on a bad value. */
+static int parse_importance_option(int c, importance_options *o, int *device_index)
+{
+    double value;
+    unsigned int whole;
+    switch (c) {
+    case OPT_ITERATIONS:
+        return parse_unsigned("--iterations", optarg, 1, 1000000, &o->iterations) ? -1 : 1;
+    case OPT_TOLERANCE:
+        return parse_double("--tolerance", optarg, 0, 1e30, &o->tolerance) ? -1 : 1;
+    case OPT_PHOTONS:
+        return parse_unsigned("--photons", optarg, 1, 1u << 26, &o->photons) ? -1 : 1;
+    case OPT_GAMMA:
+        if (parse_double("--gamma", optarg, 0, 1e6, &value))
+            return -1;
+        o->gamma = (float)value;
+        return 1;
+    case OPT_ALPHA:
+        if (parse_double("--alpha", optarg, 1e-3, 1, &value))
+            return -1;
+        o->alpha = (float)value;
+        return 1;
+    case OPT_RESOLUTION:
+        if (parse_double("--resolution", optarg, 1e-3, 16, &value))
+            return -1;
+        o->resolution = (float)value;
+        return 1;
+    case OPT_SEED:
+        return parse_unsigned("--seed", optarg, 0, 0xffffffffu, &o->seed) ? -1 : 1;
+    case OPT_DEVICE:
+        if (parse_unsigned("--device", optarg, 0, 1000, &whole))
+            return -1;
+        *device_index = (int)whole;
+        return 1;
+    case OPT_QUIET:
+        o->progress = 0;
+        return 1;
+    case OPT_LOCAL_SIZE:
+        if (parse_unsigned("--local-size", optarg, 0, 4096, &whole))
+            return -1;
+        o->local_size = whole;
+        return 1;
+    default:
+        return 0;
+    }
+}
 
 static int command_importance(int argc, char **argv)
 {
-    static const struct option options[] = {{"output", required_argument, NULL, 'o'},
-                                            {"iterations", required_argument, NULL, OPT_ITERATIONS},
-                                            {"tolerance", required_argument, NULL, OPT_TOLERANCE},
-                                            {"photons", required_argument, NULL, OPT_PHOTONS},
-                                            {"gamma", required_argument, NULL, OPT_GAMMA},
-                                            {"alpha", required_argument, NULL, OPT_ALPHA},
-                                            {"resolution", required_argument, NULL, OPT_RESOLUTION},
-                                            {"seed", required_argument, NULL, OPT_SEED},
-                                            {"device", required_argument, NULL, OPT_DEVICE},
-                                            {"quiet", no_argument, NULL, OPT_QUIET},
-                                            {"local-size", required_argument, NULL, OPT_LOCAL_SIZE},
-                                            {0, 0, 0, 0}};
+    static const struct option options[] = {IMPORTANCE_LONG_OPTIONS, {0, 0, 0, 0}};
     importance_options o;
     importance_options_default(&o);
     o.progress = 1;
@@ -367,53 +435,15 @@ static int command_importance(int argc, char **argv)
     int device_index = -1;
     int c;
     while ((c = getopt_long(argc, argv, "o:", options, NULL)) != -1) {
-        double value;
-        unsigned int whole;
-        int status = 0;
-        switch (c) {
-        case 'o':
+        if (c == 'o') {
             output = optarg;
-            break;
-        case OPT_ITERATIONS:
-            status = parse_unsigned("--iterations", optarg, 1, 1000000, &o.iterations);
-            break;
-        case OPT_TOLERANCE:
-            status = parse_double("--tolerance", optarg, 0, 1e30, &o.tolerance);
-            break;
-        case OPT_PHOTONS:
-            status = parse_unsigned("--photons", optarg, 1, 1u << 26, &o.photons);
-            break;
-        case OPT_GAMMA:
-            status = parse_double("--gamma", optarg, 0, 1e6, &value);
-            o.gamma = (float)value;
-            break;
-        case OPT_ALPHA:
-            status = parse_double("--alpha", optarg, 1e-3, 1, &value);
-            o.alpha = (float)value;
-            break;
-        case OPT_RESOLUTION:
-            status = parse_double("--resolution", optarg, 1e-3, 16, &value);
-            o.resolution = (float)value;
-            break;
-        case OPT_SEED:
-            status = parse_unsigned("--seed", optarg, 0, 0xffffffffu, &o.seed);
-            break;
-        case OPT_DEVICE:
-            status = parse_unsigned("--device", optarg, 0, 1000, &whole);
-            device_index = (int)whole;
-            break;
-        case OPT_QUIET:
-            o.progress = 0;
-            break;
-        case OPT_LOCAL_SIZE:
-            status = parse_unsigned("--local-size", optarg, 0, 4096, &whole);
-            o.local_size = whole;
-            break;
-        default:
-            return usage_error("importance: unknown option %s", argv[optind - 1]);
+            continue;
         }
-        if (status)
+        int parsed = parse_importance_option(c, &o, &device_index);
+        if (parsed < 0)
             return fail();
+        if (parsed == 0)
+            return usage_error("importance: unknown option %s", argv[optind - 1]);
     }
     if (optind != argc - 1)
         return usage_error("importance: expected one SCENE argument%s", "");
@@ -451,6 +481,97 @@ static int command_importance(int argc, char **argv)
     return code;
 }
 
+/* ---- reduce ---- */
+
+static int command_reduce(int argc, char **argv)
+{
+    static const struct option options[] = {
+        IMPORTANCE_LONG_OPTIONS,
+        {"target", required_argument, NULL, OPT_TARGET},
+        {"method", required_argument, NULL, OPT_METHOD},
+        {"min-vertices", required_argument, NULL, OPT_MIN_VERTICES},
+        {"max-normal-angle", required_argument, NULL, OPT_MAX_NORMAL_ANGLE},
+        {"keep", required_argument, NULL, OPT_KEEP},
+        {"force", no_argument, NULL, OPT_FORCE},
+        {"threads", required_argument, NULL, OPT_THREADS},
+        {0, 0, 0, 0}};
+    reduce_options o;
+    reduce_options_default(&o);
+    o.importance.progress = 1;
+    const char *output = NULL;
+    int device_index = -1, have_target = 0;
+    const char **keep = xcalloc((size_t)argc + 1, sizeof *keep);
+    int c, code = 0;
+    while ((c = getopt_long(argc, argv, "o:", options, NULL)) != -1 && !code) {
+        unsigned int whole;
+        int status = 0;
+        switch (c) {
+        case 'o':
+            output = optarg;
+            break;
+        case OPT_TARGET:
+            status = parse_double("--target", optarg, 1e-9, 1, &o.target);
+            have_target = 1;
+            break;
+        case OPT_METHOD:
+            if (!strcmp(optarg, "importance"))
+                o.method = DECIMATE_IMPORTANCE;
+            else if (!strcmp(optarg, "quadric"))
+                o.method = DECIMATE_QUADRIC;
+            else
+                status = error_set(IDMR_EXIT_INPUT,
+                                   "--method: '%s' is neither 'importance' nor 'quadric'", optarg);
+            break;
+        case OPT_MIN_VERTICES:
+            status = parse_unsigned("--min-vertices", optarg, 0, 0xffffffffu, &whole);
+            o.min_vertices = whole;
+            break;
+        case OPT_MAX_NORMAL_ANGLE:
+            status = parse_double("--max-normal-angle", optarg, 1, 180, &o.max_normal_angle);
+            break;
+        case OPT_KEEP:
+            keep[o.keep_count++] = optarg;
+            break;
+        case OPT_FORCE:
+            o.force = 1;
+            break;
+        case OPT_THREADS:
+            status = parse_unsigned("--threads", optarg, 1, 1024, &o.threads);
+            break;
+        default: {
+            int parsed = parse_importance_option(c, &o.importance, &device_index);
+            if (parsed < 0)
+                status = -1;
+            else if (parsed == 0)
+                code = usage_error("reduce: unknown option %s", argv[optind - 1]);
+        }
+        }
+        if (status)
+            code = fail();
+    }
+    o.keep = keep;
+    if (!code && optind != argc - 1)
+        code = usage_error("reduce: expected one SCENE argument%s", "");
+    if (!code && (!output || !have_target))
+        code = usage_error("reduce: --target D and -o OUTDIR are required%s", "");
+    scene *s = code ? NULL : mitsuba_load(argv[optind]);
+    if (!code && !s)
+        code = fail();
+    if (!code) {
+        device d;
+        int status = device_open(&d, device_index);
+        if (!status) {
+            status = reduce_run(&d, s, output, &o);
+            device_close(&d);
+        }
+        if (status)
+            code = fail();
+    }
+    scene_free(s);
+    free(keep);
+    return code;
+}
+
 int main(int argc, char **argv)
 {
     int first = 1;
@@ -482,6 +603,8 @@ int main(int argc, char **argv)
         return command_info(sub_argc, sub_argv);
     if (!strcmp(command, "importance"))
         return command_importance(sub_argc, sub_argv);
+    if (!strcmp(command, "reduce"))
+        return command_reduce(sub_argc, sub_argv);
     if (!strcmp(command, "help")) {
         print_usage(stdout);
         return 0;

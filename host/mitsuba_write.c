@@ -506,7 +506,7 @@ static void add_filename(xmlNodePtr shape, const char *ply)
     xmlNodePtr element = xmlNewDocNode(shape->doc, NULL, (const xmlChar *)"string", NULL);
     xmlNewProp(element, (const xmlChar *)"name", (const xmlChar *)"filename");
     xmlNewProp(element, (const xmlChar *)"value", (const xmlChar *)ply);
-    char indent[256], text[260];
+    char indent[256], text[300];
     if (first) {
         indentation_of(first, indent, sizeof indent);
         snprintf(text, sizeof text, "\n%s", indent);
@@ -522,6 +522,13 @@ static void add_filename(xmlNodePtr shape, const char *ply)
     indentation_of(shape, indent, sizeof indent);
     const char *unit = strchr(indent, '\t') ? "\t" : "    ";
     snprintf(text, sizeof text, "\n%s%s", indent, unit);
+    xmlNodePtr tail = shape->last;
+    if (tail && tail->type == XML_TEXT_NODE && xmlIsBlankNode(tail)) {
+        /* [... blank before </shape>]: the element goes before it, indented. */
+        xmlAddPrevSibling(tail, element);
+        xmlAddPrevSibling(element, xmlNewDocText(shape->doc, (const xmlChar *)text));
+        return;
+    }
     xmlAddChild(shape, xmlNewDocText(shape->doc, (const xmlChar *)text));
     xmlAddChild(shape, element);
     snprintf(text, sizeof text, "\n%s", indent);

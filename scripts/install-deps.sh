@@ -6,6 +6,7 @@ set -eu
 
 PACKAGES="build-essential pkg-config pocl-opencl-icd ocl-icd-opencl-dev opencl-headers clinfo
 libembree-dev libopenmesh-dev libopenimageio-dev libxml2-dev libcjson-dev libcmocka-dev
+libmeshoptimizer-dev
 python3-matplotlib python3-numpy"
 
 missing=""

@@ -60,7 +60,7 @@ static inline scene *trace_scene_from_mesh(const char *path)
 }
 
 /* Embree scene over all meshes as one geometry whose primID is the scene triangle index. */
-static RTCScene trace_embree_scene(const scene *s)
+static inline RTCScene trace_embree_scene(const scene *s)
 {
     RTCDevice embree = bvh_embree_device();
     RTCScene es = rtcNewScene(embree);

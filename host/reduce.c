@@ -1,0 +1,325 @@
+/* reduce.c — the reduction pipeline behind `idmr reduce` (see reduce.h). */
+#include "reduce.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "budget.h"
+#include "bvh.h"
+#include "error.h"
+#include "importance_report.h"
+#include "mesh_io.h"
+#include "mitsuba_write.h"
+#include "report.h"
+
+static double seconds_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+void reduce_options_default(reduce_options *o)
+{
+    memset(o, 0, sizeof *o);
+    importance_options_default(&o->importance);
+    o->target = 0.1;
+    o->method = DECIMATE_IMPORTANCE;
+    o->min_vertices = 16;
+    o->max_normal_angle = 60.0;
+}
+
+/* OUTDIR: created if missing; an existing non-empty one needs force; never the scene's own
+ * directory (inputs are never written). */
+static int prepare_outdir(const scene *s, const char *outdir, int force)
+{
+    char scene_dir[PATH_MAX], out[PATH_MAX];
+    DIR *dir = opendir(outdir);
+    if (dir) {
+        struct dirent *entry;
+        int empty = 1;
+        while ((entry = readdir(dir)))
+            if (strcmp(entry->d_name, ".") && strcmp(entry->d_name, ".."))
+                empty = 0;
+        closedir(dir);
+        if (!empty && !force)
+            return error_set(IDMR_EXIT_INPUT,
+                             "output directory '%s' exists and is not empty (use --force to write "
+                             "into it)",
+                             outdir);
+    }
+    if (importance_make_directory(outdir))
+        return -1;
+    if (realpath(s->dir, scene_dir) && realpath(outdir, out) && strcmp(scene_dir, out) == 0)
+        return error_set(IDMR_EXIT_INPUT,
+                         "output directory '%s' is the scene's own directory: choose another "
+                         "(inputs are never overwritten)",
+                         outdir);
+    char meshes[PATH_MAX];
+    snprintf(meshes, sizeof meshes, "%s/meshes", outdir);
+    return importance_make_directory(meshes);
+}
+
+static int is_kept(const reduce_options *o, const char *name)
+{
+    for (size_t i = 0; i < o->keep_count; i++)
+        if (strcmp(o->keep[i], name) == 0)
+            return 1;
+    return 0;
+}
+
+typedef struct reduce_state {
+    size_t count;
+    double **vertex_importance;
+    decimate_input *input;
+    decimate_output *output;
+    int *status;
+    char (*messages)[512];
+    uint32_t *measured;
+    uint32_t *uncollapsible;
+    char **ply; /* relative to outdir, for decimated meshes */
+    budget_plan plan;
+    double seconds_importance, seconds_budget, seconds_decimation, seconds_write;
+} reduce_state;
+
+static void state_free(reduce_state *st)
+{
+    for (size_t m = 0; m < st->count; m++) {
+        free(st->vertex_importance ? st->vertex_importance[m] : NULL);
+        if (st->output)
+            decimate_output_free(&st->output[m]);
+        free(st->ply ? st->ply[m] : NULL);
+    }
+    free(st->vertex_importance);
+    free(st->input);
+    free(st->output);
+    free(st->status);
+    free(st->messages);
+    free(st->measured);
+    free(st->uncollapsible);
+    free(st->ply);
+    budget_plan_free(&st->plan);
+}
+
+static cJSON *reduce_report(const scene *s, const device *d, const reduce_options *o,
+                            const importance_result *r, const reduce_state *st, uint64_t after)
+{
+    cJSON *root = o->method == DECIMATE_IMPORTANCE ? importance_report_json(s, d, &o->importance, r)
+                                                   : cJSON_CreateObject();
+    if (o->method != DECIMATE_IMPORTANCE) {
+        cJSON_AddStringToObject(root, "scene", s->file);
+        cJSON_AddItemToObject(root, "meshes", cJSON_CreateArray());
+        cJSON_AddItemToObject(root, "seconds", cJSON_CreateObject());
+    }
+    cJSON_AddNumberToObject(root, "target", o->target);
+    cJSON_AddStringToObject(root, "method", o->method == DECIMATE_IMPORTANCE ? "importance" : "quadric");
+    cJSON_AddNumberToObject(root, "max_normal_angle", o->max_normal_angle);
+    cJSON_AddNumberToObject(root, "min_vertices", (double)o->min_vertices);
+    cJSON_AddNumberToObject(root, "vertices_before", (double)st->plan.total_before);
+    cJSON_AddNumberToObject(root, "vertices_requested", (double)st->plan.total_requested);
+    cJSON_AddNumberToObject(root, "vertices_planned", (double)st->plan.total_planned);
+    cJSON_AddNumberToObject(root, "vertices_after", (double)after);
+    cJSON_AddNumberToObject(root, "vertices_missed", (double)after - (double)st->plan.total_requested);
+    cJSON_AddBoolToObject(root, "uniform_fallback", st->plan.uniform_fallback);
+    cJSON *seconds = cJSON_GetObjectItem(root, "seconds");
+    cJSON_AddNumberToObject(seconds, "importance", st->seconds_importance);
+    cJSON_AddNumberToObject(seconds, "budget", st->seconds_budget);
+    cJSON_AddNumberToObject(seconds, "decimation", st->seconds_decimation);
+    cJSON_AddNumberToObject(seconds, "write", st->seconds_write);
+    cJSON *meshes = cJSON_GetObjectItem(root, "meshes");
+    for (size_t m = 0; m < s->mesh_count; m++) {
+        cJSON *mesh = cJSON_GetArrayItem(meshes, (int)m);
+        if (!mesh) {
+            mesh = cJSON_CreateObject();
+            cJSON_AddStringToObject(mesh, "name", s->meshes[m].name);
+            cJSON_AddNumberToObject(mesh, "vertices", s->meshes[m].vertex_count);
+            cJSON_AddNumberToObject(mesh, "triangles", s->meshes[m].triangle_count);
+            cJSON_AddItemToArray(meshes, mesh);
+        }
+        int decimated = st->plan.decimate[m];
+        cJSON_AddNumberToObject(mesh, "factor", st->plan.factor[m]);
+        cJSON_AddBoolToObject(mesh, "decimated", decimated);
+        cJSON_AddNumberToObject(mesh, "vertices_before", (double)st->measured[m]);
+        cJSON_AddNumberToObject(mesh, "vertices_target", (double)st->plan.target[m]);
+        cJSON_AddNumberToObject(mesh, "vertices_after",
+                                decimated ? st->output[m].mesh.vertex_count : st->measured[m]);
+        cJSON_AddNumberToObject(mesh, "triangles_after",
+                                decimated ? st->output[m].mesh.triangle_count
+                                          : s->meshes[m].triangle_count);
+        cJSON_AddNumberToObject(mesh, "vertices_uncollapsible", st->uncollapsible[m]);
+        if (decimated) {
+            cJSON_AddNumberToObject(mesh, "faces_patched", st->output[m].faces_patched);
+            cJSON_AddNumberToObject(mesh, "faces_loose", st->output[m].faces_loose);
+            cJSON_AddStringToObject(mesh, "file", st->ply[m]);
+        }
+        cJSON_AddBoolToObject(mesh, "pinned", s->meshes[m].light >= 0 || is_kept(o, s->meshes[m].name));
+    }
+    return root;
+}
+
+int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
+{
+    if (!(o->target > 0 && o->target <= 1))
+        return error_set(IDMR_EXIT_INPUT, "--target must be in (0, 1], not %g", o->target);
+    for (size_t k = 0; k < o->keep_count; k++) {
+        size_t m = 0;
+        while (m < s->mesh_count && strcmp(s->meshes[m].name, o->keep[k]))
+            m++;
+        if (m == s->mesh_count)
+            return error_set(IDMR_EXIT_INPUT, "--keep %s: the scene has no mesh of that name "
+                                              "(see `idmr info`)", o->keep[k]);
+    }
+    if (prepare_outdir(s, outdir, o->force))
+        return -1;
+
+    reduce_state st;
+    memset(&st, 0, sizeof st);
+    st.count = s->mesh_count;
+    importance_result r;
+    memset(&r, 0, sizeof r);
+    int status = 0;
+
+    /* Importance. */
+    double start = seconds_now();
+    bvh b;
+    memset(&b, 0, sizeof b);
+    if (o->method == DECIMATE_IMPORTANCE) {
+        status = bvh_build(s, &b) || importance_run(d, s, &b, &o->importance, &r);
+        if (!status) {
+            st.vertex_importance = xcalloc(st.count + 1, sizeof *st.vertex_importance);
+            for (size_t m = 0; m < st.count; m++) {
+                st.vertex_importance[m] =
+                    xmalloc((s->meshes[m].vertex_count + 1) * sizeof **st.vertex_importance);
+                importance_mesh_vertices(&r, s, m, o->importance.gamma, st.vertex_importance[m]);
+            }
+        }
+    }
+    st.seconds_importance = seconds_now() - start;
+
+    /* Budget over what the decimater will start from. */
+    start = seconds_now();
+    st.input = xcalloc(st.count + 1, sizeof *st.input);
+    st.output = xcalloc(st.count + 1, sizeof *st.output);
+    st.status = xcalloc(st.count + 1, sizeof *st.status);
+    st.messages = xcalloc(st.count + 1, sizeof *st.messages);
+    st.measured = xcalloc(st.count + 1, sizeof *st.measured);
+    st.uncollapsible = xcalloc(st.count + 1, sizeof *st.uncollapsible);
+    st.ply = xcalloc(st.count + 1, sizeof *st.ply);
+    budget_mesh *budget = xcalloc(st.count + 1, sizeof *budget);
+    for (size_t m = 0; m < st.count && !status; m++) {
+        const scene_mesh *mesh = &s->meshes[m];
+        decimate_input *in = &st.input[m];
+        in->name = mesh->name;
+        in->positions = mesh->positions;
+        in->vertex_count = mesh->vertex_count;
+        in->indices = mesh->indices;
+        in->triangle_count = mesh->triangle_count;
+        in->vertex_importance = st.vertex_importance ? st.vertex_importance[m] : NULL;
+        in->max_normal_angle = o->max_normal_angle;
+        status = decimate_measure(in, &st.measured[m], &st.uncollapsible[m]);
+        budget[m].name = mesh->name;
+        budget[m].vertices = st.measured[m];
+        budget[m].pinned = mesh->light >= 0 || is_kept(o, mesh->name);
+        if (o->method == DECIMATE_IMPORTANCE) {
+            double camera, light;
+            importance_mesh_sums(&r, s, m, o->importance.gamma, &budget[m].importance, &camera,
+                                 &light);
+        } else {
+            budget[m].importance = 1.0; /* equal factors: the uniform D of the baseline */
+        }
+    }
+    if (!status)
+        status = budget_distribute(budget, st.count, o->target, o->min_vertices, &st.plan);
+    free(budget);
+    st.seconds_budget = seconds_now() - start;
+
+    /* Decimation of the meshes the plan decimates, in parallel, largest first. */
+    start = seconds_now();
+    uint64_t after = 0;
+    if (!status) {
+        decimate_input *jobs = xcalloc(st.count + 1, sizeof *jobs);
+        decimate_output *results = xcalloc(st.count + 1, sizeof *results);
+        int *job_status = xcalloc(st.count + 1, sizeof *job_status);
+        char(*job_messages)[512] = xcalloc(st.count + 1, sizeof *job_messages);
+        size_t *job_mesh = xcalloc(st.count + 1, sizeof *job_mesh);
+        size_t n = 0;
+        for (size_t m = 0; m < st.count; m++)
+            if (st.plan.decimate[m]) {
+                jobs[n] = st.input[m];
+                jobs[n].target_vertices = st.plan.target[m];
+                job_mesh[n++] = m;
+            }
+        unsigned int threads = o->threads ? o->threads : (unsigned int)sysconf(_SC_NPROCESSORS_ONLN);
+        progress bar;
+        progress_begin(&bar, "decimation", 1, o->importance.progress);
+        size_t failed = decimate_many(jobs, results, job_status, job_messages, n, o->method, threads);
+        progress_update(&bar, 1, NULL);
+        progress_end(&bar);
+        for (size_t j = 0; j < n; j++) {
+            st.output[job_mesh[j]] = results[j];
+            if (job_status[j] && !status)
+                status = error_set(IDMR_EXIT_FAILURE, "%s", job_messages[j]);
+        }
+        (void)failed;
+        free(jobs);
+        free(results);
+        free(job_status);
+        free(job_messages);
+        free(job_mesh);
+        for (size_t m = 0; m < st.count; m++)
+            after += st.plan.decimate[m] ? st.output[m].mesh.vertex_count : st.measured[m];
+    }
+    st.seconds_decimation = seconds_now() - start;
+
+    /* Output. */
+    start = seconds_now();
+    mitsuba_replacement *replacements = xcalloc(st.count + 1, sizeof *replacements);
+    size_t replaced = 0;
+    for (size_t m = 0; m < st.count && !status; m++) {
+        if (!st.plan.decimate[m])
+            continue;
+        char name[256], path[PATH_MAX];
+        importance_file_name(s->meshes[m].name, name, sizeof name);
+        size_t length = strlen(name) + 16;
+        st.ply[m] = xmalloc(length);
+        snprintf(st.ply[m], length, "meshes/%s.ply", name);
+        snprintf(path, sizeof path, "%s/%s", outdir, st.ply[m]);
+        status = mesh_io_write_ply(path, &st.output[m].mesh, NULL, NULL, NULL);
+        replacements[replaced++] =
+            (mitsuba_replacement){s->meshes[m].xml_file, s->meshes[m].xml_line, st.ply[m]};
+    }
+    if (!status)
+        status = mitsuba_write_reduced(s->file, outdir, replacements, replaced);
+    free(replacements);
+    st.seconds_write = seconds_now() - start;
+    if (!status) {
+        cJSON *report = reduce_report(s, d, o, &r, &st, after);
+        if (o->method == DECIMATE_IMPORTANCE) {
+            status = importance_write_outputs(outdir, report, s, &b, d, &o->importance, &r);
+        } else {
+            char path[PATH_MAX];
+            snprintf(path, sizeof path, "%s/report.json", outdir);
+            status = report_write_json(report, path);
+        }
+        cJSON_Delete(report);
+        if (!status)
+            fprintf(stderr,
+                    "idmr: %llu -> %llu vertices (target %.4g: %llu), %zu of %zu meshes decimated; "
+                    "reduced scene in %s/scene.xml\n",
+                    (unsigned long long)st.plan.total_before, (unsigned long long)after, o->target,
+                    (unsigned long long)st.plan.total_requested, replaced, st.count, outdir);
+    }
+    if (b.nodes)
+        bvh_free(&b);
+    importance_result_free(&r);
+    state_free(&st);
+    return status ? -1 : 0;
+}
