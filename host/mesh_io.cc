@@ -4,6 +4,7 @@
 #include <OpenMesh/Core/System/omstream.hh>
 
 #include <cerrno>
+#include <utility>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -53,6 +54,14 @@ int check_readable(const char *path)
 
 extern "C" int mesh_io_read(const char *path, mesh_data *out)
 {
+    return mesh_io_read_oriented(path, out, 0, nullptr);
+}
+
+extern "C" int mesh_io_read_oriented(const char *path, mesh_data *out, int orient,
+                                     uint32_t *flipped)
+{
+    if (flipped)
+        *flipped = 0;
     std::memset(out, 0, sizeof *out);
     if (check_readable(path) != 0)
         return -1;
@@ -60,7 +69,10 @@ extern "C" int mesh_io_read(const char *path, mesh_data *out)
 
     TriMesh mesh;
     mesh.request_vertex_texcoords2D();
+    mesh.request_vertex_normals();
     OpenMesh::IO::Options options = OpenMesh::IO::Options::VertexTexCoord;
+    if (orient)
+        options += OpenMesh::IO::Options::VertexNormal;
     bool ok;
     try {
         ok = OpenMesh::IO::read_mesh(mesh, path, options);
@@ -90,6 +102,22 @@ extern "C" int mesh_io_read(const char *path, mesh_data *out)
     for (auto f : mesh.faces())
         for (auto v : mesh.fv_range(f))
             out->indices[corner++] = (uint32_t)v.idx();
+    if (orient && options.check(OpenMesh::IO::Options::VertexNormal)) {
+        for (uint32_t t = 0; t < out->triangle_count; t++) {
+            uint32_t *ix = &out->indices[3 * (size_t)t];
+            TriMesh::Point a = mesh.point(TriMesh::VertexHandle((int)ix[0]));
+            TriMesh::Point b = mesh.point(TriMesh::VertexHandle((int)ix[1]));
+            TriMesh::Point c = mesh.point(TriMesh::VertexHandle((int)ix[2]));
+            TriMesh::Normal sum = mesh.normal(TriMesh::VertexHandle((int)ix[0])) +
+                                  mesh.normal(TriMesh::VertexHandle((int)ix[1])) +
+                                  mesh.normal(TriMesh::VertexHandle((int)ix[2]));
+            if (OpenMesh::dot(OpenMesh::cross(b - a, c - a), sum) < 0) {
+                std::swap(ix[1], ix[2]);
+                if (flipped)
+                    (*flipped)++;
+            }
+        }
+    }
     if (options.check(OpenMesh::IO::Options::VertexTexCoord)) {
         out->texcoords = (float *)xmalloc(2 * sizeof(float) * out->vertex_count);
         for (auto v : mesh.vertices()) {

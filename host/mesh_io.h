@@ -25,6 +25,13 @@ typedef struct mesh_data {
  * missing, unreadable, unknown format, or no triangles. `out` is zeroed on failure. */
 int mesh_io_read(const char *path, mesh_data *out);
 
+/* As mesh_io_read(); in addition, when `orient` is set and the file has vertex normals, every
+ * triangle is wound so that its geometric normal agrees with the sum of its vertex normals
+ * (Mitsuba takes a mesh's front side — where area lights emit and one-sided bsdfs reflect —
+ * from its normals, which some files give against the winding). *flipped (may be NULL) gets
+ * the number of triangles turned. */
+int mesh_io_read_oriented(const char *path, mesh_data *out, int orient, uint32_t *flipped);
+
 /* Writes `mesh` as a binary PLY through OpenMesh, with an optional per-vertex float property
  * `value_name` (values may be NULL) and optional per-vertex RGB colours (colors: 3 bytes per
  * vertex, may be NULL). The file is written under a temporary name and renamed. A face that

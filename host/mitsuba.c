@@ -1487,7 +1487,11 @@ static int shape_read_file(loader *ld, xmlNodePtr node, mesh_data *mesh, char **
     *file = resolve_path(ld, prop_find(node, "filename"), *written);
     if (access(*file, R_OK) != 0)
         return fail(node, "cannot read '%s' (%s): %s", *written, *file, strerror(errno));
-    if (mesh_io_read(*file, mesh))
+    /* Mitsuba's front side comes from the file's normals unless face_normals is set. */
+    int face_normals;
+    if (prop_bool(node, "face_normals", 0, &face_normals))
+        return -1;
+    if (mesh_io_read_oriented(*file, mesh, !face_normals, NULL))
         return fail_prefix(node);
     return 0;
 }

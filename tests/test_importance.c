@@ -85,16 +85,27 @@ static void small_options(importance_options *o, unsigned int iterations, unsign
     o->snapshot = snapshot;
 }
 
-/* Builds the BVH and runs the pass; any failure fails the test with the error message. */
+static void build_or_fail(const scene *s, bvh *b)
+{
+    if (bvh_build(s, b))
+        fail_msg("bvh_build: %s", error_message());
+}
+
+/* Runs the pass on a built BVH; any failure fails the test with the error message. */
+static void run_on_bvh(const scene *s, const bvh *b, const importance_options *o,
+                       importance_result *r)
+{
+    if (importance_run(&dev, s, b, o, r))
+        fail_msg("importance_run: %s", error_message());
+}
+
+/* Builds the BVH and runs the pass. */
 static void run_or_fail(const scene *s, const importance_options *o, importance_result *r)
 {
     bvh b;
-    if (bvh_build(s, &b))
-        fail_msg("bvh_build: %s", error_message());
-    int status = importance_run(&dev, s, &b, o, r);
+    build_or_fail(s, &b);
+    run_on_bvh(s, &b, o, r);
     bvh_free(&b);
-    if (status)
-        fail_msg("importance_run: %s", error_message());
 }
 
 static void expect_all_finite(const importance_result *r)
@@ -219,19 +230,20 @@ static void test_camera_weight_head_on_quad(void **state)
 
 /* ---- 2. camera pass against Embree ---- */
 
-/* A diffuse floor, a glossy sphere and a diffuse box under a point light, seen from a camera
- * with background on three sides; the film is scaled by 0.5 (192 x 128 -> 96 x 64). Per
+/* A diffuse floor (wound facing down, so the camera sees its back), a glossy sphere and a
+ * diffuse box under a point light, seen from a camera with background on three sides; the
+ * film is scaled by 0.5 (192 x 128 -> 96 x 64). Per
  * triangle, the device's camera importance of one iteration equals the sum of Eq. 2 weights
  * over the same rays traced by Embree, within 2^-20 per hit plus 1e-4 relative (rays within
  * 1e-5 of a triangle edge, in barycentrics, may go to the neighbour: their weights widen the
  * bound). Hit points: valid exactly where Embree hits (no specular surface here), at Embree's
- * hit position within 1e-4 of the scene diagonal. */
+ * hit position within 1e-4 of the scene diagonal, with the normal of the side the camera sees. */
 static void test_camera_pass_matches_embree(void **state)
 {
     scene *s = scene_create("camera-vs-embree.xml");
     uint32_t white = imp_diffuse(s, "white", 0.8f, 0), glossy = imp_glossy(s, "glossy");
-    const float fc[3] = {0, 0, 0}, fu[3] = {0, 0, 2}, fv[3] = {2, 0, 0};
-    imp_add_quad(s, "floor", white, fc, fu, fv);
+    const float fc[3] = {0, 0, 0}, fu[3] = {2, 0, 0}, fv[3] = {0, 0, 2};
+    imp_add_quad(s, "floor", white, fc, fu, fv); /* wound facing down: seen from its back */
     const float sc[3] = {0.6f, 0.5f, 0.0f};
     imp_add_sphere(s, "sphere", glossy, sc, 0.5f);
     const float lo[3] = {-1.2f, 0.0f, -0.6f}, hi[3] = {-0.4f, 0.8f, 0.2f};
@@ -257,7 +269,7 @@ static void test_camera_pass_matches_embree(void **state)
     double *expected = calloc(triangles, sizeof *expected);
     unsigned int *hits = calloc(triangles, sizeof *hits);
     double ambiguous = 0, diagonal = imp_scene_diagonal(s), worst_position = 0;
-    size_t embree_hits = 0, valid_mismatches = 0, position_errors = 0;
+    size_t embree_hits = 0, valid_mismatches = 0, position_errors = 0, ambiguous_rays = 0;
     RTCScene es = trace_embree_scene(s);
     for (unsigned int p = 0; p < width * height; p++) {
         float d[3];
@@ -278,8 +290,10 @@ static void test_camera_pass_matches_embree(void **state)
         expected[hit.triangle] += w;
         hits[hit.triangle]++;
         float edge = fminf(fminf(hit.u, hit.v), 1.0f - hit.u - hit.v);
-        if (edge < 1e-5f)
+        if (edge < 1e-5f) {
             ambiguous += w;
+            ambiguous_rays++;
+        }
         if (!hp->valid) {
             valid_mismatches++;
             continue;
@@ -295,12 +309,14 @@ static void test_camera_pass_matches_embree(void **state)
     rtcReleaseScene(es);
 
     size_t triangle_errors = 0, triangles_hit = 0;
-    double worst = 0;
+    double worst = 0, total_error = 0, total_bound = 2 * ambiguous;
     for (size_t t = 0; t < triangles; t++) {
         double on_device = (double)snap.camera_fixed[t] * FIXED_UNIT;
         double bound = hits[t] * FIXED_UNIT + 1e-4 * expected[t] + ambiguous;
         double error = fabs(on_device - expected[t]);
         triangles_hit += hits[t] > 0;
+        total_error += error;
+        total_bound += bound - ambiguous;
         if (bound > 0)
             worst = fmax(worst, error / bound);
         if (error > bound && triangle_errors++ < 5)
@@ -310,10 +326,13 @@ static void test_camera_pass_matches_embree(void **state)
             triangle_errors++;
     }
     print_message("  %u pixels, %zu Embree hits on %zu triangles; %zu triangle sums off "
-                  "(worst %.3f of the bound, ambiguous weight %.2e); %zu hit point validity "
-                  "mismatches, %zu position errors (worst %.2e of the diagonal)\n",
-                  width * height, embree_hits, triangles_hit, triangle_errors, worst, ambiguous,
-                  valid_mismatches, position_errors, worst_position);
+                  "(worst %.3f of the bound; %zu rays at an edge, weight %.2e); Σ|error| %.2e "
+                  "(bound %.2e); %zu hit point validity mismatches, %zu position errors (worst "
+                  "%.2e of the diagonal)\n",
+                  width * height, embree_hits, triangles_hit, triangle_errors, worst,
+                  ambiguous_rays, ambiguous, total_error, total_bound, valid_mismatches,
+                  position_errors, worst_position);
+    assert_true(total_error <= total_bound); /* a ray at an edge moves its weight once */
     assert_true(embree_hits > width * height / 2 && embree_hits < width * height);
     assert_true(triangles_hit > 200); /* the sphere's triangles are exercised */
     assert_int_equal(triangle_errors, 0);
@@ -650,6 +669,69 @@ static void test_area_light_emission_cosine(void **state)
     scene_free(s);
 }
 
+/* Two parallel planes 200 wide: a floor (y = 0, facing up, reflectance (0.3, 0.6, 0.45)) and a
+ * ceiling (y = 1, facing up: its back faces the point light at y = 0.5). A path scattered at
+ * either plane almost surely (>= 1 - 1e-4) hits the other one, so the fraction of paths going
+ * on after their first vertex measures the scattering: on the floor, Russian roulette with
+ * survival = the largest channel, 0.6; on the ceiling's back, 0 when it is one-sided (the back
+ * absorbs), its albedo 0.8 when it is two-sided. Within 5 binomial σ. The ceiling's vertices
+ * carry the normal of the side the photon arrived from (down). */
+static void expect_continuing(const char *what, size_t continuing, size_t paths, double expected)
+{
+    double fraction = (double)continuing / paths;
+    double sigma = sqrt(fmax(expected * (1 - expected), 1e-4 * (1 - 1e-4)) / paths);
+    print_message("  %s: %zu of %zu paths go on, %.4f, expected %.4f (%.2f σ)\n", what,
+                  continuing, paths, fraction, expected, (fraction - expected) / sigma);
+    assert_true(paths > 10000);
+    assert_true(fabs(fraction - expected) <= 5 * sigma + 1e-4);
+}
+
+static void test_roulette_and_one_sided_back(void **state)
+{
+    for (int twosided = 0; twosided < 2; twosided++) {
+        scene *s = scene_create("roulette.xml");
+        idmr_material coloured = {{0.3f, 0.6f, 0.45f}, IDMR_MATERIAL_DIFFUSE, {0, 0, 0}, 0, 1, 1,
+                                  -1, 0};
+        uint32_t floor_material = scene_add_material(s, "coloured", "diffuse", &coloured);
+        uint32_t ceiling_material =
+            imp_diffuse(s, "white", 0.8f, twosided ? IDMR_MATERIAL_TWOSIDED : 0u);
+        const float fc[3] = {0, 0, 0}, cc[3] = {0, 1, 0}, u[3] = {0, 0, 100}, v[3] = {100, 0, 0};
+        imp_add_quad(s, "floor", floor_material, fc, u, v);     /* triangles 0, 1 */
+        imp_add_quad(s, "ceiling", ceiling_material, cc, u, v); /* triangles 2, 3 */
+        const float light[3] = {0, 0.5f, 0}, eye[3] = {0, 0.5f, 5}, target[3] = {0, 0, 0},
+                    up[3] = {0, 1, 0};
+        imp_point_light(s, light, 1.0f);
+        imp_look_at(s, eye, target, up, 32, 32, 0.8f);
+        finalize_or_fail(s);
+        importance_snapshot snap = {0};
+        importance_options o;
+        small_options(&o, 1, 100000, &snap);
+        importance_result r;
+        run_or_fail(s, &o, &r);
+        size_t on[2] = {0, 0}, going_on[2] = {0, 0};
+        for (size_t p = 0; p < snap.params.path_count; p++) {
+            if (snap.path_length[p] == 0)
+                continue;
+            const idmr_photon_vertex *vx = &snap.vertices[p * IDMR_PATH_VERTICES];
+            int ceiling = vx->triangle >= 2;
+            on[ceiling]++;
+            going_on[ceiling] += snap.path_length[p] > 1;
+            if (ceiling)
+                assert_true(vx->normal[1] < -0.999f);
+        }
+        if (!twosided)
+            expect_continuing("floor (survival = max channel 0.6)", going_on[0], on[0], 0.6);
+        expect_continuing(twosided ? "two-sided ceiling's back (albedo 0.8)"
+                                   : "one-sided ceiling's back",
+                          going_on[1], on[1], twosided ? 0.8 : 0.0);
+        if (!twosided)
+            assert_int_equal(going_on[1], 0);
+        importance_snapshot_free(&snap);
+        importance_result_free(&r);
+        scene_free(s);
+    }
+}
+
 /* ---- 7. a triangle the camera cannot see ---- */
 
 /* A floor seen by the camera, a point light over it, and a wall behind the camera (z = 6,
@@ -763,14 +845,15 @@ static void test_glass_caustic(void **state)
 
 /* ---- 9. determinism ---- */
 
-static void cornell_run(const scene *s, unsigned int seed, size_t local, importance_result *r)
+static void cornell_run(const scene *s, const bvh *b, unsigned int seed, size_t local,
+                        importance_result *r)
 {
     importance_options o;
     small_options(&o, 2, 20000, NULL);
     o.resolution = 0.25f;
     o.seed = seed;
     o.local_size = local;
-    run_or_fail(s, &o, r);
+    run_on_bvh(s, b, &o, r);
 }
 
 static int same_result(const importance_result *a, const importance_result *b)
@@ -786,15 +869,17 @@ static int same_result(const importance_result *a, const importance_result *b)
 static void test_deterministic(void **state)
 {
     scene *s = load_or_fail(CORNELL);
+    bvh b;
+    build_or_fail(s, &b);
     importance_result base, again, one, sixty_four, other_seed, no_int64;
-    cornell_run(s, 1, 0, &base);
-    cornell_run(s, 1, 0, &again);
-    cornell_run(s, 1, 1, &one);
-    cornell_run(s, 1, 64, &sixty_four);
-    cornell_run(s, 2, 0, &other_seed);
+    cornell_run(s, &b, 1, 0, &base);
+    cornell_run(s, &b, 1, 0, &again);
+    cornell_run(s, &b, 1, 1, &one);
+    cornell_run(s, &b, 1, 64, &sixty_four);
+    cornell_run(s, &b, 2, 0, &other_seed);
     int had_int64 = dev.info.int64_atomics;
     dev.info.int64_atomics = 0;
-    cornell_run(s, 1, 0, &no_int64);
+    cornell_run(s, &b, 1, 0, &no_int64);
     dev.info.int64_atomics = had_int64;
     print_message("  device int64 atomics: %d; fallback options: %s\n", had_int64,
                   no_int64.build_options);
@@ -811,6 +896,7 @@ static void test_deterministic(void **state)
     importance_result *all[] = {&base, &again, &one, &sixty_four, &other_seed, &no_int64};
     for (int i = 0; i < 6; i++)
         importance_result_free(all[i]);
+    bvh_free(&b);
     scene_free(s);
 }
 
@@ -1122,6 +1208,7 @@ int main(void)
         cmocka_unit_test(test_path_importance_exact),
         cmocka_unit_test(test_point_light_emission_solid_angle),
         cmocka_unit_test(test_area_light_emission_cosine),
+        cmocka_unit_test(test_roulette_and_one_sided_back),
         cmocka_unit_test(test_hidden_triangle),
         cmocka_unit_test(test_glass_caustic),
         cmocka_unit_test(test_deterministic),

@@ -507,6 +507,39 @@ static void test_shape_rectangle(void **state)
 
 /* A mirroring to_world turns a built-in shape's normal (Mitsuba transforms it as a normal), so
  * the winding must flip with it: the rectangle mirrored in z faces -z. */
+/* An OBJ whose normals (vn) oppose its winding: the front side comes from the normals, as in
+ * Mitsuba, so the triangle is turned; with face_normals the winding rules and stays. */
+static void test_obj_oriented_by_its_normals(void **state)
+{
+    write_file("flipped.obj", "v 0 0 0\nv 0 1 0\nv 1 0 0\nvn 0 0 1\nf 1//1 2//1 3//1\n");
+    /* winding (0,0,0) (0,1,0) (1,0,0): normal (0,1,0) x (1,0,0) = (0,0,-1), against vn +z */
+    for (int face_normals = 0; face_normals < 2; face_normals++) {
+        char text[512];
+        snprintf(text, sizeof text,
+                 "<scene version=\"3.0.0\">\n"
+                 "  <shape type=\"obj\">\n"
+                 "    <string name=\"filename\" value=\"flipped.obj\"/>\n"
+                 "    <boolean name=\"face_normals\" value=\"%s\"/>\n"
+                 "  </shape>\n"
+                 "</scene>\n",
+                 face_normals ? "true" : "false");
+        warn_silence(1);
+        scene *s = mitsuba_load(write_file("scene.xml", text));
+        warn_silence(0);
+        if (!s)
+            fail_msg("load failed: %s", error_message());
+        const scene_mesh *m = &s->meshes[0];
+        const float *a = &m->positions[3 * m->indices[0]], *b = &m->positions[3 * m->indices[1]],
+                    *c = &m->positions[3 * m->indices[2]];
+        float nz = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+        if (face_normals)
+            assert_true(nz < 0); /* the winding as written */
+        else
+            assert_true(nz > 0); /* turned to face +z like the normals */
+        scene_free(s);
+    }
+}
+
 static void test_shape_mirrored_builtin(void **state)
 {
     scene *s = load_ok("<scene version=\"3.0.0\">\n"
@@ -1227,6 +1260,7 @@ int main(void)
         cmocka_unit_test(test_no_sensor_warns),
         cmocka_unit_test(test_shape_rectangle),
         cmocka_unit_test(test_shape_mirrored_builtin),
+        cmocka_unit_test(test_obj_oriented_by_its_normals),
         cmocka_unit_test(test_shape_cube_sphere_disk),
         cmocka_unit_test(test_shape_obj_file),
         cmocka_unit_test(test_area_emitter_attaches),
