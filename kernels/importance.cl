@@ -234,7 +234,9 @@ kernel void grid_scatter(idmr_importance_params params, global const idmr_hit_po
     grid_points[atomic_inc(cell_cursor + h)] = i;
 }
 
-/* Hit points within the radius of point p whose normal faces the same side as `side`. The
+/* Hit points within the radius of point p whose normal faces the same side as `side` (cosine
+ * above 1e-3, so that faces meeting at a right angle never gather each other's hit points on
+ * the sign of a rounding error: that made the result depend on the scene's scale). The
  * cell size is at least twice the radius, so the ball touches at most 2 x 2 x 2 cells; buckets
  * that two of them share (hash collisions) are visited once. */
 inline uint count_hit_points_near(float3 p, float3 side, const idmr_importance_params *params,
@@ -260,7 +262,7 @@ inline uint count_hit_points_near(float3 p, float3 side, const idmr_importance_p
                 for (uint i = cell_start[h]; i < cell_start[h + 1]; i++) {
                     global const idmr_hit_point *hp = hit_points + grid_points[i];
                     float3 delta = vload3(0, hp->position) - p;
-                    if (dot(delta, delta) < r2 && dot(vload3(0, hp->normal), side) > 0.0f)
+                    if (dot(delta, delta) < r2 && dot(vload3(0, hp->normal), side) > 1e-3f)
                         count++;
                 }
             }

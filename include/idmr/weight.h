@@ -15,6 +15,9 @@
 
 IDMR_INLINE float idmr_eq2_weight(float nx, float ny, float nz, float dx, float dy, float dz)
 {
+    /* NaN anywhere: no direction (x != x only for NaN; fmax below would skip it). */
+    if (nx != nx || ny != ny || nz != nz || dx != dx || dy != dy || dz != dz)
+        return 0.0f;
     /* Scale both by their largest component first: no overflow for huge coordinates, no
      * underflow for tiny ones. */
     float dm = fmax(fabs(dx), fmax(fabs(dy), fabs(dz)));
