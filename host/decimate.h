@@ -46,7 +46,7 @@ typedef struct decimate_input {
     const uint32_t *indices;
     uint32_t triangle_count;
     const double *vertex_importance; /* per input vertex; needed by DECIMATE_IMPORTANCE */
-    uint64_t target_vertices;        /* vertices to keep, counted as decimate_measure() counts */
+    uint64_t target_vertices;        /* vertices to keep; where welding leaves fewer, fewer */
     double max_normal_angle;         /* degrees; default 60 (the paper's α_max) */
     int verify_heap;  /* tests: after every collapse, count heap entries whose stored priority or
                          target differs from a fresh evaluation (heap_violations) */

@@ -147,10 +147,11 @@ static cJSON *reduce_report(const scene *s, const device *d, const reduce_option
         int decimated = st->plan.decimate[m];
         cJSON_AddNumberToObject(mesh, "factor", st->plan.factor[m]);
         cJSON_AddBoolToObject(mesh, "decimated", decimated);
-        cJSON_AddNumberToObject(mesh, "vertices_before", (double)st->measured[m]);
+        cJSON_AddNumberToObject(mesh, "vertices_before", s->meshes[m].vertex_count);
+        cJSON_AddNumberToObject(mesh, "vertices_welded", (double)st->measured[m]);
         cJSON_AddNumberToObject(mesh, "vertices_target", (double)st->plan.target[m]);
-        cJSON_AddNumberToObject(mesh, "vertices_after",
-                                decimated ? st->output[m].mesh.vertex_count : st->measured[m]);
+        cJSON_AddNumberToObject(mesh, "vertices_after", decimated ? st->output[m].mesh.vertex_count
+                                                                  : s->meshes[m].vertex_count);
         cJSON_AddNumberToObject(mesh, "triangles_after",
                                 decimated ? st->output[m].mesh.triangle_count
                                           : s->meshes[m].triangle_count);
@@ -204,7 +205,7 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
     }
     st.seconds_importance = seconds_now() - start;
 
-    /* Budget over what the decimater will start from. */
+    /* Budget: measure what the decimater will start from (welded, uncollapsible), then plan. */
     start = seconds_now();
     st.input = xcalloc(st.count + 1, sizeof *st.input);
     st.output = xcalloc(st.count + 1, sizeof *st.output);
@@ -226,7 +227,9 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
         in->max_normal_angle = o->max_normal_angle;
         status = decimate_measure(in, &st.measured[m], &st.uncollapsible[m]);
         budget[m].name = mesh->name;
-        budget[m].vertices = st.measured[m];
+        /* Counted as the scene holds them, so the totals match what `idmr info` says of the
+         * input and of the reduced scene. */
+        budget[m].vertices = mesh->vertex_count;
         budget[m].pinned = mesh->light >= 0 || is_kept(o, mesh->name);
         if (o->method == DECIMATE_IMPORTANCE) {
             double camera, light;
@@ -275,7 +278,7 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
         free(job_messages);
         free(job_mesh);
         for (size_t m = 0; m < st.count; m++)
-            after += st.plan.decimate[m] ? st.output[m].mesh.vertex_count : st.measured[m];
+            after += st.plan.decimate[m] ? st.output[m].mesh.vertex_count : s->meshes[m].vertex_count;
     }
     st.seconds_decimation = seconds_now() - start;
 
