@@ -1,6 +1,6 @@
 #!/bin/sh
-# demo.sh — what `make demo` runs: the main job on the scene the repository ships
-# (data/cornell/scene.xml), with its output under out/demo/.
+# demo.sh — what `make demo` runs: the main job, `idmr reduce`, on the scene the repository
+# ships (data/cornell/scene.xml), with its output under out/demo/.
 set -eu
 cd "$(dirname "$0")/.."
 scene=data/cornell/scene.xml
@@ -11,14 +11,12 @@ bin/idmr devices
 echo
 echo "== idmr info $scene"
 bin/idmr info "$scene"
-bin/idmr info --json "$scene" > "$out/info.json.tmp"
-mv "$out/info.json.tmp" "$out/info.json"
 echo
-echo "== idmr importance $scene -o $out/importance --iterations 20"
-bin/idmr importance "$scene" -o "$out/importance" --iterations 20
+echo "== idmr reduce $scene --target 0.1 --iterations 20 -o $out/reduced --force"
+bin/idmr reduce "$scene" --target 0.1 --iterations 20 -o "$out/reduced" --force
 echo
-echo "demo: outputs in $out/:"
-echo "  info.json                      the scene summary"
-echo "  importance/importance.png      what the camera sees, coloured by importance"
-echo "  importance/importance/*.ply    each mesh with per-vertex importance (any mesh viewer)"
-echo "  importance/report.json         timings, per-mesh importance, convergence"
+echo "demo: the reduced scene is $out/reduced/scene.xml (Mitsuba XML, meshes in $out/reduced/meshes/)"
+echo "  $out/reduced/report.json          vertex counts per mesh, factors, timings, convergence"
+echo "  $out/reduced/importance.png       what the camera sees, coloured by importance"
+echo "  $out/reduced/importance/NAME.ply  each original mesh with per-vertex importance"
+echo "  idmr info $out/reduced/scene.xml  to inspect it"

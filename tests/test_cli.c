@@ -219,6 +219,34 @@ static void test_usage_errors(void **state)
     run_free(&r);
 }
 
+/* importance and reduce: every bad option value is refused with exit 2 and a message naming it,
+ * before any work starts. */
+static void test_pass_option_errors(void **state)
+{
+    const struct {
+        const char *command, *expect;
+    } cases[] = {
+        {"bin/idmr importance data/cornell/scene.xml", "-o DIR is required"},
+        {"bin/idmr importance data/cornell/scene.xml -o /tmp/x --iterations 0", "--iterations"},
+        {"bin/idmr importance data/cornell/scene.xml -o /tmp/x --photons many", "--photons"},
+        {"bin/idmr importance data/cornell/scene.xml -o /tmp/x --alpha 1.5", "--alpha"},
+        {"bin/idmr importance data/cornell/scene.xml -o /tmp/x --gamma -1", "--gamma"},
+        {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x", "--target D and -o OUTDIR"},
+        {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x --target 0", "--target"},
+        {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x --target 0.5 --method median",
+         "'median'"},
+        {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x --target 0.5 --max-normal-angle 0",
+         "--max-normal-angle"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        run_result r = run(cases[i].command);
+        if (r.status != 2 || !strstr(r.err, cases[i].expect))
+            fail_msg("'%s': exit %d, message '%s' (expected 2 and '%s')", cases[i].command,
+                     r.status, r.err, cases[i].expect);
+        run_free(&r);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -230,6 +258,7 @@ int main(void)
         cmocka_unit_test(test_missing_mesh_is_named),
         cmocka_unit_test(test_malformed_xml),
         cmocka_unit_test(test_usage_errors),
+        cmocka_unit_test(test_pass_option_errors),
     };
     return cmocka_run_group_tests_name("cli", tests, NULL, NULL);
 }
