@@ -1,11 +1,15 @@
 /* device.c — OpenCL discovery, program build and buffers (see device.h). */
 #include "device.h"
 
+#include <dirent.h>
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "error.h"
+#include "report.h"
 
 #ifndef IDMR_ROOT
 #define IDMR_ROOT "."
@@ -238,11 +242,163 @@ static char *read_text_file(const char *path, size_t *length)
     return text;
 }
 
+/* ---- program cache ---- */
+
+static _Thread_local int last_build_cached;
+
+int device_last_build_cached(void) { return last_build_cached; }
+
+static uint64_t fnv1a(uint64_t hash, const void *bytes, size_t size)
+{
+    const unsigned char *p = bytes;
+    for (size_t i = 0; i < size; i++) {
+        hash ^= p[i];
+        hash *= 1099511628211ull;
+    }
+    return hash;
+}
+
+static int compare_names(const void *a, const void *b)
+{
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+/* Hashes the names and contents of the regular files of `dir`, in name order. */
+static uint64_t hash_directory(uint64_t hash, const char *dir)
+{
+    DIR *handle = opendir(dir);
+    if (!handle)
+        return fnv1a(hash, dir, strlen(dir));
+    char **names = NULL;
+    size_t count = 0;
+    struct dirent *entry;
+    while ((entry = readdir(handle))) {
+        if (entry->d_name[0] == '.')
+            continue;
+        names = xrealloc(names, (count + 1) * sizeof *names);
+        names[count++] = xstrdup(entry->d_name);
+    }
+    closedir(handle);
+    qsort(names, count, sizeof *names, compare_names);
+    for (size_t i = 0; i < count; i++) {
+        char path[4096];
+        snprintf(path, sizeof path, "%s/%s", dir, names[i]);
+        size_t length;
+        char *text = read_text_file(path, &length);
+        hash = fnv1a(hash, names[i], strlen(names[i]) + 1);
+        if (text)
+            hash = fnv1a(hash, text, length);
+        free(text);
+        free(names[i]);
+    }
+    free(names);
+    return hash;
+}
+
+uint64_t device_program_key(const device *d, const char *file, const char *options)
+{
+    char version[256] = "", driver[256] = "";
+    clGetPlatformInfo(d->info.platform, CL_PLATFORM_VERSION, sizeof version - 1, version, NULL);
+    clGetDeviceInfo(d->info.id, CL_DRIVER_VERSION, sizeof driver - 1, driver, NULL);
+    uint64_t hash = 14695981039346656037ull;
+    const char *parts[] = {d->info.name, version, driver, file, options};
+    for (size_t i = 0; i < sizeof parts / sizeof *parts; i++)
+        hash = fnv1a(hash, parts[i], strlen(parts[i]) + 1);
+    char dir[4096];
+    snprintf(dir, sizeof dir, "%s/kernels", device_source_root());
+    hash = hash_directory(hash, dir);
+    snprintf(dir, sizeof dir, "%s/include/idmr", device_source_root());
+    return hash_directory(hash, dir);
+}
+
+/* The cache directory (created), or NULL when the cache is off or unusable. */
+static const char *cache_directory(char *out, size_t size)
+{
+    const char *env = getenv("IDMR_CACHE_DIR");
+    if (env && strcmp(env, "off") == 0)
+        return NULL;
+    if (env && *env)
+        snprintf(out, size, "%s", env);
+    else if (getenv("XDG_CACHE_HOME") && *getenv("XDG_CACHE_HOME"))
+        snprintf(out, size, "%s/idmr", getenv("XDG_CACHE_HOME"));
+    else if (getenv("HOME") && *getenv("HOME"))
+        snprintf(out, size, "%s/.cache/idmr", getenv("HOME"));
+    else
+        return NULL;
+    char partial[4096];
+    snprintf(partial, sizeof partial, "%s", out);
+    for (char *c = partial + 1; *c; c++)
+        if (*c == '/') {
+            *c = '\0';
+            mkdir(partial, 0777);
+            *c = '/';
+        }
+    if (mkdir(partial, 0777) != 0 && errno != EEXIST) {
+        log_verbose("program cache %s unusable: %s", out, strerror(errno));
+        return NULL;
+    }
+    return out;
+}
+
+static cl_program load_cached(device *d, const char *path, const char *options)
+{
+    size_t size;
+    unsigned char *binary = (unsigned char *)read_text_file(path, &size);
+    if (!binary)
+        return NULL;
+    cl_int status, err;
+    const unsigned char *binaries[] = {binary};
+    cl_program program =
+        clCreateProgramWithBinary(d->context, 1, &d->info.id, &size, binaries, &status, &err);
+    free(binary);
+    if (err != CL_SUCCESS || status != CL_SUCCESS) {
+        if (program)
+            clReleaseProgram(program);
+        return NULL;
+    }
+    if (clBuildProgram(program, 1, &d->info.id, options, NULL, NULL) != CL_SUCCESS) {
+        clReleaseProgram(program);
+        return NULL;
+    }
+    return program;
+}
+
+static void store_cached(cl_program program, const char *path)
+{
+    size_t size = 0;
+    if (clGetProgramInfo(program, CL_PROGRAM_BINARY_SIZES, sizeof size, &size, NULL) !=
+            CL_SUCCESS ||
+        size == 0)
+        return;
+    unsigned char *binary = xmalloc(size);
+    unsigned char *binaries[] = {binary};
+    if (clGetProgramInfo(program, CL_PROGRAM_BINARIES, sizeof binaries, binaries, NULL) ==
+            CL_SUCCESS &&
+        report_write_file(path, binary, size) != 0)
+        log_verbose("program cache: %s", error_message());
+    free(binary);
+}
+
 int device_build_program(device *d, const char *file, const char *options, cl_program *program)
 {
     *program = NULL;
-    char path[4096];
+    last_build_cached = 0;
+    char path[4096], cache[4096], cached_path[4096 + 64];
     snprintf(path, sizeof path, "%s/kernels/%s", device_source_root(), file);
+    const char *dir = cache_directory(cache, sizeof cache);
+    uint64_t key = 0;
+    if (dir) {
+        key = device_program_key(d, file, options);
+        snprintf(cached_path, sizeof cached_path, "%s/%016llx.bin", dir, (unsigned long long)key);
+        cl_program cached = load_cached(d, cached_path, options);
+        if (cached) {
+            log_verbose("%s: program %016llx from the cache (options: %s)", path,
+                        (unsigned long long)key, options);
+            *program = cached;
+            last_build_cached = 1;
+            return 0;
+        }
+    }
     size_t length;
     char *source = read_text_file(path, &length);
     if (!source)
@@ -269,6 +425,8 @@ int device_build_program(device *d, const char *file, const char *options, cl_pr
         clReleaseProgram(built);
         return -1;
     }
+    if (dir)
+        store_cached(built, cached_path);
     *program = built;
     return 0;
 }

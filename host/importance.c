@@ -80,9 +80,11 @@ static void pass_release(pass *p)
 static int pass_build(pass *p, const scene *s, const importance_options *o, importance_result *r)
 {
     double start = seconds_now();
-    char extra[64];
-    snprintf(extra, sizeof extra, "-D IDMR_BOOKKEEPING=%d", o->bookkeeping ? 1 : 0);
-    r->build_options = device_build_options(p->dev, s->features, extra);
+    char extra[96];
+    snprintf(extra, sizeof extra, "-D IDMR_BOOKKEEPING=%d -D IDMR_CAMERA_IMPORTANCE=%d",
+             o->bookkeeping ? 1 : 0, o->gamma > 0 ? 1 : 0);
+    r->build_options =
+        device_build_options(p->dev, o->generic ? IDMR_FEATURES_ALL : s->features, extra);
     if (device_build_program(p->dev, "importance.cl", r->build_options, &p->program))
         return -1;
     struct {

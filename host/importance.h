@@ -12,6 +12,11 @@
  *   mesh sum   = Σ (γ camera + light) / iterations over its triangles (unnormalised: no area
  *                division, for the decimation budget)
  *
+ * Kernels are built for the scene's feature bits (idmr/features.h): only the material and light
+ * branches the scene has are compiled in (`generic` builds them all, for comparison), and with
+ * γ = 0 the camera importance atomics are left out (camera importance is then 0: it would be
+ * multiplied by γ = 0 anyway).
+ *
  * Gather radius: r_1 = 5 × |scene box diagonal| / (width + height) of the hit-point image, and
  * r_{n+1}² = r_n² (n + α) / (n + 1) (the SPPM schedule with one global radius).
  *
@@ -52,6 +57,7 @@ typedef struct importance_options {
     float resolution;        /* scale of the scene's film for the hit-point image (default 1) */
     size_t local_size;       /* work-group size; 0 lets the runtime choose */
     int bookkeeping;         /* 1; 0 compiles the importance accumulation out (benchmark) */
+    int generic;             /* build the all-features program instead of the scene's */
     int progress;            /* report progress on stderr */
     importance_snapshot *snapshot; /* when not NULL, receives the last iteration's buffers */
 } importance_options;

@@ -52,6 +52,7 @@ static void print_usage(FILE *out)
           "      --seed S              random seed (default 1)\n"
           "      --device N            OpenCL device (see `idmr devices`)\n"
           "      --quiet               no progress on stderr\n"
+          "      --generic             kernels with every feature, not only the scene's\n"
           "  reduce SCENE --target D -o OUTDIR\n"
           "                            the reduced scene: OUTDIR/scene.xml and meshes/*.ply with\n"
           "                            about D of all vertices; takes the options of importance\n"
@@ -355,6 +356,7 @@ enum {
     OPT_DEVICE,
     OPT_QUIET,
     OPT_LOCAL_SIZE,
+    OPT_GENERIC,
     OPT_TARGET,
     OPT_METHOD,
     OPT_MIN_VERTICES,
@@ -376,7 +378,8 @@ enum {
         {"seed", required_argument, NULL, OPT_SEED},                                        \
         {"device", required_argument, NULL, OPT_DEVICE},                                    \
         {"quiet", no_argument, NULL, OPT_QUIET},                                            \
-        {"local-size", required_argument, NULL, OPT_LOCAL_SIZE}
+        {"local-size", required_argument, NULL, OPT_LOCAL_SIZE},                            \
+        {"generic", no_argument, NULL, OPT_GENERIC}
 
 /* Applies importance option `c`; returns 1 if it was one, 0 if not, -1 on a bad value. */
 static int parse_importance_option(int c, importance_options *o, int *device_index)
@@ -419,6 +422,9 @@ static int parse_importance_option(int c, importance_options *o, int *device_ind
         if (parse_unsigned("--local-size", optarg, 0, 4096, &whole))
             return -1;
         o->local_size = whole;
+        return 1;
+    case OPT_GENERIC:
+        o->generic = 1;
         return 1;
     default:
         return 0;

@@ -11,9 +11,10 @@
  *   path_importance  per path, from its last vertex back: running sum s of gather counts;
  *                    vertex j adds weight_j * s to its triangle's light importance
  *
- * Build options (host/device.c, host/importance.c): IDMR_FEATURES, IDMR_INT64_ATOMICS, and
+ * Build options (host/device.c, host/importance.c): IDMR_FEATURES, IDMR_INT64_ATOMICS,
  * IDMR_BOOKKEEPING (0 compiles the importance accumulation out: the "plain" variant that
- * `make bench` compares against). Layouts: idmr/importance.h. */
+ * `make bench` compares against) and IDMR_CAMERA_IMPORTANCE (0 when γ = 0: camera importance
+ * would be multiplied by zero, so its atomics are compiled out). Layouts: idmr/importance.h. */
 #include "idmr/camera.h"
 #include "idmr/importance.h"
 #include "scene.h"
@@ -21,6 +22,9 @@
 
 #ifndef IDMR_BOOKKEEPING
 #define IDMR_BOOKKEEPING 1
+#endif
+#ifndef IDMR_CAMERA_IMPORTANCE
+#define IDMR_CAMERA_IMPORTANCE 1
 #endif
 
 #if IDMR_INT64_ATOMICS
@@ -91,7 +95,7 @@ kernel void camera_pass(idmr_importance_params params, idmr_camera camera,
             break;
         float4 nw = triangle_normals[hit.triangle];
         float3 n = nw.xyz;
-#if IDMR_BOOKKEEPING
+#if IDMR_BOOKKEEPING && IDMR_CAMERA_IMPORTANCE
         importance_add(camera_importance, hit.triangle,
                        fixed_units(idmr_eq2_weight(n.x, n.y, n.z, d.x, d.y, d.z)));
 #endif

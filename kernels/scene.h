@@ -23,6 +23,15 @@
 #error "IDMR_FEATURES must be defined by the host (device_build_options)"
 #endif
 #define HAS_FEATURE(bit) ((IDMR_FEATURES & (bit)) != 0u)
+#if (IDMR_FEATURES & ~IDMR_FEATURES_ALL) != 0u
+#error "IDMR_FEATURES has bits no feature defines (idmr/features.h)"
+#endif
+#if !HAS_FEATURE(IDMR_FEATURES_LIGHTS)
+#error "no light kind in IDMR_FEATURES: photon paths need an emitter"
+#endif
+#if HAS_FEATURE(IDMR_FEATURE_TEXTURED) && !HAS_FEATURE(IDMR_FEATURE_DIFFUSE | IDMR_FEATURE_GLOSSY)
+#error "a texture without a diffuse or glossy material to carry it"
+#endif
 
 #define PI_F 3.14159265358979f
 

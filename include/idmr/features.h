@@ -18,6 +18,11 @@
 #define IDMR_FEATURE_ENVIRONMENT (1u << 9) /* constant and envmap emitters */
 #define IDMR_FEATURE_COUNT 10
 
+#define IDMR_FEATURES_ALL ((1u << IDMR_FEATURE_COUNT) - 1u) /* the generic program */
+#define IDMR_FEATURES_LIGHTS                                                                     \
+    (IDMR_FEATURE_AREA | IDMR_FEATURE_POINT | IDMR_FEATURE_SPOT | IDMR_FEATURE_DIRECTIONAL |    \
+     IDMR_FEATURE_ENVIRONMENT)
+
 /* Surfaces that continue a camera path instead of ending it in a hit point. */
 #define IDMR_FEATURES_SPECULAR (IDMR_FEATURE_MIRROR | IDMR_FEATURE_DIELECTRIC)
 

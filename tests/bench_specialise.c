@@ -1,0 +1,137 @@
+/* bench_specialise.c — `make bench`: what building kernels for the scene's features saves.
+ *
+ *   specialisation: scene=<name> pass=importance generic=<s/iter> specialised=<s/iter> speedup=<x>
+ *   program-build: cold=<s> cached=<s> speedup=<x>
+ *
+ * The importance iteration of the shipped Cornell box (diffuse, one area light) and of the glass
+ * of water (dielectrics, glossy metal), with the program built for the scene and with the
+ * all-features program (--generic); best of ROUNDS, after one warm-up iteration each. The build
+ * of the importance program with PoCL's own cache off (in a child process), then from idmr's
+ * program cache. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "bvh.h"
+#include "device.h"
+#include "error.h"
+#include "importance.h"
+#include "mitsuba.h"
+
+#define ROUNDS 2
+#define ITERATIONS 3
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static double per_iteration(device *d, const scene *s, const bvh *b, int generic,
+                            unsigned int iterations)
+{
+    importance_options o;
+    importance_options_default(&o);
+    o.iterations = iterations;
+    o.generic = generic;
+    importance_result r;
+    if (importance_run(d, s, b, &o, &r)) {
+        fprintf(stderr, "bench_specialise: %s\n", error_message());
+        exit(1);
+    }
+    double seconds = r.seconds.total / r.iterations;
+    importance_result_free(&r);
+    return seconds;
+}
+
+static void bench_scene(device *d, const char *name, const char *path)
+{
+    warn_silence(1);
+    scene *s = mitsuba_load(path);
+    warn_silence(0);
+    bvh b;
+    if (!s || bvh_build(s, &b)) {
+        fprintf(stderr, "bench_specialise: %s\n", error_message());
+        exit(1);
+    }
+    double best[2] = {1e30, 1e30};
+    for (int generic = 0; generic < 2; generic++)
+        per_iteration(d, s, &b, generic, 1);
+    for (int round = 0; round < ROUNDS; round++)
+        for (int generic = 0; generic < 2; generic++) {
+            double seconds = per_iteration(d, s, &b, generic, ITERATIONS);
+            if (seconds < best[generic])
+                best[generic] = seconds;
+        }
+    printf("specialisation: scene=%s pass=importance generic=%.3f specialised=%.3f "
+           "speedup=%.2f\n",
+           name, best[1], best[0], best[1] / best[0]);
+    fflush(stdout);
+    bvh_free(&b);
+    scene_free(s);
+}
+
+static void bench_build(device *d)
+{
+    char cache[] = "/tmp/idmr-bench-cache-XXXXXX";
+    if (!mkdtemp(cache))
+        return;
+    setenv("IDMR_CACHE_DIR", cache, 1);
+    char *options = device_build_options(d, IDMR_FEATURE_DIFFUSE | IDMR_FEATURE_AREA,
+                                         "-D IDMR_BOOKKEEPING=1 -D IDMR_CAMERA_IMPORTANCE=1");
+    cl_program program;
+    double t0 = now();
+    if (device_build_program(d, "importance.cl", options, &program)) {
+        fprintf(stderr, "bench_specialise: %s\n", error_message());
+        exit(1);
+    }
+    double cold = now() - t0;
+    clReleaseProgram(program);
+    t0 = now();
+    if (device_build_program(d, "importance.cl", options, &program) || !device_last_build_cached()) {
+        fprintf(stderr, "bench_specialise: the second build did not come from the cache\n");
+        exit(1);
+    }
+    double cached = now() - t0;
+    clReleaseProgram(program);
+    printf("program-build: kernel=importance.cl cold=%.2f cached=%.3f speedup=%.0f\n", cold, cached,
+           cold / cached);
+    free(options);
+    char command[256];
+    snprintf(command, sizeof command, "rm -rf %s", cache);
+    if (system(command) != 0)
+        fprintf(stderr, "bench_specialise: could not remove %s\n", cache);
+    unsetenv("IDMR_CACHE_DIR");
+}
+
+int main(int argc, char **argv)
+{
+    /* The cold build runs in a child with PoCL's own kernel cache off, so that "cold" is a real
+     * compile while the iterations below keep PoCL's cache for its lazy work-group compiles. */
+    if (argc > 1 && strcmp(argv[1], "build") == 0) {
+        device d;
+        if (device_open(&d, -1)) {
+            fprintf(stderr, "bench_specialise: %s\n", error_message());
+            return 1;
+        }
+        bench_build(&d);
+        device_close(&d);
+        return 0;
+    }
+    char command[4200];
+    snprintf(command, sizeof command, "POCL_KERNEL_CACHE=0 %s build", argv[0]);
+    fflush(stdout);
+    if (system(command) != 0)
+        fprintf(stderr, "bench_specialise: the build measurement failed\n");
+    device d;
+    if (device_open(&d, -1)) {
+        fprintf(stderr, "bench_specialise: %s\n", error_message());
+        return 1;
+    }
+    bench_scene(&d, "cornell", "data/cornell/scene.xml");
+    bench_scene(&d, "glass-of-water", "../shared/data/scenes/glass-of-water/scene-without-mesh000.xml");
+    device_close(&d);
+    return 0;
+}
