@@ -423,7 +423,8 @@ void build_mesh(const decimate_input *in, Mesh &mesh, decimate_output *out,
         auto found = patch_copy.find(welded);
         if (found != patch_copy.end())
             return found->second;
-        Mesh::VertexHandle h = mesh.add_vertex(mesh.point(handles[welded]));
+        Mesh::Point p = mesh.point(handles[welded]); // a copy: add_vertex may move the points
+        Mesh::VertexHandle h = mesh.add_vertex(p);
         importance.push_back(importance[welded]);
         patch_copy.emplace(welded, h);
         return h;
@@ -440,7 +441,8 @@ void build_mesh(const decimate_input *in, Mesh &mesh, decimate_output *out,
         const uint32_t *ix = &in->indices[3 * (size_t)t];
         Mesh::VertexHandle copy[3];
         for (int k = 0; k < 3; k++) {
-            copy[k] = mesh.add_vertex(mesh.point(handles[out->welded_of[ix[k]]]));
+            Mesh::Point p = mesh.point(handles[out->welded_of[ix[k]]]); // a copy, as above
+            copy[k] = mesh.add_vertex(p);
             mesh.status(copy[k]).set_locked(true);
             importance.push_back(importance[out->welded_of[ix[k]]]);
         }
@@ -449,7 +451,15 @@ void build_mesh(const decimate_input *in, Mesh &mesh, decimate_output *out,
         out->vertices_uncollapsible += 3;
     }
     out->faces_patched = (uint32_t)(pending.size() - loose.size());
-    out->vertices_welded = (uint32_t)mesh.n_vertices();
+    // A position used only by patched or loose faces keeps a vertex without faces: remove it
+    // (it would never collapse, count against the budget, and be written out).
+    uint32_t isolated = 0;
+    for (auto v : mesh.vertices())
+        if (mesh.is_isolated(v)) {
+            mesh.status(v).set_deleted(true);
+            isolated++;
+        }
+    out->vertices_welded = (uint32_t)mesh.n_vertices() - isolated;
 }
 
 } // namespace

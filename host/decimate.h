@@ -11,7 +11,9 @@
  * each removed vertex, the vertex it went into). We use our own normal limit rather than
  * OpenMesh's ModNormalFlippingT because that one compares against stored face normals, which
  * must be refreshed after every collapse, and normalises zero-area faces into NaN; ours computes
- * both normals from the current positions and rejects degenerate results.
+ * both normals from the current positions and rejects degenerate results. The limit holds per
+ * collapse, as in the paper; rotations can add up over many collapses (a sphere decimated by
+ * importance to 20 % ended with one inward face in 5 of 20 random importance fields).
  *
  * The collapse loop is ours too (on OpenMesh's BaseDecimaterT, which runs the modules): after a
  * collapse it re-scores the kept vertex and its whole new one-ring, because the importance moved
