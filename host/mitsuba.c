@@ -198,7 +198,7 @@ static void trim_trailing_space(char *text)
 }
 
 /* Parses `path` into a document; a parse error names the file and line. */
-static xmlDocPtr read_document(const char *path)
+xmlDocPtr mitsuba_read_xml(const char *path)
 {
     FILE *probe = fopen(path, "rb");
     if (!probe) {
@@ -332,7 +332,7 @@ static int prepare_tree(loader *ld, xmlNodePtr node)
 /* Reads a scene file or fragment, checks its root, and prepares it; returns its <scene>. */
 static xmlNodePtr open_document(loader *ld, const char *path)
 {
-    xmlDocPtr doc = read_document(path);
+    xmlDocPtr doc = mitsuba_read_xml(path);
     if (!doc)
         return NULL;
     ld->docs = xrealloc(ld->docs, (ld->doc_count + 1) * sizeof *ld->docs);

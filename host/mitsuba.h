@@ -40,6 +40,12 @@
  * bad input); messages read "file:line: <element type="...">: what is wrong". */
 scene *mitsuba_load(const char *path);
 
+/* The raw document (no substitution or renaming), read with the options the loader uses, so
+ * that line numbers agree with scene_mesh.xml_line: network off, blanks kept, big line numbers.
+ * NULL with the error set ("file:line: malformed XML: ..."). Free with xmlFreeDoc(). Shared by
+ * the loader and the reduced-scene writer (host/mitsuba_write.c). */
+struct _xmlDoc *mitsuba_read_xml(const char *path);
+
 /* Writes the snake_case form of a camelCase property name (toWorld → to_world, intIOR →
  * int_ior; snake_case stays as it is) into out (truncated to size). */
 void mitsuba_snake_case(const char *name, char *out, size_t size);

@@ -159,39 +159,6 @@ static int file_has_declaration(const char *path)
     return n >= skip + 5 && memcmp(head + skip, "<?xml", 5) == 0;
 }
 
-/* Parses `path` with the loader's options (so line numbers agree) and blanks kept. */
-static xmlDocPtr read_document(const char *path)
-{
-    FILE *probe = fopen(path, "rb");
-    if (!probe) {
-        error_set(IDMR_EXIT_INPUT, "cannot read scene '%s': %s", path, strerror(errno));
-        return NULL;
-    }
-    fclose(probe);
-    xmlParserCtxtPtr context = xmlNewParserCtxt();
-    if (!context) {
-        error_set(IDMR_EXIT_FAILURE, "%s: cannot create an XML parser", path);
-        return NULL;
-    }
-    int options = XML_PARSE_NONET | XML_PARSE_NOERROR | XML_PARSE_NOWARNING | XML_PARSE_BIG_LINES;
-    xmlDocPtr doc = xmlCtxtReadFile(context, path, NULL, options);
-    if (!doc) {
-        const xmlError *e = xmlCtxtGetLastError(context);
-        char message[512];
-        snprintf(message, sizeof message, "%s", e && e->message ? e->message : "unknown error");
-        size_t length = strlen(message);
-        while (length > 0 && isspace((unsigned char)message[length - 1]))
-            message[--length] = '\0';
-        error_set(IDMR_EXIT_INPUT, "%s:%d: malformed XML: %s", path, e ? e->line : 0, message);
-    } else if (!xmlDocGetRootElement(doc)) {
-        error_set(IDMR_EXIT_INPUT, "%s: empty document", path);
-        xmlFreeDoc(doc);
-        doc = NULL;
-    }
-    xmlFreeParserCtxt(context);
-    return doc;
-}
-
 static const char *param_lookup(const writer *w, const char *name, size_t length)
 {
     for (size_t i = 0; i < w->param_count; i++)
@@ -315,7 +282,7 @@ static int doc_open(writer *w, const char *path, int depth, size_t *index)
         free(real);
         return 0;
     }
-    xmlDocPtr tree = read_document(path);
+    xmlDocPtr tree = mitsuba_read_xml(path);
     if (!tree) {
         free(real);
         return -1;
