@@ -247,6 +247,42 @@ static void test_pass_option_errors(void **state)
     }
 }
 
+/* The main job from the command line: reduce the shipped scene (a short importance pass), and
+ * the reduced scene loads again with the vertex total the report gives. */
+static void test_reduce_shipped_scene(void **state)
+{
+    char dir[] = "/tmp/idmr-cli-reduce-XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    char command[512];
+    snprintf(command, sizeof command,
+             "bin/idmr reduce data/cornell/scene.xml --target 0.2 -o %s/out --iterations 2 "
+             "--photons 20000 --resolution 0.25 --quiet",
+             dir);
+    run_result r = run(command);
+    if (r.status != 0)
+        fail_msg("reduce failed (%d): %s", r.status, r.err);
+    assert_non_null(strstr(r.err, "reduced scene in"));
+    run_free(&r);
+    snprintf(command, sizeof command, "cat %s/out/report.json", dir);
+    r = run(command);
+    cJSON *report = parse_or_fail(r.out);
+    double after = cJSON_GetObjectItem(report, "vertices_after")->valuedouble;
+    double requested = cJSON_GetObjectItem(report, "vertices_requested")->valuedouble;
+    assert_true(after == requested); /* the knot is the only mesh above the floor */
+    assert_string_equal(cJSON_GetObjectItem(report, "method")->valuestring, "importance");
+    cJSON_Delete(report);
+    run_free(&r);
+    snprintf(command, sizeof command, "bin/idmr info --json --no-bvh %s/out/scene.xml", dir);
+    r = run(command);
+    assert_int_equal(r.status, 0);
+    cJSON *info = parse_or_fail(r.out);
+    assert_true(cJSON_GetObjectItem(info, "vertices")->valuedouble == after);
+    cJSON_Delete(info);
+    run_free(&r);
+    snprintf(command, sizeof command, "rm -rf %s", dir);
+    assert_int_equal(system(command), 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -259,6 +295,7 @@ int main(void)
         cmocka_unit_test(test_malformed_xml),
         cmocka_unit_test(test_usage_errors),
         cmocka_unit_test(test_pass_option_errors),
+        cmocka_unit_test(test_reduce_shipped_scene),
     };
     return cmocka_run_group_tests_name("cli", tests, NULL, NULL);
 }
