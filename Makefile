@@ -38,16 +38,23 @@ MAIN_OBJECT := $(BUILD)/host/main.c.o
 TEST_PROGRAMS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/test_*.c))
 BENCH_PROGRAMS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/bench_*.c))
 
-.PHONY: all deps test bench demo clean
+.PHONY: all deps test bench demo clean FORCE
 all: bin/idmr
 
 # Installs the Debian packages when one is missing (a quick dpkg query otherwise).
 deps:
 	@scripts/install-deps.sh
 
-bin/idmr: $(MAIN_OBJECT) $(BUILD)/libidmr.a | deps
-	@mkdir -p bin
+$(BUILD)/idmr: $(MAIN_OBJECT) $(BUILD)/libidmr.a | deps
 	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
+# bin/idmr is the binary of the config last asked for: copied every time, so that switching
+# config never leaves the other one's binary in place.
+bin/idmr: $(BUILD)/idmr FORCE
+	@mkdir -p bin
+	@cp $< $@
+
+FORCE:
 
 $(BUILD)/libidmr.a: $(LIB_OBJECTS)
 	@rm -f $@

@@ -87,6 +87,8 @@ typedef struct reduce_state {
     uint32_t *uncollapsible;
     char **ply; /* relative to outdir, for decimated meshes */
     budget_plan plan;
+    uint64_t *measured_loaded; /* per mesh: vertices as the scene holds them */
+    unsigned int compensation_rounds;
     double seconds_importance, seconds_budget, seconds_decimation, seconds_write;
 } reduce_state;
 
@@ -105,6 +107,7 @@ static void state_free(reduce_state *st)
     free(st->messages);
     free(st->measured);
     free(st->uncollapsible);
+    free(st->measured_loaded);
     free(st->ply);
     budget_plan_free(&st->plan);
 }
@@ -129,6 +132,7 @@ static cJSON *reduce_report(const scene *s, const device *d, const reduce_option
     cJSON_AddNumberToObject(root, "vertices_after", (double)after);
     cJSON_AddNumberToObject(root, "vertices_missed", (double)after - (double)st->plan.total_requested);
     cJSON_AddBoolToObject(root, "uniform_fallback", st->plan.uniform_fallback);
+    cJSON_AddNumberToObject(root, "compensation_rounds", st->compensation_rounds);
     cJSON *seconds = cJSON_GetObjectItem(root, "seconds");
     cJSON_AddNumberToObject(seconds, "importance", st->seconds_importance);
     cJSON_AddNumberToObject(seconds, "budget", st->seconds_budget);
@@ -164,6 +168,76 @@ static cJSON *reduce_report(const scene *s, const device *d, const reduce_option
         cJSON_AddBoolToObject(mesh, "pinned", s->meshes[m].light >= 0 || is_kept(o, s->meshes[m].name));
     }
     return root;
+}
+
+#define COMPENSATION_ROUNDS 3
+
+/* Decimates the meshes flagged in `redo` to st->plan.target, replacing earlier outputs. */
+static int decimate_selected(reduce_state *st, decimate_method method, unsigned int threads,
+                             const unsigned char *redo)
+{
+    decimate_input *jobs = xcalloc(st->count + 1, sizeof *jobs);
+    decimate_output *results = xcalloc(st->count + 1, sizeof *results);
+    int *job_status = xcalloc(st->count + 1, sizeof *job_status);
+    char(*job_messages)[512] = xcalloc(st->count + 1, sizeof *job_messages);
+    size_t *job_mesh = xcalloc(st->count + 1, sizeof *job_mesh);
+    size_t n = 0;
+    for (size_t m = 0; m < st->count; m++)
+        if (redo[m]) {
+            jobs[n] = st->input[m];
+            jobs[n].target_vertices = st->plan.target[m];
+            job_mesh[n++] = m;
+        }
+    decimate_many(jobs, results, job_status, job_messages, n, method, threads);
+    int status = 0;
+    for (size_t j = 0; j < n; j++) {
+        decimate_output_free(&st->output[job_mesh[j]]);
+        st->output[job_mesh[j]] = results[j];
+        if (job_status[j] && !status)
+            status = error_set(IDMR_EXIT_FAILURE, "%s", job_messages[j]);
+    }
+    free(jobs);
+    free(results);
+    free(job_status);
+    free(job_messages);
+    free(job_mesh);
+    return status;
+}
+
+/* Lowers the targets of the decimated meshes that met theirs by `excess` vertices in all, in
+ * proportion to their room above the floor, and flags them in `redo`. False if none has room. */
+static int compensate(reduce_state *st, uint64_t excess, uint64_t floor_vertices,
+                      unsigned char *redo)
+{
+    uint64_t room = 0;
+    for (size_t m = 0; m < st->count; m++) {
+        redo[m] = 0;
+        uint64_t target = st->plan.target[m];
+        if (st->plan.decimate[m] && st->output[m].mesh.vertex_count <= target &&
+            target > floor_vertices)
+            room += target - floor_vertices;
+    }
+    if (room == 0)
+        return 0;
+    uint64_t taken = 0;
+    for (size_t m = 0; m < st->count && taken < excess; m++) {
+        uint64_t target = st->plan.target[m];
+        if (!st->plan.decimate[m] || st->output[m].mesh.vertex_count > target ||
+            target <= floor_vertices)
+            continue;
+        uint64_t share = (uint64_t)ceil((double)excess * (target - floor_vertices) / room);
+        if (share > target - floor_vertices)
+            share = target - floor_vertices;
+        if (share > excess - taken)
+            share = excess - taken;
+        if (share == 0)
+            continue;
+        st->plan.target[m] = target - share;
+        st->plan.factor[m] = (double)st->plan.target[m] / st->measured_loaded[m];
+        taken += share;
+        redo[m] = 1;
+    }
+    return taken > 0;
 }
 
 int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
@@ -213,6 +287,7 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
     st.messages = xcalloc(st.count + 1, sizeof *st.messages);
     st.measured = xcalloc(st.count + 1, sizeof *st.measured);
     st.uncollapsible = xcalloc(st.count + 1, sizeof *st.uncollapsible);
+    st.measured_loaded = xcalloc(st.count + 1, sizeof *st.measured_loaded);
     st.ply = xcalloc(st.count + 1, sizeof *st.ply);
     budget_mesh *budget = xcalloc(st.count + 1, sizeof *budget);
     for (size_t m = 0; m < st.count && !status; m++) {
@@ -230,6 +305,7 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
         /* Counted as the scene holds them, so the totals match what `idmr info` says of the
          * input and of the reduced scene. */
         budget[m].vertices = mesh->vertex_count;
+        st.measured_loaded[m] = mesh->vertex_count;
         budget[m].pinned = mesh->light >= 0 || is_kept(o, mesh->name);
         if (o->method == DECIMATE_IMPORTANCE) {
             double camera, light;
@@ -244,42 +320,30 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
     free(budget);
     st.seconds_budget = seconds_now() - start;
 
-    /* Decimation of the meshes the plan decimates, in parallel, largest first. */
+    /* Decimation of the meshes the plan decimates, in parallel, largest first; then up to
+     * COMPENSATION_ROUNDS rounds that take what meshes could not give up (too few legal
+     * collapses) from the meshes that met their targets and have room above the floor. */
     start = seconds_now();
     uint64_t after = 0;
-    if (!status) {
-        decimate_input *jobs = xcalloc(st.count + 1, sizeof *jobs);
-        decimate_output *results = xcalloc(st.count + 1, sizeof *results);
-        int *job_status = xcalloc(st.count + 1, sizeof *job_status);
-        char(*job_messages)[512] = xcalloc(st.count + 1, sizeof *job_messages);
-        size_t *job_mesh = xcalloc(st.count + 1, sizeof *job_mesh);
-        size_t n = 0;
-        for (size_t m = 0; m < st.count; m++)
-            if (st.plan.decimate[m]) {
-                jobs[n] = st.input[m];
-                jobs[n].target_vertices = st.plan.target[m];
-                job_mesh[n++] = m;
-            }
-        unsigned int threads = o->threads ? o->threads : (unsigned int)sysconf(_SC_NPROCESSORS_ONLN);
-        progress bar;
-        progress_begin(&bar, "decimation", 1, o->importance.progress);
-        size_t failed = decimate_many(jobs, results, job_status, job_messages, n, o->method, threads);
-        progress_update(&bar, 1, NULL);
-        progress_end(&bar);
-        for (size_t j = 0; j < n; j++) {
-            st.output[job_mesh[j]] = results[j];
-            if (job_status[j] && !status)
-                status = error_set(IDMR_EXIT_FAILURE, "%s", job_messages[j]);
-        }
-        (void)failed;
-        free(jobs);
-        free(results);
-        free(job_status);
-        free(job_messages);
-        free(job_mesh);
+    unsigned int threads = o->threads ? o->threads : (unsigned int)sysconf(_SC_NPROCESSORS_ONLN);
+    unsigned char *redo = xcalloc(st.count + 1, 1);
+    for (size_t m = 0; m < st.count; m++)
+        redo[m] = (unsigned char)st.plan.decimate[m];
+    progress bar;
+    progress_begin(&bar, "decimation", COMPENSATION_ROUNDS + 1, o->importance.progress);
+    for (unsigned int round = 0; !status && round <= COMPENSATION_ROUNDS; round++) {
+        status = decimate_selected(&st, o->method, threads, redo);
+        progress_update(&bar, round + 1, NULL);
+        after = 0;
         for (size_t m = 0; m < st.count; m++)
             after += st.plan.decimate[m] ? st.output[m].mesh.vertex_count : s->meshes[m].vertex_count;
+        if (status || after <= st.plan.total_requested || round == COMPENSATION_ROUNDS ||
+            !compensate(&st, after - st.plan.total_requested, o->min_vertices, redo))
+            break;
+        st.compensation_rounds = round + 1;
     }
+    progress_end(&bar);
+    free(redo);
     st.seconds_decimation = seconds_now() - start;
 
     /* Output. */
