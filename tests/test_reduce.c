@@ -484,6 +484,71 @@ static void test_quadric(void **state)
 
 /* ---- 4. keep ---- */
 
+/* A mesh that cannot give up any vertex (200 separate triangles: no collapse is legal) beside
+ * the knot, reduced with uniform factors: the confetti keeps all 600 vertices, and the
+ * compensation rounds take them from the knot, so the total still meets the target exactly. */
+static void test_compensation(void **state)
+{
+    char in_dir[64], dir[64], scene_path[4200], confetti[4200];
+    temp_dir(in_dir, sizeof in_dir);
+    temp_dir(dir, sizeof dir);
+    snprintf(confetti, sizeof confetti, "%s/confetti.obj", in_dir);
+    FILE *f = fopen(confetti, "w");
+    assert_non_null(f);
+    for (int t = 0; t < 200; t++) {
+        float x = -0.9f + 0.09f * (float)(t % 20), y = -0.9f + 0.09f * (float)(t / 20);
+        fprintf(f, "v %g %g 0.5\nv %g %g 0.5\nv %g %g 0.5\n", x, y, x + 0.05f, y, x, y + 0.05f);
+    }
+    for (int t = 0; t < 200; t++)
+        fprintf(f, "f %d %d %d\n", 3 * t + 1, 3 * t + 2, 3 * t + 3);
+    assert_int_equal(fclose(f), 0);
+    size_t length;
+    char *xml = read_file(CORNELL, &length);
+    char *end = strstr(xml, "</scene>");
+    assert_non_null(end);
+    *end = 0;
+    char knot[4096];
+    assert_non_null(realpath(KNOT, knot));
+    const char *relative = "value=\"meshes/knot.ply\"";
+    char *first = strstr(xml, relative);
+    assert_non_null(first);
+    *first = 0;
+    snprintf(scene_path, sizeof scene_path, "%s/scene.xml", in_dir);
+    f = fopen(scene_path, "w");
+    assert_non_null(f);
+    fprintf(f, "%svalue=\"%s\"%s", xml, knot, first + strlen(relative));
+    fprintf(f,
+            "    <shape type=\"obj\" id=\"confetti\">\n"
+            "        <string name=\"filename\" value=\"confetti.obj\"/>\n"
+            "        <ref id=\"white\"/>\n"
+            "    </shape>\n"
+            "</scene>\n");
+    assert_int_equal(fclose(f), 0);
+    free(xml);
+
+    scene *s = load(scene_path);
+    reduce_options o;
+    small_options(&o);
+    o.method = DECIMATE_QUADRIC;
+    o.target = 0.2;
+    if (reduce_run(&dev, s, dir, &o))
+        fail_msg("reduce: %s", error_message());
+    cJSON *report = read_report(dir);
+    const cJSON *confetti_entry = mesh_entry(report, "confetti");
+    print_message("  confetti %g -> %g vertices; total %g for %g requested, %g compensation "
+                  "rounds\n",
+                  number(confetti_entry, "vertices_before"), number(confetti_entry, "vertices_after"),
+                  number(report, "vertices_after"), number(report, "vertices_requested"),
+                  number(report, "compensation_rounds"));
+    assert_true(number(confetti_entry, "vertices_after") == 600);
+    assert_true(number(report, "compensation_rounds") >= 1);
+    assert_true(number(report, "vertices_after") == number(report, "vertices_requested"));
+    cJSON_Delete(report);
+    scene_free(s);
+    remove_tree(in_dir);
+    remove_tree(dir);
+}
+
 static void test_keep(void **state)
 {
     char dir[64];
@@ -569,6 +634,7 @@ int main(void)
         cmocka_unit_test(test_importance_cornell),
         cmocka_unit_test(test_outdir),
         cmocka_unit_test(test_quadric),
+        cmocka_unit_test(test_compensation),
         cmocka_unit_test(test_keep),
         cmocka_unit_test(test_target),
     };
