@@ -70,7 +70,8 @@ static void print_usage(FILE *out)
           "\n"
           "environment:\n"
           "  IDMR_DEVICE=N             default OpenCL device (see `idmr devices`)\n"
-          "  IDMR_ROOT=DIR             directory holding kernels/ and include/\n",
+          "  IDMR_ROOT=DIR             directory holding kernels/ and include/\n"
+          "  IDMR_CACHE_DIR=DIR        compiled kernel cache (default ~/.cache/idmr; off: none)\n",
           out);
 }
 

@@ -87,7 +87,7 @@ typedef struct reduce_state {
     uint32_t *uncollapsible;
     char **ply; /* relative to outdir, for decimated meshes */
     budget_plan plan;
-    uint64_t *measured_loaded; /* per mesh: vertices as the scene holds them */
+    uint64_t *loaded_vertices; /* per mesh: vertices as the scene holds them */
     unsigned int compensation_rounds;
     double seconds_importance, seconds_budget, seconds_decimation, seconds_write;
 } reduce_state;
@@ -107,7 +107,7 @@ static void state_free(reduce_state *st)
     free(st->messages);
     free(st->measured);
     free(st->uncollapsible);
-    free(st->measured_loaded);
+    free(st->loaded_vertices);
     free(st->ply);
     budget_plan_free(&st->plan);
 }
@@ -233,7 +233,7 @@ static int compensate(reduce_state *st, uint64_t excess, uint64_t floor_vertices
         if (share == 0)
             continue;
         st->plan.target[m] = target - share;
-        st->plan.factor[m] = (double)st->plan.target[m] / st->measured_loaded[m];
+        st->plan.factor[m] = (double)st->plan.target[m] / st->loaded_vertices[m];
         taken += share;
         redo[m] = 1;
     }
@@ -287,7 +287,7 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
     st.messages = xcalloc(st.count + 1, sizeof *st.messages);
     st.measured = xcalloc(st.count + 1, sizeof *st.measured);
     st.uncollapsible = xcalloc(st.count + 1, sizeof *st.uncollapsible);
-    st.measured_loaded = xcalloc(st.count + 1, sizeof *st.measured_loaded);
+    st.loaded_vertices = xcalloc(st.count + 1, sizeof *st.loaded_vertices);
     st.ply = xcalloc(st.count + 1, sizeof *st.ply);
     budget_mesh *budget = xcalloc(st.count + 1, sizeof *budget);
     for (size_t m = 0; m < st.count && !status; m++) {
@@ -305,7 +305,7 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
         /* Counted as the scene holds them, so the totals match what `idmr info` says of the
          * input and of the reduced scene. */
         budget[m].vertices = mesh->vertex_count;
-        st.measured_loaded[m] = mesh->vertex_count;
+        st.loaded_vertices[m] = mesh->vertex_count;
         budget[m].pinned = mesh->light >= 0 || is_kept(o, mesh->name);
         if (o->method == DECIMATE_IMPORTANCE) {
             double camera, light;
