@@ -172,6 +172,15 @@ static cJSON *reduce_report(const scene *s, const device *d, const reduce_option
 
 #define COMPENSATION_ROUNDS 3
 
+/* Whether an earlier mesh's PLY has the name mesh m's would get. */
+static int ply_name_taken(const reduce_state *st, size_t m)
+{
+    for (size_t k = 0; k < m; k++)
+        if (st->ply[k] && strcmp(st->ply[k], st->ply[m]) == 0)
+            return 1;
+    return 0;
+}
+
 /* Decimates the meshes flagged in `redo` to st->plan.target, replacing earlier outputs. */
 static int decimate_selected(reduce_state *st, decimate_method method, unsigned int threads,
                              const unsigned char *redo)
@@ -355,9 +364,12 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
             continue;
         char name[256], path[PATH_MAX];
         importance_file_name(s->meshes[m].name, name, sizeof name);
-        size_t length = strlen(name) + 16;
+        size_t length = strlen(name) + 32;
         st.ply[m] = xmalloc(length);
         snprintf(st.ply[m], length, "meshes/%s.ply", name);
+        /* Two mesh names can make the same file name ("a/b", "a_b"): number the later ones. */
+        for (unsigned int suffix = 2; ply_name_taken(&st, m); suffix++)
+            snprintf(st.ply[m], length, "meshes/%s.%u.ply", name, suffix);
         snprintf(path, sizeof path, "%s/%s", outdir, st.ply[m]);
         status = mesh_io_write_ply(path, &st.output[m].mesh, NULL, NULL, NULL);
         replacements[replaced++] =

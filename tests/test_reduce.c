@@ -549,6 +549,46 @@ static void test_compensation(void **state)
     remove_tree(dir);
 }
 
+/* Two meshes whose names make the same file name ("knot x" and "knot_x") get two files. */
+static void test_file_name_collision(void **state)
+{
+    char in_dir[64], dir[64], scene_path[4200], knot[4096];
+    temp_dir(in_dir, sizeof in_dir);
+    temp_dir(dir, sizeof dir);
+    assert_non_null(realpath(KNOT, knot));
+    snprintf(scene_path, sizeof scene_path, "%s/scene.xml", in_dir);
+    FILE *f = fopen(scene_path, "w");
+    assert_non_null(f);
+    fprintf(f,
+            "<scene version=\"3.0.0\">\n"
+            "  <sensor type=\"perspective\"><transform name=\"to_world\"><lookat origin=\"0, 0, 4\" "
+            "target=\"0, 0, 0\" up=\"0, 1, 0\"/></transform></sensor>\n"
+            "  <shape type=\"ply\" id=\"knot x\"><string name=\"filename\" value=\"%s\"/></shape>\n"
+            "  <shape type=\"ply\" id=\"knot_x\"><string name=\"filename\" value=\"%s\"/>\n"
+            "    <transform name=\"to_world\"><translate x=\"2\"/></transform></shape>\n"
+            "</scene>\n",
+            knot, knot);
+    assert_int_equal(fclose(f), 0);
+    scene *s = load(scene_path);
+    reduce_options o;
+    small_options(&o);
+    o.method = DECIMATE_QUADRIC; /* no light needed */
+    if (reduce_run(&dev, s, dir, &o))
+        fail_msg("reduce: %s", error_message());
+    assert_true(file_exists(dir, "meshes/knot_x.ply"));
+    assert_true(file_exists(dir, "meshes/knot_x.2.ply"));
+    char path[4200];
+    snprintf(path, sizeof path, "%s/scene.xml", dir);
+    scene *out = load(path);
+    assert_int_equal(out->mesh_count, 2);
+    /* Each kept its own geometry: the second is the one moved by x = 2. */
+    assert_true(out->meshes[1].positions[0] > out->meshes[0].positions[0] + 1.0f);
+    scene_free(out);
+    scene_free(s);
+    remove_tree(in_dir);
+    remove_tree(dir);
+}
+
 static void test_keep(void **state)
 {
     char dir[64];
@@ -635,6 +675,7 @@ int main(void)
         cmocka_unit_test(test_outdir),
         cmocka_unit_test(test_quadric),
         cmocka_unit_test(test_compensation),
+        cmocka_unit_test(test_file_name_collision),
         cmocka_unit_test(test_keep),
         cmocka_unit_test(test_target),
     };
