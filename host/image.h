@@ -17,6 +17,27 @@ int image_read_rgb(const char *path, int *width, int *height, float **rgb);
  * and rename. Returns 0, or -1 with the error set naming the file. */
 int image_write_rgb8(const char *path, int width, int height, const unsigned char *rgb);
 
+/* Writes linear float RGB (3 floats per pixel, top row first) as OpenEXR (half floats) or any
+ * format OpenImageIO picks by the extension, through a temporary file and rename. */
+int image_write_rgb_float(const char *path, int width, int height, const float *rgb);
+
+/* Width, height and channel count of an image file, without reading its pixels. */
+int image_info(const char *path, int *width, int *height, int *channels);
+
+typedef struct image_comparison {
+    int width, height, channels;
+    double rmse;         /* over all pixels and the R, G, B channels, linear values */
+    double psnr;         /* 20 log10(peak / rmse), peak = max(1, largest value of b); INFINITY
+                            when the images are equal */
+    double relative_mse; /* mean of (a - b)² / (b² + 0.01) over pixels and channels */
+    double max_error;    /* largest |a - b| */
+} image_comparison;
+
+/* Compares image a with the reference b (same size and channel count, else an error naming
+ * both files and their sizes). If diff_path is not NULL, writes the per-pixel error |a - b|
+ * (mean over R, G, B) in false colour, scaled so the 99th percentile is the top of the ramp. */
+int image_compare(const char *a, const char *b, const char *diff_path, image_comparison *out);
+
 /* A false-colour ramp for t in [0, 1] (clamped): black, violet, red, orange, pale yellow;
  * brightness rises monotonically, so it reads in grey too. NaN maps to black. */
 void image_false_colour(float t, unsigned char rgb[3]);

@@ -4,6 +4,7 @@
  *   idmr [-v] info SCENE [--json] [--no-bvh]
  *   idmr [-v] importance SCENE -o DIR [options]
  *   idmr [-v] reduce SCENE --target D -o OUTDIR [options]
+ *   idmr compare A B [--diff DIFF.png] [--json]
  *
  * Exit codes (error.h): 0 success, 1 runtime failure, 2 bad input or usage. Every failure
  * prints one "idmr: ..." message naming the file, element or call that failed. */
@@ -18,6 +19,7 @@
 #include "bvh.h"
 #include "device.h"
 #include "error.h"
+#include "image.h"
 #include "importance.h"
 #include "importance_report.h"
 #include "mitsuba.h"
@@ -62,6 +64,9 @@ static void print_usage(FILE *out)
           "      --keep NAME           never decimate mesh NAME (repeatable; emitters never are)\n"
           "      --threads N           decimation threads (default: all cores)\n"
           "      --force               write into a non-empty OUTDIR\n"
+          "  compare A B [--diff D.png] [--json]\n"
+          "                            RMSE, PSNR and relative MSE of image A against the\n"
+          "                            reference B (linear RGB), and a false-colour error image\n"
           "\n"
           "global options:\n"
           "  -v, --verbose             log progress, kernel build options and timings\n"
@@ -488,6 +493,50 @@ static int command_importance(int argc, char **argv)
     return code;
 }
 
+/* ---- compare ---- */
+
+static int command_compare(int argc, char **argv)
+{
+    static const struct option options[] = {{"diff", required_argument, NULL, 'd'},
+                                            {"json", no_argument, NULL, 'j'},
+                                            {0, 0, 0, 0}};
+    const char *diff = NULL;
+    int json = 0, c;
+    while ((c = getopt_long(argc, argv, "", options, NULL)) != -1) {
+        if (c == 'd')
+            diff = optarg;
+        else if (c == 'j')
+            json = 1;
+        else
+            return usage_error("compare: unknown option %s", argv[optind - 1]);
+    }
+    if (optind != argc - 2)
+        return usage_error("compare: expected two images, A and the reference B%s", "");
+    image_comparison result;
+    if (image_compare(argv[optind], argv[optind + 1], diff, &result))
+        return fail();
+    if (json) {
+        cJSON *root = cJSON_CreateObject();
+        cJSON_AddStringToObject(root, "a", argv[optind]);
+        cJSON_AddStringToObject(root, "b", argv[optind + 1]);
+        cJSON_AddNumberToObject(root, "width", result.width);
+        cJSON_AddNumberToObject(root, "height", result.height);
+        cJSON_AddNumberToObject(root, "rmse", result.rmse);
+        if (isfinite(result.psnr))
+            cJSON_AddNumberToObject(root, "psnr", result.psnr);
+        else
+            cJSON_AddNullToObject(root, "psnr"); /* identical images: infinite */
+        cJSON_AddNumberToObject(root, "relative_mse", result.relative_mse);
+        cJSON_AddNumberToObject(root, "max_error", result.max_error);
+        report_print_json(root);
+        cJSON_Delete(root);
+    } else {
+        printf("rmse %.6g  psnr %.2f dB  relative_mse %.6g  max_error %.6g  (%dx%d)\n", result.rmse,
+               result.psnr, result.relative_mse, result.max_error, result.width, result.height);
+    }
+    return 0;
+}
+
 /* ---- reduce ---- */
 
 static int command_reduce(int argc, char **argv)
@@ -612,6 +661,8 @@ int main(int argc, char **argv)
         return command_importance(sub_argc, sub_argv);
     if (!strcmp(command, "reduce"))
         return command_reduce(sub_argc, sub_argv);
+    if (!strcmp(command, "compare"))
+        return command_compare(sub_argc, sub_argv);
     if (!strcmp(command, "help")) {
         print_usage(stdout);
         return 0;
