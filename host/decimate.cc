@@ -168,22 +168,19 @@ class ReductionDecimater : public OpenMesh::Decimater::BaseDecimaterT<Mesh> {
             return false;
         Mesh::HalfedgeHandle v0v1 = ci.v0v1, v1v0 = ci.v1v0;
         Mesh::VertexHandle vl, vr;
-        if (!mesh_.is_boundary(v0v1)) {
-            Mesh::HalfedgeHandle h1 = mesh_.next_halfedge_handle(v0v1);
+        // The triangle on side h of the edge: its opposite vertex, and whether its other two
+        // edges are both boundary (collapsing would leave a dangling edge).
+        auto side = [&](Mesh::HalfedgeHandle h, Mesh::VertexHandle *opposite) {
+            Mesh::HalfedgeHandle h1 = mesh_.next_halfedge_handle(h);
             Mesh::HalfedgeHandle h2 = mesh_.next_halfedge_handle(h1);
-            vl = mesh_.to_vertex_handle(h1);
-            if (mesh_.is_boundary(mesh_.opposite_halfedge_handle(h1)) &&
-                mesh_.is_boundary(mesh_.opposite_halfedge_handle(h2)))
-                return false;
-        }
-        if (!mesh_.is_boundary(v1v0)) {
-            Mesh::HalfedgeHandle h1 = mesh_.next_halfedge_handle(v1v0);
-            Mesh::HalfedgeHandle h2 = mesh_.next_halfedge_handle(h1);
-            vr = mesh_.to_vertex_handle(h1);
-            if (mesh_.is_boundary(mesh_.opposite_halfedge_handle(h1)) &&
-                mesh_.is_boundary(mesh_.opposite_halfedge_handle(h2)))
-                return false;
-        }
+            *opposite = mesh_.to_vertex_handle(h1);
+            return mesh_.is_boundary(mesh_.opposite_halfedge_handle(h1)) &&
+                   mesh_.is_boundary(mesh_.opposite_halfedge_handle(h2));
+        };
+        if (!mesh_.is_boundary(v0v1) && side(v0v1, &vl))
+            return false;
+        if (!mesh_.is_boundary(v1v0) && side(v1v0, &vr))
+            return false;
         if (vl == vr)
             return false;
         bool b0 = mesh_.is_boundary(v0), b1 = mesh_.is_boundary(v1);

@@ -24,6 +24,7 @@
 #include "error.h"
 #include "image.h"
 #include "mesh_io.h"
+#include "mitsuba_text.h"
 #include "shapes.h"
 #include "spectrum.h"
 #include "xform.h"
@@ -44,10 +45,6 @@
 #define MITSUBA_SPOT_CUTOFF 20.0
 #define MITSUBA_FOCAL_LENGTH_MM 50.0
 
-typedef struct mitsuba_param {
-    char *name;
-    char *value;
-} mitsuba_param;
 
 typedef struct mitsuba_id {
     char *id;
@@ -59,8 +56,7 @@ typedef struct loader {
     scene *s;
     xmlDocPtr *docs; /* the scene file first, then included fragments */
     size_t doc_count;
-    mitsuba_param *params; /* <default> values */
-    size_t param_count;
+    mitsuba_params params; /* <default> values */
     mitsuba_id *ids;
     size_t id_count;
     int major_version;    /* 0 for Mitsuba 0.x files, else 3 */
@@ -228,14 +224,6 @@ xmlDocPtr mitsuba_read_xml(const char *path)
     return doc;
 }
 
-static const char *param_lookup(const loader *ld, const char *name, size_t length)
-{
-    for (size_t i = 0; i < ld->param_count; i++)
-        if (strlen(ld->params[i].name) == length && strncmp(ld->params[i].name, name, length) == 0)
-            return ld->params[i].value;
-    return NULL;
-}
-
 /* Records the <default> elements directly under `root`; an earlier definition wins. */
 static int collect_params(loader *ld, xmlNodePtr root)
 {
@@ -246,53 +234,18 @@ static int collect_params(loader *ld, xmlNodePtr root)
             continue;
         if (require_attr(child, "name", &name) || require_attr(child, "value", &value))
             return -1;
-        if (param_lookup(ld, name, strlen(name)))
-            continue;
-        ld->params = xrealloc(ld->params, (ld->param_count + 1) * sizeof *ld->params);
-        ld->params[ld->param_count].name = xstrdup(name);
-        ld->params[ld->param_count].value = xstrdup(value);
-        ld->param_count++;
+        mitsuba_params_add(&ld->params, name, value);
     }
     return 0;
-}
-
-static int is_param_char(char c)
-{
-    return isalnum((unsigned char)c) || c == '_';
 }
 
 /* Returns a malloc'd copy of `text` with each $name replaced by its <default> value. */
 static char *substitute(const loader *ld, xmlNodePtr node, const char *text)
 {
-    size_t capacity = strlen(text) + 1, used = 0;
-    char *out = xmalloc(capacity);
-    for (const char *p = text; *p;) {
-        const char *piece = p;
-        size_t length = 1;
-        if (*p == '$') {
-            size_t n = 1;
-            while (is_param_char(p[n]))
-                n++;
-            piece = param_lookup(ld, p + 1, n - 1);
-            if (!piece) {
-                fail(node, "undefined parameter '%.*s' (no <default name=\"%.*s\">)", (int)n, p,
-                     (int)(n - 1), p + 1);
-                free(out);
-                return NULL;
-            }
-            length = strlen(piece);
-            p += n;
-        } else {
-            p++;
-        }
-        if (used + length + 1 > capacity) {
-            capacity = 2 * (used + length + 1);
-            out = xrealloc(out, capacity);
-        }
-        memcpy(out + used, piece, length);
-        used += length;
-    }
-    out[used] = '\0';
+    char missing[256];
+    char *out = mitsuba_substitute(&ld->params, text, missing, sizeof missing);
+    if (!out)
+        fail(node, "undefined parameter '%s' (no <default name=\"%s\">)", missing, missing + 1);
     return out;
 }
 
@@ -357,43 +310,10 @@ static int parse_major_version(xmlNodePtr root)
 /* ---------------------------------------------------------------------------------------- */
 /* Paths                                                                                    */
 
-static char *path_join(const char *dir, const char *file)
-{
-    if (file[0] == '/' || !dir || !dir[0] || strcmp(dir, ".") == 0)
-        return xstrdup(file);
-    size_t size = strlen(dir) + strlen(file) + 2;
-    char *out = xmalloc(size);
-    snprintf(out, size, "%s/%s", dir, file);
-    return out;
-}
-
-static char *path_directory(const char *path)
-{
-    const char *slash = strrchr(path, '/');
-    if (!slash)
-        return xstrdup("");
-    if (slash == path)
-        return xstrdup("/");
-    char *dir = xstrdup(path);
-    dir[slash - path] = '\0';
-    return dir;
-}
-
 /* `written` resolved against the directory of the file that names it, then the scene's. */
 static char *resolve_path(const loader *ld, xmlNodePtr node, const char *written)
 {
-    char *dir = path_directory(node_file(node));
-    char *path = path_join(dir, written);
-    free(dir);
-    if (access(path, F_OK) == 0 || written[0] == '/')
-        return path;
-    char *fallback = path_join(ld->s->dir, written);
-    if (access(fallback, F_OK) == 0) {
-        free(path);
-        return fallback;
-    }
-    free(fallback);
-    return path;
+    return mitsuba_resolve(node_file(node), ld->s->dir, written, NULL);
 }
 
 /* ---------------------------------------------------------------------------------------- */
@@ -1715,11 +1635,7 @@ static void loader_free(loader *ld)
     for (size_t i = 0; i < ld->doc_count; i++)
         xmlFreeDoc(ld->docs[i]);
     free(ld->docs);
-    for (size_t i = 0; i < ld->param_count; i++) {
-        free(ld->params[i].name);
-        free(ld->params[i].value);
-    }
-    free(ld->params);
+    mitsuba_params_free(&ld->params);
     for (size_t i = 0; i < ld->id_count; i++)
         free(ld->ids[i].id);
     free(ld->ids);

@@ -24,15 +24,11 @@
 
 #include "error.h"
 #include "mitsuba.h"
+#include "mitsuba_text.h"
 #include "report.h"
 
 #define WRITE_MAX_INCLUDE_DEPTH 16 /* as the loader */
 #define WRITE_INCLUDES_DIR "includes"
-
-typedef struct write_param {
-    char *name;
-    char *value;
-} write_param;
 
 typedef struct write_doc {
     char *path; /* as the loader names it: the scene path as given, or dir(includer)/written */
@@ -62,8 +58,7 @@ typedef struct writer {
     char *scene_dir;
     write_doc *docs; /* the scene first */
     size_t doc_count;
-    write_param *params;
-    size_t param_count;
+    mitsuba_params params; /* <default> values, as the loader reads them */
     write_path_edit *edits;
     size_t edit_count;
     write_include *includes;
@@ -102,29 +97,6 @@ static int has_property_name(xmlNodePtr node, const char *snake)
     return strcmp(normal, snake) == 0;
 }
 
-static char *path_join(const char *dir, const char *file)
-{
-    if (file[0] == '/' || !dir || !dir[0] || strcmp(dir, ".") == 0)
-        return xstrdup(file);
-    size_t size = strlen(dir) + strlen(file) + 2;
-    char *out = xmalloc(size);
-    snprintf(out, size, "%s/%s", dir, file);
-    return out;
-}
-
-static char *path_directory(const char *path)
-{
-    const char *slash = strrchr(path, '/');
-    if (!slash)
-        return xstrdup("");
-    if (slash == path)
-        return xstrdup("/");
-    char *dir = xstrdup(path);
-    dir[slash - path] = '\0';
-    return dir;
-}
-
-/* realpath() as a malloc'd string, or NULL if the file does not exist. */
 static char *real_path(const char *path)
 {
     char buffer[PATH_MAX];
@@ -138,7 +110,7 @@ static char *absolute_path(const char *path)
     if (path[0] == '/' || !getcwd(cwd, sizeof cwd))
         return xstrdup(path);
     char *real_cwd = real_path(cwd);
-    char *out = path_join(real_cwd ? real_cwd : cwd, path[0] == '.' && path[1] == '/' ? path + 2 : path);
+    char *out = mitsuba_path_join(real_cwd ? real_cwd : cwd, path[0] == '.' && path[1] == '/' ? path + 2 : path);
     free(real_cwd);
     return out;
 }
@@ -159,66 +131,14 @@ static int file_has_declaration(const char *path)
     return n >= skip + 5 && memcmp(head + skip, "<?xml", 5) == 0;
 }
 
-static const char *param_lookup(const writer *w, const char *name, size_t length)
-{
-    for (size_t i = 0; i < w->param_count; i++)
-        if (strlen(w->params[i].name) == length && strncmp(w->params[i].name, name, length) == 0)
-            return w->params[i].value;
-    return NULL;
-}
-
 /* Records the <default> elements directly under `root`; an earlier definition wins. */
 static void collect_params(writer *w, xmlNodePtr root)
 {
     for (xmlNodePtr child = root->children; child; child = child->next) {
         const char *name = attr(child, "name"), *value = attr(child, "value");
-        if (!is_tag(child, "default") || !name || !value || param_lookup(w, name, strlen(name)))
-            continue;
-        w->params = xrealloc(w->params, (w->param_count + 1) * sizeof *w->params);
-        w->params[w->param_count].name = xstrdup(name);
-        w->params[w->param_count].value = xstrdup(value);
-        w->param_count++;
+        if (is_tag(child, "default") && name && value)
+            mitsuba_params_add(&w->params, name, value);
     }
-}
-
-static int is_param_char(char c)
-{
-    return isalnum((unsigned char)c) || c == '_';
-}
-
-/* A malloc'd copy of `text` with each $name replaced by its <default> value, or NULL if one is
- * undefined (its name goes to `missing`). */
-static char *substitute(const writer *w, const char *text, char *missing, size_t size)
-{
-    size_t capacity = strlen(text) + 1, used = 0;
-    char *out = xmalloc(capacity);
-    for (const char *p = text; *p;) {
-        const char *piece = p;
-        size_t length = 1;
-        if (*p == '$') {
-            size_t n = 1;
-            while (is_param_char(p[n]))
-                n++;
-            piece = param_lookup(w, p + 1, n - 1);
-            if (!piece) {
-                snprintf(missing, size, "%.*s", (int)n, p);
-                free(out);
-                return NULL;
-            }
-            length = strlen(piece);
-            p += n;
-        } else {
-            p++;
-        }
-        if (used + length + 1 > capacity) {
-            capacity = 2 * (used + length + 1);
-            out = xrealloc(out, capacity);
-        }
-        memcpy(out + used, piece, length);
-        used += length;
-    }
-    out[used] = '\0';
-    return out;
 }
 
 /* `written` (already substituted) resolved as the loader resolves it: from the directory of
@@ -228,20 +148,7 @@ static char *substitute(const writer *w, const char *text, char *missing, size_t
 static char *resolve_loader(const writer *w, const write_doc *doc, const char *written,
                             int *fallback)
 {
-    *fallback = 0;
-    char *dir = path_directory(doc->path);
-    char *first = path_join(dir, written);
-    free(dir);
-    if (written[0] == '/' || access(first, F_OK) == 0)
-        return first;
-    char *second = path_join(w->scene_dir, written);
-    if (access(second, F_OK) == 0) {
-        free(first);
-        *fallback = 1;
-        return second;
-    }
-    free(second);
-    return first;
+    return mitsuba_resolve(doc->path, w->scene_dir, written, fallback);
 }
 
 /* The absolute path to write for `written`: realpath of what the loader resolves it to, or
@@ -308,7 +215,8 @@ static void note_path(writer *w, size_t doc, xmlNodePtr node, const char *attrib
     int fallback;
     if (!written || !written[0])
         return;
-    char *value = strchr(written, '$') ? substitute(w, written, missing, sizeof missing)
+    char *value = strchr(written, '$')
+                      ? mitsuba_substitute(&w->params, written, missing, sizeof missing)
                                        : xstrdup(written);
     if (!value) /* an undefined parameter: left as written (the loader rejects it) */
         return;
@@ -335,7 +243,7 @@ static int walk_include(writer *w, size_t doc, xmlNodePtr node, int depth)
     if (depth >= WRITE_MAX_INCLUDE_DEPTH)
         return error_set(IDMR_EXIT_INPUT, "%s:%ld: <include>: includes nested too deeply",
                          path_of, xmlGetLineNo(node));
-    char *value = substitute(w, written, missing, sizeof missing);
+    char *value = mitsuba_substitute(&w->params, written, missing, sizeof missing);
     if (!value)
         return error_set(IDMR_EXIT_INPUT,
                          "%s:%ld: <include>: undefined parameter '%s' (no <default name=\"%s\">)",
@@ -583,7 +491,7 @@ static int write_doc_out(writer *w, size_t index, const char *target)
     for (size_t i = 0; i < w->replacement_count; i++)
         if (w->shapes[i]->doc == d->doc)
             replace_shape(w->shapes[i], w->replacements[i].ply);
-    char *path = path_join(w->outdir, target);
+    char *path = mitsuba_path_join(w->outdir, target);
     int status = write_tree(d, path);
     free(path);
     return status;
@@ -601,11 +509,7 @@ static void writer_free(writer *w)
         xmlFreeDoc(w->docs[i].doc);
     }
     free(w->docs);
-    for (size_t i = 0; i < w->param_count; i++) {
-        free(w->params[i].name);
-        free(w->params[i].value);
-    }
-    free(w->params);
+    mitsuba_params_free(&w->params);
     for (size_t i = 0; i < w->edit_count; i++)
         free(w->edits[i].value);
     free(w->edits);
@@ -650,7 +554,7 @@ int mitsuba_write_reduced(const char *scene_file, const char *outdir,
     memset(&w, 0, sizeof w);
     xmlInitParser();
     w.outdir = outdir;
-    w.scene_dir = path_directory(scene_file);
+    w.scene_dir = mitsuba_path_directory(scene_file);
     w.replacements = replacements;
     w.replacement_count = count;
     w.replacement_real = xcalloc(count ? count : 1, sizeof *w.replacement_real);
@@ -674,7 +578,7 @@ int mitsuba_write_reduced(const char *scene_file, const char *outdir,
         for (size_t i = 1; i < w.doc_count && status == 0; i++) {
             if (!w.docs[i].copy)
                 continue;
-            char *dir = path_join(outdir, WRITE_INCLUDES_DIR);
+            char *dir = mitsuba_path_join(outdir, WRITE_INCLUDES_DIR);
             status = ensure_directory(dir);
             free(dir);
             if (status == 0)

@@ -87,7 +87,6 @@ typedef struct reduce_state {
     uint32_t *uncollapsible;
     char **ply; /* relative to outdir, for decimated meshes */
     budget_plan plan;
-    uint64_t *loaded_vertices; /* per mesh: vertices as the scene holds them */
     unsigned int compensation_rounds;
     double seconds_importance, seconds_budget, seconds_decimation, seconds_write;
 } reduce_state;
@@ -107,7 +106,6 @@ static void state_free(reduce_state *st)
     free(st->messages);
     free(st->measured);
     free(st->uncollapsible);
-    free(st->loaded_vertices);
     free(st->ply);
     budget_plan_free(&st->plan);
 }
@@ -215,8 +213,8 @@ static int decimate_selected(reduce_state *st, decimate_method method, unsigned 
 
 /* Lowers the targets of the decimated meshes that met theirs by `excess` vertices in all, in
  * proportion to their room above the floor, and flags them in `redo`. False if none has room. */
-static int compensate(reduce_state *st, uint64_t excess, uint64_t floor_vertices,
-                      unsigned char *redo)
+static int compensate(reduce_state *st, const scene *s, uint64_t excess,
+                      uint64_t floor_vertices, unsigned char *redo)
 {
     uint64_t room = 0;
     for (size_t m = 0; m < st->count; m++) {
@@ -242,7 +240,7 @@ static int compensate(reduce_state *st, uint64_t excess, uint64_t floor_vertices
         if (share == 0)
             continue;
         st->plan.target[m] = target - share;
-        st->plan.factor[m] = (double)st->plan.target[m] / st->loaded_vertices[m];
+        st->plan.factor[m] = (double)st->plan.target[m] / s->meshes[m].vertex_count;
         taken += share;
         redo[m] = 1;
     }
@@ -296,7 +294,6 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
     st.messages = xcalloc(st.count + 1, sizeof *st.messages);
     st.measured = xcalloc(st.count + 1, sizeof *st.measured);
     st.uncollapsible = xcalloc(st.count + 1, sizeof *st.uncollapsible);
-    st.loaded_vertices = xcalloc(st.count + 1, sizeof *st.loaded_vertices);
     st.ply = xcalloc(st.count + 1, sizeof *st.ply);
     budget_mesh *budget = xcalloc(st.count + 1, sizeof *budget);
     for (size_t m = 0; m < st.count && !status; m++) {
@@ -314,7 +311,6 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
         /* Counted as the scene holds them, so the totals match what `idmr info` says of the
          * input and of the reduced scene. */
         budget[m].vertices = mesh->vertex_count;
-        st.loaded_vertices[m] = mesh->vertex_count;
         budget[m].pinned = mesh->light >= 0 || is_kept(o, mesh->name);
         if (o->method == DECIMATE_IMPORTANCE) {
             double camera, light;
@@ -347,7 +343,7 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
         for (size_t m = 0; m < st.count; m++)
             after += st.plan.decimate[m] ? st.output[m].mesh.vertex_count : s->meshes[m].vertex_count;
         if (status || after <= st.plan.total_requested || round == COMPENSATION_ROUNDS ||
-            !compensate(&st, after - st.plan.total_requested, o->min_vertices, redo))
+            !compensate(&st, s, after - st.plan.total_requested, o->min_vertices, redo))
             break;
         st.compensation_rounds = round + 1;
     }

@@ -388,7 +388,8 @@ static void test_outdir(void **state)
 
 /* The Cornell box plus a second knot (moved) and a sphere (994 vertices): three meshes to
  * decimate. The file names the knot by its absolute path (it is written elsewhere). */
-static void write_three_mesh_scene(const char *dir, char *scene_path, size_t size)
+/* DIR/scene.xml: the shipped Cornell box, its knot by absolute path, plus `extra` shapes. */
+static void write_cornell_plus(const char *dir, const char *extra, char *scene_path, size_t size)
 {
     size_t length;
     char *xml = read_file(CORNELL, &length);
@@ -404,25 +405,31 @@ static void write_three_mesh_scene(const char *dir, char *scene_path, size_t siz
     snprintf(scene_path, size, "%s/scene.xml", dir);
     FILE *f = fopen(scene_path, "w");
     assert_non_null(f);
-    fprintf(f, "%svalue=\"%s\"%s", xml, knot, first + strlen(relative));
-    fprintf(f,
-            "    <shape type=\"ply\" id=\"knot2\">\n"
-            "        <string name=\"filename\" value=\"%s\"/>\n"
-            "        <transform name=\"to_world\">\n"
-            "            <scale value=\"0.5\"/>\n"
-            "            <translate x=\"-0.4\" y=\"0.4\" z=\"0.2\"/>\n"
-            "        </transform>\n"
-            "        <ref id=\"knot\"/>\n"
-            "    </shape>\n"
-            "    <shape type=\"sphere\" id=\"ball\">\n"
-            "        <point name=\"center\" x=\"0.5\" y=\"0.5\" z=\"-0.3\"/>\n"
-            "        <float name=\"radius\" value=\"0.2\"/>\n"
-            "        <ref id=\"white\"/>\n"
-            "    </shape>\n"
-            "</scene>\n",
-            knot);
+    fprintf(f, "%svalue=\"%s\"%s%s</scene>\n", xml, knot, first + strlen(relative), extra);
     assert_int_equal(fclose(f), 0);
     free(xml);
+}
+
+static void write_three_mesh_scene(const char *dir, char *scene_path, size_t size)
+{
+    char knot[4096], extra[8192];
+    assert_non_null(realpath(KNOT, knot));
+    snprintf(extra, sizeof extra,
+             "    <shape type=\"ply\" id=\"knot2\">\n"
+             "        <string name=\"filename\" value=\"%s\"/>\n"
+             "        <transform name=\"to_world\">\n"
+             "            <scale value=\"0.5\"/>\n"
+             "            <translate x=\"-0.4\" y=\"0.4\" z=\"0.2\"/>\n"
+             "        </transform>\n"
+             "        <ref id=\"knot\"/>\n"
+             "    </shape>\n"
+             "    <shape type=\"sphere\" id=\"ball\">\n"
+             "        <point name=\"center\" x=\"0.5\" y=\"0.5\" z=\"-0.3\"/>\n"
+             "        <float name=\"radius\" value=\"0.2\"/>\n"
+             "        <ref id=\"white\"/>\n"
+             "    </shape>\n",
+             knot);
+    write_cornell_plus(dir, extra, scene_path, size);
 }
 
 static void test_quadric(void **state)
@@ -482,8 +489,6 @@ static void test_quadric(void **state)
     remove_tree(in_dir);
 }
 
-/* ---- 4. keep ---- */
-
 /* A mesh that cannot give up any vertex (200 separate triangles: no collapse is legal) beside
  * the knot, reduced with uniform factors: the confetti keeps all 600 vertices, and the
  * compensation rounds take them from the knot, so the total still meets the target exactly. */
@@ -502,29 +507,12 @@ static void test_compensation(void **state)
     for (int t = 0; t < 200; t++)
         fprintf(f, "f %d %d %d\n", 3 * t + 1, 3 * t + 2, 3 * t + 3);
     assert_int_equal(fclose(f), 0);
-    size_t length;
-    char *xml = read_file(CORNELL, &length);
-    char *end = strstr(xml, "</scene>");
-    assert_non_null(end);
-    *end = 0;
-    char knot[4096];
-    assert_non_null(realpath(KNOT, knot));
-    const char *relative = "value=\"meshes/knot.ply\"";
-    char *first = strstr(xml, relative);
-    assert_non_null(first);
-    *first = 0;
-    snprintf(scene_path, sizeof scene_path, "%s/scene.xml", in_dir);
-    f = fopen(scene_path, "w");
-    assert_non_null(f);
-    fprintf(f, "%svalue=\"%s\"%s", xml, knot, first + strlen(relative));
-    fprintf(f,
-            "    <shape type=\"obj\" id=\"confetti\">\n"
-            "        <string name=\"filename\" value=\"confetti.obj\"/>\n"
-            "        <ref id=\"white\"/>\n"
-            "    </shape>\n"
-            "</scene>\n");
-    assert_int_equal(fclose(f), 0);
-    free(xml);
+    write_cornell_plus(in_dir,
+                       "    <shape type=\"obj\" id=\"confetti\">\n"
+                       "        <string name=\"filename\" value=\"confetti.obj\"/>\n"
+                       "        <ref id=\"white\"/>\n"
+                       "    </shape>\n",
+                       scene_path, sizeof scene_path);
 
     scene *s = load(scene_path);
     reduce_options o;
@@ -588,6 +576,8 @@ static void test_file_name_collision(void **state)
     remove_tree(in_dir);
     remove_tree(dir);
 }
+
+/* ---- 4. keep ---- */
 
 static void test_keep(void **state)
 {
