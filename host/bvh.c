@@ -15,6 +15,7 @@
 #include <time.h>
 
 #include "error.h"
+#include "report.h"
 
 enum { BUILD_NODE, BUILD_LEAF };
 
@@ -228,17 +229,10 @@ static void flatten(builder *b, const build_node *src, size_t index, int depth)
     }
 }
 
-static double seconds_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 int bvh_build(const scene *s, bvh *out)
 {
     memset(out, 0, sizeof *out);
-    double start = seconds_now();
+    double start = monotonic_seconds();
     RTCDevice device = bvh_embree_device();
     if (!device)
         return error_set(IDMR_EXIT_FAILURE, "rtcNewDevice failed: Embree could not start");
@@ -353,7 +347,7 @@ int bvh_build(const scene *s, bvh *out)
     out->leaf_count = b.leaf_count;
     out->reference_count = b.reference_count;
     out->depth = b.depth;
-    out->build_seconds = seconds_now() - start;
+    out->build_seconds = monotonic_seconds() - start;
     log_verbose("BVH: %zu nodes, %zu leaves, %zu triangle references (%zu degenerate triangles "
                 "left out), depth %d, %.2f s",
                 out->node_count, out->leaf_count, out->reference_count, out->degenerate_count,

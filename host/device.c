@@ -472,6 +472,16 @@ int device_read(device *d, cl_mem buffer, size_t bytes, void *host, const char *
     return 0;
 }
 
+int device_clear(device *d, cl_mem buffer, size_t bytes, const char *what)
+{
+    cl_uint zero = 0;
+    cl_int err = clEnqueueFillBuffer(d->queue, buffer, &zero, sizeof zero, 0, bytes, 0, NULL, NULL);
+    if (err != CL_SUCCESS)
+        return error_set(IDMR_EXIT_FAILURE, "clearing %s failed: %s", what,
+                         device_error_string(err));
+    return 0;
+}
+
 int device_set_args(cl_kernel kernel, const char *kernel_name, const device_arg *args,
                     size_t count)
 {

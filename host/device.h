@@ -80,6 +80,9 @@ int device_buffer(device *d, cl_mem_flags flags, size_t bytes, const void *host,
 /* Blocking read of `bytes` from `buffer` into `host`. */
 int device_read(device *d, cl_mem buffer, size_t bytes, void *host, const char *what);
 
+/* Fills the first `bytes` of `buffer` (a multiple of 4) with zeros, queued in order. */
+int device_clear(device *d, cl_mem buffer, size_t bytes, const char *what);
+
 /* One kernel argument: DEVICE_ARG(x) passes sizeof x and &x. */
 typedef struct device_arg {
     size_t size;

@@ -142,6 +142,7 @@ int device_scene_upload(device *d, const scene *s, const bvh *b, device_scene *o
                       emitter_cdf, "emitter CDF", &out->emitter_cdf) ||
         device_buffer(d, CL_MEM_READ_ONLY, 12 * sizeof(float) * (emitter_count ? emitter_count : 1),
                       emitter_triangles, "emitter triangles", &out->emitter_triangles);
+    out->bvh_bytes = node_bytes + leaf_bytes;
     out->bytes = node_bytes + leaf_bytes + (uint64_t)(triangles ? triangles : 1) * 20u +
                  s->material_count * sizeof(idmr_material) + light_count * (sizeof *lights + 4) +
                  emitter_count * 52u;

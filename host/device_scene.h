@@ -32,6 +32,7 @@ typedef struct device_scene {
     float radius;      /* bounding sphere of the scene box */
     float ray_epsilon; /* origin offset of secondary rays */
     uint64_t bytes;    /* device memory of all the above */
+    uint64_t bvh_bytes; /* of which the BVH (nodes and leaves) */
 } device_scene;
 
 /* Uploads scene `s` with its BVH `b`. A scene without lights is accepted (the light buffers

@@ -15,16 +15,10 @@
 #include "device_scene.h"
 #include "error.h"
 #include "idmr/importance.h"
+#include "pass_grid.h"
 #include "report.h"
 
 #define STOP_AFTER_CALM_ITERATIONS 3
-
-static double seconds_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 void importance_options_default(importance_options *o)
 {
@@ -48,30 +42,27 @@ unsigned int importance_default_photons(const device *d)
 typedef struct pass {
     device *dev;
     cl_program program;
-    cl_kernel camera, photon, grid_count, scan_chunks, scan_chunk_sums, scan_apply, grid_scatter,
-        gather, path;
+    cl_kernel camera, photon, gather, path;
     cl_mem hit_points, vertices, path_length, gathered;
-    cl_mem cell_counts, cell_start, cell_cursor, chunk_sums, grid_points;
     cl_mem camera_importance, light_importance;
     device_scene scene;
-    unsigned int pixels, cells, chunks;
+    pass_grid grid;
+    unsigned int pixels;
     uint64_t bytes;
 } pass;
 
 static void pass_release(pass *p)
 {
-    cl_kernel kernels[] = {p->camera,     p->photon,       p->grid_count,
-                           p->scan_chunks, p->scan_chunk_sums, p->scan_apply,
-                           p->grid_scatter, p->gather,      p->path};
+    cl_kernel kernels[] = {p->camera, p->photon, p->gather, p->path};
     for (size_t i = 0; i < sizeof kernels / sizeof *kernels; i++)
         if (kernels[i])
             clReleaseKernel(kernels[i]);
-    cl_mem buffers[] = {p->hit_points,  p->vertices,   p->path_length,       p->gathered,
-                        p->cell_counts, p->cell_start, p->cell_cursor,       p->chunk_sums,
-                        p->grid_points, p->camera_importance, p->light_importance};
+    cl_mem buffers[] = {p->hit_points,        p->vertices,        p->path_length,
+                        p->gathered,          p->camera_importance, p->light_importance};
     for (size_t i = 0; i < sizeof buffers / sizeof *buffers; i++)
         if (buffers[i])
             clReleaseMemObject(buffers[i]);
+    pass_grid_release(&p->grid);
     if (p->program)
         clReleaseProgram(p->program);
     device_scene_release(&p->scene);
@@ -79,7 +70,7 @@ static void pass_release(pass *p)
 
 static int pass_build(pass *p, const scene *s, const importance_options *o, importance_result *r)
 {
-    double start = seconds_now();
+    double start = monotonic_seconds();
     char extra[96];
     snprintf(extra, sizeof extra, "-D IDMR_BOOKKEEPING=%d -D IDMR_CAMERA_IMPORTANCE=%d",
              o->bookkeeping ? 1 : 0, o->gamma > 0 ? 1 : 0);
@@ -90,15 +81,14 @@ static int pass_build(pass *p, const scene *s, const importance_options *o, impo
     struct {
         cl_kernel *kernel;
         const char *name;
-    } kernels[] = {{&p->camera, "camera_pass"},          {&p->photon, "photon_pass"},
-                   {&p->grid_count, "grid_count"},       {&p->scan_chunks, "scan_chunks"},
-                   {&p->scan_chunk_sums, "scan_chunk_sums"}, {&p->scan_apply, "scan_apply"},
-                   {&p->grid_scatter, "grid_scatter"},   {&p->gather, "gather_count"},
+    } kernels[] = {{&p->camera, "camera_pass"},
+                   {&p->photon, "photon_pass"},
+                   {&p->gather, "gather_count"},
                    {&p->path, "path_importance"}};
     for (size_t i = 0; i < sizeof kernels / sizeof *kernels; i++)
         if (device_create_kernel(p->program, kernels[i].name, kernels[i].kernel))
             return -1;
-    r->seconds.build = seconds_now() - start;
+    r->seconds.build = monotonic_seconds() - start;
     return 0;
 }
 
@@ -106,10 +96,8 @@ static int pass_allocate(pass *p, const scene *s, unsigned int photons)
 {
     size_t triangles = s->triangle_count ? (size_t)s->triangle_count : 1;
     size_t slots = (size_t)photons * IDMR_PATH_VERTICES;
-    p->cells = 1024;
-    while (p->cells < 2u * p->pixels)
-        p->cells *= 2;
-    p->chunks = (p->cells + IDMR_SCAN_CHUNK - 1) / IDMR_SCAN_CHUNK;
+    if (pass_grid_create(p->dev, p->program, p->pixels, &p->grid))
+        return -1;
     struct {
         cl_mem *buffer;
         size_t bytes;
@@ -119,15 +107,10 @@ static int pass_allocate(pass *p, const scene *s, unsigned int photons)
         {&p->vertices, slots * sizeof(idmr_photon_vertex), "photon paths"},
         {&p->path_length, photons * sizeof(cl_uint), "photon path lengths"},
         {&p->gathered, slots * sizeof(cl_uint), "gather counts"},
-        {&p->cell_counts, p->cells * sizeof(cl_uint), "grid cell counts"},
-        {&p->cell_start, (p->cells + 1) * sizeof(cl_uint), "grid cell starts"},
-        {&p->cell_cursor, p->cells * sizeof(cl_uint), "grid cursors"},
-        {&p->chunk_sums, p->chunks * sizeof(cl_uint), "grid prefix sums"},
-        {&p->grid_points, p->pixels * sizeof(cl_uint), "grid hit point lists"},
         {&p->camera_importance, triangles * sizeof(cl_ulong), "camera importance"},
         {&p->light_importance, triangles * sizeof(cl_ulong), "light importance"},
     };
-    p->bytes = p->scene.bytes;
+    p->bytes = p->scene.bytes + p->grid.bytes;
     for (size_t i = 0; i < sizeof buffers / sizeof *buffers; i++) {
         if (device_buffer(p->dev, CL_MEM_READ_WRITE, buffers[i].bytes, NULL, buffers[i].what,
                           buffers[i].buffer))
@@ -137,23 +120,12 @@ static int pass_allocate(pass *p, const scene *s, unsigned int photons)
     return 0;
 }
 
-static int clear_buffer(pass *p, cl_mem buffer, size_t bytes, const char *what)
-{
-    cl_uint zero = 0;
-    cl_int err = clEnqueueFillBuffer(p->dev->queue, buffer, &zero, sizeof zero, 0, bytes, 0, NULL,
-                                     NULL);
-    if (err != CL_SUCCESS)
-        return error_set(IDMR_EXIT_FAILURE, "clearing %s failed: %s", what,
-                         device_error_string(err));
-    return 0;
-}
-
 /* Runs one iteration's kernels, timing each stage (the queue is drained between stages). */
 static int pass_iterate(pass *p, const scene *s, const importance_options *o,
-                        idmr_importance_params *params, importance_result *r)
+                        idmr_pass_params *params, importance_result *r)
 {
     size_t local = o->local_size;
-    double t0 = seconds_now();
+    double t0 = monotonic_seconds();
     idmr_camera camera = s->camera;
     if (DEVICE_SET_ARGS(p->camera, "camera_pass", DEVICE_ARG(*params), DEVICE_ARG(camera),
                         DEVICE_ARG(p->scene.nodes), DEVICE_ARG(p->scene.leaves),
@@ -162,7 +134,7 @@ static int pass_iterate(pass *p, const scene *s, const importance_options *o,
                         DEVICE_ARG(p->hit_points), DEVICE_ARG(p->camera_importance)) ||
         device_run(p->dev, p->camera, "camera_pass", p->pixels, local))
         return -1;
-    double t1 = seconds_now();
+    double t1 = monotonic_seconds();
     if (DEVICE_SET_ARGS(p->photon, "photon_pass", DEVICE_ARG(*params), DEVICE_ARG(p->scene.lights),
                         DEVICE_ARG(p->scene.light_cdf), DEVICE_ARG(p->scene.emitter_cdf),
                         DEVICE_ARG(p->scene.emitter_triangles), DEVICE_ARG(p->scene.nodes),
@@ -171,43 +143,25 @@ static int pass_iterate(pass *p, const scene *s, const importance_options *o,
                         DEVICE_ARG(p->vertices), DEVICE_ARG(p->path_length)) ||
         device_run(p->dev, p->photon, "photon_pass", params->path_count, local))
         return -1;
-    double t2 = seconds_now();
-    cl_uint cells = p->cells, chunks = p->chunks;
-    if (clear_buffer(p, p->cell_counts, p->cells * sizeof(cl_uint), "grid cell counts") ||
-        DEVICE_SET_ARGS(p->grid_count, "grid_count", DEVICE_ARG(*params),
-                        DEVICE_ARG(p->hit_points), DEVICE_ARG(p->cell_counts)) ||
-        device_run(p->dev, p->grid_count, "grid_count", p->pixels, local) ||
-        DEVICE_SET_ARGS(p->scan_chunks, "scan_chunks", DEVICE_ARG(p->cell_counts),
-                        DEVICE_ARG(cells), DEVICE_ARG(p->chunk_sums)) ||
-        device_run(p->dev, p->scan_chunks, "scan_chunks", p->chunks, 0) ||
-        DEVICE_SET_ARGS(p->scan_chunk_sums, "scan_chunk_sums", DEVICE_ARG(p->chunk_sums),
-                        DEVICE_ARG(chunks)) ||
-        device_run(p->dev, p->scan_chunk_sums, "scan_chunk_sums", 1, 0) ||
-        DEVICE_SET_ARGS(p->scan_apply, "scan_apply", DEVICE_ARG(p->cell_counts),
-                        DEVICE_ARG(cells), DEVICE_ARG(p->chunk_sums), DEVICE_ARG(p->cell_start),
-                        DEVICE_ARG(p->cell_cursor)) ||
-        device_run(p->dev, p->scan_apply, "scan_apply", p->chunks, 0) ||
-        DEVICE_SET_ARGS(p->grid_scatter, "grid_scatter", DEVICE_ARG(*params),
-                        DEVICE_ARG(p->hit_points), DEVICE_ARG(p->cell_cursor),
-                        DEVICE_ARG(p->grid_points)) ||
-        device_run(p->dev, p->grid_scatter, "grid_scatter", p->pixels, local))
+    double t2 = monotonic_seconds();
+    if (pass_grid_build(p->dev, &p->grid, params, p->hit_points, local))
         return -1;
-    double t3 = seconds_now();
+    double t3 = monotonic_seconds();
     size_t slots = (size_t)params->path_count * IDMR_PATH_VERTICES;
     if (DEVICE_SET_ARGS(p->gather, "gather_count", DEVICE_ARG(*params), DEVICE_ARG(p->vertices),
                         DEVICE_ARG(p->path_length), DEVICE_ARG(p->hit_points),
-                        DEVICE_ARG(p->cell_start), DEVICE_ARG(p->grid_points),
+                        DEVICE_ARG(p->grid.cell_start), DEVICE_ARG(p->grid.grid_points),
                         DEVICE_ARG(p->gathered)) ||
         device_run(p->dev, p->gather, "gather_count", slots, local))
         return -1;
-    double t4 = seconds_now();
+    double t4 = monotonic_seconds();
     if (o->bookkeeping &&
         (DEVICE_SET_ARGS(p->path, "path_importance", DEVICE_ARG(*params), DEVICE_ARG(p->vertices),
                          DEVICE_ARG(p->path_length), DEVICE_ARG(p->gathered),
                          DEVICE_ARG(p->light_importance)) ||
          device_run(p->dev, p->path, "path_importance", params->path_count, local)))
         return -1;
-    double t5 = seconds_now();
+    double t5 = monotonic_seconds();
     r->seconds.camera += t1 - t0;
     r->seconds.photon += t2 - t1;
     r->seconds.grid += t3 - t2;
@@ -227,7 +181,7 @@ void importance_snapshot_free(importance_snapshot *snapshot)
     memset(snapshot, 0, sizeof *snapshot);
 }
 
-static int pass_snapshot(pass *p, const idmr_importance_params *params, size_t triangles,
+static int pass_snapshot(pass *p, const idmr_pass_params *params, size_t triangles,
                          importance_snapshot *out)
 {
     importance_snapshot_free(out);
@@ -260,7 +214,7 @@ static int pass_snapshot(pass *p, const idmr_importance_params *params, size_t t
 static int pass_collect(pass *p, const scene *s, importance_result *r, uint64_t *scratch)
 {
     size_t n = (size_t)s->triangle_count;
-    double start = seconds_now();
+    double start = monotonic_seconds();
     cl_mem buffers[2] = {p->camera_importance, p->light_importance};
     double *sums[2] = {r->camera, r->light};
     const char *names[2] = {"camera importance", "light importance"};
@@ -276,10 +230,10 @@ static int pass_collect(pass *p, const scene *s, importance_result *r, uint64_t 
                                  names[b], t);
             sums[b][t] += (double)scratch[t] / IDMR_FIXED_SCALE;
         }
-        if (clear_buffer(p, buffers[b], (n ? n : 1) * sizeof(uint64_t), names[b]))
+        if (device_clear(p->dev, buffers[b], (n ? n : 1) * sizeof(uint64_t), names[b]))
             return -1;
     }
-    r->seconds.readback += seconds_now() - start;
+    r->seconds.readback += monotonic_seconds() - start;
     return 0;
 }
 
@@ -370,23 +324,19 @@ int importance_run(device *d, const scene *s, const bvh *b, const importance_opt
         return -1;
     }
     r->device_bytes = p.bytes;
-    status = clear_buffer(&p, p.camera_importance, (r->triangle_count ? r->triangle_count : 1) * 8,
+    status = device_clear(p.dev, p.camera_importance, (r->triangle_count ? r->triangle_count : 1) * 8,
                           "camera importance") ||
-             clear_buffer(&p, p.light_importance, (r->triangle_count ? r->triangle_count : 1) * 8,
+             device_clear(p.dev, p.light_importance, (r->triangle_count ? r->triangle_count : 1) * 8,
                           "light importance");
 
-    double diagonal = 2.0 * p.scene.radius;
-    double radius2 = pow(5.0 * diagonal / (r->width + r->height), 2.0);
-    if (!(radius2 > 0))
-        radius2 = 1e-12; /* a scene of one point: nothing to gather anyway */
-    idmr_importance_params params;
+    double radius2 = pass_initial_radius2(s, r->width, r->height);
+    idmr_pass_params params;
     memset(&params, 0, sizeof params);
     params.seed = o->seed;
     params.width = r->width;
     params.height = r->height;
     params.path_count = r->photons;
     params.light_count = p.scene.light_count;
-    params.cell_count = p.cells;
     params.triangle_count = (unsigned int)r->triangle_count;
     memcpy(params.scene_center, p.scene.center, sizeof params.scene_center);
     params.scene_radius = p.scene.radius;
@@ -397,14 +347,11 @@ int importance_run(device *d, const scene *s, const bvh *b, const importance_opt
     uint64_t *scratch = xmalloc((r->triangle_count + 1) * sizeof *scratch);
     progress bar;
     progress_begin(&bar, "importance", o->iterations, o->progress);
-    double start = seconds_now();
+    double start = monotonic_seconds();
     unsigned int calm = 0;
     for (unsigned int n = 0; n < o->iterations && !status; n++) {
         params.iteration = n;
-        params.radius = (float)sqrt(radius2);
-        params.cell_size = 2.0f * params.radius * 1.0001f;
-        for (int k = 0; k < 3; k++)
-            params.grid_origin[k] = s->bbox_min[k] - params.radius;
+        pass_grid_place(&p.grid, s, radius2, &params);
         r->radius[n] = params.radius;
         memcpy(previous_camera, r->camera, r->triangle_count * sizeof *r->camera);
         memcpy(previous_light, r->light, r->triangle_count * sizeof *r->light);
@@ -421,13 +368,13 @@ int importance_run(device *d, const scene *s, const bvh *b, const importance_opt
         char detail[64];
         snprintf(detail, sizeof detail, "change %.2e", r->convergence[n]);
         progress_update(&bar, n + 1, detail);
-        radius2 *= (n + 1 + o->alpha) / (n + 2.0);
+        radius2 = pass_next_radius2(radius2, n, o->alpha);
         calm = (o->tolerance > 0 && r->convergence[n] < o->tolerance) ? calm + 1 : 0;
         if (calm >= STOP_AFTER_CALM_ITERATIONS)
             break;
     }
     progress_end(&bar);
-    r->seconds.total = seconds_now() - start;
+    r->seconds.total = monotonic_seconds() - start;
     free(previous_camera);
     free(previous_light);
     free(scratch);

@@ -36,7 +36,7 @@
 
 /* Copies of one iteration's device buffers (the last one run), for tests and debugging. */
 typedef struct importance_snapshot {
-    idmr_importance_params params;
+    idmr_pass_params params;
     idmr_hit_point *hit_points; /* params.width * params.height */
     idmr_photon_vertex *vertices; /* params.path_count * IDMR_PATH_VERTICES */
     uint32_t *path_length;        /* params.path_count */

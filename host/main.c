@@ -4,6 +4,7 @@
  *   idmr [-v] info SCENE [--json] [--no-bvh]
  *   idmr [-v] importance SCENE -o DIR [options]
  *   idmr [-v] reduce SCENE --target D -o OUTDIR [options]
+ *   idmr [-v] render SCENE -o IMAGE [options]
  *   idmr compare A B [--diff DIFF.png] [--json]
  *
  * Exit codes (error.h): 0 success, 1 runtime failure, 2 bad input or usage. Every failure
@@ -12,6 +13,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include <errno.h>
 #include <math.h>
@@ -24,6 +26,7 @@
 #include "importance_report.h"
 #include "mitsuba.h"
 #include "reduce.h"
+#include "render.h"
 #include "report.h"
 #include "scene.h"
 
@@ -64,6 +67,14 @@ static void print_usage(FILE *out)
           "      --keep NAME           never decimate mesh NAME (repeatable; emitters never are)\n"
           "      --threads N           decimation threads (default: all cores)\n"
           "      --force               write into a non-empty OUTDIR\n"
+          "  render SCENE -o IMAGE     stochastic progressive photon mapping: IMAGE.exr (linear),\n"
+          "                            IMAGE.png (sRGB) and IMAGE.json (timings, device memory)\n"
+          "      --iterations N        iterations (default 64)\n"
+          "      --photons P           photon paths per iteration (default as for importance)\n"
+          "      --time-limit S        stop after the iteration in which S seconds pass\n"
+          "      --alpha A             radius reduction (default 0.7)\n"
+          "      --seed S, --resolution F, --device N, --quiet, --generic   as for importance\n"
+          "      --exposure EV         PNG brightness: linear values times 2^EV (default 0)\n"
           "  compare A B [--diff D.png] [--json]\n"
           "                            RMSE, PSNR and relative MSE of image A against the\n"
           "                            reference B (linear RGB), and a false-colour error image\n"
@@ -370,6 +381,8 @@ enum {
     OPT_KEEP,
     OPT_FORCE,
     OPT_THREADS,
+    OPT_TIME_LIMIT,
+    OPT_EXPOSURE,
 };
 
 /* Options of the importance pass, shared by `importance` and `reduce`. */
@@ -489,6 +502,116 @@ static int command_importance(int argc, char **argv)
                 "importance.png, importance/*.ply, convergence.csv)\n",
                 r.iterations, r.photons, r.seconds.total, output);
     importance_result_free(&r);
+    scene_free(s);
+    return code;
+}
+
+/* ---- render ---- */
+
+/* IMAGE without a trailing ".exr", into stem (size bytes). */
+static void image_stem(const char *image, char *stem, size_t size)
+{
+    snprintf(stem, size, "%s", image);
+    size_t length = strlen(stem);
+    if (length > 4 && !strcasecmp(stem + length - 4, ".exr"))
+        stem[length - 4] = '\0';
+}
+
+static int command_render(int argc, char **argv)
+{
+    static const struct option options[] = {IMPORTANCE_LONG_OPTIONS,
+                                            {"time-limit", required_argument, NULL, OPT_TIME_LIMIT},
+                                            {"exposure", required_argument, NULL, OPT_EXPOSURE},
+                                            {0, 0, 0, 0}};
+    render_options o;
+    render_options_default(&o);
+    o.progress = 1;
+    /* The importance options the renderer shares are parsed into an importance_options and
+     * copied; --gamma and --tolerance mean nothing to a render. */
+    importance_options shared;
+    importance_options_default(&shared);
+    shared.iterations = o.iterations;
+    shared.progress = 1;
+    const char *output = NULL;
+    double exposure = 0;
+    int device_index = -1, c;
+    while ((c = getopt_long(argc, argv, "o:", options, NULL)) != -1) {
+        if (c == 'o') {
+            output = optarg;
+        } else if (c == OPT_TIME_LIMIT) {
+            if (parse_double("--time-limit", optarg, 0, 1e9, &o.time_limit))
+                return fail();
+        } else if (c == OPT_EXPOSURE) {
+            if (parse_double("--exposure", optarg, -64, 64, &exposure))
+                return fail();
+        } else if (c == OPT_GAMMA || c == OPT_TOLERANCE) {
+            return usage_error("render: %s is an importance pass option", argv[optind - 1]);
+        } else {
+            int parsed = parse_importance_option(c, &shared, &device_index);
+            if (parsed < 0)
+                return fail();
+            if (parsed == 0)
+                return usage_error("render: unknown option %s", argv[optind - 1]);
+        }
+    }
+    o.iterations = shared.iterations;
+    o.photons = shared.photons;
+    o.seed = shared.seed;
+    o.alpha = shared.alpha;
+    o.resolution = shared.resolution;
+    o.local_size = shared.local_size;
+    o.generic = shared.generic;
+    o.progress = shared.progress;
+    if (optind != argc - 1)
+        return usage_error("render: expected one SCENE argument%s", "");
+    if (!output)
+        return usage_error("render: -o IMAGE is required%s", "");
+    char stem[4096], exr[4200], png[4200], json[4200], directory[4096];
+    image_stem(output, stem, sizeof stem);
+    snprintf(exr, sizeof exr, "%s.exr", stem);
+    snprintf(png, sizeof png, "%s.png", stem);
+    snprintf(json, sizeof json, "%s.json", stem);
+    snprintf(directory, sizeof directory, "%s", stem);
+    char *slash = strrchr(directory, '/');
+    scene *s = mitsuba_load(argv[optind]);
+    if (!s)
+        return fail();
+    device d;
+    bvh b;
+    render_result r;
+    memset(&r, 0, sizeof r);
+    int status = slash && slash != directory
+                     ? (*slash = '\0', importance_make_directory(directory))
+                     : 0;
+    if (!status)
+        status = device_open(&d, device_index);
+    if (!status) {
+        status = bvh_build(s, &b);
+        if (!status) {
+            status = render_run(&d, s, &b, &o, &r) || render_write_images(&r, exr, png, exposure);
+            if (!status) {
+                cJSON *report = render_report_json(s, &d, &o, &r);
+                status = report_write_json(report, json);
+                cJSON_Delete(report);
+            }
+            bvh_free(&b);
+        }
+        device_close(&d);
+    }
+    int code = status ? fail() : 0;
+    if (!status) {
+        double n = r.iterations;
+        printf("%s: %ux%u, %u iterations of %u photon paths, %.3f s per iteration (camera %.3f, "
+               "photons %.3f, grid %.3f, gather %.3f); device memory %.1f MiB (geometry %.1f, "
+               "BVH %.1f, SPPM %.1f)\n",
+               exr, r.width, r.height, r.iterations, r.photons, r.seconds.total / n,
+               r.seconds.camera / n, r.seconds.photon / n, r.seconds.grid / n,
+               r.seconds.gather / n,
+               (r.memory.geometry + r.memory.bvh + r.memory.sppm) / 1048576.0,
+               r.memory.geometry / 1048576.0, r.memory.bvh / 1048576.0,
+               r.memory.sppm / 1048576.0);
+    }
+    render_result_free(&r);
     scene_free(s);
     return code;
 }
@@ -661,6 +784,8 @@ int main(int argc, char **argv)
         return command_importance(sub_argc, sub_argv);
     if (!strcmp(command, "reduce"))
         return command_reduce(sub_argc, sub_argv);
+    if (!strcmp(command, "render"))
+        return command_render(sub_argc, sub_argv);
     if (!strcmp(command, "compare"))
         return command_compare(sub_argc, sub_argv);
     if (!strcmp(command, "help")) {

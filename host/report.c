@@ -72,7 +72,7 @@ cJSON *report_add_vec3(cJSON *object, const char *name, const float v[3])
     return array;
 }
 
-static double progress_now(void)
+double monotonic_seconds(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -86,14 +86,14 @@ void progress_begin(progress *p, const char *label, unsigned int total, int enab
     p->enabled = enabled;
     p->terminal = isatty(STDERR_FILENO);
     p->next_line = 0;
-    p->start = progress_now();
+    p->start = monotonic_seconds();
 }
 
 void progress_update(progress *p, unsigned int done, const char *detail)
 {
     if (!p->enabled)
         return;
-    double elapsed = progress_now() - p->start;
+    double elapsed = monotonic_seconds() - p->start;
     double fraction = (double)done / p->total;
     double remaining = done ? elapsed * (p->total - done) / done : 0;
     if (p->terminal) {

@@ -29,7 +29,8 @@ int report_write_json(const cJSON *json, const char *path);
 /* Adds a [x, y, z] array of three floats. */
 cJSON *report_add_vec3(cJSON *object, const char *name, const float v[3]);
 
-
+/* Seconds on the monotonic clock, for timings in reports and progress. */
+double monotonic_seconds(void);
 
 /* A progress display on stderr for long work: a bar redrawn in place when stderr is a
  * terminal, otherwise one line at every tenth of the work. */

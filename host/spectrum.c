@@ -88,6 +88,13 @@ float spectrum_srgb_to_linear(float encoded)
     return powf((encoded + 0.055f) / 1.055f, 2.4f);
 }
 
+float spectrum_linear_to_srgb(float linear)
+{
+    if (!(linear > 0.0031308f))
+        return linear > 0 ? 12.92f * linear : 0.0f;
+    return 1.055f * powf(linear, 1.0f / 2.4f) - 0.055f;
+}
+
 float spectrum_luminance(const float rgb[3])
 {
     return 0.2126f * rgb[0] + 0.7152f * rgb[1] + 0.0722f * rgb[2];

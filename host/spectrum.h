@@ -28,6 +28,10 @@ void spectrum_to_rgb(const double *lambda, const double *value, int count, float
 /* The sRGB transfer function inverted: an sRGB-encoded value in [0,1] to linear. */
 float spectrum_srgb_to_linear(float encoded);
 
+/* The sRGB transfer function: a linear value to sRGB-encoded (0 for NaN or negatives; values
+ * above 1 stay above 1, for the caller to clamp). */
+float spectrum_linear_to_srgb(float linear);
+
 /* Rec. 709 / sRGB luminance of a linear RGB triple. */
 float spectrum_luminance(const float rgb[3]);
 

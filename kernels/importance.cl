@@ -6,7 +6,7 @@
  *   photon_pass      one path per work-item: a vertex at every surface interaction, in the
  *                    path's fixed slot of IDMR_PATH_VERTICES
  *   grid_count, scan_chunks, scan_chunk_sums, scan_apply, grid_scatter
- *                    a hash grid over the hit points by counting sort
+ *                    a hash grid over the hit points by counting sort (hit_point_grid.h)
  *   gather_count     per photon vertex: hit points within the radius, on the same side
  *   path_importance  per path, from its last vertex back: running sum s of gather counts;
  *                    vertex j adds weight_j * s to its triangle's light importance
@@ -17,6 +17,8 @@
  * would be multiplied by zero, so its atomics are compiled out). Layouts: idmr/importance.h. */
 #include "idmr/camera.h"
 #include "idmr/importance.h"
+#include "fixed_point.h"
+#include "hit_point_grid.h"
 #include "scene.h"
 #include "traverse.h"
 
@@ -27,55 +29,17 @@
 #define IDMR_CAMERA_IMPORTANCE 1
 #endif
 
-#if IDMR_INT64_ATOMICS
-#pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
-typedef ulong importance_word;
-/* Adds `units` of fixed-point weight with one 64-bit atomic. */
-inline void importance_add(volatile global importance_word *accumulators, uint triangle,
-                           ulong units)
-{
-    if (units != 0ul)
-        atom_add(accumulators + triangle, units);
-}
-#else
-typedef uint importance_word;
-/* Without 64-bit atomics: the low and high words (little-endian order) with 32-bit atomics,
- * the carry of the low word added to the high one. Integer addition commutes, so the sum is
- * exact and independent of the order, as with 64-bit atomics. */
-inline void importance_add(volatile global importance_word *accumulators, uint triangle,
-                           ulong units)
-{
-    uint low = (uint)units, high = (uint)(units >> 32);
-    volatile global uint *word = accumulators + 2 * triangle;
-    if (low != 0u) {
-        uint before = atomic_add(word, low);
-        if (before + low < before)
-            high += 1u;
-    }
-    if (high != 0u)
-        atomic_add(word + 1, high);
-}
-#endif
-
 inline ulong fixed_units(float weight)
 {
     return (ulong)(weight * IDMR_FIXED_SCALE + 0.5f);
 }
 
-/* The camera ray through pixel (x, y), jittered within the pixel. */
-inline float3 camera_direction(const idmr_camera *c, uint x, uint y, idmr_rng *rng)
-{
-    float sx = (2.0f * ((float)x + idmr_rng_float(rng)) / (float)c->width - 1.0f) * c->tan_half_x;
-    float sy = (1.0f - 2.0f * ((float)y + idmr_rng_float(rng)) / (float)c->height) * c->tan_half_y;
-    return normalize(vload3(0, c->forward) + sx * vload3(0, c->right) + sy * vload3(0, c->up));
-}
-
-kernel void camera_pass(idmr_importance_params params, idmr_camera camera,
+kernel void camera_pass(idmr_pass_params params, idmr_camera camera,
                         global const idmr_bvh_node *nodes, global const idmr_triangle4 *leaves,
                         global const float4 *triangle_normals,
                         global const uint *triangle_materials,
                         global const idmr_material *materials, global idmr_hit_point *hit_points,
-                        volatile global importance_word *camera_importance)
+                        volatile global fixed_word *camera_importance)
 {
     uint pixel = get_global_id(0);
     if (pixel >= params.width * params.height)
@@ -96,7 +60,7 @@ kernel void camera_pass(idmr_importance_params params, idmr_camera camera,
         float4 nw = triangle_normals[hit.triangle];
         float3 n = nw.xyz;
 #if IDMR_BOOKKEEPING && IDMR_CAMERA_IMPORTANCE
-        importance_add(camera_importance, hit.triangle,
+        fixed_add(camera_importance, hit.triangle,
                        fixed_units(idmr_eq2_weight(n.x, n.y, n.z, d.x, d.y, d.z)));
 #endif
         float3 p = origin + hit.t * d;
@@ -116,7 +80,7 @@ kernel void camera_pass(idmr_importance_params params, idmr_camera camera,
     hit_points[pixel] = hp;
 }
 
-kernel void photon_pass(idmr_importance_params params, global const idmr_light *lights,
+kernel void photon_pass(idmr_pass_params params, global const idmr_light *lights,
                         global const float *light_cdf, global const float *emitter_cdf,
                         global const float4 *emitter_triangles,
                         global const idmr_bvh_node *nodes, global const idmr_triangle4 *leaves,
@@ -130,10 +94,10 @@ kernel void photon_pass(idmr_importance_params params, global const idmr_light *
         return;
     idmr_rng rng = idmr_rng_init(params.seed, params.iteration, IDMR_PASS_PHOTON, path);
     float3 origin, d;
-    uint length = 0;
+    uint length = 0, light_index;
     if (emit(lights, light_cdf, params.light_count, emitter_cdf, emitter_triangles,
              vload3(0, params.scene_center), params.scene_radius, params.ray_epsilon, &rng,
-             &origin, &d)) {
+             &origin, &d, &light_index)) {
         global idmr_photon_vertex *slot = vertices + (size_t)path * IDMR_PATH_VERTICES;
         while (length < IDMR_PATH_VERTICES) {
             idmr_hit hit = traverse_closest(nodes, leaves, origin, d, 0.0f, INFINITY);
@@ -149,7 +113,8 @@ kernel void photon_pass(idmr_importance_params params, global const idmr_light *
             v.weight = idmr_eq2_weight(n.x, n.y, n.z, d.x, d.y, d.z);
             slot[length++] = v;
             global const idmr_material *m = materials + triangle_materials[hit.triangle];
-            if (scatter(m, &d, n, &rng) == SCATTER_ABSORBED)
+            float3 unused_weight; /* importance paths carry no flux */
+            if (scatter(m, &d, n, &rng, &unused_weight) == SCATTER_ABSORBED)
                 break;
             origin = offset_origin(p, dot(d, n_side) > 0.0f ? n_side : -n_side, params.ray_epsilon);
         }
@@ -157,123 +122,28 @@ kernel void photon_pass(idmr_importance_params params, global const idmr_light *
     path_length[path] = length;
 }
 
-/* ---- hash grid over the hit points ---- */
-
-inline int3 grid_cell(float3 p, const idmr_importance_params *params)
-{
-    return convert_int3_rtn((p - vload3(0, params->grid_origin)) / params->cell_size);
-}
-
-inline uint grid_hash(int3 c, uint cell_count)
-{
-    return (((uint)c.x * 73856093u) ^ ((uint)c.y * 19349663u) ^ ((uint)c.z * 83492791u)) &
-           (cell_count - 1u);
-}
-
-kernel void grid_count(idmr_importance_params params, global const idmr_hit_point *hit_points,
-                       volatile global uint *cell_counts)
-{
-    uint i = get_global_id(0);
-    if (i >= params.width * params.height || !hit_points[i].valid)
-        return;
-    uint h = grid_hash(grid_cell(vload3(0, hit_points[i].position), &params), params.cell_count);
-    atomic_inc(cell_counts + h);
-}
-
-/* Prefix sums in three steps: sums of chunks of IDMR_SCAN_CHUNK cells, an exclusive scan of
- * those sums (one work-item: there are few), then each chunk scanned from its offset. */
-kernel void scan_chunks(global const uint *cell_counts, uint cell_count, global uint *chunk_sums)
-{
-    uint chunk = get_global_id(0);
-    uint begin = chunk * IDMR_SCAN_CHUNK;
-    if (begin >= cell_count)
-        return;
-    uint end = min(begin + IDMR_SCAN_CHUNK, cell_count);
-    uint sum = 0;
-    for (uint i = begin; i < end; i++)
-        sum += cell_counts[i];
-    chunk_sums[chunk] = sum;
-}
-
-kernel void scan_chunk_sums(global uint *chunk_sums, uint chunk_count)
-{
-    if (get_global_id(0) != 0)
-        return;
-    uint running = 0;
-    for (uint i = 0; i < chunk_count; i++) {
-        uint value = chunk_sums[i];
-        chunk_sums[i] = running;
-        running += value;
-    }
-}
-
-/* cell_start[i] = hit points in cells before i; cell_start[cell_count] = all of them.
- * cell_cursor starts as a copy, for grid_scatter. */
-kernel void scan_apply(global const uint *cell_counts, uint cell_count,
-                       global const uint *chunk_offsets, global uint *cell_start,
-                       global uint *cell_cursor)
-{
-    uint chunk = get_global_id(0);
-    uint begin = chunk * IDMR_SCAN_CHUNK;
-    if (begin >= cell_count)
-        return;
-    uint end = min(begin + IDMR_SCAN_CHUNK, cell_count);
-    uint running = chunk_offsets[chunk];
-    for (uint i = begin; i < end; i++) {
-        cell_start[i] = running;
-        cell_cursor[i] = running;
-        running += cell_counts[i];
-    }
-    if (end == cell_count)
-        cell_start[cell_count] = running;
-}
-
-kernel void grid_scatter(idmr_importance_params params, global const idmr_hit_point *hit_points,
-                         volatile global uint *cell_cursor, global uint *grid_points)
-{
-    uint i = get_global_id(0);
-    if (i >= params.width * params.height || !hit_points[i].valid)
-        return;
-    uint h = grid_hash(grid_cell(vload3(0, hit_points[i].position), &params), params.cell_count);
-    grid_points[atomic_inc(cell_cursor + h)] = i;
-}
-
 /* Hit points within the radius of point p whose normal faces the same side as `side` (cosine
  * above 1e-3, so that faces meeting at a right angle never gather each other's hit points on
- * the sign of a rounding error: that made the result depend on the scene's scale). The
- * cell size is at least twice the radius, so the ball touches at most 2 x 2 x 2 cells; buckets
- * that two of them share (hash collisions) are visited once. */
-inline uint count_hit_points_near(float3 p, float3 side, const idmr_importance_params *params,
+ * the sign of a rounding error: that made the result depend on the scene's scale). */
+inline uint count_hit_points_near(float3 p, float3 side, const idmr_pass_params *params,
                                   global const idmr_hit_point *hit_points,
                                   global const uint *cell_start, global const uint *grid_points)
 {
-    float r = params->radius;
-    float r2 = r * r;
-    int3 lo = grid_cell(p - r, params), hi = grid_cell(p + r, params);
-    uint visited[8];
-    uint visited_count = 0;
+    float r2 = params->radius * params->radius;
+    uint buckets[8];
+    uint bucket_count = grid_buckets_near(p, params, buckets);
     uint count = 0;
-    for (int z = lo.z; z <= hi.z; z++)
-        for (int y = lo.y; y <= hi.y; y++)
-            for (int x = lo.x; x <= hi.x; x++) {
-                uint h = grid_hash((int3)(x, y, z), params->cell_count);
-                bool seen = false;
-                for (uint k = 0; k < visited_count; k++)
-                    seen = seen || visited[k] == h;
-                if (seen || visited_count == 8u)
-                    continue;
-                visited[visited_count++] = h;
-                for (uint i = cell_start[h]; i < cell_start[h + 1]; i++) {
-                    global const idmr_hit_point *hp = hit_points + grid_points[i];
-                    float3 delta = vload3(0, hp->position) - p;
-                    if (dot(delta, delta) < r2 && dot(vload3(0, hp->normal), side) > 1e-3f)
-                        count++;
-                }
-            }
+    for (uint b = 0; b < bucket_count; b++)
+        for (uint i = cell_start[buckets[b]]; i < cell_start[buckets[b] + 1]; i++) {
+            global const idmr_hit_point *hp = hit_points + grid_points[i];
+            float3 delta = vload3(0, hp->position) - p;
+            if (dot(delta, delta) < r2 && dot(vload3(0, hp->normal), side) > 1e-3f)
+                count++;
+        }
     return count;
 }
 
-kernel void gather_count(idmr_importance_params params, global const idmr_photon_vertex *vertices,
+kernel void gather_count(idmr_pass_params params, global const idmr_photon_vertex *vertices,
                          global const uint *path_length, global const idmr_hit_point *hit_points,
                          global const uint *cell_start, global const uint *grid_points,
                          global uint *gathered)
@@ -291,10 +161,10 @@ kernel void gather_count(idmr_importance_params params, global const idmr_photon
                                         &params, hit_points, cell_start, grid_points);
 }
 
-kernel void path_importance(idmr_importance_params params,
+kernel void path_importance(idmr_pass_params params,
                             global const idmr_photon_vertex *vertices,
                             global const uint *path_length, global const uint *gathered,
-                            volatile global importance_word *light_importance)
+                            volatile global fixed_word *light_importance)
 {
     uint path = get_global_id(0);
     if (path >= params.path_count)
@@ -304,7 +174,7 @@ kernel void path_importance(idmr_importance_params params,
     for (int j = (int)path_length[path] - 1; j >= 0; j--) {
         running += gathered[base + j];
         if (running != 0ul)
-            importance_add(light_importance, vertices[base + j].triangle,
+            fixed_add(light_importance, vertices[base + j].triangle,
                            fixed_units(vertices[base + j].weight) * running);
     }
 }

@@ -13,6 +13,7 @@
 #ifndef IDMR_KERNEL_SCENE_H
 #define IDMR_KERNEL_SCENE_H
 
+#include "idmr/camera.h"
 #include "idmr/features.h"
 #include "idmr/light.h"
 #include "idmr/material.h"
@@ -112,6 +113,14 @@ inline bool material_is_specular(const global idmr_material *m)
 #endif
 }
 
+/* Whether the side of a surface with winding normal n that direction d arrives on scatters
+ * light: the front always, the back only for two-sided materials (and dielectrics). */
+inline bool side_reflects(const global idmr_material *m, float3 d, float3 n)
+{
+    return dot(d, n) <= 0.0f || (m->flags & IDMR_MATERIAL_TWOSIDED) ||
+           m->kind == IDMR_MATERIAL_DIELECTRIC;
+}
+
 /* Smooth specular continuation (mirror, dielectric): the direction after the interface, the
  * choice between reflection and refraction made with probability Fresnel. n is the winding
  * normal, d the unit incoming direction. */
@@ -154,51 +163,115 @@ inline float3 sample_ggx_normal(float3 n_side, float alpha, idmr_rng *rng)
     return normalize(sin_theta * cos(phi) * t + sin_theta * sin(phi) * b + cos_theta * n_side);
 }
 
-/* Scatters a path at a surface: *d becomes the new direction. Absorption is Russian roulette
- * with survival probability equal to the largest channel of the lobe's albedo, at every bounce:
+/* Smith's shadowing-masking term of GGX for one direction at cosine cos_v to the normal. */
+inline float ggx_g1(float cos_v, float alpha)
+{
+    float a2 = alpha * alpha;
+    return 2.0f * cos_v / (cos_v + sqrt(a2 + (1.0f - a2) * cos_v * cos_v));
+}
+
+/* Scatters a path at a surface: *d becomes the new direction and *weight the factor the
+ * path's flux (or a camera path's throughput) is multiplied by — f cos / pdf divided by the
+ * survival probability, per RGB channel. Absorption is Russian roulette with survival
+ * probability equal to the largest channel of the chosen lobe's albedo, at every bounce:
  * importance paths carry no flux, so the roulette is their only absorption. A one-sided
- * surface absorbs what arrives at its back. */
-inline int scatter(const global idmr_material *m, float3 *d, float3 n, idmr_rng *rng)
+ * surface absorbs what arrives at its back.
+ *
+ * Glossy lobes (GGX): the microfacet normal h is sampled in proportion to D(h) cos θ_h, so the
+ * weight of the reflection is the lobe colour × G(i, o) |i·h| / (cos_i cos θ_h). A plastic
+ * chooses its coating with probability Fresnel(cos_i), which the lobe's Fresnel factor cancels.
+ * Roughness is at least IDMR_MIN_GLOSSY_ROUGHNESS, so that a glossy lobe is never a delta the
+ * renderer's density estimate cannot see. */
+#define IDMR_MIN_GLOSSY_ROUGHNESS 0.05f
+inline int scatter(const global idmr_material *m, float3 *d, float3 n, idmr_rng *rng,
+                   float3 *weight)
 {
     float cos_dn = dot(*d, n);
     float3 n_side = cos_dn < 0.0f ? n : -n;
     if (material_is_specular(m)) {
-        float survival = m->kind == IDMR_MATERIAL_MIRROR ? max3(vload3(0, m->specular)) : 1.0f;
-        if (m->kind == IDMR_MATERIAL_MIRROR && !(m->flags & IDMR_MATERIAL_TWOSIDED) && cos_dn > 0.0f)
+        float3 colour = m->kind == IDMR_MATERIAL_MIRROR ? vload3(0, m->specular) : (float3)(1.0f);
+        float survival = max3(colour);
+        if (!side_reflects(m, *d, n))
             return SCATTER_ABSORBED;
         if (idmr_rng_float(rng) >= survival)
             return SCATTER_ABSORBED;
         *d = scatter_specular(m, *d, n, rng);
+        *weight = colour / survival;
         return SCATTER_SPECULAR;
     }
-    if (!(m->flags & IDMR_MATERIAL_TWOSIDED) && cos_dn > 0.0f)
+    if (!side_reflects(m, *d, n))
         return SCATTER_ABSORBED;
+    float3 diffuse = vload3(0, m->reflectance);
 #if HAS_FEATURE(IDMR_FEATURE_GLOSSY)
     if (m->kind == IDMR_MATERIAL_GLOSSY) {
-        float3 diffuse = vload3(0, m->reflectance);
         bool metal = max3(diffuse) <= 0.0f;
+        float cos_i = -dot(*d, n_side);
         /* A plastic's coating reflects with Fresnel probability, a metal always. */
-        float f = metal ? 1.0f : fresnel_dielectric(-dot(*d, n_side), m->ext_ior / m->int_ior);
+        float f = metal ? 1.0f : fresnel_dielectric(cos_i, m->ext_ior / m->int_ior);
         if (idmr_rng_float(rng) < f) {
-            if (idmr_rng_float(rng) >= max3(vload3(0, m->specular)))
+            float3 colour = vload3(0, m->specular);
+            float survival = max3(colour);
+            if (idmr_rng_float(rng) >= survival)
                 return SCATTER_ABSORBED;
-            float3 h = m->roughness > 0.0f ? sample_ggx_normal(n_side, m->roughness, rng) : n_side;
+            float alpha = fmax(m->roughness, IDMR_MIN_GLOSSY_ROUGHNESS);
+            float3 h = sample_ggx_normal(n_side, alpha, rng);
             float3 out = reflect_about(*d, h);
-            if (dot(out, n_side) <= 0.0f)
+            float cos_o = dot(out, n_side);
+            if (cos_o <= 0.0f)
                 return SCATTER_ABSORBED;
+            float cos_h = dot(h, n_side);
+            float shadowing = ggx_g1(fmax(cos_i, 1e-6f), alpha) * ggx_g1(cos_o, alpha);
+            *weight = colour / survival *
+                      (shadowing * fabs(dot(out, h)) / fmax(cos_i * cos_h, 1e-6f));
             *d = out;
             return SCATTER_DIFFUSE;
         }
-        if (idmr_rng_float(rng) >= max3(diffuse))
-            return SCATTER_ABSORBED;
-        *d = sample_cosine(n_side, rng);
-        return SCATTER_DIFFUSE;
     }
 #endif
-    if (idmr_rng_float(rng) >= max3(vload3(0, m->reflectance)))
+    float survival = max3(diffuse);
+    if (idmr_rng_float(rng) >= survival)
         return SCATTER_ABSORBED;
     *d = sample_cosine(n_side, rng);
+    *weight = diffuse / survival;
     return SCATTER_DIFFUSE;
+}
+
+/* The BRDF of a non-specular surface for light arriving along direction `incoming` (towards
+ * the surface) and leaving along `outgoing` (away from it), on the side n_side faces (the
+ * caller makes sure that side reflects: the front, or either side of a two-sided material).
+ * It matches what scatter() samples: Lambert ρ/π; a metal's GGX lobe colour × D G /
+ * (4 cos_i cos_o); a plastic's coating weighted by Fresnel(cos_i) over its diffuse base
+ * weighted by 1 - Fresnel(cos_i). Zero when either direction is below the surface. */
+inline float3 brdf(const global idmr_material *m, float3 incoming, float3 outgoing, float3 n_side)
+{
+    float cos_i = -dot(incoming, n_side), cos_o = dot(outgoing, n_side);
+    if (cos_i <= 0.0f || cos_o <= 0.0f)
+        return (float3)(0.0f);
+    float3 diffuse = vload3(0, m->reflectance) * (1.0f / PI_F);
+#if HAS_FEATURE(IDMR_FEATURE_GLOSSY)
+    if (m->kind == IDMR_MATERIAL_GLOSSY) {
+        bool metal = max3(diffuse) <= 0.0f;
+        float f = metal ? 1.0f : fresnel_dielectric(cos_i, m->ext_ior / m->int_ior);
+        float alpha = fmax(m->roughness, IDMR_MIN_GLOSSY_ROUGHNESS);
+        float3 h = normalize(outgoing - incoming);
+        float cos_h = dot(h, n_side);
+        float a2 = alpha * alpha;
+        float denominator = cos_h * cos_h * (a2 - 1.0f) + 1.0f;
+        float distribution = cos_h > 0.0f ? a2 / (PI_F * denominator * denominator) : 0.0f;
+        float shadowing = ggx_g1(cos_i, alpha) * ggx_g1(cos_o, alpha);
+        return f * vload3(0, m->specular) * (distribution * shadowing / (4.0f * cos_i * cos_o)) +
+               (1.0f - f) * diffuse;
+    }
+#endif
+    return diffuse;
+}
+
+/* The camera ray through pixel (x, y), jittered within the pixel. */
+inline float3 camera_direction(const idmr_camera *c, uint x, uint y, idmr_rng *rng)
+{
+    float sx = (2.0f * ((float)x + idmr_rng_float(rng)) / (float)c->width - 1.0f) * c->tan_half_x;
+    float sy = (1.0f - 2.0f * ((float)y + idmr_rng_float(rng)) / (float)c->height) * c->tan_half_y;
+    return normalize(vload3(0, c->forward) + sx * vload3(0, c->right) + sy * vload3(0, c->up));
 }
 
 /* Index of the first entry of cdf[0 .. count) greater than u (the last one if none is). */
@@ -217,13 +290,14 @@ inline uint sample_cdf(global const float *cdf, uint count, float u)
 
 /* Emission of one photon path: a light chosen in proportion to power, then a position and a
  * direction by the light's kind. Returns false if the sample is rejected (outside a spot's
- * smooth falloff), in which case the path stays empty. */
+ * smooth falloff), in which case the path stays empty. *light_index is the light chosen. */
 inline bool emit(global const idmr_light *lights, global const float *light_cdf, uint light_count,
                  global const float *emitter_cdf, global const float4 *emitter_triangles,
                  float3 scene_center, float scene_radius, float epsilon, idmr_rng *rng,
-                 float3 *origin, float3 *direction)
+                 float3 *origin, float3 *direction, uint *light_index)
 {
     uint index = sample_cdf(light_cdf, light_count, idmr_rng_float(rng));
+    *light_index = index;
     global const idmr_light *light = lights + index;
 #if HAS_FEATURE(IDMR_FEATURE_AREA)
     if (light->kind == IDMR_LIGHT_AREA) {

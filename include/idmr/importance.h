@@ -49,8 +49,9 @@ IDMR_STATIC_ASSERT(sizeof(idmr_photon_vertex) == 32, "idmr_photon_vertex must be
 IDMR_OFFSET_ASSERT(idmr_photon_vertex, normal, 16);
 IDMR_OFFSET_ASSERT(idmr_photon_vertex, weight, 28);
 
-/* Per-iteration constants, passed by value to every kernel of the pass. */
-typedef struct idmr_importance_params {
+/* Per-iteration constants, passed by value to every kernel of the importance pass and of the
+ * renderer (kernels/render.cl, which shares the hit points and their grid). */
+typedef struct idmr_pass_params {
     unsigned int seed;
     unsigned int iteration;
     unsigned int width; /* hit-point image: one camera path per pixel */
@@ -69,12 +70,13 @@ typedef struct idmr_importance_params {
 
     float ray_epsilon; /* origin offset of secondary rays, along the normal */
     float cell_size;
-    float pad[2];
-} idmr_importance_params;
+    float fixed_scale; /* renderer: fixed-point units per unit of pixel radiance */
+    float pad;
+} idmr_pass_params;
 
-IDMR_STATIC_ASSERT(sizeof(idmr_importance_params) == 80, "idmr_importance_params is 80 bytes");
-IDMR_OFFSET_ASSERT(idmr_importance_params, grid_origin, 32);
-IDMR_OFFSET_ASSERT(idmr_importance_params, scene_center, 48);
-IDMR_OFFSET_ASSERT(idmr_importance_params, ray_epsilon, 64);
+IDMR_STATIC_ASSERT(sizeof(idmr_pass_params) == 80, "idmr_pass_params is 80 bytes");
+IDMR_OFFSET_ASSERT(idmr_pass_params, grid_origin, 32);
+IDMR_OFFSET_ASSERT(idmr_pass_params, scene_center, 48);
+IDMR_OFFSET_ASSERT(idmr_pass_params, ray_epsilon, 64);
 
 #endif

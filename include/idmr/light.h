@@ -46,4 +46,31 @@ IDMR_OFFSET_ASSERT(idmr_light, emission, 32);
 IDMR_OFFSET_ASSERT(idmr_light, first_triangle, 48);
 IDMR_OFFSET_ASSERT(idmr_light, cdf_offset, 64);
 
+/* The power, per unit of `emission`, of the space a light's photons are sampled from (the
+ * kernels' emit()): π × area (cosine-weighted from an area light's front), 4π (a point light's
+ * sphere), 2π (1 - cos_cutoff) (a spot's cutoff cone; samples outside its smooth falloff are
+ * rejected, which is how the falloff lowers the power), π R² (a directional light's disc over
+ * the bounding sphere of radius R) and 4π × π R² (an environment: every direction, each through
+ * that disc). A photon of light l, chosen with probability p_l among N photons, carries
+ * emission × factor / (p_l N); summed over the photons that are not rejected this is the
+ * light's power in expectation (exactly, for every kind but the spot). */
+IDMR_INLINE float idmr_light_sample_factor(unsigned int kind, float area, float cos_cutoff,
+                                           float scene_radius)
+{
+    const float pi = 3.14159265358979f;
+    float disc = pi * scene_radius * scene_radius;
+    switch (kind) {
+    case IDMR_LIGHT_AREA:
+        return pi * area;
+    case IDMR_LIGHT_POINT:
+        return 4.0f * pi;
+    case IDMR_LIGHT_SPOT:
+        return 2.0f * pi * (1.0f - cos_cutoff);
+    case IDMR_LIGHT_DIRECTIONAL:
+        return disc;
+    default: /* IDMR_LIGHT_ENVIRONMENT */
+        return 4.0f * pi * disc;
+    }
+}
+
 #endif

@@ -14,7 +14,8 @@
 /* Pass identifiers: one stream family per pass. */
 #define IDMR_PASS_CAMERA 1u
 #define IDMR_PASS_PHOTON 2u
-#define IDMR_PASS_RENDER 3u
+#define IDMR_PASS_RENDER_CAMERA 3u
+#define IDMR_PASS_RENDER_PHOTON 4u
 
 typedef struct idmr_rng {
     unsigned int key;

@@ -1,0 +1,116 @@
+/* hit_point_grid.h — the hash grid over one iteration's hit points, shared by the importance
+ * pass (importance.cl) and the renderer (render.cl): a counting sort of hit point indices by
+ * the hashed cell of their position.
+ *
+ *   grid_count       hit points per bucket (cell_counts, cleared by the host)
+ *   scan_chunks, scan_chunk_sums, scan_apply
+ *                    cell_start = prefix sums of the counts, in three steps
+ *   grid_scatter     grid_points: hit point indices sorted by bucket
+ * The cell size is at least twice the gather radius (the host sets it), so a ball of that
+ * radius touches at most 2 x 2 x 2 cells; grid_buckets_near() lists their buckets once each
+ * (two cells may hash to one bucket). Host side: host/pass_grid.c. */
+#ifndef IDMR_KERNEL_HIT_POINT_GRID_H
+#define IDMR_KERNEL_HIT_POINT_GRID_H
+
+#include "idmr/importance.h"
+
+inline int3 grid_cell(float3 p, const idmr_pass_params *params)
+{
+    return convert_int3_rtn((p - vload3(0, params->grid_origin)) / params->cell_size);
+}
+
+inline uint grid_hash(int3 c, uint cell_count)
+{
+    return (((uint)c.x * 73856093u) ^ ((uint)c.y * 19349663u) ^ ((uint)c.z * 83492791u)) &
+           (cell_count - 1u);
+}
+
+kernel void grid_count(idmr_pass_params params, global const idmr_hit_point *hit_points,
+                       volatile global uint *cell_counts)
+{
+    uint i = get_global_id(0);
+    if (i >= params.width * params.height || !hit_points[i].valid)
+        return;
+    uint h = grid_hash(grid_cell(vload3(0, hit_points[i].position), &params), params.cell_count);
+    atomic_inc(cell_counts + h);
+}
+
+/* Prefix sums in three steps: sums of chunks of IDMR_SCAN_CHUNK cells, an exclusive scan of
+ * those sums (one work-item: there are few), then each chunk scanned from its offset. */
+kernel void scan_chunks(global const uint *cell_counts, uint cell_count, global uint *chunk_sums)
+{
+    uint chunk = get_global_id(0);
+    uint begin = chunk * IDMR_SCAN_CHUNK;
+    if (begin >= cell_count)
+        return;
+    uint end = min(begin + IDMR_SCAN_CHUNK, cell_count);
+    uint sum = 0;
+    for (uint i = begin; i < end; i++)
+        sum += cell_counts[i];
+    chunk_sums[chunk] = sum;
+}
+
+kernel void scan_chunk_sums(global uint *chunk_sums, uint chunk_count)
+{
+    if (get_global_id(0) != 0)
+        return;
+    uint running = 0;
+    for (uint i = 0; i < chunk_count; i++) {
+        uint value = chunk_sums[i];
+        chunk_sums[i] = running;
+        running += value;
+    }
+}
+
+/* cell_start[i] = hit points in cells before i; cell_start[cell_count] = all of them.
+ * cell_cursor starts as a copy, for grid_scatter. */
+kernel void scan_apply(global const uint *cell_counts, uint cell_count,
+                       global const uint *chunk_offsets, global uint *cell_start,
+                       global uint *cell_cursor)
+{
+    uint chunk = get_global_id(0);
+    uint begin = chunk * IDMR_SCAN_CHUNK;
+    if (begin >= cell_count)
+        return;
+    uint end = min(begin + IDMR_SCAN_CHUNK, cell_count);
+    uint running = chunk_offsets[chunk];
+    for (uint i = begin; i < end; i++) {
+        cell_start[i] = running;
+        cell_cursor[i] = running;
+        running += cell_counts[i];
+    }
+    if (end == cell_count)
+        cell_start[cell_count] = running;
+}
+
+kernel void grid_scatter(idmr_pass_params params, global const idmr_hit_point *hit_points,
+                         volatile global uint *cell_cursor, global uint *grid_points)
+{
+    uint i = get_global_id(0);
+    if (i >= params.width * params.height || !hit_points[i].valid)
+        return;
+    uint h = grid_hash(grid_cell(vload3(0, hit_points[i].position), &params), params.cell_count);
+    grid_points[atomic_inc(cell_cursor + h)] = i;
+}
+
+/* The distinct buckets of the cells that the ball of radius params->radius around p touches,
+ * into buckets[8]; returns how many. */
+inline uint grid_buckets_near(float3 p, const idmr_pass_params *params, uint buckets[8])
+{
+    float r = params->radius;
+    int3 lo = grid_cell(p - r, params), hi = grid_cell(p + r, params);
+    uint count = 0;
+    for (int z = lo.z; z <= hi.z; z++)
+        for (int y = lo.y; y <= hi.y; y++)
+            for (int x = lo.x; x <= hi.x; x++) {
+                uint h = grid_hash((int3)(x, y, z), params->cell_count);
+                bool seen = false;
+                for (uint k = 0; k < count; k++)
+                    seen = seen || buckets[k] == h;
+                if (!seen && count < 8u)
+                    buckets[count++] = h;
+            }
+    return count;
+}
+
+#endif

@@ -1,0 +1,433 @@
+/* test_render.c — the SPPM renderer (kernels/render.cl, host/render.c) against exact formulas.
+ *
+ *   point light on a plane   radiance ρ/π · I cosθ / d² at every pixel, and the error falls
+ *                            as iterations grow (4, 16, 64)
+ *   light power              the photons' first-hit flux sums to the power of each light kind:
+ *                            area π L A, point 4π I, spot 2π I ∫ falloff, directional E × the
+ *                            lit area, environment π L A on a plane's front
+ *   furnace                  inside an emitting, reflecting sphere the radiance is
+ *                            L_e Σ_{k≤8} ρ^k everywhere (8 stored photons per path)
+ *   caustic                  a glass ball focuses a point light: the floor under it is brighter
+ *                            than the floor around its shadow
+ *   invariants               bit-identical images for any work-group size; finite values;
+ *                            missing camera or light is an input error
+ *
+ * Scenes are built in code (tests/importance_common.h); one OpenCL device for the file;
+ * render_run() builds render.cl once and later runs load it from the program cache. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+
+#include <cmocka.h>
+
+#include "bvh.h"
+#include "error.h"
+#include "importance_common.h"
+#include "render.h"
+
+static device dev;
+
+static int group_setup(void **state)
+{
+    (void)state;
+    if (device_open(&dev, -1)) {
+        fprintf(stderr, "test_render: %s\n", error_message());
+        return -1;
+    }
+    return 0;
+}
+
+static int group_teardown(void **state)
+{
+    (void)state;
+    device_close(&dev);
+    return 0;
+}
+
+static void finalize_or_fail(scene *s)
+{
+    if (scene_finalize(s))
+        fail_msg("scene_finalize: %s", error_message());
+}
+
+static void render_or_fail(const scene *s, unsigned int iterations, unsigned int photons,
+                           render_snapshot *snapshot, size_t local_size, render_result *r)
+{
+    render_options o;
+    render_options_default(&o);
+    o.iterations = iterations;
+    o.photons = photons;
+    o.snapshot = snapshot;
+    o.local_size = local_size;
+    bvh b;
+    if (bvh_build(s, &b))
+        fail_msg("bvh_build: %s", error_message());
+    int status = render_run(&dev, s, &b, &o, r);
+    bvh_free(&b);
+    if (status)
+        fail_msg("render_run: %s", error_message());
+    for (size_t i = 0; i < (size_t)r->width * r->height * 3; i++)
+        if (!isfinite(r->image[i]) || r->image[i] < 0)
+            fail_msg("pixel value %zu is %g", i / 3, r->image[i]);
+}
+
+/* Mean of the three channels of pixel p. */
+static double pixel_mean(const render_result *r, size_t p)
+{
+    return (r->image[3 * p] + r->image[3 * p + 1] + r->image[3 * p + 2]) / 3.0;
+}
+
+/* ---- 1. a point light over a diffuse plane ---- */
+
+#define PLANE_ALBEDO 0.5f
+#define PLANE_LIGHT_HEIGHT 2.0f
+#define PLANE_INTENSITY 10.0f
+
+/* The plane z = 0 (10 x 10, front up, albedo 0.5) under a point light at height 2, seen from
+ * above at an angle, 128 x 96. */
+static scene *plane_scene(void)
+{
+    scene *s = scene_create("point-light-plane.xml");
+    uint32_t white = imp_diffuse(s, "white", PLANE_ALBEDO, 0);
+    const float c[3] = {0, 0, 0}, u[3] = {5, 0, 0}, v[3] = {0, 5, 0};
+    imp_add_quad(s, "plane", white, c, u, v);
+    const float light[3] = {0, 0, PLANE_LIGHT_HEIGHT}, eye[3] = {0, -3, 4}, target[3] = {0, 0, 0},
+                up[3] = {0, 0, 1};
+    imp_point_light(s, light, PLANE_INTENSITY);
+    imp_look_at(s, eye, target, up, 128, 96, 0.5f);
+    finalize_or_fail(s);
+    return s;
+}
+
+/* RMS of the relative error against ρ/π · I cosθ / d² over the pixels whose centre ray meets
+ * the plane within 1.5 of the point under the light; also the ratio of the sums there. */
+static double plane_error(const scene *s, const render_result *r, double *sum_ratio)
+{
+    double squares = 0, rendered = 0, exact = 0;
+    size_t count = 0;
+    const idmr_camera *c = &s->camera;
+    for (unsigned int y = 0; y < r->height; y++)
+        for (unsigned int x = 0; x < r->width; x++) {
+            double sx = (2.0 * (x + 0.5) / r->width - 1.0) * c->tan_half_x;
+            double sy = (1.0 - 2.0 * (y + 0.5) / r->height) * c->tan_half_y;
+            double d[3];
+            for (int k = 0; k < 3; k++)
+                d[k] = c->forward[k] + sx * c->right[k] + sy * c->up[k];
+            if (d[2] >= 0)
+                continue;
+            double t = -c->origin[2] / d[2];
+            double px = c->origin[0] + t * d[0], py = c->origin[1] + t * d[1];
+            double rho2 = px * px + py * py;
+            if (rho2 > 1.5 * 1.5)
+                continue;
+            double h = PLANE_LIGHT_HEIGHT, dist2 = rho2 + h * h;
+            double expected = PLANE_ALBEDO / M_PI * PLANE_INTENSITY * (h / sqrt(dist2)) / dist2;
+            double value = pixel_mean(r, (size_t)y * r->width + x);
+            squares += (value - expected) * (value - expected) / (expected * expected);
+            rendered += value;
+            exact += expected;
+            count++;
+        }
+    assert_true(count > 1000);
+    *sum_ratio = rendered / exact;
+    return sqrt(squares / count);
+}
+
+static void test_point_light_on_plane_and_convergence(void **state)
+{
+    (void)state;
+    scene *s = plane_scene();
+    const unsigned int iterations[3] = {4, 16, 64};
+    double errors[3];
+    for (int i = 0; i < 3; i++) {
+        render_result r;
+        render_or_fail(s, iterations[i], 50000, NULL, 0, &r);
+        double ratio;
+        errors[i] = plane_error(s, &r, &ratio);
+        print_message("  %2u iterations: RMS relative error %.4f, rendered / exact over the lit "
+                      "disc %.4f (radius %.3f -> %.3f)\n",
+                      iterations[i], errors[i], ratio, r.first_radius, r.last_radius);
+        if (i == 2) {
+            assert_true(fabs(ratio - 1.0) < 0.01);
+            assert_true(errors[i] < 0.05);
+        }
+        render_result_free(&r);
+    }
+    assert_true(errors[1] < 0.9 * errors[0]);
+    assert_true(errors[2] < 0.9 * errors[1]);
+    scene_free(s);
+}
+
+/* ---- 2. emitted power of each light kind ---- */
+
+/* Σ of the flux (R, G, B mean) of every path's first stored photon. */
+static double first_photon_flux(const render_snapshot *snap)
+{
+    double sum = 0;
+    for (size_t p = 0; p < snap->params.path_count; p++)
+        if (snap->path_length[p] > 0) {
+            const idmr_render_photon *ph = &snap->photons[p * IDMR_PATH_VERTICES];
+            sum += ((double)ph->flux_r + ph->flux_g + ph->flux_b) / 3.0;
+        }
+    return sum;
+}
+
+/* Renders one iteration of `photons` paths and compares the first-hit flux with `power`,
+ * within `tolerance` (relative). */
+static void expect_power(const char *what, scene *s, double power, double tolerance)
+{
+    const float eye[3] = {0, 0, 0.5f}, target[3] = {0, 0, -1}, up[3] = {0, 1, 0};
+    if (!s->has_camera)
+        imp_look_at(s, eye, target, up, 8, 8, 0.5f);
+    finalize_or_fail(s);
+    render_snapshot snap = {0};
+    render_result r;
+    render_or_fail(s, 1, 200000, &snap, 0, &r);
+    double flux = first_photon_flux(&snap);
+    print_message("  %-12s photon flux %.6g, power %.6g, ratio %.5f (tolerance %.4f)\n", what, flux,
+                  power, flux / power, tolerance);
+    assert_true(fabs(flux / power - 1.0) <= tolerance);
+    render_snapshot_free(&snap);
+    render_result_free(&r);
+    scene_free(s);
+}
+
+/* A black two-sided box around the origin, [-2, 2]³: every photon from inside lands on it and
+ * is absorbed there, so each path stores exactly its first hit. */
+static scene *black_box_scene(const char *name)
+{
+    scene *s = scene_create(name);
+    uint32_t black = imp_diffuse(s, "black", 0.0f, IDMR_MATERIAL_TWOSIDED);
+    const float lo[3] = {-2, -2, -2}, hi[3] = {2, 2, 2};
+    imp_add_box(s, "box", black, lo, hi);
+    return s;
+}
+
+static void test_light_power_of_each_kind(void **state)
+{
+    (void)state;
+    /* Point: every photon carries 4πI / N; the sum is exact up to float rounding. */
+    scene *s = black_box_scene("point.xml");
+    const float origin[3] = {0.1f, -0.2f, 0.3f};
+    imp_point_light(s, origin, 3.0f);
+    expect_power("point", s, 4 * M_PI * 3.0, 1e-4);
+
+    /* Area: a 1 x 0.5 quad facing down with radiance 2: π L A = π. */
+    s = black_box_scene("area.xml");
+    uint32_t black = (uint32_t)0;
+    const float qc[3] = {0, 0, 1}, qu[3] = {0.5f, 0, 0}, qv[3] = {0, -0.25f, 0};
+    imp_area_light(s, imp_add_quad(s, "emitter", black, qc, qu, qv), 2.0f);
+    expect_power("area", s, M_PI * 2.0 * 0.5, 1e-4);
+
+    /* Spot: intensity 5, beam width 20°, cutoff 30°. Exact power 2π I ∫ smoothstep(cos 30°,
+     * cos 20°, μ) dμ over μ in [cos 30°, 1], by the midpoint rule; the kernel rejects samples
+     * outside the falloff, so the sum is binomial: 5 standard deviations. */
+    s = black_box_scene("spot.xml");
+    idmr_light spot;
+    memset(&spot, 0, sizeof spot);
+    spot.kind = IDMR_LIGHT_SPOT;
+    spot.direction[2] = -1;
+    spot.cos_cutoff = (float)cos(30 * M_PI / 180);
+    spot.cos_falloff_start = (float)cos(20 * M_PI / 180);
+    spot.emission[0] = spot.emission[1] = spot.emission[2] = 5.0f;
+    scene_add_light(s, &spot);
+    double integral = 0, lo = spot.cos_cutoff, hi = spot.cos_falloff_start;
+    const int steps = 100000;
+    double accepted = 0;
+    for (int i = 0; i < steps; i++) {
+        double mu = lo + (1.0 - lo) * (i + 0.5) / steps;
+        double t = fmin(1.0, fmax(0.0, (mu - lo) / (hi - lo)));
+        double keep = t * t * (3 - 2 * t);
+        integral += keep * (1.0 - lo) / steps;
+        accepted += keep / steps;
+    }
+    double sigma = sqrt((1 - accepted) / (accepted * 200000.0));
+    expect_power("spot", s, 2 * M_PI * 5.0 * integral, 5 * sigma);
+
+    /* Directional: irradiance 4 straight down onto a 2 x 2 plane: E × A = 16. Photons start on
+     * a disc over the scene's bounding sphere (radius √2), of which the plane covers 2/π. */
+    s = scene_create("directional.xml");
+    black = imp_diffuse(s, "black", 0.0f, IDMR_MATERIAL_TWOSIDED);
+    const float pc[3] = {0, 0, 0}, pu[3] = {1, 0, 0}, pv[3] = {0, 1, 0};
+    imp_add_quad(s, "plane", black, pc, pu, pv);
+    idmr_light sun;
+    memset(&sun, 0, sizeof sun);
+    sun.kind = IDMR_LIGHT_DIRECTIONAL;
+    sun.direction[2] = -1;
+    sun.emission[0] = sun.emission[1] = sun.emission[2] = 4.0f;
+    scene_add_light(s, &sun);
+    const float high_eye[3] = {0, -0.5f, 3}, centre[3] = {0, 0, 0}, y_up[3] = {0, 1, 0};
+    imp_look_at(s, high_eye, centre, y_up, 8, 8, 0.5f);
+    double hit_fraction = 2 / M_PI;
+    expect_power("directional", s, 4.0 * 4.0,
+                 5 * sqrt((1 - hit_fraction) / (hit_fraction * 200000.0)));
+
+    /* Environment: radiance 0.5 from every direction onto the front of a one-sided 2 x 2 plane:
+     * π L A = 2π. The back absorbs without storing. The fraction of photons that hit the front
+     * is A / (4π R²) with R = √2, R² = 2. */
+    s = scene_create("environment.xml");
+    uint32_t one_sided = imp_diffuse(s, "black", 0.0f, 0);
+    imp_add_quad(s, "plane", one_sided, pc, pu, pv);
+    idmr_light sky;
+    memset(&sky, 0, sizeof sky);
+    sky.kind = IDMR_LIGHT_ENVIRONMENT;
+    sky.emission[0] = sky.emission[1] = sky.emission[2] = 0.5f;
+    scene_add_light(s, &sky);
+    imp_look_at(s, high_eye, centre, y_up, 8, 8, 0.5f);
+    hit_fraction = 4.0 / (4 * M_PI * 2.0);
+    expect_power("environment", s, M_PI * 0.5 * 4.0,
+                 5 * sqrt((1 - hit_fraction) / (hit_fraction * 200000.0)));
+}
+
+/* ---- 3. furnace ---- */
+
+static void test_furnace(void **state)
+{
+    (void)state;
+    const float albedo = 0.5f, emitted = 1.0f;
+    scene *s = scene_create("furnace.xml");
+    uint32_t grey = imp_diffuse(s, "grey", albedo, 0);
+    const float centre[3] = {0, 0, 0};
+    scene_mesh *sphere = imp_add_sphere(s, "sphere", grey, centre, 1.0f);
+    for (uint32_t t = 0; t < sphere->triangle_count; t++) { /* wind inward: emit and reflect in */
+        uint32_t *ix = &sphere->indices[3 * (size_t)t];
+        uint32_t swap = ix[1];
+        ix[1] = ix[2];
+        ix[2] = swap;
+    }
+    imp_area_light(s, sphere, emitted);
+    const float target[3] = {0, 0, -1}, up[3] = {0, 1, 0};
+    imp_look_at(s, centre, target, up, 48, 48, 1.0f);
+    finalize_or_fail(s);
+    render_result r;
+    render_or_fail(s, 16, 50000, NULL, 0, &r);
+    double expected = 0;
+    for (int k = 0; k <= IDMR_PATH_VERTICES; k++)
+        expected += emitted * pow(albedo, k);
+    double sum = 0, squares = 0;
+    size_t pixels = (size_t)r.width * r.height;
+    for (size_t p = 0; p < pixels; p++) {
+        double value = pixel_mean(&r, p);
+        sum += value;
+        squares += (value - expected) * (value - expected);
+    }
+    double mean = sum / pixels, rms = sqrt(squares / pixels) / expected;
+    print_message("  mean radiance %.5f, exact %.5f (ratio %.5f), RMS relative error %.4f\n", mean,
+                  expected, mean / expected, rms);
+    assert_true(fabs(mean / expected - 1) < 0.01);
+    assert_true(rms < 0.05);
+    render_result_free(&r);
+    scene_free(s);
+}
+
+/* ---- 4. a caustic under a glass ball ---- */
+
+static void test_glass_ball_caustic(void **state)
+{
+    (void)state;
+    scene *s = scene_create("caustic.xml");
+    uint32_t white = imp_diffuse(s, "white", 0.8f, 0), glass = imp_glass(s, "glass");
+    const float c[3] = {0, 0, 0}, u[3] = {3, 0, 0}, v[3] = {0, 3, 0};
+    imp_add_quad(s, "floor", white, c, u, v);
+    const float ball[3] = {0, 0, 1};
+    imp_add_sphere(s, "ball", glass, ball, 0.5f);
+    const float light[3] = {0, 0, 8}, eye[3] = {0, -3, 2}, target[3] = {0, 0, 0},
+                up[3] = {0, 0, 1};
+    imp_point_light(s, light, 50.0f);
+    imp_look_at(s, eye, target, up, 128, 96, 0.4f); /* sees the floor under the ball */
+    finalize_or_fail(s);
+    render_snapshot snap = {0};
+    render_result r;
+    render_or_fail(s, 8, 100000, &snap, 0, &r);
+    /* Pixels by where their (last iteration's) hit point lies on the floor. */
+    double focus = 0, around = 0;
+    size_t focus_count = 0, around_count = 0;
+    for (size_t p = 0; p < (size_t)r.width * r.height; p++) {
+        const idmr_hit_point *hp = &snap.hit_points[p];
+        if (!hp->valid || fabsf(hp->position[2]) > 1e-3f)
+            continue;
+        double rho = hypot(hp->position[0], hp->position[1]);
+        if (rho < 0.08) {
+            focus += pixel_mean(&r, p);
+            focus_count++;
+        } else if (rho > 1.0 && rho < 1.5) {
+            around += pixel_mean(&r, p);
+            around_count++;
+        }
+    }
+    print_message("  %zu pixels see the floor under the ball, %zu around its shadow\n", focus_count,
+                  around_count);
+    assert_true(focus_count >= 4 && around_count >= 100);
+    focus /= focus_count;
+    around /= around_count;
+    print_message("  floor under the ball %.4g (%zu pixels), around its shadow %.4g (%zu pixels): "
+                  "%.1fx brighter\n",
+                  focus, focus_count, around, around_count, focus / around);
+    assert_true(focus > 2 * around);
+    render_snapshot_free(&snap);
+    render_result_free(&r);
+    scene_free(s);
+}
+
+/* ---- 5. invariants ---- */
+
+static void test_same_image_for_any_local_size(void **state)
+{
+    (void)state;
+    scene *s = plane_scene();
+    render_result a, b;
+    render_or_fail(s, 2, 20000, NULL, 0, &a);
+    render_or_fail(s, 2, 20000, NULL, 1, &b);
+    size_t bytes = (size_t)a.width * a.height * 3 * sizeof(float);
+    assert_int_equal(a.width, b.width);
+    assert_memory_equal(a.image, b.image, bytes);
+    render_result_free(&b);
+    render_or_fail(s, 2, 20000, NULL, 64, &b);
+    assert_memory_equal(a.image, b.image, bytes);
+    render_result_free(&a);
+    render_result_free(&b);
+    scene_free(s);
+}
+
+static void test_missing_camera_or_light_is_an_input_error(void **state)
+{
+    (void)state;
+    scene *s = scene_create("no-light.xml");
+    uint32_t white = imp_diffuse(s, "white", 0.5f, 0);
+    const float c[3] = {0, 0, 0}, u[3] = {1, 0, 0}, v[3] = {0, 1, 0};
+    imp_add_quad(s, "plane", white, c, u, v);
+    const float eye[3] = {0, 0, 2}, target[3] = {0, 0, 0}, up[3] = {0, 1, 0};
+    imp_look_at(s, eye, target, up, 8, 8, 0.5f);
+    finalize_or_fail(s);
+    bvh b;
+    assert_int_equal(bvh_build(s, &b), 0);
+    render_options o;
+    render_options_default(&o);
+    render_result r;
+    assert_int_equal(render_run(&dev, s, &b, &o, &r), -1);
+    assert_int_equal(error_code(), IDMR_EXIT_INPUT);
+    print_message("  %s\n", error_message());
+    assert_non_null(strstr(error_message(), "no-light.xml"));
+    render_result_free(&r);
+    s->has_camera = 0;
+    assert_int_equal(render_run(&dev, s, &b, &o, &r), -1);
+    assert_int_equal(error_code(), IDMR_EXIT_INPUT);
+    print_message("  %s\n", error_message());
+    render_result_free(&r);
+    bvh_free(&b);
+    scene_free(s);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_point_light_on_plane_and_convergence),
+        cmocka_unit_test(test_light_power_of_each_kind),
+        cmocka_unit_test(test_furnace),
+        cmocka_unit_test(test_glass_ball_caustic),
+        cmocka_unit_test(test_same_image_for_any_local_size),
+        cmocka_unit_test(test_missing_camera_or_light_is_an_input_error),
+    };
+    return cmocka_run_group_tests(tests, group_setup, group_teardown);
+}
