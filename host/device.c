@@ -463,6 +463,36 @@ int device_buffer(device *d, cl_mem_flags flags, size_t bytes, const void *host,
     return 0;
 }
 
+int device_buffers(device *d, const device_buffer_request *requests, size_t count,
+                   uint64_t *bytes)
+{
+    for (size_t i = 0; i < count; i++) {
+        if (device_buffer(d, CL_MEM_READ_WRITE, requests[i].bytes, NULL, requests[i].what,
+                          requests[i].buffer))
+            return -1;
+        *bytes += requests[i].bytes;
+    }
+    return 0;
+}
+
+void device_release_kernels(cl_kernel *kernels, size_t count)
+{
+    for (size_t i = 0; i < count; i++)
+        if (kernels[i]) {
+            clReleaseKernel(kernels[i]);
+            kernels[i] = NULL;
+        }
+}
+
+void device_release_buffers(cl_mem *buffers, size_t count)
+{
+    for (size_t i = 0; i < count; i++)
+        if (buffers[i]) {
+            clReleaseMemObject(buffers[i]);
+            buffers[i] = NULL;
+        }
+}
+
 int device_read(device *d, cl_mem buffer, size_t bytes, void *host, const char *what)
 {
     cl_int err = clEnqueueReadBuffer(d->queue, buffer, CL_TRUE, 0, bytes, host, 0, NULL, NULL);

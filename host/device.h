@@ -77,6 +77,22 @@ int device_create_kernel(cl_program program, const char *name, cl_kernel *kernel
 int device_buffer(device *d, cl_mem_flags flags, size_t bytes, const void *host, const char *what,
                   cl_mem *buffer);
 
+/* One buffer of a group that device_buffers() creates. */
+typedef struct device_buffer_request {
+    cl_mem *buffer;
+    size_t bytes;
+    const char *what;
+} device_buffer_request;
+
+/* Creates read-write buffers for `count` requests in order, adding their sizes to *bytes.
+ * Returns 0, or -1 with the error set (buffers made so far stay for the caller to release). */
+int device_buffers(device *d, const device_buffer_request *requests, size_t count,
+                   uint64_t *bytes);
+
+/* Releases the non-NULL kernels and buffers of arrays of `count`, setting them to NULL. */
+void device_release_kernels(cl_kernel *kernels, size_t count);
+void device_release_buffers(cl_mem *buffers, size_t count);
+
 /* Blocking read of `bytes` from `buffer` into `host`. */
 int device_read(device *d, cl_mem buffer, size_t bytes, void *host, const char *what);
 

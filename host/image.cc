@@ -134,7 +134,7 @@ extern "C" int image_info(const char *path, int *width, int *height, int *channe
 }
 
 extern "C" int image_compare(const char *a, const char *b, const char *diff_path,
-                             image_comparison *out)
+                             double diff_max, image_comparison *out)
 {
     std::memset(out, 0, sizeof *out);
     int wa, ha, ca, wb, hb, cb;
@@ -174,11 +174,12 @@ extern "C" int image_compare(const char *a, const char *b, const char *diff_path
     out->psnr = out->rmse > 0 ? 20.0 * std::log10(peak / out->rmse) : INFINITY;
     out->relative_mse = relative / n;
     out->max_error = largest;
+    std::vector<float> sorted(error);
+    std::sort(sorted.begin(), sorted.end());
+    out->error_p99 = pixels ? sorted[(size_t)(0.99 * (double)(pixels - 1))] : 0.0;
     int status = 0;
     if (diff_path) {
-        std::vector<float> sorted(error);
-        std::sort(sorted.begin(), sorted.end());
-        float top = pixels ? sorted[(size_t)(0.99 * (double)(pixels - 1))] : 0.0f;
+        float top = diff_max > 0 ? (float)diff_max : (float)out->error_p99;
         if (!(top > 0))
             top = pixels ? sorted[pixels - 1] : 0.0f;
         std::vector<unsigned char> rgb(3 * pixels);

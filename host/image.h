@@ -31,12 +31,16 @@ typedef struct image_comparison {
                             when the images are equal */
     double relative_mse; /* mean of (a - b)² / (b² + 0.01) over pixels and channels */
     double max_error;    /* largest |a - b| */
+    double error_p99;    /* 99th percentile of the per-pixel error (mean |a - b| over R, G, B) */
 } image_comparison;
 
 /* Compares image a with the reference b (same size and channel count, else an error naming
  * both files and their sizes). If diff_path is not NULL, writes the per-pixel error |a - b|
- * (mean over R, G, B) in false colour, scaled so the 99th percentile is the top of the ramp. */
-int image_compare(const char *a, const char *b, const char *diff_path, image_comparison *out);
+ * (mean over R, G, B) in false colour, scaled so that diff_max is the top of the ramp, or the
+ * 99th percentile when diff_max <= 0 (a common diff_max makes several difference images
+ * comparable). */
+int image_compare(const char *a, const char *b, const char *diff_path, double diff_max,
+                  image_comparison *out);
 
 /* A false-colour ramp for t in [0, 1] (clamped): black, violet, red, orange, pale yellow;
  * brightness rises monotonically, so it reads in grey too. NaN maps to black. */

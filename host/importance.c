@@ -54,14 +54,10 @@ typedef struct pass {
 static void pass_release(pass *p)
 {
     cl_kernel kernels[] = {p->camera, p->photon, p->gather, p->path};
-    for (size_t i = 0; i < sizeof kernels / sizeof *kernels; i++)
-        if (kernels[i])
-            clReleaseKernel(kernels[i]);
-    cl_mem buffers[] = {p->hit_points,        p->vertices,        p->path_length,
-                        p->gathered,          p->camera_importance, p->light_importance};
-    for (size_t i = 0; i < sizeof buffers / sizeof *buffers; i++)
-        if (buffers[i])
-            clReleaseMemObject(buffers[i]);
+    device_release_kernels(kernels, sizeof kernels / sizeof *kernels);
+    cl_mem buffers[] = {p->hit_points, p->vertices,          p->path_length,
+                        p->gathered,   p->camera_importance, p->light_importance};
+    device_release_buffers(buffers, sizeof buffers / sizeof *buffers);
     pass_grid_release(&p->grid);
     if (p->program)
         clReleaseProgram(p->program);
@@ -98,11 +94,7 @@ static int pass_allocate(pass *p, const scene *s, unsigned int photons)
     size_t slots = (size_t)photons * IDMR_PATH_VERTICES;
     if (pass_grid_create(p->dev, p->program, p->pixels, &p->grid))
         return -1;
-    struct {
-        cl_mem *buffer;
-        size_t bytes;
-        const char *what;
-    } buffers[] = {
+    const device_buffer_request buffers[] = {
         {&p->hit_points, p->pixels * sizeof(idmr_hit_point), "hit points"},
         {&p->vertices, slots * sizeof(idmr_photon_vertex), "photon paths"},
         {&p->path_length, photons * sizeof(cl_uint), "photon path lengths"},
@@ -111,13 +103,7 @@ static int pass_allocate(pass *p, const scene *s, unsigned int photons)
         {&p->light_importance, triangles * sizeof(cl_ulong), "light importance"},
     };
     p->bytes = p->scene.bytes + p->grid.bytes;
-    for (size_t i = 0; i < sizeof buffers / sizeof *buffers; i++) {
-        if (device_buffer(p->dev, CL_MEM_READ_WRITE, buffers[i].bytes, NULL, buffers[i].what,
-                          buffers[i].buffer))
-            return -1;
-        p->bytes += buffers[i].bytes;
-    }
-    return 0;
+    return device_buffers(p->dev, buffers, sizeof buffers / sizeof *buffers, &p->bytes);
 }
 
 /* Runs one iteration's kernels, timing each stage (the queue is drained between stages). */

@@ -5,7 +5,7 @@
  *   idmr [-v] importance SCENE -o DIR [options]
  *   idmr [-v] reduce SCENE --target D -o OUTDIR [options]
  *   idmr [-v] render SCENE -o IMAGE [options]
- *   idmr compare A B [--diff DIFF.png] [--json]
+ *   idmr compare A B [--diff DIFF.png] [--diff-max E] [--json]
  *
  * Exit codes (error.h): 0 success, 1 runtime failure, 2 bad input or usage. Every failure
  * prints one "idmr: ..." message naming the file, element or call that failed. */
@@ -61,7 +61,9 @@ static void print_usage(FILE *out)
           "  reduce SCENE --target D -o OUTDIR\n"
           "                            the reduced scene: OUTDIR/scene.xml and meshes/*.ply with\n"
           "                            about D of all vertices; takes the options of importance\n"
-          "      --method M            importance (default) or quadric (view-independent)\n"
+          "      --method M            importance (default: the paper's), quadric (uniform D,\n"
+          "                            view-independent) or importance-quadric (importance\n"
+          "                            budgets per mesh, quadric collapses within each)\n"
           "      --min-vertices N      meshes this small are not decimated (default 16)\n"
           "      --max-normal-angle A  no collapse turns a face more than A degrees (default 60)\n"
           "      --keep NAME           never decimate mesh NAME (repeatable; emitters never are)\n"
@@ -78,6 +80,8 @@ static void print_usage(FILE *out)
           "  compare A B [--diff D.png] [--json]\n"
           "                            RMSE, PSNR and relative MSE of image A against the\n"
           "                            reference B (linear RGB), and a false-colour error image\n"
+          "      --diff-max E          top of the error image's ramp (default: the 99th\n"
+          "                            percentile of the error)\n"
           "\n"
           "global options:\n"
           "  -v, --verbose             log progress, kernel build options and timings\n"
@@ -621,14 +625,19 @@ static int command_render(int argc, char **argv)
 static int command_compare(int argc, char **argv)
 {
     static const struct option options[] = {{"diff", required_argument, NULL, 'd'},
+                                            {"diff-max", required_argument, NULL, 'm'},
                                             {"json", no_argument, NULL, 'j'},
                                             {0, 0, 0, 0}};
     const char *diff = NULL;
+    double diff_max = 0;
     int json = 0, c;
     while ((c = getopt_long(argc, argv, "", options, NULL)) != -1) {
         if (c == 'd')
             diff = optarg;
-        else if (c == 'j')
+        else if (c == 'm') {
+            if (parse_double("--diff-max", optarg, 1e-30, 1e30, &diff_max))
+                return fail();
+        } else if (c == 'j')
             json = 1;
         else
             return usage_error("compare: unknown option %s", argv[optind - 1]);
@@ -636,7 +645,7 @@ static int command_compare(int argc, char **argv)
     if (optind != argc - 2)
         return usage_error("compare: expected two images, A and the reference B%s", "");
     image_comparison result;
-    if (image_compare(argv[optind], argv[optind + 1], diff, &result))
+    if (image_compare(argv[optind], argv[optind + 1], diff, diff_max, &result))
         return fail();
     if (json) {
         cJSON *root = cJSON_CreateObject();
@@ -651,6 +660,7 @@ static int command_compare(int argc, char **argv)
             cJSON_AddNullToObject(root, "psnr"); /* identical images: infinite */
         cJSON_AddNumberToObject(root, "relative_mse", result.relative_mse);
         cJSON_AddNumberToObject(root, "max_error", result.max_error);
+        cJSON_AddNumberToObject(root, "error_p99", result.error_p99);
         report_print_json(root);
         cJSON_Delete(root);
     } else {
@@ -697,9 +707,14 @@ static int command_reduce(int argc, char **argv)
                 o.method = DECIMATE_IMPORTANCE;
             else if (!strcmp(optarg, "quadric"))
                 o.method = DECIMATE_QUADRIC;
-            else
+            else if (!strcmp(optarg, "importance-quadric")) {
+                o.method = DECIMATE_IMPORTANCE;
+                o.quadric_collapses = 1;
+            } else
                 status = error_set(IDMR_EXIT_INPUT,
-                                   "--method: '%s' is neither 'importance' nor 'quadric'", optarg);
+                                   "--method: '%s' is none of 'importance', 'quadric' and "
+                                   "'importance-quadric'",
+                                   optarg);
             break;
         case OPT_MIN_VERTICES:
             status = parse_unsigned("--min-vertices", optarg, 0, 0xffffffffu, &whole);

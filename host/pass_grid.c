@@ -21,38 +21,24 @@ int pass_grid_create(device *d, cl_program program, unsigned int hit_points, pas
         device_create_kernel(program, "scan_apply", &g->scan_apply) ||
         device_create_kernel(program, "grid_scatter", &g->scatter))
         return -1;
-    struct {
-        cl_mem *buffer;
-        size_t bytes;
-        const char *what;
-    } buffers[] = {
+    const device_buffer_request buffers[] = {
         {&g->cell_counts, g->cells * sizeof(cl_uint), "grid cell counts"},
         {&g->cell_start, (g->cells + 1) * sizeof(cl_uint), "grid cell starts"},
         {&g->cell_cursor, g->cells * sizeof(cl_uint), "grid cursors"},
         {&g->chunk_sums, g->chunks * sizeof(cl_uint), "grid prefix sums"},
         {&g->grid_points, (hit_points ? hit_points : 1) * sizeof(cl_uint), "grid hit point lists"},
     };
-    for (size_t i = 0; i < sizeof buffers / sizeof *buffers; i++) {
-        if (device_buffer(d, CL_MEM_READ_WRITE, buffers[i].bytes, NULL, buffers[i].what,
-                          buffers[i].buffer))
-            return -1;
-        g->bytes += buffers[i].bytes;
-    }
-    return 0;
+    return device_buffers(d, buffers, sizeof buffers / sizeof *buffers, &g->bytes);
 }
 
 void pass_grid_release(pass_grid *g)
 {
     cl_kernel kernels[] = {g->count, g->scan_chunks, g->scan_chunk_sums, g->scan_apply,
                            g->scatter};
-    for (size_t i = 0; i < sizeof kernels / sizeof *kernels; i++)
-        if (kernels[i])
-            clReleaseKernel(kernels[i]);
+    device_release_kernels(kernels, sizeof kernels / sizeof *kernels);
     cl_mem buffers[] = {g->cell_counts, g->cell_start, g->cell_cursor, g->chunk_sums,
                         g->grid_points};
-    for (size_t i = 0; i < sizeof buffers / sizeof *buffers; i++)
-        if (buffers[i])
-            clReleaseMemObject(buffers[i]);
+    device_release_buffers(buffers, sizeof buffers / sizeof *buffers);
     memset(g, 0, sizeof *g);
 }
 

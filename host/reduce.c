@@ -9,7 +9,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <time.h>
 #include <unistd.h>
 
 #include "budget.h"
@@ -19,13 +18,6 @@
 #include "mesh_io.h"
 #include "mitsuba_write.h"
 #include "report.h"
-
-static double seconds_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 void reduce_options_default(reduce_options *o)
 {
@@ -110,6 +102,13 @@ static void state_free(reduce_state *st)
     budget_plan_free(&st->plan);
 }
 
+const char *reduce_method_name(const reduce_options *o)
+{
+    if (o->method == DECIMATE_QUADRIC)
+        return "quadric";
+    return o->quadric_collapses ? "importance-quadric" : "importance";
+}
+
 static cJSON *reduce_report(const scene *s, const device *d, const reduce_options *o,
                             const importance_result *r, const reduce_state *st, uint64_t after)
 {
@@ -121,7 +120,7 @@ static cJSON *reduce_report(const scene *s, const device *d, const reduce_option
         cJSON_AddItemToObject(root, "seconds", cJSON_CreateObject());
     }
     cJSON_AddNumberToObject(root, "target", o->target);
-    cJSON_AddStringToObject(root, "method", o->method == DECIMATE_IMPORTANCE ? "importance" : "quadric");
+    cJSON_AddStringToObject(root, "method", reduce_method_name(o));
     cJSON_AddNumberToObject(root, "max_normal_angle", o->max_normal_angle);
     cJSON_AddNumberToObject(root, "min_vertices", (double)o->min_vertices);
     cJSON_AddNumberToObject(root, "vertices_before", (double)st->plan.total_before);
@@ -270,7 +269,7 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
     int status = 0;
 
     /* Importance. */
-    double start = seconds_now();
+    double start = monotonic_seconds();
     bvh b;
     memset(&b, 0, sizeof b);
     if (o->method == DECIMATE_IMPORTANCE) {
@@ -284,10 +283,10 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
             }
         }
     }
-    st.seconds_importance = seconds_now() - start;
+    st.seconds_importance = monotonic_seconds() - start;
 
     /* Budget: measure what the decimater will start from (welded, uncollapsible), then plan. */
-    start = seconds_now();
+    start = monotonic_seconds();
     st.input = xcalloc(st.count + 1, sizeof *st.input);
     st.output = xcalloc(st.count + 1, sizeof *st.output);
     st.status = xcalloc(st.count + 1, sizeof *st.status);
@@ -323,12 +322,12 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
     if (!status)
         status = budget_distribute(budget, st.count, o->target, o->min_vertices, &st.plan);
     free(budget);
-    st.seconds_budget = seconds_now() - start;
+    st.seconds_budget = monotonic_seconds() - start;
 
     /* Decimation of the meshes the plan decimates, in parallel, largest first; then up to
      * COMPENSATION_ROUNDS rounds that take what meshes could not give up (too few legal
      * collapses) from the meshes that met their targets and have room above the floor. */
-    start = seconds_now();
+    start = monotonic_seconds();
     uint64_t after = 0;
     unsigned int threads = o->threads ? o->threads : (unsigned int)sysconf(_SC_NPROCESSORS_ONLN);
     unsigned char *redo = xcalloc(st.count + 1, 1);
@@ -337,7 +336,10 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
     progress bar;
     progress_begin(&bar, "decimation", COMPENSATION_ROUNDS + 1, o->importance.progress);
     for (unsigned int round = 0; !status && round <= COMPENSATION_ROUNDS; round++) {
-        status = decimate_selected(&st, o->method, threads, redo);
+        status = decimate_selected(&st, o->method == DECIMATE_IMPORTANCE && !o->quadric_collapses
+                                            ? DECIMATE_IMPORTANCE
+                                            : DECIMATE_QUADRIC,
+                                   threads, redo);
         progress_update(&bar, round + 1, NULL);
         after = 0;
         for (size_t m = 0; m < st.count; m++)
@@ -349,10 +351,10 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
     }
     progress_end(&bar);
     free(redo);
-    st.seconds_decimation = seconds_now() - start;
+    st.seconds_decimation = monotonic_seconds() - start;
 
     /* Output. */
-    start = seconds_now();
+    start = monotonic_seconds();
     mitsuba_replacement *replacements = xcalloc(st.count + 1, sizeof *replacements);
     size_t replaced = 0;
     for (size_t m = 0; m < st.count && !status; m++) {
@@ -374,7 +376,7 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
     if (!status)
         status = mitsuba_write_reduced(s->file, outdir, replacements, replaced);
     free(replacements);
-    st.seconds_write = seconds_now() - start;
+    st.seconds_write = monotonic_seconds() - start;
     if (!status) {
         cJSON *report = reduce_report(s, d, o, &r, &st, after);
         if (o->method == DECIMATE_IMPORTANCE) {

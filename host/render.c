@@ -51,14 +51,10 @@ typedef struct renderer {
 static void renderer_release(renderer *p)
 {
     cl_kernel kernels[] = {p->camera, p->photon, p->gather};
-    for (size_t i = 0; i < sizeof kernels / sizeof *kernels; i++)
-        if (kernels[i])
-            clReleaseKernel(kernels[i]);
+    device_release_kernels(kernels, sizeof kernels / sizeof *kernels);
     cl_mem buffers[] = {p->hit_points, p->render_hits, p->emitted,
                         p->photons,    p->path_length, p->pixel_radiance};
-    for (size_t i = 0; i < sizeof buffers / sizeof *buffers; i++)
-        if (buffers[i])
-            clReleaseMemObject(buffers[i]);
+    device_release_buffers(buffers, sizeof buffers / sizeof *buffers);
     pass_grid_release(&p->grid);
     if (p->program)
         clReleaseProgram(p->program);
@@ -84,11 +80,7 @@ static int renderer_allocate(renderer *p, unsigned int photons)
     if (pass_grid_create(p->dev, p->program, p->pixels, &p->grid))
         return -1;
     size_t slots = (size_t)photons * IDMR_PATH_VERTICES;
-    struct {
-        cl_mem *buffer;
-        size_t bytes;
-        const char *what;
-    } buffers[] = {
+    const device_buffer_request buffers[] = {
         {&p->hit_points, p->pixels * sizeof(idmr_hit_point), "hit points"},
         {&p->render_hits, p->pixels * sizeof(idmr_render_hit), "hit point throughputs"},
         {&p->emitted, p->pixels * 4 * sizeof(cl_float), "directly seen emission"},
@@ -97,12 +89,8 @@ static int renderer_allocate(renderer *p, unsigned int photons)
         {&p->pixel_radiance, p->pixels * 3 * sizeof(cl_ulong), "pixel radiance"},
     };
     p->sppm_bytes = p->grid.bytes;
-    for (size_t i = 0; i < sizeof buffers / sizeof *buffers; i++) {
-        if (device_buffer(p->dev, CL_MEM_READ_WRITE, buffers[i].bytes, NULL, buffers[i].what,
-                          buffers[i].buffer))
-            return -1;
-        p->sppm_bytes += buffers[i].bytes;
-    }
+    if (device_buffers(p->dev, buffers, sizeof buffers / sizeof *buffers, &p->sppm_bytes))
+        return -1;
     return device_clear(p->dev, p->pixel_radiance, p->pixels * 3 * sizeof(cl_ulong),
                         "pixel radiance");
 }

@@ -1,37 +1,50 @@
 /* bench_specialise.c — `make bench`: what building kernels for the scene's features saves.
  *
- *   specialisation: scene=<name> pass=importance generic=<s/iter> specialised=<s/iter> speedup=<x>
+ *   specialisation: scene=<name> pass=importance|render generic=<s/iter> specialised=<s/iter>
+ *                   speedup=<x>
  *   program-build: cold=<s> cached=<s> speedup=<x>
  *
- * The importance iteration of the shipped Cornell box (diffuse, one area light) and of the glass
- * of water (dielectrics, glossy metal), with the program built for the scene and with the
- * all-features program (--generic); best of ROUNDS, after one warm-up iteration each. The build
+ * The importance iteration and the render iteration of the shipped Cornell box (diffuse, one
+ * area light) and of the glass of water (dielectrics, glossy metal), with the program built for
+ * the scene and with the all-features program (--generic); best of ROUNDS, after one warm-up
+ * iteration each. The build
  * of the importance program with PoCL's own cache off (in a child process), then from idmr's
  * program cache. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "bvh.h"
 #include "device.h"
 #include "error.h"
 #include "importance.h"
 #include "mitsuba.h"
+#include "render.h"
+#include "report.h"
 
 #define ROUNDS 2
 #define ITERATIONS 3
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+enum pass { PASS_IMPORTANCE, PASS_RENDER };
+static const char *const pass_names[] = {"importance", "render"};
 
-static double per_iteration(device *d, const scene *s, const bvh *b, int generic,
+static double per_iteration(device *d, const scene *s, const bvh *b, enum pass pass, int generic,
                             unsigned int iterations)
 {
+    if (pass == PASS_RENDER) {
+        render_options o;
+        render_options_default(&o);
+        o.iterations = iterations;
+        o.generic = generic;
+        render_result r;
+        if (render_run(d, s, b, &o, &r)) {
+            fprintf(stderr, "bench_specialise: %s\n", error_message());
+            exit(1);
+        }
+        double seconds = r.seconds.total / r.iterations;
+        render_result_free(&r);
+        return seconds;
+    }
     importance_options o;
     importance_options_default(&o);
     o.iterations = iterations;
@@ -56,19 +69,20 @@ static void bench_scene(device *d, const char *name, const char *path)
         fprintf(stderr, "bench_specialise: %s\n", error_message());
         exit(1);
     }
-    double best[2] = {1e30, 1e30};
-    for (int generic = 0; generic < 2; generic++)
-        per_iteration(d, s, &b, generic, 1);
-    for (int round = 0; round < ROUNDS; round++)
-        for (int generic = 0; generic < 2; generic++) {
-            double seconds = per_iteration(d, s, &b, generic, ITERATIONS);
-            if (seconds < best[generic])
-                best[generic] = seconds;
-        }
-    printf("specialisation: scene=%s pass=importance generic=%.3f specialised=%.3f "
-           "speedup=%.2f\n",
-           name, best[1], best[0], best[1] / best[0]);
-    fflush(stdout);
+    for (enum pass pass = PASS_IMPORTANCE; pass <= PASS_RENDER; pass++) {
+        double best[2] = {1e30, 1e30};
+        for (int generic = 0; generic < 2; generic++)
+            per_iteration(d, s, &b, pass, generic, 1);
+        for (int round = 0; round < ROUNDS; round++)
+            for (int generic = 0; generic < 2; generic++) {
+                double seconds = per_iteration(d, s, &b, pass, generic, ITERATIONS);
+                if (seconds < best[generic])
+                    best[generic] = seconds;
+            }
+        printf("specialisation: scene=%s pass=%s generic=%.3f specialised=%.3f speedup=%.2f\n",
+               name, pass_names[pass], best[1], best[0], best[1] / best[0]);
+        fflush(stdout);
+    }
     bvh_free(&b);
     scene_free(s);
 }
@@ -82,19 +96,19 @@ static void bench_build(device *d)
     char *options = device_build_options(d, IDMR_FEATURE_DIFFUSE | IDMR_FEATURE_AREA,
                                          "-D IDMR_BOOKKEEPING=1 -D IDMR_CAMERA_IMPORTANCE=1");
     cl_program program;
-    double t0 = now();
+    double t0 = monotonic_seconds();
     if (device_build_program(d, "importance.cl", options, &program)) {
         fprintf(stderr, "bench_specialise: %s\n", error_message());
         exit(1);
     }
-    double cold = now() - t0;
+    double cold = monotonic_seconds() - t0;
     clReleaseProgram(program);
-    t0 = now();
+    t0 = monotonic_seconds();
     if (device_build_program(d, "importance.cl", options, &program) || !device_last_build_cached()) {
         fprintf(stderr, "bench_specialise: the second build did not come from the cache\n");
         exit(1);
     }
-    double cached = now() - t0;
+    double cached = monotonic_seconds() - t0;
     clReleaseProgram(program);
     printf("program-build: kernel=importance.cl cold=%.2f cached=%.3f speedup=%.0f\n", cold, cached,
            cold / cached);

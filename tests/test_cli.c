@@ -219,7 +219,7 @@ static void test_usage_errors(void **state)
     run_free(&r);
 }
 
-/* importance and reduce: every bad option value is refused with exit 2 and a message naming it,
+/* importance, reduce and render: every bad option value is refused with exit 2 and a message naming it,
  * before any work starts. */
 static void test_pass_option_errors(void **state)
 {
@@ -237,6 +237,11 @@ static void test_pass_option_errors(void **state)
          "'median'"},
         {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x --target 0.5 --max-normal-angle 0",
          "--max-normal-angle"},
+        {"bin/idmr render data/cornell/scene.xml", "-o IMAGE is required"},
+        {"bin/idmr render data/cornell/scene.xml -o /tmp/x --iterations 0", "--iterations"},
+        {"bin/idmr render data/cornell/scene.xml -o /tmp/x --gamma 2", "importance pass option"},
+        {"bin/idmr render data/cornell/scene.xml -o /tmp/x --time-limit soon", "--time-limit"},
+        {"bin/idmr render data/cornell/scene.xml -o /tmp/x --exposure 100", "--exposure"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
         run_result r = run(cases[i].command);
@@ -248,7 +253,8 @@ static void test_pass_option_errors(void **state)
 }
 
 /* The main job from the command line: reduce the shipped scene (a short importance pass), and
- * the reduced scene loads again with the vertex total the report gives. */
+ * the reduced scene loads again with the vertex total the report gives; importance-quadric
+ * meets the same total with other collapses. */
 static void test_reduce_shipped_scene(void **state)
 {
     char dir[] = "/tmp/idmr-cli-reduce-XXXXXX";
@@ -279,6 +285,92 @@ static void test_reduce_shipped_scene(void **state)
     assert_true(cJSON_GetObjectItem(info, "vertices")->valuedouble == after);
     cJSON_Delete(info);
     run_free(&r);
+
+    /* importance-quadric: the same budget (same seed, same importance), other collapses. */
+    snprintf(command, sizeof command,
+             "bin/idmr reduce data/cornell/scene.xml --target 0.2 -o %s/hybrid "
+             "--method importance-quadric --iterations 2 --photons 20000 --resolution 0.25 "
+             "--quiet && cat %s/hybrid/report.json && cmp -s %s/out/meshes/knot.ply "
+             "%s/hybrid/meshes/knot.ply || echo differ",
+             dir, dir, dir, dir);
+    r = run(command);
+    if (r.status != 0)
+        fail_msg("reduce --method importance-quadric failed (%d): %s", r.status, r.err);
+    assert_non_null(strstr(r.out, "differ"));
+    *strstr(r.out, "differ") = '\0';
+    cJSON *hybrid = parse_or_fail(r.out);
+    assert_string_equal(cJSON_GetObjectItem(hybrid, "method")->valuestring, "importance-quadric");
+    assert_true(cJSON_GetObjectItem(hybrid, "vertices_after")->valuedouble == after);
+    cJSON_Delete(hybrid);
+    run_free(&r);
+    snprintf(command, sizeof command, "rm -rf %s", dir);
+    assert_int_equal(system(command), 0);
+}
+
+/* idmr render on the shipped scene: IMAGE.exr, IMAGE.png and IMAGE.json beside each other (the
+ * directory created), the report's figures, --time-limit stopping after the first iteration,
+ * and `compare` telling a render from itself and from another seed's. */
+static void test_render_shipped_scene(void **state)
+{
+    char dir[] = "/tmp/idmr-cli-render-XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    char command[768];
+    const char *common = "--photons 20000 --resolution 0.25 --quiet";
+    snprintf(command, sizeof command,
+             "bin/idmr render data/cornell/scene.xml -o %s/images/a.exr --iterations 3 %s", dir,
+             common);
+    run_result r = run(command);
+    if (r.status != 0)
+        fail_msg("render failed (%d): %s", r.status, r.err);
+    assert_non_null(strstr(r.out, "s per iteration"));
+    run_free(&r);
+    snprintf(command, sizeof command, "cat %s/images/a.json", dir);
+    r = run(command);
+    cJSON *report = parse_or_fail(r.out);
+    assert_int_equal(cJSON_GetObjectItem(report, "iterations")->valueint, 3);
+    assert_int_equal(cJSON_GetObjectItem(report, "width")->valueint, 64);
+    assert_int_equal(cJSON_GetObjectItem(report, "photons_per_iteration")->valueint, 20000);
+    cJSON *memory = cJSON_GetObjectItem(report, "device_bytes");
+    double geometry = cJSON_GetObjectItem(memory, "geometry")->valuedouble;
+    double bvh = cJSON_GetObjectItem(memory, "bvh")->valuedouble;
+    double sppm = cJSON_GetObjectItem(memory, "sppm")->valuedouble;
+    assert_true(geometry > 0 && bvh > 0 && sppm > 0);
+    assert_true(cJSON_GetObjectItem(memory, "total")->valuedouble == geometry + bvh + sppm);
+    cJSON *seconds = cJSON_GetObjectItem(report, "seconds");
+    assert_true(cJSON_GetObjectItem(seconds, "per_iteration")->valuedouble > 0);
+    assert_non_null(cJSON_GetObjectItem(seconds, "per_iteration_by_stage"));
+    cJSON_Delete(report);
+    run_free(&r);
+
+    snprintf(command, sizeof command,
+             "bin/idmr render data/cornell/scene.xml -o %s/images/b --iterations 5 --seed 2 "
+             "--time-limit 0.000001 %s && cat %s/images/b.json && ls %s/images",
+             dir, common, dir, dir);
+    r = run(command);
+    if (r.status != 0)
+        fail_msg("render failed (%d): %s", r.status, r.err);
+    assert_non_null(strstr(r.out, "\"iterations\":\t1,"));
+    assert_non_null(strstr(r.out, "b.exr"));
+    assert_non_null(strstr(r.out, "b.png"));
+    assert_non_null(strstr(r.out, "a.png"));
+    run_free(&r);
+
+    snprintf(command, sizeof command, "bin/idmr compare --json %s/images/a.exr %s/images/a.exr",
+             dir, dir);
+    r = run(command);
+    assert_int_equal(r.status, 0);
+    cJSON *same = parse_or_fail(r.out);
+    assert_true(cJSON_GetObjectItem(same, "rmse")->valuedouble == 0);
+    cJSON_Delete(same);
+    run_free(&r);
+    snprintf(command, sizeof command, "bin/idmr compare --json %s/images/b.exr %s/images/a.exr",
+             dir, dir);
+    r = run(command);
+    assert_int_equal(r.status, 0);
+    cJSON *other = parse_or_fail(r.out);
+    assert_true(cJSON_GetObjectItem(other, "rmse")->valuedouble > 0);
+    cJSON_Delete(other);
+    run_free(&r);
     snprintf(command, sizeof command, "rm -rf %s", dir);
     assert_int_equal(system(command), 0);
 }
@@ -296,6 +388,7 @@ int main(void)
         cmocka_unit_test(test_usage_errors),
         cmocka_unit_test(test_pass_option_errors),
         cmocka_unit_test(test_reduce_shipped_scene),
+        cmocka_unit_test(test_render_shipped_scene),
     };
     return cmocka_run_group_tests_name("cli", tests, NULL, NULL);
 }

@@ -76,7 +76,7 @@ static void test_compare_against_formulas(void **state)
     assert_int_equal(image_write_rgb_float(pa, 16, 8, a), 0);
     assert_int_equal(image_write_rgb_float(pb, 16, 8, b), 0);
     image_comparison r;
-    assert_int_equal(image_compare(pa, pb, diff, &r), 0);
+    assert_int_equal(image_compare(pa, pb, diff, 0, &r), 0);
     assert_float_equal(r.rmse, 0.25, 1e-9);
     assert_float_equal(r.psnr, 20.0 * log10(1.0 / 0.25), 1e-9);
     assert_float_equal(r.relative_mse, 0.0625 / 0.0725, 1e-9);
@@ -84,7 +84,7 @@ static void test_compare_against_formulas(void **state)
     int w, h, c;
     assert_int_equal(image_info(diff, &w, &h, &c), 0);
     assert_int_equal(w, 16);
-    assert_int_equal(image_compare(pa, pa, NULL, &r), 0);
+    assert_int_equal(image_compare(pa, pa, NULL, 0, &r), 0);
     assert_true(r.rmse == 0.0 && isinf(r.psnr) && r.relative_mse == 0.0);
     /* One pixel off by 1 in one channel of 16 x 8 x 3 values: RMSE sqrt(1 / 384). */
     a[0] = 1.5f;
@@ -92,7 +92,7 @@ static void test_compare_against_formulas(void **state)
     memcpy(b, a, 3 * sizeof(float) * 128);
     b[0] = 0.5f;
     assert_int_equal(image_write_rgb_float(pb, 16, 8, b), 0);
-    assert_int_equal(image_compare(pa, pb, NULL, &r), 0);
+    assert_int_equal(image_compare(pa, pb, NULL, 0, &r), 0);
     assert_float_equal(r.rmse, sqrt(1.0 / 384.0), 1e-9);
     free(a);
     free(b);
@@ -105,11 +105,11 @@ static void test_compare_size_mismatch(void **state)
     assert_int_equal(image_write_rgb_float(pa, 4, 4, a), 0);
     assert_int_equal(image_write_rgb_float(pb, 4, 5, b), 0);
     image_comparison r;
-    assert_int_equal(image_compare(pa, pb, NULL, &r), -1);
+    assert_int_equal(image_compare(pa, pb, NULL, 0, &r), -1);
     assert_int_equal(error_code(), IDMR_EXIT_INPUT);
     assert_non_null(strstr(error_message(), "small.exr"));
     assert_non_null(strstr(error_message(), "4x5"));
-    assert_int_equal(image_compare(pa, path_of("absent.exr"), NULL, &r), -1);
+    assert_int_equal(image_compare(pa, path_of("absent.exr"), NULL, 0, &r), -1);
     assert_non_null(strstr(error_message(), "absent.exr"));
     free(a);
     free(b);

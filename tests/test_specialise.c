@@ -1,6 +1,6 @@
 /* test_specialise.c — kernels built for the scene's features (issue: "simulate only the effects a
  * scene calls for"): the options a scene gets, specialised and generic programs giving
- * bit-identical importance, γ = 0 leaving camera importance out without touching light
+ * bit-identical importance and bit-identical renders, γ = 0 leaving camera importance out without touching light
  * importance, and the program cache (a second build comes from it, a changed kernel source does
  * not). */
 #include <setjmp.h>
@@ -18,6 +18,7 @@
 #include "error.h"
 #include "importance.h"
 #include "mitsuba.h"
+#include "render.h"
 
 static device dev;
 
@@ -104,14 +105,53 @@ static void expect_identical(const char *path)
     scene_free(s);
 }
 
+static void render_scene(const scene *s, const bvh *b, int generic, render_result *r)
+{
+    render_options o;
+    render_options_default(&o);
+    o.iterations = 2;
+    o.photons = 20000;
+    o.resolution = 0.25f;
+    o.generic = generic;
+    if (render_run(&dev, s, b, &o, r))
+        fail_msg("%s", error_message());
+}
+
+/* The same seed renders the same image, to the bit, with either program. */
+static void expect_identical_render(const char *path)
+{
+    scene *s = load(path);
+    bvh b;
+    assert_int_equal(bvh_build(s, &b), 0);
+    render_result specialised, generic;
+    render_scene(s, &b, 0, &specialised);
+    render_scene(s, &b, 1, &generic);
+    assert_non_null(strstr(generic.build_options, "IDMR_FEATURES=0x3ffu"));
+    assert_null(strstr(specialised.build_options, "IDMR_FEATURES=0x3ffu"));
+    size_t values = (size_t)specialised.width * specialised.height * 3;
+    double total = 0;
+    for (size_t i = 0; i < values; i++)
+        total += specialised.image[i];
+    assert_true(total > 0);
+    assert_memory_equal(specialised.image, generic.image, values * sizeof(float));
+    print_message("  %s: %ux%u, identical images (mean %.6g)\n", path, specialised.width,
+                  specialised.height, total / values);
+    render_result_free(&specialised);
+    render_result_free(&generic);
+    bvh_free(&b);
+    scene_free(s);
+}
+
 static void test_generic_equals_specialised_diffuse(void **state)
 {
     expect_identical("data/cornell/scene.xml");
+    expect_identical_render("data/cornell/scene.xml");
 }
 
 static void test_generic_equals_specialised_glass(void **state)
 {
     expect_identical("../shared/data/scenes/glass-of-water/scene-without-mesh000.xml");
+    expect_identical_render("../shared/data/scenes/glass-of-water/scene-without-mesh000.xml");
 }
 
 /* γ = 0 compiles the camera atomics out: camera importance is all zero, light importance is the
