@@ -61,7 +61,7 @@ kernel void camera_pass(idmr_pass_params params, idmr_camera camera,
         float3 n = nw.xyz;
 #if IDMR_BOOKKEEPING && IDMR_CAMERA_IMPORTANCE
         fixed_add(camera_importance, hit.triangle,
-                       fixed_units(idmr_eq2_weight(n.x, n.y, n.z, d.x, d.y, d.z)));
+                  fixed_units(idmr_eq2_weight(n.x, n.y, n.z, d.x, d.y, d.z)));
 #endif
         float3 p = origin + hit.t * d;
         global const idmr_material *m = materials + triangle_materials[hit.triangle];
@@ -175,6 +175,6 @@ kernel void path_importance(idmr_pass_params params,
         running += gathered[base + j];
         if (running != 0ul)
             fixed_add(light_importance, vertices[base + j].triangle,
-                           fixed_units(vertices[base + j].weight) * running);
+                      fixed_units(vertices[base + j].weight) * running);
     }
 }

@@ -5,7 +5,7 @@
  * (host/shapes.h), diffuse / glossy / mirror / dielectric materials, point and area lights,
  * and a look-at pinhole camera (right = forward × up, up = right × forward, as
  * trace_overview_camera). Host references: the camera pass's jittered direction (the same rng
- * stream and float formula as camera_direction in kernels/importance.cl) and per-triangle unit
+ * stream and float formula as camera_direction in kernels/scene.h) and per-triangle unit
  * normals computed as host/device_scene.c does (double cross product, cast to float). */
 #ifndef IDMR_TESTS_IMPORTANCE_COMMON_H
 #define IDMR_TESTS_IMPORTANCE_COMMON_H
@@ -172,7 +172,7 @@ static inline void imp_look_at(scene *s, const float origin[3], const float targ
 
 /* The camera pass's ray direction for pixel `pixel` of a width x height hit-point image, from
  * the same rng stream (x jitter, then y jitter) and the same float formula as camera_direction
- * in kernels/importance.cl. */
+ * in kernels/scene.h. */
 static inline void imp_camera_direction(const idmr_camera *c, unsigned int width,
                                         unsigned int height, unsigned int seed,
                                         unsigned int iteration, unsigned int pixel, float d[3])
