@@ -512,12 +512,14 @@ static int command_importance(int argc, char **argv)
 
 /* ---- render ---- */
 
-/* IMAGE without a trailing ".exr", into stem (size bytes). */
+/* IMAGE without a trailing ".exr" or ".png" (either names the same three outputs), into stem
+ * (size bytes). */
 static void image_stem(const char *image, char *stem, size_t size)
 {
     snprintf(stem, size, "%s", image);
     size_t length = strlen(stem);
-    if (length > 4 && !strcasecmp(stem + length - 4, ".exr"))
+    if (length > 4 &&
+        (!strcasecmp(stem + length - 4, ".exr") || !strcasecmp(stem + length - 4, ".png")))
         stem[length - 4] = '\0';
 }
 

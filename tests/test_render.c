@@ -6,7 +6,8 @@
  *                            area π L A, point 4π I, spot 2π I ∫ falloff, directional E × the
  *                            lit area, environment π L A on a plane's front
  *   furnace                  inside an emitting, reflecting sphere the radiance is
- *                            L_e Σ_{k≤8} ρ^k everywhere (8 stored photons per path)
+ *                            L_e Σ_{k≤8} ρ^k everywhere (8 stored photons per path), at radius
+ *                            1, 1e-3 and 1e4
  *   caustic                  a glass ball focuses a point light: the floor under it is brighter
  *                            than the floor around its shadow
  *   glossy                   against GGX written out here from the textbook formulas: a glossy
@@ -286,15 +287,17 @@ static void test_light_power_of_each_kind(void **state)
 
 /* ---- 3. furnace ---- */
 
-static void test_furnace(void **state)
+/* Inside a sphere of radius `radius` that emits 1 and reflects half of what arrives, wound
+ * inward, seen from its centre: the radiance is L_e Σ_{k=0}^{8} ρ^k everywhere (photons add
+ * the reflections after 0..7 bounces), whatever the scale. */
+static void expect_furnace(float radius)
 {
-    (void)state;
     const float albedo = 0.5f, emitted = 1.0f;
     scene *s = scene_create("furnace.xml");
     uint32_t grey = imp_diffuse(s, "grey", albedo, 0);
     const float centre[3] = {0, 0, 0};
-    scene_mesh *sphere = imp_add_sphere(s, "sphere", grey, centre, 1.0f);
-    for (uint32_t t = 0; t < sphere->triangle_count; t++) { /* wind inward: emit and reflect in */
+    scene_mesh *sphere = imp_add_sphere(s, "sphere", grey, centre, radius);
+    for (uint32_t t = 0; t < sphere->triangle_count; t++) {
         uint32_t *ix = &sphere->indices[3 * (size_t)t];
         uint32_t swap = ix[1];
         ix[1] = ix[2];
@@ -317,12 +320,21 @@ static void test_furnace(void **state)
         squares += (value - expected) * (value - expected);
     }
     double mean = sum / pixels, rms = sqrt(squares / pixels) / expected;
-    print_message("  mean radiance %.5f, exact %.5f (ratio %.5f), RMS relative error %.4f\n", mean,
-                  expected, mean / expected, rms);
+    print_message("  radius %g: mean radiance %.5f, exact %.5f (ratio %.5f), RMS relative error "
+                  "%.4f\n",
+                  radius, mean, expected, mean / expected, rms);
     assert_true(fabs(mean / expected - 1) < 0.01);
     assert_true(rms < 0.05);
     render_result_free(&r);
     scene_free(s);
+}
+
+static void test_furnace_at_any_scale(void **state)
+{
+    (void)state;
+    expect_furnace(1.0f);
+    expect_furnace(1e-3f);
+    expect_furnace(1e4f);
 }
 
 /* ---- 4. a caustic under a glass ball ---- */
@@ -620,7 +632,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_point_light_on_plane_and_convergence),
         cmocka_unit_test(test_light_power_of_each_kind),
-        cmocka_unit_test(test_furnace),
+        cmocka_unit_test(test_furnace_at_any_scale),
         cmocka_unit_test(test_glass_ball_caustic),
         cmocka_unit_test(test_glossy_plane_under_point_light),
         cmocka_unit_test(test_glossy_scattering_keeps_the_albedo),
