@@ -586,9 +586,11 @@ static int command_render(int argc, char **argv)
     bvh b;
     render_result r;
     memset(&r, 0, sizeof r);
-    int status = slash && slash != directory
-                     ? (*slash = '\0', importance_make_directory(directory))
-                     : 0;
+    int status = 0;
+    if (slash && slash != directory) { /* the images' directory, created if missing */
+        *slash = '\0';
+        status = importance_make_directory(directory);
+    }
     if (!status)
         status = device_open(&d, device_index);
     if (!status) {

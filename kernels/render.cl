@@ -72,7 +72,10 @@ kernel void render_camera(idmr_pass_params params, idmr_camera camera,
     idmr_hit_point hp;
     hp.valid = 0u;
     hp.pixel = pixel;
-    idmr_render_hit rh;
+    idmr_render_hit rh; /* zero where there is no hit point */
+    vstore3((float3)(0.0f), 0, rh.throughput);
+    vstore3((float3)(0.0f), 0, rh.outgoing);
+    rh.material = 0u;
     rh.pad = 0.0f;
     for (int depth = 0; depth < IDMR_CAMERA_DEPTH; depth++) {
         idmr_hit hit = traverse_closest(nodes, leaves, origin, d, 0.0f, INFINITY);
