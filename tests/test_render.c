@@ -220,7 +220,7 @@ static void test_light_power_of_each_kind(void **state)
 
     /* Area: a 1 x 0.5 quad facing down with radiance 2: π L A = π. */
     s = black_box_scene("area.xml");
-    uint32_t black = (uint32_t)0;
+    uint32_t black = 0; /* black_box_scene's one material */
     const float qc[3] = {0, 0, 1}, qu[3] = {0.5f, 0, 0}, qv[3] = {0, -0.25f, 0};
     imp_area_light(s, imp_add_quad(s, "emitter", black, qc, qu, qv), 2.0f);
     expect_power("area", s, M_PI * 2.0 * 0.5, 1e-4);
