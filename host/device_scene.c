@@ -47,6 +47,21 @@ static void triangle_data(const scene *s, float *normals, uint32_t *material_of)
     }
 }
 
+uint64_t device_scene_geometry_bytes(const scene *s)
+{
+    uint64_t triangles = s->triangle_count ? s->triangle_count : 1;
+    uint64_t lights = s->light_count ? s->light_count : 1, emitters = 0;
+    for (size_t i = 0; i < s->light_count; i++)
+        if (s->lights[i].kind == IDMR_LIGHT_AREA)
+            emitters += s->lights[i].triangle_count;
+    /* Per triangle a float4 normal and a material index; per light its struct and CDF entry;
+     * per emitter triangle a CDF entry and three float4. */
+    return triangles * (4 * sizeof(float) + sizeof(uint32_t)) +
+           (s->material_count ? s->material_count : 1) * sizeof(idmr_material) +
+           lights * (sizeof(idmr_light) + sizeof(float)) +
+           (emitters ? emitters : 1) * (sizeof(float) + 12 * sizeof(float));
+}
+
 int device_scene_upload(device *d, const scene *s, const bvh *b, device_scene *out)
 {
     memset(out, 0, sizeof *out);
@@ -143,9 +158,7 @@ int device_scene_upload(device *d, const scene *s, const bvh *b, device_scene *o
         device_buffer(d, CL_MEM_READ_ONLY, 12 * sizeof(float) * (emitter_count ? emitter_count : 1),
                       emitter_triangles, "emitter triangles", &out->emitter_triangles);
     out->bvh_bytes = node_bytes + leaf_bytes;
-    out->bytes = node_bytes + leaf_bytes + (uint64_t)(triangles ? triangles : 1) * 20u +
-                 s->material_count * sizeof(idmr_material) + light_count * (sizeof *lights + 4) +
-                 emitter_count * 52u;
+    out->bytes = out->bvh_bytes + device_scene_geometry_bytes(s);
     free(normals);
     free(material_of);
     free(lights);

@@ -35,6 +35,10 @@ typedef struct device_scene {
     uint64_t bvh_bytes; /* of which the BVH (nodes and leaves) */
 } device_scene;
 
+/* Device memory of the scene's buffers other than the BVH (what `idmr info` and the passes
+ * report as geometry), as device_scene_upload() allocates them. */
+uint64_t device_scene_geometry_bytes(const scene *s);
+
 /* Uploads scene `s` with its BVH `b`. A scene without lights is accepted (the light buffers
  * then hold one unused entry). Returns 0, or -1 with the error set. */
 int device_scene_upload(device *d, const scene *s, const bvh *b, device_scene *out);

@@ -89,7 +89,7 @@ void importance_options_default(importance_options *o);
 
 /* Photon paths per iteration when none are asked for: 1,000,000 on a GPU (the paper's
  * figure); 500,000 on a CPU, which keeps an iteration of the DRAGON CORNELL BOX (871k
- * triangles) near 0.65 s on 2 cores with PoCL (make bench). */
+ * triangles) near 0.68 s on 2 cores with PoCL (make bench). */
 unsigned int importance_default_photons(const device *d);
 
 /* Runs the pass. The scene needs a camera and at least one light. Returns 0, or -1 with the

@@ -20,6 +20,7 @@
 
 #include "bvh.h"
 #include "device.h"
+#include "device_scene.h"
 #include "error.h"
 #include "image.h"
 #include "importance.h"
@@ -251,11 +252,11 @@ static cJSON *info_json(const scene *s, const bvh *b)
     cJSON_AddNumberToObject(root, "vertices", (double)s->vertex_count);
     cJSON_AddNumberToObject(root, "triangles", (double)s->triangle_count);
     cJSON *memory = cJSON_AddObjectToObject(root, "device_memory");
-    cJSON_AddNumberToObject(memory, "geometry", (double)scene_geometry_device_bytes(s));
+    cJSON_AddNumberToObject(memory, "geometry", (double)device_scene_geometry_bytes(s));
     if (b) {
         cJSON_AddNumberToObject(memory, "bvh", (double)bvh_device_bytes(b));
         cJSON_AddNumberToObject(memory, "total",
-                                (double)(scene_geometry_device_bytes(s) + bvh_device_bytes(b)));
+                                (double)(device_scene_geometry_bytes(s) + bvh_device_bytes(b)));
         cJSON *tree = cJSON_AddObjectToObject(root, "bvh");
         cJSON_AddNumberToObject(tree, "nodes", (double)b->node_count);
         cJSON_AddNumberToObject(tree, "leaves", (double)b->leaf_count);
@@ -318,10 +319,10 @@ static void info_print(const scene *s, const bvh *b)
         if (s->features & (1u << bit))
             printf(" %s", scene_feature_name(1u << bit));
     printf("\ndevice memory:\n");
-    print_bytes("geometry", (double)scene_geometry_device_bytes(s));
+    print_bytes("geometry", (double)device_scene_geometry_bytes(s));
     if (b) {
         print_bytes("bvh", (double)bvh_device_bytes(b));
-        print_bytes("total", (double)(scene_geometry_device_bytes(s) + bvh_device_bytes(b)));
+        print_bytes("total", (double)(device_scene_geometry_bytes(s) + bvh_device_bytes(b)));
         printf("bvh: %zu nodes, %zu leaves, %zu triangle references, depth %d, built in %.2f s\n",
                b->node_count, b->leaf_count, b->reference_count, b->depth, b->build_seconds);
     }

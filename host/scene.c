@@ -331,11 +331,3 @@ const char *scene_light_kind_name(unsigned int kind)
                                                        "environment"};
     return kind < IDMR_LIGHT_KIND_COUNT ? names[kind] : "unknown";
 }
-
-uint64_t scene_geometry_device_bytes(const scene *s)
-{
-    /* Per vertex: position (12 B). Per triangle: indices (12 B), material id (4 B), and the two
-     * importance accumulators of the importance pass (2 x 8 B). */
-    return s->vertex_count * 12u + s->triangle_count * (12u + 4u + 16u) +
-           s->material_count * sizeof(idmr_material) + s->light_count * sizeof(idmr_light);
-}

@@ -124,8 +124,4 @@ const char *scene_feature_name(unsigned int feature_bit);
 const char *scene_material_kind_name(unsigned int kind);
 const char *scene_light_kind_name(unsigned int kind);
 
-/* Bytes the geometry takes on the device (vertices, indices, per-triangle data), without the
- * BVH (see bvh_device_bytes()). */
-uint64_t scene_geometry_device_bytes(const scene *s);
-
 #endif

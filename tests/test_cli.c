@@ -341,6 +341,13 @@ static void test_render_shipped_scene(void **state)
     assert_non_null(cJSON_GetObjectItem(seconds, "per_iteration_by_stage"));
     cJSON_Delete(report);
     run_free(&r);
+    /* `info` reports the geometry memory the render allocated. */
+    r = run("bin/idmr info --json --no-bvh data/cornell/scene.xml");
+    cJSON *info = parse_or_fail(r.out);
+    assert_true(cJSON_GetObjectItem(cJSON_GetObjectItem(info, "device_memory"), "geometry")
+                    ->valuedouble == geometry);
+    cJSON_Delete(info);
+    run_free(&r);
 
     snprintf(command, sizeof command,
              "bin/idmr render data/cornell/scene.xml -o %s/images/b --iterations 5 --seed 2 "
