@@ -215,8 +215,7 @@ class ReductionDecimater : public OpenMesh::Decimater::BaseDecimaterT<Mesh> {
             float priority = collapse_priority(ci);
             if (priority < 0)
                 continue;
-            double tie = importance_ ? importance_->importance(ci.v1) : 0.0;
-            Entry candidate{priority, tie, v.idx(), 0};
+            Entry candidate{priority, 0.0, v.idx(), 0};
             if (!found || entry->operator>(candidate)) {
                 *entry = candidate;
                 *target = h;
@@ -367,6 +366,7 @@ struct PositionHash {
 void build_mesh(const decimate_input *in, Mesh &mesh, decimate_output *out,
                 std::vector<double> &importance)
 {
+    mesh_io_silence_openmesh_logs(); // failed add_face calls below would each log a line
     std::unordered_map<PositionKey, uint32_t, PositionHash> first_at;
     out->welded_of = (uint32_t *)xmalloc(sizeof(uint32_t) * (in->vertex_count + 1));
     std::vector<Mesh::VertexHandle> handles;
@@ -497,22 +497,20 @@ extern "C" int decimate_mesh(const decimate_input *in, decimate_method method,
         }
         // OpenMesh accepts exactly one priority (non-binary) module and otherwise returns false
         // here without a word.
-        if (!decimater.initialize())
+        if (!decimater.initialize()) {
+            decimate_output_free(out);
             return error_set(IDMR_EXIT_FAILURE,
                              "mesh '%s': the OpenMesh decimater did not initialise (it needs "
                              "exactly one priority module)",
                              in->name);
+        }
         // The target counts all vertices, the locked copies of loose faces included: the
         // collapsible surface gets what remains after them.
         out->collapses = (uint32_t)decimater.decimate_to(
             (size_t)std::min<uint64_t>(in->target_vertices, n), in->verify_heap != 0,
             in->reheap_removed_ring_only != 0, &out->heap_violations);
 
-        // Compact and copy out, keeping each output vertex's welded index for the history.
-        OpenMesh::VPropHandleT<int> welded_index;
-        mesh.add_property(welded_index);
-        for (auto v : mesh.vertices())
-            mesh.property(welded_index, v) = v.idx();
+        // Compact and copy out (the history, collapsed_into, is in welded indices already).
         mesh.garbage_collection();
         out->mesh.vertex_count = (uint32_t)mesh.n_vertices();
         out->mesh.triangle_count = (uint32_t)mesh.n_faces();

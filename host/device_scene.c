@@ -9,13 +9,10 @@
 
 float device_scene_ray_epsilon(const scene *s)
 {
-    double largest = 0, diagonal2 = 0;
-    for (int k = 0; k < 3; k++) {
+    double largest = 0;
+    for (int k = 0; k < 3; k++)
         largest = fmax(largest, fmax(fabs(s->bbox_min[k]), fabs(s->bbox_max[k])));
-        double e = (double)s->bbox_max[k] - s->bbox_min[k];
-        diagonal2 += e * e;
-    }
-    double epsilon = 1e-6 * largest + 1e-7 * sqrt(diagonal2);
+    double epsilon = 1e-6 * largest + 1e-7 * scene_diagonal(s);
     return epsilon > 0 ? (float)epsilon : 1e-30f;
 }
 
@@ -45,6 +42,20 @@ static void triangle_data(const scene *s, float *normals, uint32_t *material_of)
             material_of[mesh->first_triangle + t] = mesh->material;
         }
     }
+}
+
+int device_scene_upload_bvh(device *d, const bvh *b, cl_mem *nodes, cl_mem *leaves)
+{
+    idmr_triangle4 empty_leaf; /* an empty scene still binds a leaf buffer */
+    memset(&empty_leaf, 0, sizeof empty_leaf);
+    return device_buffer(d, CL_MEM_READ_ONLY, b->node_count * sizeof(idmr_bvh_node), b->nodes,
+                         "BVH nodes", nodes) ||
+                   device_buffer(d, CL_MEM_READ_ONLY,
+                                 (b->leaf_count ? b->leaf_count : 1) * sizeof(idmr_triangle4),
+                                 b->leaf_count ? (void *)b->leaves : &empty_leaf, "BVH leaves",
+                                 leaves)
+               ? -1
+               : 0;
 }
 
 uint64_t device_scene_geometry_bytes(const scene *s)
@@ -99,14 +110,12 @@ int device_scene_upload(device *d, const scene *s, const bvh *b, device_scene *o
         if (l->kind != IDMR_LIGHT_AREA)
             continue;
         l->cdf_offset = (unsigned int)at;
-        double area = 0;
-        for (uint32_t t = 0; t < l->triangle_count; t++)
-            area += scene_triangle_area(s, l->first_triangle + t);
+        /* An area light is one mesh's triangles; its total area is l->area (scene_finalize). */
+        const scene_mesh *mesh = &s->meshes[scene_mesh_of_triangle(s, l->first_triangle)];
+        uint32_t first = (uint32_t)(l->first_triangle - mesh->first_triangle);
         double area_running = 0;
         for (uint32_t t = 0; t < l->triangle_count; t++, at++) {
-            uint64_t global = (uint64_t)l->first_triangle + t;
-            const scene_mesh *mesh = &s->meshes[scene_mesh_of_triangle(s, global)];
-            const uint32_t *ix = &mesh->indices[3 * (size_t)(global - mesh->first_triangle)];
+            const uint32_t *ix = &mesh->indices[3 * (size_t)(first + t)];
             const float *v0 = &mesh->positions[3 * (size_t)ix[0]];
             const float *v1 = &mesh->positions[3 * (size_t)ix[1]];
             const float *v2 = &mesh->positions[3 * (size_t)ix[2]];
@@ -115,40 +124,32 @@ int device_scene_upload(device *d, const scene *s, const bvh *b, device_scene *o
                 emitter_triangles[12 * at + 4 + k] = v1[k] - v0[k];
                 emitter_triangles[12 * at + 8 + k] = v2[k] - v0[k];
             }
-            area_running += scene_triangle_area(s, global);
-            emitter_cdf[at] = area > 0 ? (float)(area_running / area)
-                                       : (float)(t + 1) / (float)l->triangle_count;
+            area_running += scene_mesh_triangle_area(mesh, first + t);
+            emitter_cdf[at] = l->area > 0 ? (float)(area_running / l->area)
+                                          : (float)(t + 1) / (float)l->triangle_count;
         }
         if (l->triangle_count)
             emitter_cdf[at - 1] = 1.0f;
     }
 
-    double diagonal2 = 0;
-    for (int k = 0; k < 3; k++) {
+    for (int k = 0; k < 3; k++)
         out->center[k] = 0.5f * (s->bbox_min[k] + s->bbox_max[k]);
-        double e = (double)s->bbox_max[k] - s->bbox_min[k];
-        diagonal2 += e * e;
-    }
-    out->radius = (float)(0.5 * sqrt(diagonal2));
+    out->radius = (float)(0.5 * scene_diagonal(s));
     out->ray_epsilon = device_scene_ray_epsilon(s);
     out->light_count = (unsigned int)s->light_count;
 
-    size_t node_bytes = b->node_count * sizeof(idmr_bvh_node);
-    size_t leaf_bytes = (b->leaf_count ? b->leaf_count : 1) * sizeof(idmr_triangle4);
-    idmr_triangle4 empty_leaf;
-    memset(&empty_leaf, 0, sizeof empty_leaf);
+    idmr_material no_material; /* a scene without materials still binds the buffer */
+    memset(&no_material, 0, sizeof no_material);
     int status =
-        device_buffer(d, CL_MEM_READ_ONLY, node_bytes, b->nodes, "BVH nodes", &out->nodes) ||
-        device_buffer(d, CL_MEM_READ_ONLY, leaf_bytes, b->leaf_count ? (void *)b->leaves : &empty_leaf,
-                      "BVH leaves", &out->leaves) ||
+        device_scene_upload_bvh(d, b, &out->nodes, &out->leaves) ||
         device_buffer(d, CL_MEM_READ_ONLY, 4 * sizeof(float) * (triangles ? triangles : 1), normals,
                       "triangle normals", &out->triangle_normals) ||
         device_buffer(d, CL_MEM_READ_ONLY, sizeof(uint32_t) * (triangles ? triangles : 1),
                       material_of, "triangle materials", &out->triangle_materials) ||
         device_buffer(d, CL_MEM_READ_ONLY,
                       sizeof(idmr_material) * (s->material_count ? s->material_count : 1),
-                      s->material_count ? (void *)s->materials : (void *)lights, "materials",
-                      &out->materials) ||
+                      s->material_count ? (void *)s->materials : (void *)&no_material,
+                      "materials", &out->materials) ||
         device_buffer(d, CL_MEM_READ_ONLY, light_count * sizeof *lights, lights, "lights",
                       &out->lights) ||
         device_buffer(d, CL_MEM_READ_ONLY, light_count * sizeof *light_cdf, light_cdf,
@@ -157,7 +158,7 @@ int device_scene_upload(device *d, const scene *s, const bvh *b, device_scene *o
                       emitter_cdf, "emitter CDF", &out->emitter_cdf) ||
         device_buffer(d, CL_MEM_READ_ONLY, 12 * sizeof(float) * (emitter_count ? emitter_count : 1),
                       emitter_triangles, "emitter triangles", &out->emitter_triangles);
-    out->bvh_bytes = node_bytes + leaf_bytes;
+    out->bvh_bytes = bvh_device_bytes(b);
     out->bytes = out->bvh_bytes + device_scene_geometry_bytes(s);
     free(normals);
     free(material_of);

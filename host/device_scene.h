@@ -35,6 +35,9 @@ typedef struct device_scene {
     uint64_t bvh_bytes; /* of which the BVH (nodes and leaves) */
 } device_scene;
 
+/* Uploads the BVH alone (nodes and leaf triangles), for kernels that only trace rays. */
+int device_scene_upload_bvh(device *d, const bvh *b, cl_mem *nodes, cl_mem *leaves);
+
 /* Device memory of the scene's buffers other than the BVH (what `idmr info` and the passes
  * report as geometry), as device_scene_upload() allocates them. */
 uint64_t device_scene_geometry_bytes(const scene *s);

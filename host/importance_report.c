@@ -214,16 +214,11 @@ static int write_importance_image(const char *path, const scene *s, const bvh *b
     cl_kernel kernel = NULL;
     cl_mem nodes = NULL, leaves = NULL, ray_buffer = NULL, hit_buffer = NULL;
     char *options = device_build_options(d, s->features, NULL);
-    idmr_triangle4 empty;
-    memset(&empty, 0, sizeof empty);
     cl_uint count = (cl_uint)pixels;
     int status =
         device_build_program(d, "trace.cl", options, &program) ||
         device_create_kernel(program, "trace_closest", &kernel) ||
-        device_buffer(d, CL_MEM_READ_ONLY, b->node_count * sizeof(idmr_bvh_node), b->nodes,
-                      "BVH nodes", &nodes) ||
-        device_buffer(d, CL_MEM_READ_ONLY, (b->leaf_count ? b->leaf_count : 1) * sizeof(idmr_triangle4),
-                      b->leaf_count ? (void *)b->leaves : &empty, "BVH leaves", &leaves) ||
+        device_scene_upload_bvh(d, b, &nodes, &leaves) ||
         device_buffer(d, CL_MEM_READ_ONLY, pixels * sizeof *rays, rays, "image rays", &ray_buffer) ||
         device_buffer(d, CL_MEM_WRITE_ONLY, pixels * sizeof *hits, NULL, "image hits",
                       &hit_buffer) ||
@@ -233,11 +228,8 @@ static int write_importance_image(const char *path, const scene *s, const bvh *b
         device_read(d, hit_buffer, pixels * sizeof *hits, hits, "image hits");
     free(options);
     cl_mem buffers[] = {nodes, leaves, ray_buffer, hit_buffer};
-    for (size_t i = 0; i < 4; i++)
-        if (buffers[i])
-            clReleaseMemObject(buffers[i]);
-    if (kernel)
-        clReleaseKernel(kernel);
+    device_release_buffers(buffers, sizeof buffers / sizeof *buffers);
+    device_release_kernels(&kernel, 1);
     if (program)
         clReleaseProgram(program);
     if (!status) {

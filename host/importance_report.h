@@ -1,4 +1,4 @@
-/* importance_report.h — what `idmr importance` (and later `idmr reduce`) writes:
+/* importance_report.h — what `idmr importance` and `idmr reduce` write:
  *
  *   DIR/report.json          options, per-stage seconds, per-mesh sums, convergence, counts
  *   DIR/convergence.csv      iteration, change Δ, gather radius

@@ -1,4 +1,5 @@
-// mesh_io.cc — the OpenMesh bridge behind mesh_io.h: reads a mesh file into flat C arrays.
+// mesh_io.cc — the OpenMesh bridge behind mesh_io.h: reads a mesh file into flat C arrays and
+// writes PLY files with per-vertex properties.
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Core/System/omstream.hh>
@@ -19,22 +20,25 @@ extern "C" {
 #include "mesh_io.h"
 }
 
+// OpenMesh reports every non-manifold face it has to split (and every face the decimater's
+// mesh builder tries and fails to attach) on its log streams; idmr reports what matters
+// itself, so they stay quiet. Once, thread-safely (a function-local static), since decimation
+// runs on worker threads.
+extern "C" void mesh_io_silence_openmesh_logs(void)
+{
+    static const bool silenced = [] {
+        omlog().disable();
+        omout().disable();
+        omerr().disable();
+        return true;
+    }();
+    (void)silenced;
+}
+
 namespace {
 
 typedef OpenMesh::TriMesh_ArrayKernelT<> TriMesh;
 
-// OpenMesh reports every non-manifold face it has to split on its log streams; idmr reports
-// what matters itself, so they stay quiet.
-void silence_openmesh_logs()
-{
-    static bool silenced = false;
-    if (!silenced) {
-        omlog().disable();
-        omout().disable();
-        omerr().disable();
-        silenced = true;
-    }
-}
 
 int check_readable(const char *path)
 {
@@ -65,7 +69,7 @@ extern "C" int mesh_io_read_oriented(const char *path, mesh_data *out, int orien
     std::memset(out, 0, sizeof *out);
     if (check_readable(path) != 0)
         return -1;
-    silence_openmesh_logs();
+    mesh_io_silence_openmesh_logs();
 
     TriMesh mesh;
     mesh.request_vertex_texcoords2D();
@@ -132,7 +136,7 @@ extern "C" int mesh_io_read_oriented(const char *path, mesh_data *out, int orien
 extern "C" int mesh_io_write_ply(const char *path, const mesh_data *mesh, const float *values,
                                  const char *value_name, const unsigned char *colors)
 {
-    silence_openmesh_logs();
+    mesh_io_silence_openmesh_logs();
     TriMesh out;
     OpenMesh::IO::Options options = OpenMesh::IO::Options::Binary;
     if (colors) {

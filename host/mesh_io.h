@@ -1,4 +1,4 @@
-/* mesh_io.h — the OpenMesh bridge: reading (and later writing) triangle meshes from C.
+/* mesh_io.h — the OpenMesh bridge: reading and writing triangle meshes from C.
  *
  * Reads every format OpenMesh reads (OBJ, PLY ascii/binary, OFF, STL, OM); polygons are
  * fan-triangulated. OpenMesh builds a half-edge mesh: a vertex where the surface is not
@@ -42,6 +42,10 @@ int mesh_io_write_ply(const char *path, const mesh_data *mesh, const float *valu
 
 /* Frees what mesh_io_read() allocated; `mesh` may be NULL. */
 void mesh_data_free(mesh_data *mesh);
+
+/* Turns OpenMesh's own log output off (idmr reports what matters itself); idempotent and
+ * thread-safe. Reading a mesh and decimating call it. */
+void mesh_io_silence_openmesh_logs(void);
 
 #ifdef __cplusplus
 }

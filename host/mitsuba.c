@@ -46,9 +46,12 @@
 #define MITSUBA_FOCAL_LENGTH_MM 50.0
 
 
+struct bsdf_parsed;
+
 typedef struct mitsuba_id {
     char *id;
     xmlNodePtr node;
+    struct bsdf_parsed *bsdf; /* a bsdf as parsed at its declaration (parsed once: warnings too) */
     int material; /* scene material made from this bsdf, or -1 until first referenced */
 } mitsuba_id;
 
@@ -628,6 +631,7 @@ static int id_register(loader *ld, xmlNodePtr node)
     ld->ids = xrealloc(ld->ids, (ld->id_count + 1) * sizeof *ld->ids);
     ld->ids[ld->id_count].id = xstrdup(id);
     ld->ids[ld->id_count].node = node;
+    ld->ids[ld->id_count].bsdf = NULL;
     ld->ids[ld->id_count].material = -1;
     ld->id_count++;
     return 0;
@@ -1058,14 +1062,15 @@ static int bsdf_add(loader *ld, const bsdf_parsed *parsed, const char *name)
 }
 
 /* The material of a top-level bsdf, added on its first use. */
+/* The material of a declared bsdf, added on its first reference from what its declaration
+ * parsed. */
 static int bsdf_by_id(loader *ld, mitsuba_id *entry)
 {
-    bsdf_parsed parsed;
     if (entry->material >= 0)
         return entry->material;
-    if (parse_bsdf(ld, entry->node, 0, &parsed))
-        return -1;
-    entry->material = bsdf_add(ld, &parsed, entry->id);
+    if (!entry->bsdf)
+        return fail(entry->node, "'%s' is not a bsdf", entry->id);
+    entry->material = bsdf_add(ld, entry->bsdf, entry->id);
     return entry->material;
 }
 
@@ -1521,19 +1526,18 @@ static void shape_name(xmlNodePtr node, const char *type, const char *written, c
     snprintf(out, size, "%.*s", length, base);
 }
 
-/* The material for a shape: its referenced bsdf, its inline one, or the default. */
-static int shape_material(loader *ld, xmlNodePtr bsdf, mitsuba_id *entry, const char *mesh_name)
+/* The material for a shape: its referenced bsdf, its inline one (already parsed), or the
+ * default. */
+static int shape_material(loader *ld, const bsdf_parsed *inline_bsdf, mitsuba_id *entry,
+                          const char *mesh_name)
 {
     if (entry)
         return bsdf_by_id(ld, entry);
-    if (!bsdf)
+    if (!inline_bsdf)
         return bsdf_default(ld);
-    bsdf_parsed parsed;
     char name[512];
-    if (parse_bsdf(ld, bsdf, 0, &parsed))
-        return -1;
     snprintf(name, sizeof name, "%s/bsdf", mesh_name);
-    return bsdf_add(ld, &parsed, name);
+    return bsdf_add(ld, inline_bsdf, name);
 }
 
 static int load_shape(loader *ld, xmlNodePtr node)
@@ -1542,14 +1546,16 @@ static int load_shape(loader *ld, xmlNodePtr node)
     xmlNodePtr bsdf, emitter;
     mitsuba_id *bsdf_entry;
     idmr_light light;
-    bsdf_parsed check;
+    bsdf_parsed inline_bsdf;
     mesh_data mesh;
     char *file = NULL, name[256];
     memset(&light, 0, sizeof light);
     if (require_attr(node, "type", &type) || shape_parts(ld, node, &bsdf, &bsdf_entry, &emitter))
         return -1;
-    /* Check the bsdf and emitter before the (possibly slow) mesh read. */
-    if ((bsdf && parse_bsdf(ld, bsdf, 0, &check)) || (emitter && emitter_area(ld, emitter, &light)))
+    /* Parse an inline bsdf (a referenced one was parsed at its declaration) and the emitter
+     * before the (possibly slow) mesh read. */
+    if ((bsdf && !bsdf_entry && parse_bsdf(ld, bsdf, 0, &inline_bsdf)) ||
+        (emitter && emitter_area(ld, emitter, &light)))
         return -1;
     if (shape_geometry(ld, node, type, &mesh, &file, &written)) {
         mesh_data_free(&mesh);
@@ -1561,14 +1567,13 @@ static int load_shape(loader *ld, xmlNodePtr node)
                                        mesh.vertex_count, mesh.positions, mesh.triangle_count,
                                        mesh.indices, mesh.texcoords);
     free(file);
-    int material = shape_material(ld, bsdf, bsdf_entry, added->name);
+    int material = shape_material(ld, bsdf && !bsdf_entry ? &inline_bsdf : NULL, bsdf_entry,
+                                  added->name);
     if (material < 0)
         return -1;
-    /* scene_add_* may move the mesh array; index it afresh. */
-    scene_mesh *mesh_record = &ld->s->meshes[ld->s->mesh_count - 1];
-    mesh_record->material = (uint32_t)material;
-    mesh_record->xml_file = xstrdup(node_file(node));
-    mesh_record->light = emitter ? scene_add_light(ld->s, &light) : -1;
+    added->material = (uint32_t)material;
+    added->xml_file = xstrdup(node_file(node));
+    added->light = emitter ? scene_add_light(ld->s, &light) : -1;
     return 0;
 }
 
@@ -1595,14 +1600,17 @@ static int load_include(loader *ld, xmlNodePtr node, int include_depth)
 /* A top-level bsdf or texture: checked now, registered for references, added when used. */
 static int load_declaration(loader *ld, xmlNodePtr node)
 {
-    if (is_tag(node, "bsdf")) {
-        bsdf_parsed parsed;
-        if (parse_bsdf(ld, node, 0, &parsed))
-            return -1;
-    } else if (texture_check(node)) {
+    bsdf_parsed parsed;
+    if (is_tag(node, "bsdf") ? parse_bsdf(ld, node, 0, &parsed) : texture_check(node))
         return -1;
+    if (id_register(ld, node))
+        return -1;
+    if (is_tag(node, "bsdf") && attr(node, "id")) {
+        mitsuba_id *entry = &ld->ids[ld->id_count - 1];
+        entry->bsdf = xmalloc(sizeof parsed);
+        *entry->bsdf = parsed;
     }
-    return id_register(ld, node);
+    return 0;
 }
 
 static int load_children(loader *ld, xmlNodePtr root, int include_depth)
@@ -1636,8 +1644,10 @@ static void loader_free(loader *ld)
         xmlFreeDoc(ld->docs[i]);
     free(ld->docs);
     mitsuba_params_free(&ld->params);
-    for (size_t i = 0; i < ld->id_count; i++)
+    for (size_t i = 0; i < ld->id_count; i++) {
         free(ld->ids[i].id);
+        free(ld->ids[i].bsdf);
+    }
     free(ld->ids);
 }
 

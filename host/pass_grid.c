@@ -70,12 +70,8 @@ int pass_grid_build(device *d, pass_grid *g, const idmr_pass_params *params, cl_
 
 double pass_initial_radius2(const scene *s, unsigned int width, unsigned int height)
 {
-    double diagonal2 = 0;
-    for (int k = 0; k < 3; k++) {
-        double e = (double)s->bbox_max[k] - s->bbox_min[k];
-        diagonal2 += e > 0 ? e * e : 0;
-    }
-    double radius2 = 25.0 * diagonal2 / ((double)(width + height) * (width + height));
+    double radius = 5.0 * scene_diagonal(s) / ((double)width + height);
+    double radius2 = radius * radius;
     return radius2 > 0 ? radius2 : 1e-12; /* a scene of one point: nothing to gather anyway */
 }
 

@@ -68,15 +68,17 @@ static int is_kept(const reduce_options *o, const char *name)
     return 0;
 }
 
+/* Emitters and meshes named with --keep are never decimated. */
+static int is_pinned(const reduce_options *o, const scene_mesh *mesh)
+{
+    return mesh->light >= 0 || is_kept(o, mesh->name);
+}
+
 typedef struct reduce_state {
     size_t count;
     double **vertex_importance;
     decimate_input *input;
     decimate_output *output;
-    int *status;
-    char (*messages)[512];
-    uint32_t *measured;
-    uint32_t *uncollapsible;
     char **ply; /* relative to outdir, for decimated meshes */
     budget_plan plan;
     unsigned int compensation_rounds;
@@ -94,10 +96,6 @@ static void state_free(reduce_state *st)
     free(st->vertex_importance);
     free(st->input);
     free(st->output);
-    free(st->status);
-    free(st->messages);
-    free(st->measured);
-    free(st->uncollapsible);
     free(st->ply);
     budget_plan_free(&st->plan);
 }
@@ -149,20 +147,21 @@ static cJSON *reduce_report(const scene *s, const device *d, const reduce_option
         cJSON_AddNumberToObject(mesh, "factor", st->plan.factor[m]);
         cJSON_AddBoolToObject(mesh, "decimated", decimated);
         cJSON_AddNumberToObject(mesh, "vertices_before", s->meshes[m].vertex_count);
-        cJSON_AddNumberToObject(mesh, "vertices_welded", (double)st->measured[m]);
         cJSON_AddNumberToObject(mesh, "vertices_target", (double)st->plan.target[m]);
         cJSON_AddNumberToObject(mesh, "vertices_after", decimated ? st->output[m].mesh.vertex_count
                                                                   : s->meshes[m].vertex_count);
         cJSON_AddNumberToObject(mesh, "triangles_after",
                                 decimated ? st->output[m].mesh.triangle_count
                                           : s->meshes[m].triangle_count);
-        cJSON_AddNumberToObject(mesh, "vertices_uncollapsible", st->uncollapsible[m]);
         if (decimated) {
+            cJSON_AddNumberToObject(mesh, "vertices_welded", st->output[m].vertices_welded);
+            cJSON_AddNumberToObject(mesh, "vertices_uncollapsible",
+                                    st->output[m].vertices_uncollapsible);
             cJSON_AddNumberToObject(mesh, "faces_patched", st->output[m].faces_patched);
             cJSON_AddNumberToObject(mesh, "faces_loose", st->output[m].faces_loose);
             cJSON_AddStringToObject(mesh, "file", st->ply[m]);
         }
-        cJSON_AddBoolToObject(mesh, "pinned", s->meshes[m].light >= 0 || is_kept(o, s->meshes[m].name));
+        cJSON_AddBoolToObject(mesh, "pinned", is_pinned(o, &s->meshes[m]));
     }
     return root;
 }
@@ -285,14 +284,10 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
     }
     st.seconds_importance = monotonic_seconds() - start;
 
-    /* Budget: measure what the decimater will start from (welded, uncollapsible), then plan. */
+    /* Budget. */
     start = monotonic_seconds();
     st.input = xcalloc(st.count + 1, sizeof *st.input);
     st.output = xcalloc(st.count + 1, sizeof *st.output);
-    st.status = xcalloc(st.count + 1, sizeof *st.status);
-    st.messages = xcalloc(st.count + 1, sizeof *st.messages);
-    st.measured = xcalloc(st.count + 1, sizeof *st.measured);
-    st.uncollapsible = xcalloc(st.count + 1, sizeof *st.uncollapsible);
     st.ply = xcalloc(st.count + 1, sizeof *st.ply);
     budget_mesh *budget = xcalloc(st.count + 1, sizeof *budget);
     for (size_t m = 0; m < st.count && !status; m++) {
@@ -305,12 +300,11 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
         in->triangle_count = mesh->triangle_count;
         in->vertex_importance = st.vertex_importance ? st.vertex_importance[m] : NULL;
         in->max_normal_angle = o->max_normal_angle;
-        status = decimate_measure(in, &st.measured[m], &st.uncollapsible[m]);
         budget[m].name = mesh->name;
         /* Counted as the scene holds them, so the totals match what `idmr info` says of the
          * input and of the reduced scene. */
         budget[m].vertices = mesh->vertex_count;
-        budget[m].pinned = mesh->light >= 0 || is_kept(o, mesh->name);
+        budget[m].pinned = is_pinned(o, mesh);
         if (o->method == DECIMATE_IMPORTANCE) {
             double camera, light;
             importance_mesh_sums(&r, s, m, o->importance.gamma, &budget[m].importance, &camera,
@@ -331,7 +325,7 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
     uint64_t after = 0;
     unsigned int threads = o->threads ? o->threads : (unsigned int)sysconf(_SC_NPROCESSORS_ONLN);
     unsigned char *redo = xcalloc(st.count + 1, 1);
-    for (size_t m = 0; m < st.count; m++)
+    for (size_t m = 0; m < st.count && !status; m++) /* no plan if an earlier stage failed */
         redo[m] = (unsigned char)st.plan.decimate[m];
     progress bar;
     progress_begin(&bar, "decimation", COMPENSATION_ROUNDS + 1, o->importance.progress);

@@ -10,6 +10,7 @@
 
 #include "error.h"
 #include "image.h"
+#include "spectrum.h"
 
 scene *scene_create(const char *file)
 {
@@ -157,13 +158,7 @@ double scene_mesh_triangle_area(const scene_mesh *m, uint32_t t)
     return 0.5 * sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
 }
 
-/* Luminance of linear sRGB (Rec. 709 weights). */
-static float luminance(const float rgb[3])
-{
-    return 0.2126f * rgb[0] + 0.7152f * rgb[1] + 0.0722f * rgb[2];
-}
-
-static double scene_diagonal(const scene *s)
+double scene_diagonal(const scene *s)
 {
     double d2 = 0;
     for (int k = 0; k < 3; k++) {
@@ -192,7 +187,7 @@ static void finalize_lights(scene *s)
     double radius = 0.5 * scene_diagonal(s);
     for (size_t i = 0; i < s->light_count; i++) {
         idmr_light *l = &s->lights[i];
-        double y = luminance(l->emission);
+        double y = spectrum_luminance(l->emission);
         switch (l->kind) {
         case IDMR_LIGHT_AREA: {
             /* Two-sided materials still emit from the front side only (Mitsuba's area light). */

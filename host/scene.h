@@ -116,6 +116,9 @@ double scene_mesh_triangle_area(const scene_mesh *m, uint32_t t);
 /* Area of scene triangle `triangle` (0 for degenerate ones). */
 double scene_triangle_area(const scene *s, uint64_t triangle);
 
+/* Length of the bounding box's diagonal (0 for an empty scene). */
+double scene_diagonal(const scene *s);
+
 /* Which mesh holds scene triangle `triangle` (binary search over first_triangle). */
 size_t scene_mesh_of_triangle(const scene *s, uint64_t triangle);
 

@@ -219,6 +219,37 @@ static void test_usage_errors(void **state)
     run_free(&r);
 }
 
+/* A bsdf's warning comes once per bsdf: a declared one referenced by two shapes warns once,
+ * an inline one once. */
+static void test_each_bsdf_warns_once(void **state)
+{
+    char dir[] = "/tmp/idmr-cli-warn-XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    char path[256], command[512];
+    snprintf(path, sizeof path, "%s/scene.xml", dir);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs("<scene version=\"3.0.0\">\n"
+          "  <bsdf type=\"roughdielectric\" id=\"glass\"/>\n"
+          "  <shape type=\"sphere\"><ref id=\"glass\"/></shape>\n"
+          "  <shape type=\"cube\"><ref id=\"glass\"/></shape>\n"
+          "  <shape type=\"rectangle\"><bsdf type=\"roughdielectric\"/></shape>\n"
+          "</scene>\n",
+          f);
+    fclose(f);
+    snprintf(command, sizeof command, "bin/idmr info %s", path);
+    run_result r = run(command);
+    assert_int_equal(r.status, 0);
+    int count = 0;
+    for (const char *at = r.err; (at = strstr(at, "roughdielectric is treated")); at++)
+        count++;
+    if (count != 2)
+        fail_msg("expected 2 roughdielectric warnings, got %d:\n%s", count, r.err);
+    run_free(&r);
+    snprintf(command, sizeof command, "rm -rf %s", dir);
+    assert_int_equal(system(command), 0);
+}
+
 /* importance, reduce and render: every bad option value is refused with exit 2 and a message naming it,
  * before any work starts. */
 static void test_pass_option_errors(void **state)
@@ -392,6 +423,7 @@ int main(void)
         cmocka_unit_test(test_info_living_room_warns_about_envmap),
         cmocka_unit_test(test_missing_mesh_is_named),
         cmocka_unit_test(test_malformed_xml),
+        cmocka_unit_test(test_each_bsdf_warns_once),
         cmocka_unit_test(test_usage_errors),
         cmocka_unit_test(test_pass_option_errors),
         cmocka_unit_test(test_reduce_shipped_scene),
