@@ -15,28 +15,6 @@
 #include "mesh_io.h"
 #include "report.h"
 
-int importance_make_directory(const char *dir)
-{
-    char path[4096];
-    snprintf(path, sizeof path, "%s", dir);
-    for (char *c = path + 1; *c; c++) {
-        if (*c != '/')
-            continue;
-        *c = '\0';
-        if (mkdir(path, 0777) != 0 && errno != EEXIST)
-            return error_set(IDMR_EXIT_FAILURE, "cannot create directory '%s': %s", path,
-                             strerror(errno));
-        *c = '/';
-    }
-    if (mkdir(path, 0777) != 0 && errno != EEXIST)
-        return error_set(IDMR_EXIT_FAILURE, "cannot create directory '%s': %s", path,
-                         strerror(errno));
-    struct stat info;
-    if (stat(path, &info) != 0 || !S_ISDIR(info.st_mode))
-        return error_set(IDMR_EXIT_FAILURE, "'%s' exists and is not a directory", path);
-    return 0;
-}
-
 void importance_file_name(const char *mesh_name, char *out, size_t size)
 {
     size_t n = 0;
@@ -256,7 +234,7 @@ int importance_write_outputs(const char *dir, const cJSON *report, const scene *
 {
     char path[4096];
     snprintf(path, sizeof path, "%s/importance", dir);
-    if (importance_make_directory(dir) || importance_make_directory(path))
+    if (report_make_directory(dir) || report_make_directory(path))
         return -1;
     snprintf(path, sizeof path, "%s/report.json", dir);
     if (report_write_json(report, path))

@@ -19,9 +19,6 @@
 #include "importance.h"
 #include "scene.h"
 
-/* Creates `dir` (and parents) if missing. Returns 0, or -1 with the error set. */
-int importance_make_directory(const char *dir);
-
 /* The report as a JSON object (the caller adds keys and deletes it). */
 cJSON *importance_report_json(const scene *s, const device *d, const importance_options *o,
                               const importance_result *r);

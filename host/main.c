@@ -590,7 +590,7 @@ static int command_render(int argc, char **argv)
     int status = 0;
     if (slash && slash != directory) { /* the images' directory, created if missing */
         *slash = '\0';
-        status = importance_make_directory(directory);
+        status = report_make_directory(directory);
     }
     if (!status)
         status = device_open(&d, device_index);

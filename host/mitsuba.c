@@ -1,9 +1,9 @@
 /* mitsuba.c — Mitsuba XML → scene (see mitsuba.h for what is read and how the two dialects
  * are unified).
  *
- * Sections, in order: messages, the document (reading, <default> substitution, name
- * normalisation), property access (numbers, vectors, colours, transforms), the id table,
- * bsdfs, the sensor, shapes, emitters, and the top level. Every function that can fail returns
+ * Sections, in order: messages, small tree helpers, the document (reading, <default>
+ * substitution, name normalisation), paths, numbers and properties, transforms, the id table,
+ * colours, bsdfs, the sensor, emitters, shapes, and the top level. Every function that can fail returns
  * -1 with the error set through error_set()/error_prefix() and 0 on success. Nodes of included
  * documents stay alive until the load ends, since the id table points into them. */
 #include "mitsuba.h"
@@ -29,7 +29,6 @@
 #include "spectrum.h"
 #include "xform.h"
 
-#define MITSUBA_MAX_INCLUDE_DEPTH 16
 #define MITSUBA_MAX_NESTING 16
 #define MITSUBA_MESSAGE_MAX 1024
 /* Attribute that keeps a normalised property name's original spelling, for messages. */
@@ -64,11 +63,8 @@ typedef struct loader {
     size_t id_count;
     int major_version;    /* 0 for Mitsuba 0.x files, else 3 */
     int default_material; /* the shared diffuse 0.5, or -1 until needed */
-    int sensor_seen;
     int environment_warned;
 } loader;
-
-static const char *attr(xmlNodePtr node, const char *name);
 
 /* ---------------------------------------------------------------------------------------- */
 /* Messages                                                                                 */
@@ -90,8 +86,8 @@ static void node_describe(xmlNodePtr node, char *out, size_t size)
                                 ? (const char *)a->children->content
                                 : "";
         /* Show a property name as the file spells it (intIOR, not int_ior). */
-        if (strcmp(key, "name") == 0 && attr(node, MITSUBA_WRITTEN_NAME))
-            value = attr(node, MITSUBA_WRITTEN_NAME);
+        if (strcmp(key, "name") == 0 && mitsuba_attr(node, MITSUBA_WRITTEN_NAME))
+            value = mitsuba_attr(node, MITSUBA_WRITTEN_NAME);
         used += (size_t)snprintf(out + used, size - used, " %s=\"%s\"", key, value);
     }
     if (used < size)
@@ -134,11 +130,6 @@ static void warn_at(xmlNodePtr node, const char *fmt, ...)
 /* ---------------------------------------------------------------------------------------- */
 /* Small tree helpers                                                                       */
 
-static int is_tag(xmlNodePtr node, const char *tag)
-{
-    return node && node->type == XML_ELEMENT_NODE && strcmp((const char *)node->name, tag) == 0;
-}
-
 static xmlNodePtr first_element(xmlNodePtr node)
 {
     while (node && node->type != XML_ELEMENT_NODE)
@@ -150,18 +141,9 @@ static xmlNodePtr first_element(xmlNodePtr node)
     for (xmlNodePtr child = first_element((parent)->children); child;                          \
          child = first_element(child->next))
 
-/* An attribute's value as stored in the tree (no copy), "" for an empty one, NULL if absent. */
-static const char *attr(xmlNodePtr node, const char *name)
-{
-    xmlAttrPtr a = xmlHasProp(node, (const xmlChar *)name);
-    if (!a)
-        return NULL;
-    return a->children && a->children->content ? (const char *)a->children->content : "";
-}
-
 static int require_attr(xmlNodePtr node, const char *name, const char **out)
 {
-    *out = attr(node, name);
+    *out = mitsuba_attr(node, name);
     if (!*out)
         return fail(node, "missing attribute '%s'", name);
     return 0;
@@ -233,7 +215,7 @@ static int collect_params(loader *ld, xmlNodePtr root)
     FOR_EACH_ELEMENT(child, root)
     {
         const char *name, *value;
-        if (!is_tag(child, "default"))
+        if (!mitsuba_is_tag(child, "default"))
             continue;
         if (require_attr(child, "name", &name) || require_attr(child, "value", &value))
             return -1;
@@ -255,7 +237,7 @@ static char *substitute(const loader *ld, xmlNodePtr node, const char *text)
 /* Substitutes parameters in every attribute and snake_cases every property name, in place. */
 static int prepare_tree(loader *ld, xmlNodePtr node)
 {
-    if (is_tag(node, "default"))
+    if (mitsuba_is_tag(node, "default"))
         return 0;
     for (xmlAttrPtr a = node->properties; a; a = a->next) {
         const char *value = a->children && a->children->content
@@ -294,7 +276,7 @@ static xmlNodePtr open_document(loader *ld, const char *path)
     ld->docs = xrealloc(ld->docs, (ld->doc_count + 1) * sizeof *ld->docs);
     ld->docs[ld->doc_count++] = doc;
     xmlNodePtr root = xmlDocGetRootElement(doc);
-    if (!is_tag(root, "scene")) {
+    if (!mitsuba_is_tag(root, "scene")) {
         fail(root, "the root element must be <scene>");
         return NULL;
     }
@@ -306,7 +288,7 @@ static xmlNodePtr open_document(loader *ld, const char *path)
 /* "0.5.0" → 0, "3.0.0" → 3; files without a version are read as 3.x. */
 static int parse_major_version(xmlNodePtr root)
 {
-    const char *version = attr(root, "version");
+    const char *version = mitsuba_attr(root, "version");
     return version && atoi(version) < 1 ? 0 : 3;
 }
 
@@ -390,7 +372,7 @@ static int parse_exact(xmlNodePtr node, const char *text, double *out, int expec
 /* An optional numeric attribute. */
 static int attr_number(xmlNodePtr node, const char *name, double fallback, double *out)
 {
-    const char *text = attr(node, name);
+    const char *text = mitsuba_attr(node, name);
     if (!text) {
         *out = fallback;
         return 0;
@@ -401,7 +383,7 @@ static int attr_number(xmlNodePtr node, const char *name, double fallback, doubl
 /* A 3-vector from value="x, y, z" or from x= y= z= attributes (missing ones: fallback). */
 static int attr_vector(xmlNodePtr node, double fallback, double out[3])
 {
-    const char *value = attr(node, "value");
+    const char *value = mitsuba_attr(node, "value");
     if (value)
         return parse_exact(node, value, out, 3);
     return attr_number(node, "x", fallback, &out[0]) || attr_number(node, "y", fallback, &out[1]) ||
@@ -417,7 +399,7 @@ static xmlNodePtr prop_find(xmlNodePtr plugin, const char *name)
 {
     FOR_EACH_ELEMENT(child, plugin)
     {
-        const char *child_name = attr(child, "name");
+        const char *child_name = mitsuba_attr(child, "name");
         if (child_name && strcmp(child_name, name) == 0)
             return child;
     }
@@ -426,7 +408,7 @@ static xmlNodePtr prop_find(xmlNodePtr plugin, const char *name)
 
 static int prop_expect(xmlNodePtr prop, const char *tag, const char *also)
 {
-    if (is_tag(prop, tag) || (also && is_tag(prop, also)))
+    if (mitsuba_is_tag(prop, tag) || (also && mitsuba_is_tag(prop, also)))
         return 0;
     return fail(prop, "expected <%s>", tag);
 }
@@ -501,7 +483,7 @@ static int prop_vector(xmlNodePtr plugin, const char *name, double out[3], int *
 
 static int transform_lookat(xmlNodePtr node, xform *out)
 {
-    const char *origin_text, *target_text, *up_text = attr(node, "up");
+    const char *origin_text, *target_text, *up_text = mitsuba_attr(node, "up");
     double origin[3], target[3], up[3] = {0.0, 1.0, 0.0};
     if (require_attr(node, "origin", &origin_text) || require_attr(node, "target", &target_text) ||
         parse_exact(node, origin_text, origin, 3) || parse_exact(node, target_text, target, 3))
@@ -553,7 +535,7 @@ static int transform_rotate(xmlNodePtr node, xform *out)
 
 static int transform_scale(xmlNodePtr node, xform *out)
 {
-    const char *value = attr(node, "value");
+    const char *value = mitsuba_attr(node, "value");
     double s[3];
     int count;
     if (value) {
@@ -579,16 +561,16 @@ static int parse_transform(xmlNodePtr node, xform *out)
         xform step;
         double t[3];
         int status;
-        if (is_tag(child, "lookat"))
+        if (mitsuba_is_tag(child, "lookat"))
             status = transform_lookat(child, &step);
-        else if (is_tag(child, "matrix"))
+        else if (mitsuba_is_tag(child, "matrix"))
             status = transform_matrix(child, &step);
-        else if (is_tag(child, "translate")) {
+        else if (mitsuba_is_tag(child, "translate")) {
             status = attr_vector(child, 0.0, t);
             step = xform_translate(t[0], t[1], t[2]);
-        } else if (is_tag(child, "rotate"))
+        } else if (mitsuba_is_tag(child, "rotate"))
             status = transform_rotate(child, &step);
-        else if (is_tag(child, "scale"))
+        else if (mitsuba_is_tag(child, "scale"))
             status = transform_scale(child, &step);
         else
             return fail(child, "unknown transform operation");
@@ -623,7 +605,7 @@ static mitsuba_id *id_find(loader *ld, const char *id)
 
 static int id_register(loader *ld, xmlNodePtr node)
 {
-    const char *id = attr(node, "id");
+    const char *id = mitsuba_attr(node, "id");
     if (!id)
         return 0;
     if (id_find(ld, id))
@@ -710,7 +692,7 @@ static int parse_triple(xmlNodePtr node, const char *text, float rgb[3])
 
 static int parse_spectrum(xmlNodePtr node, const char *value, float rgb[3])
 {
-    if (attr(node, "filename"))
+    if (mitsuba_attr(node, "filename"))
         return fail(node, "spectra from files are not supported");
     if (strchr(value, ':'))
         return parse_spectrum_pairs(node, value, rgb);
@@ -738,30 +720,30 @@ static int texture_check(xmlNodePtr node)
 static int parse_color(loader *ld, xmlNodePtr prop, float rgb[3], xmlNodePtr *texture)
 {
     const char *value = NULL;
-    if (is_tag(prop, "ref")) {
+    if (mitsuba_is_tag(prop, "ref")) {
         mitsuba_id *entry = ref_resolve(ld, prop);
         if (!entry)
             return -1;
-        if (!is_tag(entry->node, "texture"))
+        if (!mitsuba_is_tag(entry->node, "texture"))
             return fail(prop, "'%s' is not a texture", entry->id);
         prop = entry->node;
     }
-    if (is_tag(prop, "texture")) {
+    if (mitsuba_is_tag(prop, "texture")) {
         if (texture_check(prop))
             return -1;
         *texture = prop;
         return 0;
     }
-    if (!is_tag(prop, "rgb") && !is_tag(prop, "srgb") && !is_tag(prop, "spectrum") &&
-        !is_tag(prop, "float"))
+    if (!mitsuba_is_tag(prop, "rgb") && !mitsuba_is_tag(prop, "srgb") && !mitsuba_is_tag(prop, "spectrum") &&
+        !mitsuba_is_tag(prop, "float"))
         return fail(prop, "expected a colour (<rgb>, <srgb>, <spectrum>, <float> or <texture>)");
     if (require_attr(prop, "value", &value))
         return -1;
-    if (is_tag(prop, "spectrum"))
+    if (mitsuba_is_tag(prop, "spectrum"))
         return parse_spectrum(prop, value, rgb);
     if (parse_triple(prop, value, rgb))
         return -1;
-    if (is_tag(prop, "srgb"))
+    if (mitsuba_is_tag(prop, "srgb"))
         for (int k = 0; k < 3; k++)
             rgb[k] = spectrum_srgb_to_linear(rgb[k]);
     return 0;
@@ -832,7 +814,7 @@ static int prop_ior(xmlNodePtr plugin, const char *name, double fallback, double
     *out = fallback;
     if (!prop)
         return 0;
-    if (is_tag(prop, "string")) {
+    if (mitsuba_is_tag(prop, "string")) {
         const char *value;
         if (require_attr(prop, "value", &value))
             return -1;
@@ -973,19 +955,19 @@ static int parse_bsdf(loader *ld, xmlNodePtr node, int depth, bsdf_parsed *out);
 /* The bsdf nested in a wrapper (twosided, mask, bumpmap): inline or by reference. */
 static int bsdf_wrapper(loader *ld, xmlNodePtr node, int depth, bsdf_parsed *out)
 {
-    const char *wrapper = attr(node, "type");
+    const char *wrapper = mitsuba_attr(node, "type");
     xmlNodePtr inner = NULL;
     int inner_count = 0;
     FOR_EACH_ELEMENT(child, node)
     {
         xmlNodePtr candidate = child;
-        if (is_tag(child, "ref")) {
+        if (mitsuba_is_tag(child, "ref")) {
             mitsuba_id *entry = ref_resolve(ld, child);
             if (!entry)
                 return -1;
             candidate = entry->node;
         }
-        if (!is_tag(candidate, "bsdf"))
+        if (!mitsuba_is_tag(candidate, "bsdf"))
             continue;
         if (!inner_count++)
             inner = candidate;
@@ -1140,7 +1122,7 @@ static int sensor_film(xmlNodePtr sensor, long *width, long *height)
     *height = MITSUBA_FILM_HEIGHT;
     FOR_EACH_ELEMENT(film, sensor)
     {
-        if (!is_tag(film, "film"))
+        if (!mitsuba_is_tag(film, "film"))
             continue;
         if (prop_int(film, "width", MITSUBA_FILM_WIDTH, width) ||
             prop_int(film, "height", MITSUBA_FILM_HEIGHT, height))
@@ -1215,7 +1197,7 @@ static int load_sensor(loader *ld, xmlNodePtr node)
         return -1;
     if (strcmp(type, "perspective") && strcmp(type, "thinlens"))
         return fail(node, "unsupported sensor type '%s'", type);
-    if (ld->sensor_seen) {
+    if (ld->s->has_camera) {
         warn_at(node, "only the first sensor is used: ignored");
         return 0;
     }
@@ -1237,7 +1219,6 @@ static int load_sensor(loader *ld, xmlNodePtr node)
     snprintf(ld->s->camera_info.fov_axis, sizeof ld->s->camera_info.fov_axis, "%s", axis);
     xform_to_float(&to_world, ld->s->camera_info.to_world);
     ld->s->has_camera = 1;
-    ld->sensor_seen = 1;
     return 0;
 }
 
@@ -1379,7 +1360,7 @@ static int load_emitter(loader *ld, xmlNodePtr node)
         status = emitter_directional(ld, node, &light);
     else if (strcmp(type, "area") == 0) {
         /* Declared for <ref> from shapes; checked here, added with each shape. */
-        if (!attr(node, "id"))
+        if (!mitsuba_attr(node, "id"))
             return fail(node, "an area emitter must be inside a shape (or have an id)");
         return emitter_area(ld, node, &light) || id_register(ld, node) ? -1 : 0;
     } else if (strcmp(type, "envmap") == 0 || strcmp(type, "constant") == 0)
@@ -1488,21 +1469,21 @@ static int shape_parts(loader *ld, xmlNodePtr node, xmlNodePtr *bsdf, mitsuba_id
     {
         xmlNodePtr target = child;
         mitsuba_id *entry = NULL;
-        if (is_tag(child, "ref")) {
+        if (mitsuba_is_tag(child, "ref")) {
             if (!(entry = ref_resolve(ld, child)))
                 return -1;
             target = entry->node;
         }
-        if (is_tag(target, "bsdf") && !*bsdf) {
+        if (mitsuba_is_tag(target, "bsdf") && !*bsdf) {
             *bsdf = target;
             *bsdf_entry = entry;
-        } else if (is_tag(target, "emitter") && !*emitter) {
+        } else if (mitsuba_is_tag(target, "emitter") && !*emitter) {
             *emitter = target;
-        } else if (is_tag(child, "ref") && !is_tag(target, "bsdf") && !is_tag(target, "emitter")) {
+        } else if (mitsuba_is_tag(child, "ref") && !mitsuba_is_tag(target, "bsdf") && !mitsuba_is_tag(target, "emitter")) {
             return fail(child, "'%s' is neither a bsdf nor an emitter", entry->id);
         }
     }
-    if (*emitter && strcmp(attr(*emitter, "type") ? attr(*emitter, "type") : "", "area") != 0)
+    if (*emitter && strcmp(mitsuba_attr(*emitter, "type") ? mitsuba_attr(*emitter, "type") : "", "area") != 0)
         return fail(*emitter, "only area emitters can be attached to a shape");
     return 0;
 }
@@ -1511,7 +1492,7 @@ static int shape_parts(loader *ld, xmlNodePtr node, xmlNodePtr *bsdf, mitsuba_id
 static void shape_name(xmlNodePtr node, const char *type, const char *written, char *out,
                        size_t size)
 {
-    const char *id = attr(node, "id");
+    const char *id = mitsuba_attr(node, "id");
     if (id && id[0]) {
         snprintf(out, size, "%s", id);
         return;
@@ -1601,11 +1582,11 @@ static int load_include(loader *ld, xmlNodePtr node, int include_depth)
 static int load_declaration(loader *ld, xmlNodePtr node)
 {
     bsdf_parsed parsed;
-    if (is_tag(node, "bsdf") ? parse_bsdf(ld, node, 0, &parsed) : texture_check(node))
+    if (mitsuba_is_tag(node, "bsdf") ? parse_bsdf(ld, node, 0, &parsed) : texture_check(node))
         return -1;
     if (id_register(ld, node))
         return -1;
-    if (is_tag(node, "bsdf") && attr(node, "id")) {
+    if (mitsuba_is_tag(node, "bsdf") && mitsuba_attr(node, "id")) {
         mitsuba_id *entry = &ld->ids[ld->id_count - 1];
         entry->bsdf = xmalloc(sizeof parsed);
         *entry->bsdf = parsed;
@@ -1618,17 +1599,17 @@ static int load_children(loader *ld, xmlNodePtr root, int include_depth)
     FOR_EACH_ELEMENT(child, root)
     {
         int status = 0;
-        if (is_tag(child, "default") || is_tag(child, "integrator"))
+        if (mitsuba_is_tag(child, "default") || mitsuba_is_tag(child, "integrator"))
             continue;
-        if (is_tag(child, "sensor"))
+        if (mitsuba_is_tag(child, "sensor"))
             status = load_sensor(ld, child);
-        else if (is_tag(child, "bsdf") || is_tag(child, "texture"))
+        else if (mitsuba_is_tag(child, "bsdf") || mitsuba_is_tag(child, "texture"))
             status = load_declaration(ld, child);
-        else if (is_tag(child, "shape"))
+        else if (mitsuba_is_tag(child, "shape"))
             status = load_shape(ld, child);
-        else if (is_tag(child, "emitter"))
+        else if (mitsuba_is_tag(child, "emitter"))
             status = load_emitter(ld, child);
-        else if (is_tag(child, "include"))
+        else if (mitsuba_is_tag(child, "include"))
             status = load_include(ld, child, include_depth);
         else
             status = fail(child, "unsupported element <%s>", (const char *)child->name);

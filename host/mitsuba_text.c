@@ -120,3 +120,16 @@ char *mitsuba_resolve(const char *naming_file, const char *scene_dir, const char
     free(second);
     return first;
 }
+
+int mitsuba_is_tag(xmlNodePtr node, const char *tag)
+{
+    return node && node->type == XML_ELEMENT_NODE && strcmp((const char *)node->name, tag) == 0;
+}
+
+const char *mitsuba_attr(xmlNodePtr node, const char *name)
+{
+    xmlAttrPtr a = xmlHasProp(node, (const xmlChar *)name);
+    if (!a)
+        return NULL;
+    return a->children && a->children->content ? (const char *)a->children->content : "";
+}

@@ -1,11 +1,23 @@
 /* mitsuba_text.h — what the Mitsuba loader (mitsuba.c) and the reduced-scene writer
  * (mitsuba_write.c) must do alike, so that the writer resolves every value exactly as the
- * loader does: `<default>` parameters and `$name` substitution, and the resolution of relative
- * paths (from the directory of the file that names them, then from the scene's). */
+ * loader does: element and attribute access, the include depth, `<default>` parameters and
+ * `$name` substitution, and the resolution of relative paths (from the directory of the file
+ * that names them, then from the scene's). */
 #ifndef IDMR_MITSUBA_TEXT_H
 #define IDMR_MITSUBA_TEXT_H
 
 #include <stddef.h>
+
+#include <libxml/tree.h>
+
+/* <include> elements nest at most this deep (the loader and the writer follow the same). */
+#define MITSUBA_MAX_INCLUDE_DEPTH 16
+
+/* Whether node is an element named `tag`. */
+int mitsuba_is_tag(xmlNodePtr node, const char *tag);
+
+/* An attribute's value as stored in the tree (no copy), "" for an empty one, NULL if absent. */
+const char *mitsuba_attr(xmlNodePtr node, const char *name);
 
 /* The <default name= value=> parameters of a scene; the first definition of a name wins. */
 typedef struct mitsuba_params {

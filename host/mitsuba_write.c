@@ -27,7 +27,6 @@
 #include "mitsuba_text.h"
 #include "report.h"
 
-#define WRITE_MAX_INCLUDE_DEPTH 16 /* as the loader */
 #define WRITE_INCLUDES_DIR "includes"
 
 typedef struct write_doc {
@@ -72,24 +71,10 @@ typedef struct writer {
 /* ---------------------------------------------------------------------------------------- */
 /* Small helpers                                                                            */
 
-static int is_tag(xmlNodePtr node, const char *tag)
-{
-    return node && node->type == XML_ELEMENT_NODE && strcmp((const char *)node->name, tag) == 0;
-}
-
-/* An attribute's value as stored (no copy), "" for an empty one, NULL if absent. */
-static const char *attr(xmlNodePtr node, const char *name)
-{
-    xmlAttrPtr a = xmlHasProp(node, (const xmlChar *)name);
-    if (!a)
-        return NULL;
-    return a->children && a->children->content ? (const char *)a->children->content : "";
-}
-
 /* Whether the node's name attribute is `snake` in either dialect (toWorld == to_world). */
 static int has_property_name(xmlNodePtr node, const char *snake)
 {
-    const char *name = attr(node, "name");
+    const char *name = mitsuba_attr(node, "name");
     char normal[256];
     if (!name)
         return 0;
@@ -135,8 +120,8 @@ static int file_has_declaration(const char *path)
 static void collect_params(writer *w, xmlNodePtr root)
 {
     for (xmlNodePtr child = root->children; child; child = child->next) {
-        const char *name = attr(child, "name"), *value = attr(child, "value");
-        if (is_tag(child, "default") && name && value)
+        const char *name = mitsuba_attr(child, "name"), *value = mitsuba_attr(child, "value");
+        if (mitsuba_is_tag(child, "default") && name && value)
             mitsuba_params_add(&w->params, name, value);
     }
 }
@@ -210,7 +195,7 @@ static int doc_open(writer *w, const char *path, int depth, size_t *index)
 /* A relative path in `attribute` of `node`: records its absolute rewrite. */
 static void note_path(writer *w, size_t doc, xmlNodePtr node, const char *attribute)
 {
-    const char *written = attr(node, attribute);
+    const char *written = mitsuba_attr(node, attribute);
     char missing[128];
     int fallback;
     if (!written || !written[0])
@@ -233,14 +218,14 @@ static void note_path(writer *w, size_t doc, xmlNodePtr node, const char *attrib
 
 static int walk_include(writer *w, size_t doc, xmlNodePtr node, int depth)
 {
-    const char *written = attr(node, "filename");
+    const char *written = mitsuba_attr(node, "filename");
     const char *path_of = w->docs[doc].path;
     char missing[128];
     int fallback;
     if (!written)
         return error_set(IDMR_EXIT_INPUT, "%s:%ld: <include>: missing attribute 'filename'",
                          path_of, xmlGetLineNo(node));
-    if (depth >= WRITE_MAX_INCLUDE_DEPTH)
+    if (depth >= MITSUBA_MAX_INCLUDE_DEPTH)
         return error_set(IDMR_EXIT_INPUT, "%s:%ld: <include>: includes nested too deeply",
                          path_of, xmlGetLineNo(node));
     char *value = mitsuba_substitute(&w->params, written, missing, sizeof missing);
@@ -288,18 +273,18 @@ static int note_shape(writer *w, size_t doc, xmlNodePtr node)
 static int walk(writer *w, size_t doc, xmlNodePtr parent, int depth)
 {
     for (xmlNodePtr node = parent->children; node; node = node->next) {
-        if (node->type != XML_ELEMENT_NODE || is_tag(node, "default"))
+        if (node->type != XML_ELEMENT_NODE || mitsuba_is_tag(node, "default"))
             continue;
-        if (is_tag(node, "include")) {
+        if (mitsuba_is_tag(node, "include")) {
             if (walk_include(w, doc, node, depth))
                 return -1;
             continue;
         }
-        if (is_tag(node, "shape") && note_shape(w, doc, node))
+        if (mitsuba_is_tag(node, "shape") && note_shape(w, doc, node))
             return -1;
-        if (has_property_name(node, "filename") && attr(node, "value"))
+        if (has_property_name(node, "filename") && mitsuba_attr(node, "value"))
             note_path(w, doc, node, "value");
-        if (attr(node, "filename"))
+        if (mitsuba_attr(node, "filename"))
             note_path(w, doc, node, "filename");
         if (walk(w, doc, node, depth))
             return -1;
@@ -433,11 +418,11 @@ static int property_dropped(const char *type, xmlNodePtr child)
 static void replace_shape(xmlNodePtr shape, const char *ply)
 {
     char type[64];
-    snprintf(type, sizeof type, "%s", attr(shape, "type") ? attr(shape, "type") : "");
+    snprintf(type, sizeof type, "%s", mitsuba_attr(shape, "type") ? mitsuba_attr(shape, "type") : "");
     xmlNodePtr filename = NULL;
     for (xmlNodePtr child = xmlFirstElementChild(shape), next; child; child = next) {
         next = xmlNextElementSibling(child);
-        if (is_tag(child, "bsdf") || is_tag(child, "emitter") || is_tag(child, "ref"))
+        if (mitsuba_is_tag(child, "bsdf") || mitsuba_is_tag(child, "emitter") || mitsuba_is_tag(child, "ref"))
             continue;
         if (has_property_name(child, "filename") && !filename)
             filename = child;
@@ -539,14 +524,6 @@ static int check_replacements(const writer *w)
     return 0;
 }
 
-static int ensure_directory(const char *path)
-{
-    if (mkdir(path, 0777) == 0 || errno == EEXIST)
-        return 0;
-    return error_set(IDMR_EXIT_FAILURE, "cannot create directory '%s': %s", path,
-                     strerror(errno));
-}
-
 int mitsuba_write_reduced(const char *scene_file, const char *outdir,
                           const mitsuba_replacement *replacements, size_t count)
 {
@@ -575,15 +552,17 @@ int mitsuba_write_reduced(const char *scene_file, const char *outdir,
         status = check_replacements(&w);
     if (status == 0) {
         plan_copies(&w);
-        for (size_t i = 1; i < w.doc_count && status == 0; i++) {
-            if (!w.docs[i].copy)
-                continue;
+        int copies = 0;
+        for (size_t i = 1; i < w.doc_count; i++)
+            copies += w.docs[i].copy != 0;
+        if (copies) {
             char *dir = mitsuba_path_join(outdir, WRITE_INCLUDES_DIR);
-            status = ensure_directory(dir);
+            status = report_make_directory(dir);
             free(dir);
-            if (status == 0)
-                status = write_doc_out(&w, i, w.docs[i].copy_name);
         }
+        for (size_t i = 1; i < w.doc_count && status == 0; i++)
+            if (w.docs[i].copy)
+                status = write_doc_out(&w, i, w.docs[i].copy_name);
     }
     if (status == 0)
         status = write_doc_out(&w, 0, "scene.xml");

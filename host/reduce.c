@@ -48,7 +48,7 @@ static int prepare_outdir(const scene *s, const char *outdir, int force)
                              "into it)",
                              outdir);
     }
-    if (importance_make_directory(outdir))
+    if (report_make_directory(outdir))
         return -1;
     if (realpath(s->dir, scene_dir) && realpath(outdir, out) && strcmp(scene_dir, out) == 0)
         return error_set(IDMR_EXIT_INPUT,
@@ -57,7 +57,7 @@ static int prepare_outdir(const scene *s, const char *outdir, int force)
                          outdir);
     char meshes[PATH_MAX];
     snprintf(meshes, sizeof meshes, "%s/meshes", outdir);
-    return importance_make_directory(meshes);
+    return report_make_directory(meshes);
 }
 
 static int is_kept(const reduce_options *o, const char *name)

@@ -32,6 +32,8 @@ int report_write_file(const char *path, const void *bytes, size_t size)
     if (fd < 0)
         return -1;
     FILE *f = fdopen(fd, "wb");
+    if (!f)
+        close(fd);
     int ok = f && fwrite(bytes, 1, size, f) == size;
     ok = (f && fclose(f) == 0) && ok;
     if (!ok || rename(temporary, path) != 0) {
@@ -116,4 +118,26 @@ void progress_end(progress *p)
 {
     if (p->enabled && p->terminal)
         fputc('\n', stderr);
+}
+
+int report_make_directory(const char *dir)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s", dir);
+    for (char *c = path + 1; *c; c++) {
+        if (*c != '/')
+            continue;
+        *c = '\0';
+        if (mkdir(path, 0777) != 0 && errno != EEXIST)
+            return error_set(IDMR_EXIT_FAILURE, "cannot create directory '%s': %s", path,
+                             strerror(errno));
+        *c = '/';
+    }
+    if (mkdir(path, 0777) != 0 && errno != EEXIST)
+        return error_set(IDMR_EXIT_FAILURE, "cannot create directory '%s': %s", path,
+                         strerror(errno));
+    struct stat info;
+    if (stat(path, &info) != 0 || !S_ISDIR(info.st_mode))
+        return error_set(IDMR_EXIT_FAILURE, "'%s' exists and is not a directory", path);
+    return 0;
 }

@@ -29,6 +29,10 @@ int report_write_json(const cJSON *json, const char *path);
 /* Adds a [x, y, z] array of three floats. */
 cJSON *report_add_vec3(cJSON *object, const char *name, const float v[3]);
 
+/* Creates `dir` (and parents) if missing; an existing non-directory is an error. Returns 0, or
+ * -1 with the error set naming the directory. */
+int report_make_directory(const char *dir);
+
 /* Seconds on the monotonic clock, for timings in reports and progress. */
 double monotonic_seconds(void);
 

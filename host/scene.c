@@ -224,10 +224,11 @@ int scene_finalize(scene *s)
         m->first_triangle = (uint32_t)triangles;
         triangles += m->triangle_count;
         vertices += m->vertex_count;
-        for (uint32_t t = 0; t < 3 * m->triangle_count; t++)
+        for (uint64_t t = 0; t < 3 * (uint64_t)m->triangle_count; t++)
             if (m->indices[t] >= m->vertex_count)
-                return error_set(IDMR_EXIT_INPUT, "%s: mesh '%s': triangle %u uses vertex %u of %u",
-                                 s->file, m->name, t / 3, m->indices[t], m->vertex_count);
+                return error_set(IDMR_EXIT_INPUT, "%s: mesh '%s': triangle %llu uses vertex %u of %u",
+                                 s->file, m->name, (unsigned long long)(t / 3), m->indices[t],
+                                 m->vertex_count);
     }
     s->triangle_count = triangles;
     s->vertex_count = vertices;
@@ -284,9 +285,8 @@ size_t scene_mesh_of_triangle(const scene *s, uint64_t triangle)
         else
             hi = mid;
     }
-    /* Skip empty meshes that share a first_triangle with the one holding the triangle. */
-    while (lo + 1 < s->mesh_count && s->meshes[lo].triangle_count == 0)
-        lo++;
+    /* The last mesh starting at or before `triangle`: an empty mesh shares its first_triangle
+     * with the next one, so it is never the last such mesh unless no mesh follows it. */
     return lo;
 }
 

@@ -1,6 +1,6 @@
 /* bench_common.h — shared by the benchmarks: the paper's DRAGON CORNELL BOX, written on the fly
  * (the Cornell box of data/cornell with the full Stanford dragon from ../shared/data in place
- * of the knot), and best-of-N timing. Header-only. */
+ * of the knot). Header-only. */
 #ifndef IDMR_TESTS_BENCH_COMMON_H
 #define IDMR_TESTS_BENCH_COMMON_H
 

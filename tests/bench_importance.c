@@ -69,8 +69,6 @@ int main(void)
             }
             importance_result_free(&r);
         }
-    importance_options o;
-    importance_options_default(&o);
     printf("importance-iteration: seconds=%.3f plain=%.3f ratio=%.2f photons=%u triangles=%llu "
            "device=\"%s\"\n",
            best[1], best[0], best[1] / best[0], importance_default_photons(&d),

@@ -1,5 +1,5 @@
-/* importance_common.h — scenes built in code and host references for the importance pass tests
- * (tests/test_importance.c). Header-only (static functions): each program includes it once.
+/* importance_common.h — scenes built in code and host references for the importance pass and
+ * renderer tests (tests/test_importance.c, tests/test_render.c). Header-only (static functions): each program includes it once.
  *
  * Scenes: quads (two triangles, wound so that the normal is u × v), boxes and UV spheres
  * (host/shapes.h), diffuse / glossy / mirror / dielectric materials, point and area lights,

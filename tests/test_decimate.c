@@ -653,7 +653,8 @@ static void test_history(void **state)
     check_indices(&out.mesh);
     assert_int_equal(degenerate_faces(&out.mesh), 0);
     check_history(&out);
-    /* Every input vertex has a welded vertex at its position. */
+    /* Every input vertex maps to a welded vertex; where no face needed copied vertices, the
+     * survivors also keep input positions (check_survivor_positions). */
     for (uint32_t v = 0; v < dragon.vertex_count; v++)
         assert_true(out.welded_of[v] < out.vertices_welded);
     if (out.faces_patched == 0 && out.faces_loose == 0)

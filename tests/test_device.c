@@ -17,9 +17,11 @@
 #include "idmr/bvh.h"
 #include "idmr/camera.h"
 #include "idmr/features.h"
+#include "idmr/importance.h"
 #include "idmr/light.h"
 #include "idmr/material.h"
 #include "idmr/ray.h"
+#include "idmr/render.h"
 
 static void test_list_devices(void **state)
 {

@@ -1,4 +1,4 @@
-/* test_image.c — the OpenImageIO bridge (host/image.cc): writing and reading back EXR and PNG,
+/* test_image.c — the OpenImageIO bridge (host/image.cc): writing PNG, writing and reading back EXR,
  * and image comparison against hand-computed RMSE, PSNR and relative MSE; plus `idmr compare`
  * from the command line. */
 #include <math.h>

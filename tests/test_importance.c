@@ -15,7 +15,7 @@
  *   driver          convergence Δ, early stop, radius schedule, input errors
  *
  * One OpenCL device is opened for the whole file; importance_run() builds its program per call
- * (PoCL caches the binaries). Scenes are built in code (tests/importance_common.h) or read from
+ * (after the first, from idmr's program cache). Scenes are built in code (tests/importance_common.h) or read from
  * data/cornell and ../shared/data. Runs from the repository root. */
 #include <setjmp.h>
 #include <stdarg.h>

@@ -505,8 +505,6 @@ static void test_shape_rectangle(void **state)
     scene_free(s);
 }
 
-/* A mirroring to_world turns a built-in shape's normal (Mitsuba transforms it as a normal), so
- * the winding must flip with it: the rectangle mirrored in z faces -z. */
 /* An OBJ whose normals (vn) oppose its winding: the front side comes from the normals, as in
  * Mitsuba, so the triangle is turned; with face_normals the winding rules and stays. */
 static void test_obj_oriented_by_its_normals(void **state)
@@ -540,6 +538,8 @@ static void test_obj_oriented_by_its_normals(void **state)
     }
 }
 
+/* A mirroring to_world turns a built-in shape's normal (Mitsuba transforms it as a normal), so
+ * the winding must flip with it: the rectangle mirrored in z faces -z. */
 static void test_shape_mirrored_builtin(void **state)
 {
     scene *s = load_ok("<scene version=\"3.0.0\">\n"
@@ -1178,11 +1178,14 @@ static void test_real_cbox(void **state)
     assert_true(light->emission[0] > light->emission[2]);
     assert_true(light->area > 0.0f);
     /* The red wall is red. */
+    int red_walls = 0;
     for (size_t i = 0; i < s->mesh_count; i++)
         if (strcmp(s->meshes[i].name, "cbox_redwall") == 0) {
             const float *r = s->materials[s->meshes[i].material].reflectance;
             assert_true(r[0] > 2 * r[1] && r[0] > 2 * r[2]);
+            red_walls++;
         }
+    assert_int_equal(red_walls, 1);
     scene_free(s);
 }
 

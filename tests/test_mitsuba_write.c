@@ -719,7 +719,7 @@ static void require_shared_data(void)
                  SCENES);
 }
 
-/* Snapshots every regular file directly in `dir` (not recursive: the XML files). */
+/* Snapshots the files `names` in `dir` (the XML files a test must leave untouched). */
 static void snapshot_xml(snapshot *s, const char *dir, const char *const *names, size_t count)
 {
     for (size_t i = 0; i < count; i++)

@@ -6,6 +6,8 @@
  *                input; the emitter and the small meshes are untouched; the inputs unchanged
  *   outdir       an existing non-empty OUTDIR needs force; the scene's own directory never
  *   quadric      every decimated mesh gets the same factor (up to rounding); no importance pass
+ *   compensation vertices a mesh cannot give up are taken from the others, meeting the target
+ *   file names   two mesh names that make the same PLY name get distinct files
  *   keep         keeping the knot leaves nothing to decimate; an unknown name is an error
  *   target       D outside (0, 1] is an error; D = 1 decimates nothing
  *
@@ -386,8 +388,6 @@ static void test_outdir(void **state)
 
 /* ---- 3. quadric: one factor for all ---- */
 
-/* The Cornell box plus a second knot (moved) and a sphere (994 vertices): three meshes to
- * decimate. The file names the knot by its absolute path (it is written elsewhere). */
 /* DIR/scene.xml: the shipped Cornell box, its knot by absolute path, plus `extra` shapes. */
 static void write_cornell_plus(const char *dir, const char *extra, char *scene_path, size_t size)
 {
@@ -410,6 +410,8 @@ static void write_cornell_plus(const char *dir, const char *extra, char *scene_p
     free(xml);
 }
 
+/* The Cornell box plus a second knot (moved) and a sphere (994 vertices): three meshes to
+ * decimate. The file names the knot by its absolute path (it is written elsewhere). */
 static void write_three_mesh_scene(const char *dir, char *scene_path, size_t size)
 {
     char knot[4096], extra[8192];

@@ -105,6 +105,24 @@ static scene *plane_scene(void)
     return s;
 }
 
+/* Where the ray through the centre of pixel (x, y) meets the plane z = 0; 0 if it does not. */
+static int pixel_centre_on_floor(const idmr_camera *c, unsigned int width, unsigned int height,
+                                 unsigned int x, unsigned int y, double p[3])
+{
+    double sx = (2.0 * (x + 0.5) / width - 1.0) * c->tan_half_x;
+    double sy = (1.0 - 2.0 * (y + 0.5) / height) * c->tan_half_y;
+    double d[3];
+    for (int k = 0; k < 3; k++)
+        d[k] = c->forward[k] + sx * c->right[k] + sy * c->up[k];
+    if (d[2] >= 0)
+        return 0;
+    double t = -c->origin[2] / d[2];
+    for (int k = 0; k < 3; k++)
+        p[k] = c->origin[k] + t * d[k];
+    p[2] = 0;
+    return 1;
+}
+
 /* RMS of the relative error against ρ/π · I cosθ / d² over the pixels whose centre ray meets
  * the plane within 1.5 of the point under the light; also the ratio of the sums there. */
 static double plane_error(const scene *s, const render_result *r, double *sum_ratio)
@@ -114,16 +132,10 @@ static double plane_error(const scene *s, const render_result *r, double *sum_ra
     const idmr_camera *c = &s->camera;
     for (unsigned int y = 0; y < r->height; y++)
         for (unsigned int x = 0; x < r->width; x++) {
-            double sx = (2.0 * (x + 0.5) / r->width - 1.0) * c->tan_half_x;
-            double sy = (1.0 - 2.0 * (y + 0.5) / r->height) * c->tan_half_y;
-            double d[3];
-            for (int k = 0; k < 3; k++)
-                d[k] = c->forward[k] + sx * c->right[k] + sy * c->up[k];
-            if (d[2] >= 0)
+            double p[3];
+            if (!pixel_centre_on_floor(c, r->width, r->height, x, y, p))
                 continue;
-            double t = -c->origin[2] / d[2];
-            double px = c->origin[0] + t * d[0], py = c->origin[1] + t * d[1];
-            double rho2 = px * px + py * py;
+            double rho2 = p[0] * p[0] + p[1] * p[1];
             if (rho2 > 1.5 * 1.5)
                 continue;
             double h = PLANE_LIGHT_HEIGHT, dist2 = rho2 + h * h;
@@ -480,15 +492,9 @@ static void test_glossy_plane_under_point_light(void **state)
     size_t count = 0;
     for (unsigned int y = 0; y < r.height; y++)
         for (unsigned int x = 0; x < r.width; x++) {
-            double sx = (2.0 * (x + 0.5) / r.width - 1.0) * cam->tan_half_x;
-            double sy = (1.0 - 2.0 * (y + 0.5) / r.height) * cam->tan_half_y;
-            double d[3];
-            for (int k = 0; k < 3; k++)
-                d[k] = cam->forward[k] + sx * cam->right[k] + sy * cam->up[k];
-            if (d[2] >= 0)
+            double p[3];
+            if (!pixel_centre_on_floor(cam, r.width, r.height, x, y, p))
                 continue;
-            double t = -cam->origin[2] / d[2];
-            double p[3] = {cam->origin[0] + t * d[0], cam->origin[1] + t * d[1], 0};
             if (fabs(p[0]) > 1.5 || fabs(p[1]) > 1.5)
                 continue;
             double l[3], view[3], dist2 = 0, view2 = 0;
@@ -618,10 +624,22 @@ static void test_missing_camera_or_light_is_an_input_error(void **state)
     print_message("  %s\n", error_message());
     assert_non_null(strstr(error_message(), "no-light.xml"));
     render_result_free(&r);
-    s->has_camera = 0;
+    bvh_free(&b);
+    scene_free(s);
+
+    /* With a light but without a camera. */
+    s = scene_create("no-camera.xml");
+    white = imp_diffuse(s, "white", 0.5f, 0);
+    imp_add_quad(s, "plane", white, c, u, v);
+    const float light[3] = {0, 0, 1};
+    imp_point_light(s, light, 1.0f);
+    finalize_or_fail(s);
+    assert_int_equal(bvh_build(s, &b), 0);
+    error_clear();
     assert_int_equal(render_run(&dev, s, &b, &o, &r), -1);
     assert_int_equal(error_code(), IDMR_EXIT_INPUT);
     print_message("  %s\n", error_message());
+    assert_non_null(strstr(error_message(), "no sensor"));
     render_result_free(&r);
     bvh_free(&b);
     scene_free(s);

@@ -69,14 +69,6 @@ static double incidence_cosine(const scene *s, uint32_t t, const idmr_ray *ray)
     return fabs(n[0] * d[0] + n[1] * d[1] + n[2] * d[2]) / (nn * dd);
 }
 
-static double scene_diagonal(const scene *s)
-{
-    double d2 = 0;
-    for (int k = 0; k < 3; k++)
-        d2 += ((double)s->bbox_max[k] - s->bbox_min[k]) * ((double)s->bbox_max[k] - s->bbox_min[k]);
-    return sqrt(d2);
-}
-
 /* Traces `rays` on the device (closest and any hit with tmax set to a random fraction of
  * Embree's hit distance or a finite bound) and compares with Embree. */
 static comparison compare_with_embree(const scene *s, idmr_ray *rays, size_t count)

@@ -1,4 +1,5 @@
-/* trace_common.h — shared by the traversal test and the traversal benchmark: scenes from
+/* trace_common.h — shared by the traversal test and benchmark (and used by test_importance and
+ * bench_decimation for the Embree reference and timing): scenes from
  * single mesh files, ray sets (incoherent and camera), the OpenCL trace kernels, and Embree's
  * rtcIntersect1/rtcOccluded1 as the reference. Header-only (static functions): each program
  * includes it once. */
