@@ -1,6 +1,6 @@
 # idmr — build, test, bench.  make [config=release|debug|sanitize] [all|test|bench|demo|clean]
 #
-# bin/idmr is the CLI. Every host source except host/main.c goes into build/$(config)/libidmr.a,
+# bin/idmr is the CLI. Every host source outside host/cli/ goes into build/$(config)/libidmr.a,
 # which the test and bench programs (tests/test_*.c, tests/bench_*.c) link as well.
 # Kernels are not built here: they are OpenCL C compiled at run time from kernels/.
 
@@ -32,9 +32,9 @@ endif
 LDLIBS := -lOpenCL -lembree3 -lOpenMeshTools -lOpenMeshCore -lOpenImageIO -lOpenImageIO_Util \
           $(shell pkg-config --libs libxml-2.0 libcjson 2>/dev/null) -lstdc++ -lm -pthread
 
-LIB_SOURCES := $(filter-out host/main.c,$(wildcard host/*.c)) $(wildcard host/*.cc)
+LIB_SOURCES := $(filter-out host/cli/%,$(wildcard host/*/*.c host/*/*.cc))
 LIB_OBJECTS := $(patsubst host/%,$(BUILD)/host/%.o,$(LIB_SOURCES))
-MAIN_OBJECT := $(BUILD)/host/main.c.o
+CLI_OBJECTS := $(patsubst host/%,$(BUILD)/host/%.o,$(wildcard host/cli/*.c))
 TEST_PROGRAMS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/test_*.c))
 BENCH_PROGRAMS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/bench_*.c))
 
@@ -45,7 +45,7 @@ all: bin/idmr
 deps:
 	@scripts/install-deps.sh
 
-$(BUILD)/idmr: $(MAIN_OBJECT) $(BUILD)/libidmr.a | deps
+$(BUILD)/idmr: $(CLI_OBJECTS) $(BUILD)/libidmr.a | deps
 	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
 # bin/idmr is the binary of the config last asked for: copied every time, so that switching
@@ -90,4 +90,4 @@ demo: bin/idmr
 clean:
 	rm -rf build bin
 
--include $(wildcard $(BUILD)/host/*.d $(BUILD)/tests/*.d)
+-include $(wildcard $(BUILD)/host/*/*.d $(BUILD)/tests/*.d)

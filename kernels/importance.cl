@@ -17,10 +17,10 @@
  * would be multiplied by zero, so its atomics are compiled out). Layouts: idmr/importance.h. */
 #include "idmr/camera.h"
 #include "idmr/importance.h"
-#include "fixed_point.h"
-#include "hit_point_grid.h"
-#include "scene.h"
-#include "traverse.h"
+#include "lib/fixed_point.h"
+#include "lib/hit_point_grid.h"
+#include "lib/scene.h"
+#include "lib/traverse.h"
 
 #ifndef IDMR_BOOKKEEPING
 #define IDMR_BOOKKEEPING 1

@@ -17,12 +17,12 @@
  * (scene.h), compiled for the scene's feature bits. Layouts: idmr/importance.h (hit points,
  * params), idmr/render.h (the renderer's own buffers). */
 #pragma OPENCL FP_CONTRACT OFF
-#include "fixed_point.h"
-#include "hit_point_grid.h"
+#include "lib/fixed_point.h"
+#include "lib/hit_point_grid.h"
 #include "idmr/importance.h"
 #include "idmr/render.h"
-#include "scene.h"
-#include "traverse.h"
+#include "lib/scene.h"
+#include "lib/traverse.h"
 
 /* Radiance leaving emitter surface `triangle` towards direction -d: an area light's emission
  * on its front side, else zero. */

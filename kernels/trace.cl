@@ -1,7 +1,7 @@
 /* trace.cl — ray batches through the BVH: closest hit and any hit (occlusion).
  * Used by the traversal tests (against Embree) and the traversal benchmark; the light
  * transport kernels call traverse_closest()/traverse_any() from traverse.h directly. */
-#include "traverse.h"
+#include "lib/traverse.h"
 
 kernel void trace_closest(global const idmr_ray *rays, global idmr_hit *hits, uint ray_count,
                           global const idmr_bvh_node *nodes, global const idmr_triangle4 *leaves)

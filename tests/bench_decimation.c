@@ -16,8 +16,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "decimate.h"
-#include "mitsuba.h"
+#include "reduce/decimate.h"
+#include "io/mitsuba.h"
 #include "trace_common.h"
 
 #define DRAGON_ROUNDS 1 /* one run is 20-40 s */

@@ -11,11 +11,11 @@
 #include <stdlib.h>
 
 #include "bench_common.h"
-#include "bvh.h"
-#include "device.h"
-#include "error.h"
-#include "importance.h"
-#include "mitsuba.h"
+#include "device/bvh.h"
+#include "device/device.h"
+#include "core/error.h"
+#include "passes/importance.h"
+#include "io/mitsuba.h"
 
 #define ITERATIONS 3
 #define ROUNDS 2

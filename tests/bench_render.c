@@ -16,12 +16,12 @@
 #include <string.h>
 
 #include "bench_common.h"
-#include "bvh.h"
-#include "device.h"
-#include "error.h"
-#include "mitsuba.h"
-#include "reduce.h"
-#include "render.h"
+#include "device/bvh.h"
+#include "device/device.h"
+#include "core/error.h"
+#include "io/mitsuba.h"
+#include "reduce/reduce.h"
+#include "passes/render.h"
 
 #define TARGET 0.1
 #define REDUCE_ITERATIONS 10

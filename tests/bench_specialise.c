@@ -14,13 +14,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bvh.h"
-#include "device.h"
-#include "error.h"
-#include "importance.h"
-#include "mitsuba.h"
-#include "render.h"
-#include "report.h"
+#include "device/bvh.h"
+#include "device/device.h"
+#include "core/error.h"
+#include "passes/importance.h"
+#include "io/mitsuba.h"
+#include "passes/render.h"
+#include "core/report.h"
 
 #define ROUNDS 2
 #define ITERATIONS 3

@@ -21,9 +21,9 @@
 #include "idmr/material.h"
 #include "idmr/rng.h"
 #include "idmr/weight.h"
-#include "mesh_io.h"
-#include "scene.h"
-#include "shapes.h"
+#include "io/mesh_io.h"
+#include "core/scene.h"
+#include "io/shapes.h"
 
 /* ---- small vector helpers (float[3]) ---- */
 

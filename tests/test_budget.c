@@ -18,8 +18,8 @@
 
 #include <cmocka.h>
 
-#include "budget.h"
-#include "error.h"
+#include "reduce/budget.h"
+#include "core/error.h"
 
 /* Builds meshes from parallel arrays (pinned may be NULL). */
 static budget_mesh *make_meshes(size_t count, const uint64_t *vertices, const double *importance,

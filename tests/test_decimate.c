@@ -33,10 +33,10 @@
 
 #include <cmocka.h>
 
-#include "decimate.h"
-#include "error.h"
-#include "mesh_io.h"
-#include "shapes.h"
+#include "reduce/decimate.h"
+#include "core/error.h"
+#include "io/mesh_io.h"
+#include "io/shapes.h"
 
 #ifndef IDMR_ROOT
 #define IDMR_ROOT "."

@@ -12,8 +12,8 @@
 
 #include <cmocka.h>
 
-#include "device.h"
-#include "error.h"
+#include "device/device.h"
+#include "core/error.h"
 #include "idmr/bvh.h"
 #include "idmr/camera.h"
 #include "idmr/features.h"

@@ -13,8 +13,8 @@
 
 #include <cmocka.h>
 
-#include "error.h"
-#include "image.h"
+#include "core/error.h"
+#include "io/image.h"
 
 static char dir[] = "/tmp/idmr-test-image-XXXXXX";
 

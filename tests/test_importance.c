@@ -23,9 +23,9 @@
 
 #include <cmocka.h>
 
-#include "importance.h"
+#include "passes/importance.h"
 #include "importance_common.h"
-#include "mitsuba.h"
+#include "io/mitsuba.h"
 #include "trace_common.h"
 
 #define CORNELL "data/cornell/scene.xml"

@@ -22,13 +22,13 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "error.h"
-#include "image.h"
-#include "mitsuba.h"
-#include "scene.h"
-#include "shapes.h"
-#include "spectrum.h"
-#include "xform.h"
+#include "core/error.h"
+#include "io/image.h"
+#include "io/mitsuba.h"
+#include "core/scene.h"
+#include "io/shapes.h"
+#include "io/spectrum.h"
+#include "io/xform.h"
 
 #ifndef IDMR_ROOT
 #define IDMR_ROOT "."

@@ -25,12 +25,12 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "error.h"
-#include "image.h"
-#include "mesh_io.h"
-#include "mitsuba.h"
-#include "mitsuba_write.h"
-#include "scene.h"
+#include "core/error.h"
+#include "io/image.h"
+#include "io/mesh_io.h"
+#include "io/mitsuba.h"
+#include "io/mitsuba_write.h"
+#include "core/scene.h"
 
 #ifndef IDMR_ROOT
 #define IDMR_ROOT "."

@@ -29,9 +29,9 @@
 #include <cjson/cJSON.h>
 #include <cmocka.h>
 
-#include "error.h"
-#include "mitsuba.h"
-#include "reduce.h"
+#include "core/error.h"
+#include "io/mitsuba.h"
+#include "reduce/reduce.h"
 
 #ifndef IDMR_ROOT
 #define IDMR_ROOT "."

@@ -26,10 +26,10 @@
 
 #include <cmocka.h>
 
-#include "bvh.h"
-#include "error.h"
+#include "device/bvh.h"
+#include "core/error.h"
 #include "importance_common.h"
-#include "render.h"
+#include "passes/render.h"
 
 static device dev;
 

@@ -13,12 +13,12 @@
 
 #include <cmocka.h>
 
-#include "bvh.h"
-#include "device.h"
-#include "error.h"
-#include "importance.h"
-#include "mitsuba.h"
-#include "render.h"
+#include "device/bvh.h"
+#include "device/device.h"
+#include "core/error.h"
+#include "passes/importance.h"
+#include "io/mitsuba.h"
+#include "passes/render.h"
 
 static device dev;
 

@@ -11,7 +11,7 @@
 
 #include <cmocka.h>
 
-#include "mitsuba.h"
+#include "io/mitsuba.h"
 #include "trace_common.h"
 
 static trace_device tdev;

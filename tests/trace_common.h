@@ -15,12 +15,12 @@
 #include <string.h>
 #include <time.h>
 
-#include "bvh.h"
-#include "device.h"
-#include "error.h"
+#include "device/bvh.h"
+#include "device/device.h"
+#include "core/error.h"
 #include "idmr/ray.h"
-#include "mesh_io.h"
-#include "scene.h"
+#include "io/mesh_io.h"
+#include "core/scene.h"
 
 #define SHARED_DATA "../shared/data"
 

@@ -1,0 +1,328 @@
+/* scene.c — building, finalising and querying the in-memory scene (see scene.h). */
+#include "core/scene.h"
+
+#include <float.h>
+#include <libgen.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/error.h"
+#include "io/image.h"
+#include "io/spectrum.h"
+
+scene *scene_create(const char *file)
+{
+    scene *s = xcalloc(1, sizeof *s);
+    s->file = xstrdup(file ? file : "");
+    char *copy = xstrdup(s->file);
+    s->dir = xstrdup(dirname(copy));
+    free(copy);
+    return s;
+}
+
+void scene_free(scene *s)
+{
+    if (!s)
+        return;
+    for (size_t i = 0; i < s->mesh_count; i++) {
+        scene_mesh *m = &s->meshes[i];
+        free(m->name);
+        free(m->shape_type);
+        free(m->file);
+        free(m->xml_file);
+        free(m->positions);
+        free(m->indices);
+        free(m->texcoords);
+    }
+    for (size_t i = 0; i < s->material_count; i++) {
+        free(s->material_info[i].name);
+        free(s->material_info[i].bsdf_type);
+    }
+    for (size_t i = 0; i < s->texture_count; i++) {
+        free(s->textures[i].file);
+        free(s->textures[i].rgb);
+    }
+    free(s->meshes);
+    free(s->materials);
+    free(s->material_info);
+    free(s->lights);
+    free(s->textures);
+    free(s->file);
+    free(s->dir);
+    free(s);
+}
+
+static int mesh_name_taken(const scene *s, const char *name)
+{
+    for (size_t i = 0; i < s->mesh_count; i++)
+        if (strcmp(s->meshes[i].name, name) == 0)
+            return 1;
+    return 0;
+}
+
+/* "name", or "name.2", "name.3", ... when taken. */
+static char *unique_mesh_name(const scene *s, const char *name)
+{
+    if (!mesh_name_taken(s, name))
+        return xstrdup(name);
+    size_t size = strlen(name) + 24;
+    char *candidate = xmalloc(size);
+    for (unsigned suffix = 2;; suffix++) {
+        snprintf(candidate, size, "%s.%u", name, suffix);
+        if (!mesh_name_taken(s, candidate))
+            return candidate;
+    }
+}
+
+scene_mesh *scene_add_mesh(scene *s, const char *name, const char *shape_type, const char *file,
+                           int xml_line, uint32_t vertex_count, float *positions,
+                           uint32_t triangle_count, uint32_t *indices, float *texcoords)
+{
+    char *unique = unique_mesh_name(s, name && *name ? name : (shape_type ? shape_type : "mesh"));
+    s->meshes = xrealloc(s->meshes, (s->mesh_count + 1) * sizeof *s->meshes);
+    scene_mesh *m = &s->meshes[s->mesh_count++];
+    memset(m, 0, sizeof *m);
+    m->name = unique;
+    m->shape_type = xstrdup(shape_type ? shape_type : "");
+    m->file = file ? xstrdup(file) : NULL;
+    m->xml_line = xml_line;
+    m->vertex_count = vertex_count;
+    m->positions = positions;
+    m->triangle_count = triangle_count;
+    m->indices = indices;
+    m->texcoords = texcoords;
+    m->light = -1;
+    return m;
+}
+
+uint32_t scene_add_material(scene *s, const char *name, const char *bsdf_type,
+                            const idmr_material *material)
+{
+    size_t n = s->material_count + 1;
+    s->materials = xrealloc(s->materials, n * sizeof *s->materials);
+    s->material_info = xrealloc(s->material_info, n * sizeof *s->material_info);
+    s->materials[n - 1] = *material;
+    s->material_info[n - 1].name = xstrdup(name);
+    s->material_info[n - 1].bsdf_type = xstrdup(bsdf_type);
+    s->material_count = n;
+    return (uint32_t)(n - 1);
+}
+
+int scene_add_light(scene *s, const idmr_light *light)
+{
+    s->lights = xrealloc(s->lights, (s->light_count + 1) * sizeof *s->lights);
+    s->lights[s->light_count] = *light;
+    return (int)s->light_count++;
+}
+
+int scene_add_texture(scene *s, const char *file)
+{
+    for (size_t i = 0; i < s->texture_count; i++)
+        if (strcmp(s->textures[i].file, file) == 0)
+            return (int)i;
+    scene_texture t = {0};
+    if (image_read_rgb(file, &t.width, &t.height, &t.rgb) != 0)
+        return -1;
+    double sum[3] = {0, 0, 0};
+    size_t pixels = (size_t)t.width * (size_t)t.height;
+    for (size_t p = 0; p < pixels; p++)
+        for (int c = 0; c < 3; c++)
+            sum[c] += t.rgb[3 * p + c];
+    for (int c = 0; c < 3; c++)
+        t.mean[c] = pixels ? (float)(sum[c] / (double)pixels) : 0.0f;
+    t.file = xstrdup(file);
+    s->textures = xrealloc(s->textures, (s->texture_count + 1) * sizeof *s->textures);
+    s->textures[s->texture_count] = t;
+    return (int)s->texture_count++;
+}
+
+static void triangle_vertices(const scene_mesh *m, uint32_t t, const float *v[3])
+{
+    for (int k = 0; k < 3; k++)
+        v[k] = &m->positions[3 * (size_t)m->indices[3 * (size_t)t + k]];
+}
+
+double scene_mesh_triangle_area(const scene_mesh *m, uint32_t t)
+{
+    const float *v[3];
+    triangle_vertices(m, t, v);
+    double e1[3], e2[3];
+    for (int k = 0; k < 3; k++) {
+        e1[k] = (double)v[1][k] - v[0][k];
+        e2[k] = (double)v[2][k] - v[0][k];
+    }
+    double c[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                   e1[0] * e2[1] - e1[1] * e2[0]};
+    return 0.5 * sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+}
+
+double scene_diagonal(const scene *s)
+{
+    double d2 = 0;
+    for (int k = 0; k < 3; k++) {
+        double e = (double)s->bbox_max[k] - s->bbox_min[k];
+        d2 += e > 0 ? e * e : 0;
+    }
+    return sqrt(d2);
+}
+
+/* Area lights: triangle range and area from their mesh; power by kind. A spot's power uses the
+ * solid angle of its cutoff cone; a directional light's, the scene's bounding disc. */
+static void finalize_lights(scene *s)
+{
+    for (size_t i = 0; i < s->mesh_count; i++) {
+        const scene_mesh *m = &s->meshes[i];
+        if (m->light < 0)
+            continue;
+        idmr_light *l = &s->lights[m->light];
+        l->first_triangle = m->first_triangle;
+        l->triangle_count = m->triangle_count;
+        double area = 0;
+        for (uint32_t t = 0; t < m->triangle_count; t++)
+            area += scene_mesh_triangle_area(m, t);
+        l->area = (float)area;
+    }
+    double radius = 0.5 * scene_diagonal(s);
+    for (size_t i = 0; i < s->light_count; i++) {
+        idmr_light *l = &s->lights[i];
+        double y = spectrum_luminance(l->emission);
+        switch (l->kind) {
+        case IDMR_LIGHT_AREA: {
+            /* Two-sided materials still emit from the front side only (Mitsuba's area light). */
+            l->power = (float)(M_PI * l->area * y);
+            break;
+        }
+        case IDMR_LIGHT_POINT:
+            l->power = (float)(4.0 * M_PI * y);
+            break;
+        case IDMR_LIGHT_SPOT:
+            l->power = (float)(2.0 * M_PI * (1.0 - 0.5 * (l->cos_falloff_start + l->cos_cutoff)) * y);
+            break;
+        case IDMR_LIGHT_DIRECTIONAL:
+            l->power = (float)(M_PI * radius * radius * y);
+            break;
+        case IDMR_LIGHT_ENVIRONMENT:
+            /* Uniform radiance y into the bounding sphere: 4π r² × π y. */
+            l->power = (float)(4.0 * M_PI * M_PI * radius * radius * y);
+            break;
+        }
+    }
+}
+
+int scene_finalize(scene *s)
+{
+    uint64_t triangles = 0, vertices = 0;
+    for (size_t i = 0; i < s->mesh_count; i++) {
+        scene_mesh *m = &s->meshes[i];
+        if (triangles + m->triangle_count > UINT32_MAX - 1)
+            return error_set(IDMR_EXIT_INPUT,
+                             "%s: more than %u triangles in the scene (at mesh '%s'): the "
+                             "kernels index triangles with 32 bits",
+                             s->file, UINT32_MAX - 1, m->name);
+        m->first_triangle = (uint32_t)triangles;
+        triangles += m->triangle_count;
+        vertices += m->vertex_count;
+        for (uint64_t t = 0; t < 3 * (uint64_t)m->triangle_count; t++)
+            if (m->indices[t] >= m->vertex_count)
+                return error_set(IDMR_EXIT_INPUT, "%s: mesh '%s': triangle %llu uses vertex %u of %u",
+                                 s->file, m->name, (unsigned long long)(t / 3), m->indices[t],
+                                 m->vertex_count);
+    }
+    s->triangle_count = triangles;
+    s->vertex_count = vertices;
+
+    for (int k = 0; k < 3; k++) {
+        s->bbox_min[k] = FLT_MAX;
+        s->bbox_max[k] = -FLT_MAX;
+    }
+    for (size_t i = 0; i < s->mesh_count; i++) {
+        const scene_mesh *m = &s->meshes[i];
+        for (uint32_t v = 0; v < m->vertex_count; v++)
+            for (int k = 0; k < 3; k++) {
+                float x = m->positions[3 * (size_t)v + k];
+                if (!isfinite(x))
+                    return error_set(IDMR_EXIT_INPUT, "%s: mesh '%s': vertex %u is not finite",
+                                     s->file, m->name, v);
+                s->bbox_min[k] = fminf(s->bbox_min[k], x);
+                s->bbox_max[k] = fmaxf(s->bbox_max[k], x);
+            }
+    }
+    if (vertices == 0)
+        for (int k = 0; k < 3; k++)
+            s->bbox_min[k] = s->bbox_max[k] = 0.0f;
+
+    finalize_lights(s);
+
+    unsigned int features = 0;
+    static const unsigned int material_feature[IDMR_MATERIAL_KIND_COUNT] = {
+        IDMR_FEATURE_DIFFUSE, IDMR_FEATURE_GLOSSY, IDMR_FEATURE_MIRROR, IDMR_FEATURE_DIELECTRIC};
+    for (size_t i = 0; i < s->mesh_count; i++) {
+        const idmr_material *mat = &s->materials[s->meshes[i].material];
+        if (s->meshes[i].triangle_count == 0)
+            continue;
+        features |= material_feature[mat->kind];
+        if (mat->texture >= 0)
+            features |= IDMR_FEATURE_TEXTURED;
+    }
+    static const unsigned int light_feature[IDMR_LIGHT_KIND_COUNT] = {
+        IDMR_FEATURE_AREA, IDMR_FEATURE_POINT, IDMR_FEATURE_SPOT, IDMR_FEATURE_DIRECTIONAL,
+        IDMR_FEATURE_ENVIRONMENT};
+    for (size_t i = 0; i < s->light_count; i++)
+        features |= light_feature[s->lights[i].kind];
+    s->features = features;
+    return 0;
+}
+
+size_t scene_mesh_of_triangle(const scene *s, uint64_t triangle)
+{
+    size_t lo = 0, hi = s->mesh_count;
+    while (hi - lo > 1) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (s->meshes[mid].first_triangle <= triangle)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    /* The last mesh starting at or before `triangle`: an empty mesh shares its first_triangle
+     * with the next one, so it is never the last such mesh unless no mesh follows it. */
+    return lo;
+}
+
+double scene_triangle_area(const scene *s, uint64_t triangle)
+{
+    size_t m = scene_mesh_of_triangle(s, triangle);
+    return scene_mesh_triangle_area(&s->meshes[m], (uint32_t)(triangle - s->meshes[m].first_triangle));
+}
+
+const char *scene_feature_name(unsigned int feature_bit)
+{
+    switch (feature_bit) {
+    case IDMR_FEATURE_DIFFUSE: return "diffuse";
+    case IDMR_FEATURE_GLOSSY: return "glossy";
+    case IDMR_FEATURE_MIRROR: return "mirror";
+    case IDMR_FEATURE_DIELECTRIC: return "dielectric";
+    case IDMR_FEATURE_TEXTURED: return "textured";
+    case IDMR_FEATURE_AREA: return "area";
+    case IDMR_FEATURE_POINT: return "point";
+    case IDMR_FEATURE_SPOT: return "spot";
+    case IDMR_FEATURE_DIRECTIONAL: return "directional";
+    case IDMR_FEATURE_ENVIRONMENT: return "environment";
+    default: return "unknown";
+    }
+}
+
+const char *scene_material_kind_name(unsigned int kind)
+{
+    static const char *names[IDMR_MATERIAL_KIND_COUNT] = {"diffuse", "glossy", "mirror",
+                                                          "dielectric"};
+    return kind < IDMR_MATERIAL_KIND_COUNT ? names[kind] : "unknown";
+}
+
+const char *scene_light_kind_name(unsigned int kind)
+{
+    static const char *names[IDMR_LIGHT_KIND_COUNT] = {"area", "point", "spot", "directional",
+                                                       "environment"};
+    return kind < IDMR_LIGHT_KIND_COUNT ? names[kind] : "unknown";
+}

@@ -1,0 +1,186 @@
+/* device_scene.c — uploads a scene for the light transport kernels (see device_scene.h). */
+#include "device/device_scene.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/error.h"
+
+float device_scene_ray_epsilon(const scene *s)
+{
+    double largest = 0;
+    for (int k = 0; k < 3; k++)
+        largest = fmax(largest, fmax(fabs(s->bbox_min[k]), fabs(s->bbox_max[k])));
+    double epsilon = 1e-6 * largest + 1e-7 * scene_diagonal(s);
+    return epsilon > 0 ? (float)epsilon : 1e-30f;
+}
+
+/* Per-triangle unit normals (w = area) and material indices. A degenerate triangle gets a
+ * zero normal (the traversal never returns it). */
+static void triangle_data(const scene *s, float *normals, uint32_t *material_of)
+{
+    for (size_t m = 0; m < s->mesh_count; m++) {
+        const scene_mesh *mesh = &s->meshes[m];
+        for (uint32_t t = 0; t < mesh->triangle_count; t++) {
+            const uint32_t *ix = &mesh->indices[3 * (size_t)t];
+            const float *a = &mesh->positions[3 * (size_t)ix[0]];
+            const float *b = &mesh->positions[3 * (size_t)ix[1]];
+            const float *c = &mesh->positions[3 * (size_t)ix[2]];
+            double e1[3], e2[3];
+            for (int k = 0; k < 3; k++) {
+                e1[k] = (double)b[k] - a[k];
+                e2[k] = (double)c[k] - a[k];
+            }
+            double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                           e1[0] * e2[1] - e1[1] * e2[0]};
+            double length = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            float *out = &normals[4 * ((size_t)mesh->first_triangle + t)];
+            for (int k = 0; k < 3; k++)
+                out[k] = length > 0 ? (float)(n[k] / length) : 0.0f;
+            out[3] = (float)(0.5 * length);
+            material_of[mesh->first_triangle + t] = mesh->material;
+        }
+    }
+}
+
+int device_scene_upload_bvh(device *d, const bvh *b, cl_mem *nodes, cl_mem *leaves)
+{
+    idmr_triangle4 empty_leaf; /* an empty scene still binds a leaf buffer */
+    memset(&empty_leaf, 0, sizeof empty_leaf);
+    return device_buffer(d, CL_MEM_READ_ONLY, b->node_count * sizeof(idmr_bvh_node), b->nodes,
+                         "BVH nodes", nodes) ||
+                   device_buffer(d, CL_MEM_READ_ONLY,
+                                 (b->leaf_count ? b->leaf_count : 1) * sizeof(idmr_triangle4),
+                                 b->leaf_count ? (void *)b->leaves : &empty_leaf, "BVH leaves",
+                                 leaves)
+               ? -1
+               : 0;
+}
+
+uint64_t device_scene_geometry_bytes(const scene *s)
+{
+    uint64_t triangles = s->triangle_count ? s->triangle_count : 1;
+    uint64_t lights = s->light_count ? s->light_count : 1, emitters = 0;
+    for (size_t i = 0; i < s->light_count; i++)
+        if (s->lights[i].kind == IDMR_LIGHT_AREA)
+            emitters += s->lights[i].triangle_count;
+    /* Per triangle a float4 normal and a material index; per light its struct and CDF entry;
+     * per emitter triangle a CDF entry and three float4. */
+    return triangles * (4 * sizeof(float) + sizeof(uint32_t)) +
+           (s->material_count ? s->material_count : 1) * sizeof(idmr_material) +
+           lights * (sizeof(idmr_light) + sizeof(float)) +
+           (emitters ? emitters : 1) * (sizeof(float) + 12 * sizeof(float));
+}
+
+int device_scene_upload(device *d, const scene *s, const bvh *b, device_scene *out)
+{
+    memset(out, 0, sizeof *out);
+    size_t triangles = (size_t)s->triangle_count;
+    float *normals = xmalloc(4 * sizeof(float) * (triangles ? triangles : 1));
+    uint32_t *material_of = xmalloc(sizeof(uint32_t) * (triangles ? triangles : 1));
+    triangle_data(s, normals, material_of);
+
+    /* Lights: power CDF; area lights' triangles by area. */
+    size_t light_count = s->light_count ? s->light_count : 1;
+    idmr_light *lights = xcalloc(light_count, sizeof *lights);
+    memcpy(lights, s->lights, s->light_count * sizeof *lights);
+    float *light_cdf = xcalloc(light_count, sizeof *light_cdf);
+    double total_power = 0;
+    for (size_t i = 0; i < s->light_count; i++)
+        total_power += lights[i].power > 0 ? lights[i].power : 0;
+    double running = 0;
+    for (size_t i = 0; i < s->light_count; i++) {
+        running += lights[i].power > 0 ? lights[i].power : 0;
+        light_cdf[i] = total_power > 0 ? (float)(running / total_power)
+                                       : (float)(i + 1) / (float)s->light_count;
+    }
+    if (s->light_count)
+        light_cdf[s->light_count - 1] = 1.0f;
+
+    size_t emitter_count = 0;
+    for (size_t i = 0; i < s->light_count; i++)
+        if (lights[i].kind == IDMR_LIGHT_AREA)
+            emitter_count += lights[i].triangle_count;
+    float *emitter_cdf = xcalloc(emitter_count ? emitter_count : 1, sizeof *emitter_cdf);
+    float *emitter_triangles = xcalloc(12 * (emitter_count ? emitter_count : 1), sizeof(float));
+    size_t at = 0;
+    for (size_t i = 0; i < s->light_count; i++) {
+        idmr_light *l = &lights[i];
+        if (l->kind != IDMR_LIGHT_AREA)
+            continue;
+        l->cdf_offset = (unsigned int)at;
+        /* An area light is one mesh's triangles; its total area is l->area (scene_finalize). */
+        const scene_mesh *mesh = &s->meshes[scene_mesh_of_triangle(s, l->first_triangle)];
+        uint32_t first = (uint32_t)(l->first_triangle - mesh->first_triangle);
+        double area_running = 0;
+        for (uint32_t t = 0; t < l->triangle_count; t++, at++) {
+            const uint32_t *ix = &mesh->indices[3 * (size_t)(first + t)];
+            const float *v0 = &mesh->positions[3 * (size_t)ix[0]];
+            const float *v1 = &mesh->positions[3 * (size_t)ix[1]];
+            const float *v2 = &mesh->positions[3 * (size_t)ix[2]];
+            for (int k = 0; k < 3; k++) {
+                emitter_triangles[12 * at + k] = v0[k];
+                emitter_triangles[12 * at + 4 + k] = v1[k] - v0[k];
+                emitter_triangles[12 * at + 8 + k] = v2[k] - v0[k];
+            }
+            area_running += scene_mesh_triangle_area(mesh, first + t);
+            emitter_cdf[at] = l->area > 0 ? (float)(area_running / l->area)
+                                          : (float)(t + 1) / (float)l->triangle_count;
+        }
+        if (l->triangle_count)
+            emitter_cdf[at - 1] = 1.0f;
+    }
+
+    for (int k = 0; k < 3; k++)
+        out->center[k] = 0.5f * (s->bbox_min[k] + s->bbox_max[k]);
+    out->radius = (float)(0.5 * scene_diagonal(s));
+    out->ray_epsilon = device_scene_ray_epsilon(s);
+    out->light_count = (unsigned int)s->light_count;
+
+    idmr_material no_material; /* a scene without materials still binds the buffer */
+    memset(&no_material, 0, sizeof no_material);
+    int status =
+        device_scene_upload_bvh(d, b, &out->nodes, &out->leaves) ||
+        device_buffer(d, CL_MEM_READ_ONLY, 4 * sizeof(float) * (triangles ? triangles : 1), normals,
+                      "triangle normals", &out->triangle_normals) ||
+        device_buffer(d, CL_MEM_READ_ONLY, sizeof(uint32_t) * (triangles ? triangles : 1),
+                      material_of, "triangle materials", &out->triangle_materials) ||
+        device_buffer(d, CL_MEM_READ_ONLY,
+                      sizeof(idmr_material) * (s->material_count ? s->material_count : 1),
+                      s->material_count ? (void *)s->materials : (void *)&no_material,
+                      "materials", &out->materials) ||
+        device_buffer(d, CL_MEM_READ_ONLY, light_count * sizeof *lights, lights, "lights",
+                      &out->lights) ||
+        device_buffer(d, CL_MEM_READ_ONLY, light_count * sizeof *light_cdf, light_cdf,
+                      "light CDF", &out->light_cdf) ||
+        device_buffer(d, CL_MEM_READ_ONLY, (emitter_count ? emitter_count : 1) * sizeof(float),
+                      emitter_cdf, "emitter CDF", &out->emitter_cdf) ||
+        device_buffer(d, CL_MEM_READ_ONLY, 12 * sizeof(float) * (emitter_count ? emitter_count : 1),
+                      emitter_triangles, "emitter triangles", &out->emitter_triangles);
+    out->bvh_bytes = bvh_device_bytes(b);
+    out->bytes = out->bvh_bytes + device_scene_geometry_bytes(s);
+    free(normals);
+    free(material_of);
+    free(lights);
+    free(light_cdf);
+    free(emitter_cdf);
+    free(emitter_triangles);
+    if (status) {
+        device_scene_release(out);
+        return -1;
+    }
+    return 0;
+}
+
+void device_scene_release(device_scene *ds)
+{
+    cl_mem *buffers[] = {&ds->nodes,     &ds->leaves,   &ds->triangle_normals,
+                         &ds->triangle_materials, &ds->materials, &ds->lights,
+                         &ds->light_cdf, &ds->emitter_cdf, &ds->emitter_triangles};
+    for (size_t i = 0; i < sizeof buffers / sizeof *buffers; i++)
+        if (*buffers[i]) {
+            clReleaseMemObject(*buffers[i]);
+            *buffers[i] = NULL;
+        }
+}

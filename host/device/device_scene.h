@@ -1,0 +1,55 @@
+/* device_scene.h — a scene's data on the OpenCL device, as the light transport kernels read it
+ * (kernels/scene.h, kernels/traverse.h):
+ *
+ *   nodes, leaves            the BVH (idmr/bvh.h)
+ *   triangle_normals         float4 per scene triangle: unit winding normal, w = area
+ *   triangle_materials       uint per scene triangle
+ *   materials, lights        idmr_material[], idmr_light[] (lights with cdf_offset filled)
+ *   light_cdf                float per light: cumulative power, last entry 1
+ *   emitter_cdf              per area light, its triangles' cumulative area (each light's
+ *                            stretch ends at 1), in light order
+ *   emitter_triangles        3 float4 per emitter_cdf entry: v0, v1 - v0, v2 - v0
+ * Also the scene's bounding sphere and the secondary-ray offset. */
+#ifndef IDMR_DEVICE_SCENE_H
+#define IDMR_DEVICE_SCENE_H
+
+#include "device/bvh.h"
+#include "device/device.h"
+#include "core/scene.h"
+
+typedef struct device_scene {
+    cl_mem nodes;
+    cl_mem leaves;
+    cl_mem triangle_normals;
+    cl_mem triangle_materials;
+    cl_mem materials;
+    cl_mem lights;
+    cl_mem light_cdf;
+    cl_mem emitter_cdf;
+    cl_mem emitter_triangles;
+    unsigned int light_count;
+    float center[3];
+    float radius;      /* bounding sphere of the scene box */
+    float ray_epsilon; /* origin offset of secondary rays */
+    uint64_t bytes;    /* device memory of all the above */
+    uint64_t bvh_bytes; /* of which the BVH (nodes and leaves) */
+} device_scene;
+
+/* Uploads the BVH alone (nodes and leaf triangles), for kernels that only trace rays. */
+int device_scene_upload_bvh(device *d, const bvh *b, cl_mem *nodes, cl_mem *leaves);
+
+/* Device memory of the scene's buffers other than the BVH (what `idmr info` and the passes
+ * report as geometry), as device_scene_upload() allocates them. */
+uint64_t device_scene_geometry_bytes(const scene *s);
+
+/* Uploads scene `s` with its BVH `b`. A scene without lights is accepted (the light buffers
+ * then hold one unused entry). Returns 0, or -1 with the error set. */
+int device_scene_upload(device *d, const scene *s, const bvh *b, device_scene *out);
+void device_scene_release(device_scene *ds);
+
+/* Secondary-ray offset for a scene: 1e-6 of the largest coordinate magnitude plus 1e-7 of the
+ * scene diagonal, so it scales with the scene and stays above float rounding of positions far
+ * from the origin. */
+float device_scene_ray_epsilon(const scene *s);
+
+#endif

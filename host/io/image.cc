@@ -1,0 +1,198 @@
+// image.cc — the OpenImageIO bridge behind image.h.
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+extern "C" {
+#include "core/error.h"
+#include "core/report.h"
+#include "io/image.h"
+}
+
+extern "C" int image_read_rgb(const char *path, int *width, int *height, float **rgb)
+{
+    *rgb = nullptr;
+    OIIO::ImageBuf source(path);
+    if (!source.read(0, 0, true, OIIO::TypeDesc::FLOAT))
+        return error_set(IDMR_EXIT_INPUT, "cannot read image '%s': %s", path,
+                         source.geterror().c_str());
+    const OIIO::ImageSpec &spec = source.spec();
+    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
+        return error_set(IDMR_EXIT_INPUT, "image '%s' is empty", path);
+
+    // 8-bit and 16-bit integer files hold sRGB-encoded colour; float files are linear.
+    OIIO::ImageBuf linear;
+    std::string space = spec.get_string_attribute("oiio:ColorSpace", "");
+    bool encoded = spec.format.basetype != OIIO::TypeDesc::FLOAT &&
+                   spec.format.basetype != OIIO::TypeDesc::HALF &&
+                   spec.format.basetype != OIIO::TypeDesc::DOUBLE;
+    if (space == "Linear" || space == "linear")
+        encoded = false;
+    const OIIO::ImageBuf *pixels = &source;
+    if (encoded) {
+        if (!OIIO::ImageBufAlgo::colorconvert(linear, source, "sRGB", "linear"))
+            return error_set(IDMR_EXIT_INPUT, "image '%s': sRGB to linear conversion failed: %s",
+                             path, linear.geterror().c_str());
+        pixels = &linear;
+    }
+
+    size_t count = (size_t)spec.width * (size_t)spec.height;
+    float *out = (float *)xmalloc(3 * sizeof(float) * count);
+    int channels = spec.nchannels;
+    float *all = (float *)xmalloc(sizeof(float) * count * (size_t)channels);
+    pixels->get_pixels(OIIO::ROI(0, spec.width, 0, spec.height, 0, 1, 0, channels),
+                       OIIO::TypeDesc::FLOAT, all);
+    for (size_t p = 0; p < count; p++)
+        for (int c = 0; c < 3; c++)
+            out[3 * p + c] = all[p * (size_t)channels + (channels >= 3 ? c : 0)];
+    std::free(all);
+    *width = spec.width;
+    *height = spec.height;
+    *rgb = out;
+    return 0;
+}
+
+extern "C" void image_false_colour(float t, unsigned char rgb[3])
+{
+    static const float stops[5][3] = {{0.0f, 0.0f, 0.02f},
+                                      {0.35f, 0.05f, 0.55f},
+                                      {0.85f, 0.15f, 0.25f},
+                                      {0.98f, 0.55f, 0.05f},
+                                      {1.0f, 0.98f, 0.75f}};
+    if (!(t > 0.0f))
+        t = 0.0f;
+    if (t > 1.0f)
+        t = 1.0f;
+    float x = t * 4.0f;
+    int i = x >= 4.0f ? 3 : (int)x;
+    float f = x - (float)i;
+    for (int c = 0; c < 3; c++) {
+        float v = stops[i][c] + f * (stops[i + 1][c] - stops[i][c]);
+        rgb[c] = (unsigned char)(v * 255.0f + 0.5f);
+    }
+}
+
+// Writes through a temporary file that keeps the extension (the format is chosen by it).
+static int write_image(const char *path, int width, int height, OIIO::TypeDesc file_type,
+                       OIIO::TypeDesc pixel_type, const void *pixels)
+{
+    std::string target(path);
+    size_t dot = target.find_last_of('.');
+    std::string extension = dot == std::string::npos ? "" : target.substr(dot);
+    std::vector<char> name(target.size() + extension.size() + 32);
+    int fd = report_create_temporary(path, extension.c_str(), name.data(), name.size());
+    if (fd < 0)
+        return -1;
+    close(fd);
+    auto out = OIIO::ImageOutput::create(name.data());
+    if (!out) {
+        unlink(name.data());
+        return error_set(IDMR_EXIT_FAILURE, "cannot write image '%s': %s", path,
+                         OIIO::geterror().c_str());
+    }
+    OIIO::ImageSpec spec(width, height, 3, file_type);
+    bool ok = out->open(name.data(), spec) && out->write_image(pixel_type, pixels) && out->close();
+    std::string reason = out->geterror();
+    out.reset();
+    if (!ok || rename(name.data(), path) != 0) {
+        unlink(name.data());
+        return error_set(IDMR_EXIT_FAILURE, "cannot write image '%s': %s", path,
+                         ok ? strerror(errno) : reason.c_str());
+    }
+    return 0;
+}
+
+extern "C" int image_write_rgb_float(const char *path, int width, int height, const float *rgb)
+{
+    std::string target(path);
+    bool exr = target.size() >= 4 && target.compare(target.size() - 4, 4, ".exr") == 0;
+    return write_image(path, width, height, exr ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT,
+                       OIIO::TypeDesc::FLOAT, rgb);
+}
+
+extern "C" int image_info(const char *path, int *width, int *height, int *channels)
+{
+    auto in = OIIO::ImageInput::open(path);
+    if (!in)
+        return error_set(IDMR_EXIT_INPUT, "cannot read image '%s': %s", path,
+                         OIIO::geterror().c_str());
+    const OIIO::ImageSpec &spec = in->spec();
+    *width = spec.width;
+    *height = spec.height;
+    *channels = spec.nchannels;
+    in->close();
+    return 0;
+}
+
+extern "C" int image_compare(const char *a, const char *b, const char *diff_path,
+                             double diff_max, image_comparison *out)
+{
+    std::memset(out, 0, sizeof *out);
+    int wa, ha, ca, wb, hb, cb;
+    if (image_info(a, &wa, &ha, &ca) || image_info(b, &wb, &hb, &cb))
+        return -1;
+    if (wa != wb || ha != hb || ca != cb)
+        return error_set(IDMR_EXIT_INPUT,
+                         "cannot compare '%s' (%dx%d, %d channels) with '%s' (%dx%d, %d "
+                         "channels): sizes or channels differ",
+                         a, wa, ha, ca, b, wb, hb, cb);
+    float *pa = nullptr, *pb = nullptr;
+    if (image_read_rgb(a, &wa, &ha, &pa) || image_read_rgb(b, &wb, &hb, &pb)) {
+        std::free(pa);
+        return -1;
+    }
+    size_t pixels = (size_t)wa * (size_t)ha;
+    double sum2 = 0, relative = 0, peak = 1, largest = 0;
+    std::vector<float> error(pixels);
+    for (size_t p = 0; p < pixels; p++) {
+        double e = 0;
+        for (int c = 0; c < 3; c++) {
+            double x = pa[3 * p + c], y = pb[3 * p + c];
+            double d = x - y;
+            sum2 += d * d;
+            relative += d * d / (y * y + 0.01);
+            peak = std::max(peak, y);
+            largest = std::max(largest, std::fabs(d));
+            e += std::fabs(d) / 3;
+        }
+        error[p] = (float)e;
+    }
+    double n = 3.0 * (double)(pixels ? pixels : 1);
+    out->width = wa;
+    out->height = ha;
+    out->channels = ca;
+    out->rmse = std::sqrt(sum2 / n);
+    out->psnr = out->rmse > 0 ? 20.0 * std::log10(peak / out->rmse) : INFINITY;
+    out->relative_mse = relative / n;
+    out->max_error = largest;
+    std::vector<float> sorted(error);
+    std::sort(sorted.begin(), sorted.end());
+    out->error_p99 = pixels ? sorted[(size_t)(0.99 * (double)(pixels - 1))] : 0.0;
+    int status = 0;
+    if (diff_path) {
+        float top = diff_max > 0 ? (float)diff_max : (float)out->error_p99;
+        if (!(top > 0))
+            top = pixels ? sorted[pixels - 1] : 0.0f;
+        std::vector<unsigned char> rgb(3 * pixels);
+        for (size_t p = 0; p < pixels; p++)
+            image_false_colour(top > 0 ? error[p] / top : 0.0f, &rgb[3 * p]);
+        status = image_write_rgb8(diff_path, wa, ha, rgb.data());
+    }
+    std::free(pa);
+    std::free(pb);
+    return status;
+}
+
+extern "C" int image_write_rgb8(const char *path, int width, int height, const unsigned char *rgb)
+{
+    return write_image(path, width, height, OIIO::TypeDesc::UINT8, OIIO::TypeDesc::UINT8, rgb);
+}

@@ -1,0 +1,198 @@
+// mesh_io.cc — the OpenMesh bridge behind mesh_io.h: reads a mesh file into flat C arrays and
+// writes PLY files with per-vertex properties.
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <OpenMesh/Core/System/omstream.hh>
+
+#include <cerrno>
+#include <utility>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <vector>
+
+extern "C" {
+#include "core/error.h"
+#include "core/report.h"
+#include "io/mesh_io.h"
+}
+
+// OpenMesh reports every non-manifold face it has to split (and every face the decimater's
+// mesh builder tries and fails to attach) on its log streams; idmr reports what matters
+// itself, so they stay quiet. Once, thread-safely (a function-local static), since decimation
+// runs on worker threads.
+extern "C" void mesh_io_silence_openmesh_logs(void)
+{
+    static const bool silenced = [] {
+        omlog().disable();
+        omout().disable();
+        omerr().disable();
+        return true;
+    }();
+    (void)silenced;
+}
+
+namespace {
+
+typedef OpenMesh::TriMesh_ArrayKernelT<> TriMesh;
+
+
+int check_readable(const char *path)
+{
+    struct stat info;
+    if (stat(path, &info) != 0)
+        return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': %s", path, strerror(errno));
+    if (!S_ISREG(info.st_mode))
+        return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': not a regular file", path);
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': %s", path, strerror(errno));
+    fclose(f);
+    return 0;
+}
+
+} // namespace
+
+extern "C" int mesh_io_read(const char *path, mesh_data *out)
+{
+    return mesh_io_read_oriented(path, out, 0, nullptr);
+}
+
+extern "C" int mesh_io_read_oriented(const char *path, mesh_data *out, int orient,
+                                     uint32_t *flipped)
+{
+    if (flipped)
+        *flipped = 0;
+    std::memset(out, 0, sizeof *out);
+    if (check_readable(path) != 0)
+        return -1;
+    mesh_io_silence_openmesh_logs();
+
+    TriMesh mesh;
+    mesh.request_vertex_texcoords2D();
+    mesh.request_vertex_normals();
+    OpenMesh::IO::Options options = OpenMesh::IO::Options::VertexTexCoord;
+    if (orient)
+        options += OpenMesh::IO::Options::VertexNormal;
+    bool ok;
+    try {
+        ok = OpenMesh::IO::read_mesh(mesh, path, options);
+    } catch (const std::exception &e) {
+        return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': %s", path, e.what());
+    }
+    if (!ok)
+        return error_set(IDMR_EXIT_INPUT,
+                         "cannot read mesh '%s': OpenMesh could not parse it (unknown "
+                         "extension or malformed file)",
+                         path);
+    if (mesh.n_faces() == 0)
+        return error_set(IDMR_EXIT_INPUT, "mesh '%s' has no faces", path);
+    if (mesh.n_vertices() > UINT32_MAX || mesh.n_faces() > UINT32_MAX / 3)
+        return error_set(IDMR_EXIT_INPUT, "mesh '%s' is too large for 32-bit indices", path);
+
+    out->vertex_count = (uint32_t)mesh.n_vertices();
+    out->triangle_count = (uint32_t)mesh.n_faces();
+    out->positions = (float *)xmalloc(3 * sizeof(float) * out->vertex_count);
+    out->indices = (uint32_t *)xmalloc(3 * sizeof(uint32_t) * out->triangle_count);
+    for (auto v : mesh.vertices()) {
+        const TriMesh::Point &p = mesh.point(v);
+        for (int k = 0; k < 3; k++)
+            out->positions[3 * (size_t)v.idx() + k] = p[k];
+    }
+    size_t corner = 0;
+    for (auto f : mesh.faces())
+        for (auto v : mesh.fv_range(f))
+            out->indices[corner++] = (uint32_t)v.idx();
+    if (orient && options.check(OpenMesh::IO::Options::VertexNormal)) {
+        for (uint32_t t = 0; t < out->triangle_count; t++) {
+            uint32_t *ix = &out->indices[3 * (size_t)t];
+            TriMesh::Point a = mesh.point(TriMesh::VertexHandle((int)ix[0]));
+            TriMesh::Point b = mesh.point(TriMesh::VertexHandle((int)ix[1]));
+            TriMesh::Point c = mesh.point(TriMesh::VertexHandle((int)ix[2]));
+            TriMesh::Normal sum = mesh.normal(TriMesh::VertexHandle((int)ix[0])) +
+                                  mesh.normal(TriMesh::VertexHandle((int)ix[1])) +
+                                  mesh.normal(TriMesh::VertexHandle((int)ix[2]));
+            if (OpenMesh::dot(OpenMesh::cross(b - a, c - a), sum) < 0) {
+                std::swap(ix[1], ix[2]);
+                if (flipped)
+                    (*flipped)++;
+            }
+        }
+    }
+    if (options.check(OpenMesh::IO::Options::VertexTexCoord)) {
+        out->texcoords = (float *)xmalloc(2 * sizeof(float) * out->vertex_count);
+        for (auto v : mesh.vertices()) {
+            const TriMesh::TexCoord2D &uv = mesh.texcoord2D(v);
+            out->texcoords[2 * (size_t)v.idx()] = uv[0];
+            out->texcoords[2 * (size_t)v.idx() + 1] = uv[1];
+        }
+    }
+    return 0;
+}
+
+extern "C" int mesh_io_write_ply(const char *path, const mesh_data *mesh, const float *values,
+                                 const char *value_name, const unsigned char *colors)
+{
+    mesh_io_silence_openmesh_logs();
+    TriMesh out;
+    OpenMesh::IO::Options options = OpenMesh::IO::Options::Binary;
+    if (colors) {
+        out.request_vertex_colors();
+        options += OpenMesh::IO::Options::VertexColor;
+    }
+    OpenMesh::VPropHandleT<float> property;
+    if (values) {
+        out.add_property(property, value_name);
+        out.property(property).set_persistent(true);
+        options += OpenMesh::IO::Options::Custom;
+    }
+    std::vector<TriMesh::VertexHandle> handles(mesh->vertex_count);
+    auto add_vertex = [&](uint32_t v) {
+        const float *p = &mesh->positions[3 * (size_t)v];
+        TriMesh::VertexHandle h = out.add_vertex(TriMesh::Point(p[0], p[1], p[2]));
+        if (colors)
+            out.set_color(h, TriMesh::Color(colors[3 * (size_t)v], colors[3 * (size_t)v + 1],
+                                            colors[3 * (size_t)v + 2]));
+        if (values)
+            out.property(property, h) = values[v];
+        return h;
+    };
+    for (uint32_t v = 0; v < mesh->vertex_count; v++)
+        handles[v] = add_vertex(v);
+    for (uint32_t t = 0; t < mesh->triangle_count; t++) {
+        const uint32_t *ix = &mesh->indices[3 * (size_t)t];
+        if (out.add_face(handles[ix[0]], handles[ix[1]], handles[ix[2]]).is_valid())
+            continue;
+        out.add_face(add_vertex(ix[0]), add_vertex(ix[1]), add_vertex(ix[2]));
+    }
+
+    std::vector<char> name(std::strlen(path) + 32);
+    int fd = report_create_temporary(path, ".ply", name.data(), name.size());
+    if (fd < 0)
+        return -1;
+    close(fd);
+    bool ok;
+    try {
+        ok = OpenMesh::IO::write_mesh(out, name.data(), options);
+    } catch (const std::exception &e) {
+        ok = false;
+    }
+    if (!ok || rename(name.data(), path) != 0) {
+        unlink(name.data());
+        return error_set(IDMR_EXIT_FAILURE, "cannot write mesh '%s'", path);
+    }
+    return 0;
+}
+
+extern "C" void mesh_data_free(mesh_data *mesh)
+{
+    if (!mesh)
+        return;
+    std::free(mesh->positions);
+    std::free(mesh->indices);
+    std::free(mesh->texcoords);
+    std::memset(mesh, 0, sizeof *mesh);
+}

@@ -1,0 +1,571 @@
+/* mitsuba_write.c — the reduced scene's XML (see mitsuba_write.h for what is changed).
+ *
+ * Two passes over raw libxml2 trees. The first reads the scene and, depth-first in document
+ * order as the loader does, every fragment it includes (one tree per file, keyed by realpath),
+ * collecting the <default> parameters, the path rewrites (node, attribute, new value), the
+ * include links (node → fragment) and the <shape> node of each replacement; it also notes
+ * which fragments must be copied. The second edits the trees that are written (the scene and
+ * the copies) and writes them, copies first and the scene last. All state lives in one
+ * `writer`; every function that can fail returns -1 with the error set. */
+#include "io/mitsuba_write.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <libxml/parser.h>
+#include <libxml/tree.h>
+#include <libxml/xmlsave.h>
+
+#include "core/error.h"
+#include "io/mitsuba.h"
+#include "io/mitsuba_text.h"
+#include "core/report.h"
+
+#define WRITE_INCLUDES_DIR "includes"
+
+typedef struct write_doc {
+    char *path; /* as the loader names it: the scene path as given, or dir(includer)/written */
+    char *real; /* realpath, the key that identifies a file */
+    xmlDocPtr doc;
+    int has_declaration; /* the file starts with <?xml ...?> */
+    int replaced;        /* holds a replaced shape */
+    int fallback;        /* a relative path in it resolved only from the scene's directory */
+    int copy;            /* fragment written under outdir/includes/ */
+    char *copy_name;     /* "includes/<name>", relative to outdir */
+} write_doc;
+
+typedef struct write_path_edit {
+    xmlNodePtr node;
+    const char *attribute; /* "value" or "filename" */
+    char *value;
+} write_path_edit;
+
+typedef struct write_include {
+    xmlNodePtr node; /* the <include> element */
+    size_t parent;   /* document holding it */
+    size_t child;    /* the fragment it names */
+} write_include;
+
+typedef struct writer {
+    const char *outdir;
+    char *scene_dir;
+    write_doc *docs; /* the scene first */
+    size_t doc_count;
+    mitsuba_params params; /* <default> values, as the loader reads them */
+    write_path_edit *edits;
+    size_t edit_count;
+    write_include *includes;
+    size_t include_count;
+    const mitsuba_replacement *replacements;
+    size_t replacement_count;
+    char **replacement_real;  /* realpath of each replacement's xml_file, or NULL */
+    xmlNodePtr *shapes;       /* the <shape> node of each replacement, once found */
+} writer;
+
+/* ---------------------------------------------------------------------------------------- */
+/* Small helpers                                                                            */
+
+/* Whether the node's name attribute is `snake` in either dialect (toWorld == to_world). */
+static int has_property_name(xmlNodePtr node, const char *snake)
+{
+    const char *name = mitsuba_attr(node, "name");
+    char normal[256];
+    if (!name)
+        return 0;
+    mitsuba_snake_case(name, normal, sizeof normal);
+    return strcmp(normal, snake) == 0;
+}
+
+static char *real_path(const char *path)
+{
+    char buffer[PATH_MAX];
+    return realpath(path, buffer) ? xstrdup(buffer) : NULL;
+}
+
+/* The absolute form of a path that may not exist: cwd/path, without resolving links. */
+static char *absolute_path(const char *path)
+{
+    char cwd[PATH_MAX];
+    if (path[0] == '/' || !getcwd(cwd, sizeof cwd))
+        return xstrdup(path);
+    char *real_cwd = real_path(cwd);
+    char *out = mitsuba_path_join(real_cwd ? real_cwd : cwd, path[0] == '.' && path[1] == '/' ? path + 2 : path);
+    free(real_cwd);
+    return out;
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* Reading documents                                                                        */
+
+/* Whether the file's first bytes (after a UTF-8 byte order mark) are an XML declaration. */
+static int file_has_declaration(const char *path)
+{
+    unsigned char head[8] = {0};
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return 1;
+    size_t n = fread(head, 1, sizeof head, f);
+    fclose(f);
+    size_t skip = n >= 3 && head[0] == 0xEF && head[1] == 0xBB && head[2] == 0xBF ? 3 : 0;
+    return n >= skip + 5 && memcmp(head + skip, "<?xml", 5) == 0;
+}
+
+/* Records the <default> elements directly under `root`; an earlier definition wins. */
+static void collect_params(writer *w, xmlNodePtr root)
+{
+    for (xmlNodePtr child = root->children; child; child = child->next) {
+        const char *name = mitsuba_attr(child, "name"), *value = mitsuba_attr(child, "value");
+        if (mitsuba_is_tag(child, "default") && name && value)
+            mitsuba_params_add(&w->params, name, value);
+    }
+}
+
+/* `written` (already substituted) resolved as the loader resolves it: from the directory of
+ * the file naming it, then from the scene's; when neither exists, the first. Returns the
+ * malloc'd path in the loader's spelling (relative if the scene path is) and sets *fallback
+ * when only the scene's directory found it. */
+static char *resolve_loader(const writer *w, const write_doc *doc, const char *written,
+                            int *fallback)
+{
+    return mitsuba_resolve(doc->path, w->scene_dir, written, fallback);
+}
+
+/* The absolute path to write for `written`: realpath of what the loader resolves it to, or
+ * the absolute form of its first candidate when nothing exists there. */
+static char *resolve_absolute(const writer *w, const write_doc *doc, const char *written,
+                              int *fallback)
+{
+    char *path = resolve_loader(w, doc, written, fallback);
+    char *real = real_path(path);
+    if (!real)
+        real = absolute_path(path);
+    free(path);
+    return real;
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* Pass 1: walking the documents                                                            */
+
+static int walk(writer *w, size_t doc, xmlNodePtr parent, int depth);
+
+/* The index of the document whose realpath is `real`, or doc_count. */
+static size_t doc_find(const writer *w, const char *real)
+{
+    size_t i = 0;
+    while (i < w->doc_count && strcmp(w->docs[i].real, real) != 0)
+        i++;
+    return i;
+}
+
+/* Reads a document (scene or fragment) and walks it; *index gets its number. */
+static int doc_open(writer *w, const char *path, int depth, size_t *index)
+{
+    char *real = real_path(path);
+    if (!real)
+        return error_set(IDMR_EXIT_INPUT, "cannot read scene '%s': %s", path, strerror(errno));
+    *index = doc_find(w, real);
+    if (*index < w->doc_count) { /* included before: one tree, one copy */
+        free(real);
+        return 0;
+    }
+    xmlDocPtr tree = mitsuba_read_xml(path);
+    if (!tree) {
+        free(real);
+        return -1;
+    }
+    w->docs = xrealloc(w->docs, (w->doc_count + 1) * sizeof *w->docs);
+    write_doc *d = &w->docs[w->doc_count];
+    memset(d, 0, sizeof *d);
+    d->path = xstrdup(path);
+    d->real = real;
+    d->doc = tree;
+    d->has_declaration = file_has_declaration(path);
+    *index = w->doc_count++;
+    xmlNodePtr root = xmlDocGetRootElement(tree);
+    collect_params(w, root);
+    return walk(w, *index, root, depth);
+}
+
+/* A relative path in `attribute` of `node`: records its absolute rewrite. */
+static void note_path(writer *w, size_t doc, xmlNodePtr node, const char *attribute)
+{
+    const char *written = mitsuba_attr(node, attribute);
+    char missing[128];
+    int fallback;
+    if (!written || !written[0])
+        return;
+    char *value = strchr(written, '$')
+                      ? mitsuba_substitute(&w->params, written, missing, sizeof missing)
+                                       : xstrdup(written);
+    if (!value) /* an undefined parameter: left as written (the loader rejects it) */
+        return;
+    if (value[0] == '/' && !strchr(written, '$')) {
+        free(value);
+        return;
+    }
+    char *absolute = resolve_absolute(w, &w->docs[doc], value, &fallback);
+    free(value);
+    w->docs[doc].fallback |= fallback;
+    w->edits = xrealloc(w->edits, (w->edit_count + 1) * sizeof *w->edits);
+    w->edits[w->edit_count++] = (write_path_edit){node, attribute, absolute};
+}
+
+static int walk_include(writer *w, size_t doc, xmlNodePtr node, int depth)
+{
+    const char *written = mitsuba_attr(node, "filename");
+    const char *path_of = w->docs[doc].path;
+    char missing[128];
+    int fallback;
+    if (!written)
+        return error_set(IDMR_EXIT_INPUT, "%s:%ld: <include>: missing attribute 'filename'",
+                         path_of, xmlGetLineNo(node));
+    if (depth >= MITSUBA_MAX_INCLUDE_DEPTH)
+        return error_set(IDMR_EXIT_INPUT, "%s:%ld: <include>: includes nested too deeply",
+                         path_of, xmlGetLineNo(node));
+    char *value = mitsuba_substitute(&w->params, written, missing, sizeof missing);
+    if (!value)
+        return error_set(IDMR_EXIT_INPUT,
+                         "%s:%ld: <include>: undefined parameter '%s' (no <default name=\"%s\">)",
+                         path_of, xmlGetLineNo(node), missing, missing + 1);
+    char *path = resolve_loader(w, &w->docs[doc], value, &fallback);
+    free(value);
+    w->docs[doc].fallback |= fallback;
+    size_t child;
+    int status = doc_open(w, path, depth + 1, &child);
+    free(path);
+    if (status)
+        return error_prefix("%s:%ld: <include filename=\"%s\">", w->docs[doc].path,
+                            xmlGetLineNo(node), written);
+    w->includes = xrealloc(w->includes, (w->include_count + 1) * sizeof *w->includes);
+    w->includes[w->include_count++] = (write_include){node, doc, child};
+    return 0;
+}
+
+/* Finds the replacements that name this <shape>. */
+static int note_shape(writer *w, size_t doc, xmlNodePtr node)
+{
+    const write_doc *d = &w->docs[doc];
+    long line = xmlGetLineNo(node);
+    for (size_t i = 0; i < w->replacement_count; i++) {
+        const mitsuba_replacement *r = &w->replacements[i];
+        int same_file = w->replacement_real[i] ? strcmp(w->replacement_real[i], d->real) == 0
+                                               : strcmp(r->xml_file, d->path) == 0;
+        if (!same_file || r->xml_line != line)
+            continue;
+        if (w->shapes[i])
+            return error_set(IDMR_EXIT_INPUT,
+                             "%s:%ld: more than one <shape> element on this line; cannot tell "
+                             "which one to replace by '%s'",
+                             d->path, line, r->ply);
+        w->shapes[i] = node;
+        w->docs[doc].replaced = 1;
+    }
+    return 0;
+}
+
+/* Walks the elements under `parent` in document order. <default> values stay as written. */
+static int walk(writer *w, size_t doc, xmlNodePtr parent, int depth)
+{
+    for (xmlNodePtr node = parent->children; node; node = node->next) {
+        if (node->type != XML_ELEMENT_NODE || mitsuba_is_tag(node, "default"))
+            continue;
+        if (mitsuba_is_tag(node, "include")) {
+            if (walk_include(w, doc, node, depth))
+                return -1;
+            continue;
+        }
+        if (mitsuba_is_tag(node, "shape") && note_shape(w, doc, node))
+            return -1;
+        if (has_property_name(node, "filename") && mitsuba_attr(node, "value"))
+            note_path(w, doc, node, "value");
+        if (mitsuba_attr(node, "filename"))
+            note_path(w, doc, node, "filename");
+        if (walk(w, doc, node, depth))
+            return -1;
+    }
+    return 0;
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* Pass 2: editing and writing                                                              */
+
+/* Which fragments are copied, and under which names. */
+static void plan_copies(writer *w)
+{
+    for (size_t i = 1; i < w->doc_count; i++)
+        w->docs[i].copy = w->docs[i].replaced || w->docs[i].fallback;
+    /* A fragment that includes a copy must point at it, so it is copied too. */
+    for (int changed = 1; changed;) {
+        changed = 0;
+        for (size_t i = 0; i < w->include_count; i++) {
+            write_doc *parent = &w->docs[w->includes[i].parent];
+            if (w->includes[i].parent > 0 && !parent->copy && w->docs[w->includes[i].child].copy)
+                parent->copy = changed = 1;
+        }
+    }
+    for (size_t i = 1; i < w->doc_count; i++) {
+        if (!w->docs[i].copy)
+            continue;
+        const char *base = strrchr(w->docs[i].path, '/') ? strrchr(w->docs[i].path, '/') + 1
+                                                         : w->docs[i].path;
+        const char *dot = strrchr(base, '.');
+        int stem = dot && dot != base ? (int)(dot - base) : (int)strlen(base);
+        const char *extension = dot && dot != base ? dot : "";
+        char name[PATH_MAX];
+        for (int n = 1;; n++) {
+            if (n == 1)
+                snprintf(name, sizeof name, WRITE_INCLUDES_DIR "/%s", base);
+            else
+                snprintf(name, sizeof name, WRITE_INCLUDES_DIR "/%.*s-%d%s", stem, base, n,
+                         extension);
+            size_t j = 1;
+            while (j < i && !(w->docs[j].copy_name && strcmp(w->docs[j].copy_name, name) == 0))
+                j++;
+            if (j == i)
+                break;
+        }
+        w->docs[i].copy_name = xstrdup(name);
+    }
+}
+
+/* Unlinks and frees `node` with the blank text before it (its indentation). */
+static void remove_with_indent(xmlNodePtr node)
+{
+    xmlNodePtr before = node->prev;
+    if (before && before->type == XML_TEXT_NODE && xmlIsBlankNode(before)) {
+        xmlUnlinkNode(before);
+        xmlFreeNode(before);
+    }
+    xmlUnlinkNode(node);
+    xmlFreeNode(node);
+}
+
+/* The whitespace after the last newline of a blank text node before `node` ("" if none). */
+static void indentation_of(xmlNodePtr node, char *out, size_t size)
+{
+    out[0] = '\0';
+    xmlNodePtr before = node ? node->prev : NULL;
+    if (!before || before->type != XML_TEXT_NODE || !xmlIsBlankNode(before) || !before->content)
+        return;
+    const char *text = (const char *)before->content;
+    const char *line = strrchr(text, '\n');
+    snprintf(out, size, "%s", line ? line + 1 : text);
+}
+
+/* Adds <string name="filename" value="ply"/> as the shape's first element child, indented as
+ * its siblings are (or one level deeper than the shape when it has none). */
+static void add_filename(xmlNodePtr shape, const char *ply)
+{
+    xmlNodePtr first = xmlFirstElementChild(shape);
+    xmlNodePtr element = xmlNewDocNode(shape->doc, NULL, (const xmlChar *)"string", NULL);
+    xmlNewProp(element, (const xmlChar *)"name", (const xmlChar *)"filename");
+    xmlNewProp(element, (const xmlChar *)"value", (const xmlChar *)ply);
+    char indent[256], text[300];
+    if (first) {
+        indentation_of(first, indent, sizeof indent);
+        snprintf(text, sizeof text, "\n%s", indent);
+        xmlAddPrevSibling(first, element);
+        if (first->prev == element && element->prev && element->prev->type == XML_TEXT_NODE) {
+            /* [blank][element][first]: give `first` its own indentation back. */
+            xmlAddPrevSibling(first, xmlNewDocText(shape->doc, (const xmlChar *)text));
+        } else if (indent[0]) {
+            xmlAddPrevSibling(element, xmlNewDocText(shape->doc, (const xmlChar *)text));
+        }
+        return;
+    }
+    indentation_of(shape, indent, sizeof indent);
+    const char *unit = strchr(indent, '\t') ? "\t" : "    ";
+    snprintf(text, sizeof text, "\n%s%s", indent, unit);
+    xmlNodePtr tail = shape->last;
+    if (tail && tail->type == XML_TEXT_NODE && xmlIsBlankNode(tail)) {
+        /* [... blank before </shape>]: the element goes before it, indented. */
+        xmlAddPrevSibling(tail, element);
+        xmlAddPrevSibling(element, xmlNewDocText(shape->doc, (const xmlChar *)text));
+        return;
+    }
+    xmlAddChild(shape, xmlNewDocText(shape->doc, (const xmlChar *)text));
+    xmlAddChild(shape, element);
+    snprintf(text, sizeof text, "\n%s", indent);
+    xmlAddChild(shape, xmlNewDocText(shape->doc, (const xmlChar *)text));
+}
+
+/* Whether a property of a shape of type `type` no longer applies once it is a world-space PLY. */
+static int property_dropped(const char *type, xmlNodePtr child)
+{
+    static const char *const always[] = {"to_world", "flip_normals"};
+    static const char *const sphere[] = {"center", "radius"};
+    static const char *const obj[] = {"flip_tex_coords", "shape_index", "collapse"};
+    for (size_t i = 0; i < sizeof always / sizeof *always; i++)
+        if (has_property_name(child, always[i]))
+            return 1;
+    if (strcmp(type, "sphere") == 0)
+        for (size_t i = 0; i < sizeof sphere / sizeof *sphere; i++)
+            if (has_property_name(child, sphere[i]))
+                return 1;
+    if (strcmp(type, "obj") == 0)
+        for (size_t i = 0; i < sizeof obj / sizeof *obj; i++)
+            if (has_property_name(child, obj[i]))
+                return 1;
+    return 0;
+}
+
+static void replace_shape(xmlNodePtr shape, const char *ply)
+{
+    char type[64];
+    snprintf(type, sizeof type, "%s", mitsuba_attr(shape, "type") ? mitsuba_attr(shape, "type") : "");
+    xmlNodePtr filename = NULL;
+    for (xmlNodePtr child = xmlFirstElementChild(shape), next; child; child = next) {
+        next = xmlNextElementSibling(child);
+        if (mitsuba_is_tag(child, "bsdf") || mitsuba_is_tag(child, "emitter") || mitsuba_is_tag(child, "ref"))
+            continue;
+        if (has_property_name(child, "filename") && !filename)
+            filename = child;
+        else if (property_dropped(type, child))
+            remove_with_indent(child);
+    }
+    xmlSetProp(shape, (const xmlChar *)"type", (const xmlChar *)"ply");
+    if (filename)
+        xmlSetProp(filename, (const xmlChar *)"value", (const xmlChar *)ply);
+    else
+        add_filename(shape, ply);
+}
+
+/* Serialises a tree as it was read (no reformatting) and writes it atomically. */
+static int write_tree(const write_doc *d, const char *target)
+{
+    xmlBufferPtr buffer = xmlBufferCreate();
+    if (!buffer)
+        return error_set(IDMR_EXIT_FAILURE, "%s: out of memory serialising XML", target);
+    const char *encoding = d->doc->encoding ? (const char *)d->doc->encoding : "UTF-8";
+    xmlSaveCtxtPtr save = xmlSaveToBuffer(buffer, encoding, d->has_declaration ? 0 : XML_SAVE_NO_DECL);
+    long written = save ? xmlSaveDoc(save, d->doc) : -1;
+    if (save)
+        xmlSaveClose(save);
+    int status = 0;
+    if (written < 0)
+        status = error_set(IDMR_EXIT_FAILURE, "%s: cannot serialise the XML of '%s'", target,
+                           d->path);
+    else
+        status = report_write_file(target, xmlBufferContent(buffer), (size_t)xmlBufferLength(buffer));
+    xmlBufferFree(buffer);
+    return status;
+}
+
+/* Applies the edits that fall in document `index` and writes it to outdir/target. */
+static int write_doc_out(writer *w, size_t index, const char *target)
+{
+    write_doc *d = &w->docs[index];
+    for (size_t i = 0; i < w->edit_count; i++)
+        if (w->edits[i].node->doc == d->doc)
+            xmlSetProp(w->edits[i].node, (const xmlChar *)w->edits[i].attribute,
+                       (const xmlChar *)w->edits[i].value);
+    for (size_t i = 0; i < w->include_count; i++) {
+        const write_include *link = &w->includes[i];
+        if (link->parent != index)
+            continue;
+        const write_doc *child = &w->docs[link->child];
+        xmlSetProp(link->node, (const xmlChar *)"filename",
+                   (const xmlChar *)(child->copy ? child->copy_name : child->real));
+    }
+    for (size_t i = 0; i < w->replacement_count; i++)
+        if (w->shapes[i]->doc == d->doc)
+            replace_shape(w->shapes[i], w->replacements[i].ply);
+    char *path = mitsuba_path_join(w->outdir, target);
+    int status = write_tree(d, path);
+    free(path);
+    return status;
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* The entry point                                                                          */
+
+static void writer_free(writer *w)
+{
+    for (size_t i = 0; i < w->doc_count; i++) {
+        free(w->docs[i].path);
+        free(w->docs[i].real);
+        free(w->docs[i].copy_name);
+        xmlFreeDoc(w->docs[i].doc);
+    }
+    free(w->docs);
+    mitsuba_params_free(&w->params);
+    for (size_t i = 0; i < w->edit_count; i++)
+        free(w->edits[i].value);
+    free(w->edits);
+    free(w->includes);
+    for (size_t i = 0; i < w->replacement_count; i++)
+        free(w->replacement_real[i]);
+    free(w->replacement_real);
+    free(w->shapes);
+    free(w->scene_dir);
+}
+
+/* Checks that each replacement found its shape and that no shape is replaced twice. */
+static int check_replacements(const writer *w)
+{
+    for (size_t i = 0; i < w->replacement_count; i++) {
+        const mitsuba_replacement *r = &w->replacements[i];
+        if (!w->shapes[i])
+            return error_set(IDMR_EXIT_INPUT,
+                             "%s:%d: no <shape> element at this line of the scene (replacement "
+                             "by '%s')",
+                             r->xml_file, r->xml_line, r->ply);
+        for (size_t j = 0; j < i; j++)
+            if (w->shapes[j] == w->shapes[i])
+                return error_set(IDMR_EXIT_INPUT, "%s:%d: <shape> replaced twice ('%s', '%s')",
+                                 r->xml_file, r->xml_line, w->replacements[j].ply, r->ply);
+    }
+    return 0;
+}
+
+int mitsuba_write_reduced(const char *scene_file, const char *outdir,
+                          const mitsuba_replacement *replacements, size_t count)
+{
+    writer w;
+    memset(&w, 0, sizeof w);
+    xmlInitParser();
+    w.outdir = outdir;
+    w.scene_dir = mitsuba_path_directory(scene_file);
+    w.replacements = replacements;
+    w.replacement_count = count;
+    w.replacement_real = xcalloc(count ? count : 1, sizeof *w.replacement_real);
+    w.shapes = xcalloc(count ? count : 1, sizeof *w.shapes);
+    for (size_t i = 0; i < count; i++)
+        w.replacement_real[i] = replacements[i].xml_file ? real_path(replacements[i].xml_file)
+                                                         : NULL;
+    for (size_t i = 0; i < count; i++)
+        if (!replacements[i].xml_file || !replacements[i].ply) {
+            writer_free(&w);
+            return error_set(IDMR_EXIT_FAILURE, "replacement %zu of %s has no %s", i,
+                             scene_file, replacements[i].ply ? "xml_file" : "ply");
+        }
+
+    size_t scene_index;
+    int status = doc_open(&w, scene_file, 0, &scene_index);
+    if (status == 0)
+        status = check_replacements(&w);
+    if (status == 0) {
+        plan_copies(&w);
+        int copies = 0;
+        for (size_t i = 1; i < w.doc_count; i++)
+            copies += w.docs[i].copy != 0;
+        if (copies) {
+            char *dir = mitsuba_path_join(outdir, WRITE_INCLUDES_DIR);
+            status = report_make_directory(dir);
+            free(dir);
+        }
+        for (size_t i = 1; i < w.doc_count && status == 0; i++)
+            if (w.docs[i].copy)
+                status = write_doc_out(&w, i, w.docs[i].copy_name);
+    }
+    if (status == 0)
+        status = write_doc_out(&w, 0, "scene.xml");
+    writer_free(&w);
+    return status;
+}

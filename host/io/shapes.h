@@ -1,0 +1,42 @@
+/* shapes.h — tessellation of Mitsuba's built-in shapes into triangle meshes (object space).
+ *
+ * Each function fills a mesh_data (host/mesh_io.h, the same record a mesh file is read into)
+ * with malloc'd arrays; the loader then transforms it to world space and hands the arrays to
+ * the scene. All surfaces are wound counter-clockwise seen from the side their geometric
+ * normal points to (outward for closed shapes), and closed shapes share their vertices
+ * (watertight, so the decimator sees no seams):
+ *   rectangle  [-1,1]² in z = 0, normal +z, 4 vertices, 2 triangles, uv = (x+1)/2, (y+1)/2
+ *   cube       [-1,1]³, 8 vertices, 12 triangles
+ *   disk       unit disk in z = 0, normal +z: a centre vertex and `segments` rim vertices
+ *   sphere     UV sphere about `center`, poles on ±z: 2 + (rings-1)·segments vertices,
+ *              2·segments·(rings-1) triangles (1984 with the default 32 × 32) */
+#ifndef IDMR_SHAPES_H
+#define IDMR_SHAPES_H
+
+#include "io/mesh_io.h"
+#include "io/xform.h"
+
+#define SHAPES_DISK_SEGMENTS 64
+#define SHAPES_SPHERE_RINGS 32
+#define SHAPES_SPHERE_SEGMENTS 32
+
+void shapes_rectangle(mesh_data *out);
+void shapes_cube(mesh_data *out);
+/* segments >= 3 */
+void shapes_disk(unsigned int segments, mesh_data *out);
+/* rings >= 2, segments >= 3 */
+void shapes_sphere(const double center[3], double radius, unsigned int rings, unsigned int segments,
+                   mesh_data *out);
+
+/* Reverses every triangle's winding (Mitsuba's flip_normals). */
+void shapes_flip_winding(mesh_data *mesh);
+
+/* Applies `to_world` to the positions; the winding is kept. (For built-in shapes Mitsuba
+ * transforms the normal, so a mirroring transform needs shapes_flip_winding() as well; for
+ * mesh files Mitsuba's geometric normal follows the winding, so they are left alone.) */
+void shapes_transform(mesh_data *mesh, const xform *to_world);
+
+/* Signed volume enclosed by a closed mesh (positive when wound outward); for tests. */
+double shapes_signed_volume(const mesh_data *mesh);
+
+#endif

@@ -1,0 +1,164 @@
+/* xform.c — 4x4 affine transform maths (see xform.h). Row-major doubles, column vectors. */
+#include "io/xform.h"
+
+#include <math.h>
+#include <string.h>
+
+xform xform_identity(void)
+{
+    xform t;
+    memset(&t, 0, sizeof t);
+    t.m[0] = t.m[5] = t.m[10] = t.m[15] = 1.0;
+    return t;
+}
+
+xform xform_multiply(const xform *a, const xform *b)
+{
+    xform out;
+    for (int row = 0; row < 4; row++)
+        for (int col = 0; col < 4; col++) {
+            double sum = 0.0;
+            for (int k = 0; k < 4; k++)
+                sum += a->m[4 * row + k] * b->m[4 * k + col];
+            out.m[4 * row + col] = sum;
+        }
+    return out;
+}
+
+xform xform_translate(double x, double y, double z)
+{
+    xform t = xform_identity();
+    t.m[3] = x;
+    t.m[7] = y;
+    t.m[11] = z;
+    return t;
+}
+
+xform xform_scale(double x, double y, double z)
+{
+    xform t = xform_identity();
+    t.m[0] = x;
+    t.m[5] = y;
+    t.m[10] = z;
+    return t;
+}
+
+/* Rodrigues' formula: R = cos·I + sin·[a]× + (1 - cos)·a aᵀ for the unit axis a. */
+xform xform_rotate(const double axis[3], double degrees)
+{
+    double a[3] = {axis[0], axis[1], axis[2]};
+    xform t = xform_identity();
+    if (xform_normalize(a) == 0.0)
+        return t;
+    double angle = degrees * (M_PI / 180.0);
+    double s = sin(angle), c = cos(angle), k = 1.0 - c;
+    t.m[0] = c + k * a[0] * a[0];
+    t.m[1] = k * a[0] * a[1] - s * a[2];
+    t.m[2] = k * a[0] * a[2] + s * a[1];
+    t.m[4] = k * a[1] * a[0] + s * a[2];
+    t.m[5] = c + k * a[1] * a[1];
+    t.m[6] = k * a[1] * a[2] - s * a[0];
+    t.m[8] = k * a[2] * a[0] - s * a[1];
+    t.m[9] = k * a[2] * a[1] + s * a[0];
+    t.m[10] = c + k * a[2] * a[2];
+    return t;
+}
+
+int xform_lookat(const double origin[3], const double target[3], const double up[3], xform *out)
+{
+    double dir[3] = {target[0] - origin[0], target[1] - origin[1], target[2] - origin[2]};
+    double left[3], new_up[3];
+    if (xform_normalize(dir) == 0.0)
+        return -1;
+    xform_cross(up, dir, left);
+    if (xform_normalize(left) < 1e-12)
+        return -1;
+    xform_cross(dir, left, new_up);
+    *out = xform_identity();
+    for (int row = 0; row < 3; row++) {
+        out->m[4 * row + 0] = left[row];
+        out->m[4 * row + 1] = new_up[row];
+        out->m[4 * row + 2] = dir[row];
+        out->m[4 * row + 3] = origin[row];
+    }
+    return 0;
+}
+
+xform xform_from_rows(const double values[16])
+{
+    xform t;
+    memcpy(t.m, values, sizeof t.m);
+    return t;
+}
+
+xform xform_from_3x3(const double values[9])
+{
+    xform t = xform_identity();
+    for (int row = 0; row < 3; row++)
+        for (int col = 0; col < 3; col++)
+            t.m[4 * row + col] = values[3 * row + col];
+    return t;
+}
+
+void xform_apply_point(const xform *t, const double p[3], double out[3])
+{
+    double r[4];
+    for (int row = 0; row < 4; row++)
+        r[row] = t->m[4 * row] * p[0] + t->m[4 * row + 1] * p[1] + t->m[4 * row + 2] * p[2] +
+                 t->m[4 * row + 3];
+    /* Affine transforms keep w = 1; divide anyway for a general 4x4 from a <matrix>. */
+    double w = r[3] != 0.0 ? r[3] : 1.0;
+    for (int i = 0; i < 3; i++)
+        out[i] = r[i] / w;
+}
+
+void xform_apply_vector(const xform *t, const double v[3], double out[3])
+{
+    double r[3];
+    for (int row = 0; row < 3; row++)
+        r[row] = t->m[4 * row] * v[0] + t->m[4 * row + 1] * v[1] + t->m[4 * row + 2] * v[2];
+    memcpy(out, r, sizeof r);
+}
+
+void xform_apply_points(const xform *t, float *xyz, unsigned long count)
+{
+    for (unsigned long i = 0; i < count; i++) {
+        double p[3] = {xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]}, q[3];
+        xform_apply_point(t, p, q);
+        for (int k = 0; k < 3; k++)
+            xyz[3 * i + k] = (float)q[k];
+    }
+}
+
+double xform_determinant3(const xform *t)
+{
+    const double *m = t->m;
+    return m[0] * (m[5] * m[10] - m[6] * m[9]) - m[1] * (m[4] * m[10] - m[6] * m[8]) +
+           m[2] * (m[4] * m[9] - m[5] * m[8]);
+}
+
+void xform_to_float(const xform *t, float out[16])
+{
+    for (int i = 0; i < 16; i++)
+        out[i] = (float)t->m[i];
+}
+
+double xform_dot(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+void xform_cross(const double a[3], const double b[3], double out[3])
+{
+    double r[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    memcpy(out, r, sizeof r);
+}
+
+double xform_normalize(double v[3])
+{
+    double length = sqrt(xform_dot(v, v));
+    if (length > 0.0)
+        for (int i = 0; i < 3; i++)
+            v[i] /= length;
+    return length;
+}

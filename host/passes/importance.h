@@ -1,0 +1,112 @@
+/* importance.h — the importance pass (paper sections 3.2, 3.3, 4.1): iterations of camera
+ * paths, photon paths, a hash grid, gather counts and the reverse path walk on the OpenCL
+ * device (kernels/importance.cl), and the host-side importance per triangle, vertex and mesh.
+ *
+ * What is accumulated: per scene triangle T, camera(T) = Σ Eq. 2 weights of camera path
+ * vertices on T and light(T) = Σ over photon vertices on T of weight × (the number of hit
+ * points gathered by that vertex and the vertices after it on its path). Both are kept apart,
+ * so γ is applied afterwards and a sweep over γ needs no new simulation:
+ *   I(T)       = (γ camera(T) + light(T)) / (iterations × area(T))   (0 for zero area)
+ *   I(vertex)  = Σ (γ camera + light) / Σ area over the triangles around it  (an area-weighted
+ *                mean of I(T); 0 if all of them have zero area)
+ *   mesh sum   = Σ (γ camera + light) / iterations over its triangles (unnormalised: no area
+ *                division, for the decimation budget)
+ *
+ * Kernels are built for the scene's feature bits (idmr/features.h): only the material and light
+ * branches the scene has are compiled in (`generic` builds them all, for comparison), and with
+ * γ = 0 the camera importance atomics are left out (camera importance is then 0: it would be
+ * multiplied by γ = 0 anyway).
+ *
+ * Gather radius: r_1 = 5 × |scene box diagonal| / (width + height) of the hit-point image, and
+ * r_{n+1}² = r_n² (n + α) / (n + 1) (the SPPM schedule with one global radius).
+ *
+ * Convergence after iteration n: Δ_n = Σ_T (I_n(T) - I_{n-1}(T))² / Σ_T I_n(T)², with I_n the
+ * per-triangle importance after n iterations (normalised by n); Δ_1 = 1. It is scale-free. With
+ * a tolerance E > 0 the pass stops once Δ stays below E for 3 iterations in a row. */
+#ifndef IDMR_IMPORTANCE_H
+#define IDMR_IMPORTANCE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "device/bvh.h"
+#include "device/device.h"
+#include "idmr/importance.h"
+#include "core/scene.h"
+
+/* Copies of one iteration's device buffers (the last one run), for tests and debugging. */
+typedef struct importance_snapshot {
+    idmr_pass_params params;
+    idmr_hit_point *hit_points; /* params.width * params.height */
+    idmr_photon_vertex *vertices; /* params.path_count * IDMR_PATH_VERTICES */
+    uint32_t *path_length;        /* params.path_count */
+    uint32_t *gathered;           /* params.path_count * IDMR_PATH_VERTICES */
+    uint64_t *camera_fixed;       /* this iteration's accumulators, fixed point */
+    uint64_t *light_fixed;
+} importance_snapshot;
+
+void importance_snapshot_free(importance_snapshot *snapshot);
+
+typedef struct importance_options {
+    unsigned int iterations; /* at most this many (default 100) */
+    unsigned int photons;    /* paths per iteration; 0: importance_default_photons() */
+    float gamma;             /* hit point importance factor γ (default 1) */
+    unsigned int seed;       /* default 1 */
+    float alpha;             /* SPPM radius reduction (default 0.7) */
+    double tolerance;        /* stop once Δ stays below it; 0: run all iterations */
+    float resolution;        /* scale of the scene's film for the hit-point image (default 1) */
+    size_t local_size;       /* work-group size; 0 lets the runtime choose */
+    int bookkeeping;         /* 1; 0 compiles the importance accumulation out (benchmark) */
+    int generic;             /* build the all-features program instead of the scene's */
+    int progress;            /* report progress on stderr */
+    importance_snapshot *snapshot; /* when not NULL, receives the last iteration's buffers */
+} importance_options;
+
+typedef struct importance_seconds {
+    double build; /* kernel build */
+    double camera, photon, grid, gather, path, readback;
+    double total; /* all iterations, build excluded */
+} importance_seconds;
+
+typedef struct importance_result {
+    size_t triangle_count;
+    double *camera; /* per scene triangle, summed over iterations, in weight units */
+    double *light;
+    unsigned int iterations; /* run */
+    double *convergence;     /* Δ per iteration */
+    double *radius;          /* gather radius per iteration */
+    unsigned int width, height; /* hit-point image */
+    unsigned int photons;       /* per iteration */
+    uint64_t hit_points;        /* valid hit points, first iteration */
+    uint64_t photon_vertices;   /* stored, first iteration */
+    uint64_t gathered;          /* hit points found by photon vertices, first iteration */
+    uint64_t device_bytes;      /* scene + pass buffers */
+    char *build_options;
+    importance_seconds seconds;
+} importance_result;
+
+void importance_options_default(importance_options *o);
+
+/* Photon paths per iteration when none are asked for: 1,000,000 on a GPU (the paper's
+ * figure); 500,000 on a CPU, which keeps an iteration of the DRAGON CORNELL BOX (871k
+ * triangles) near 0.68 s on 2 cores with PoCL (make bench). */
+unsigned int importance_default_photons(const device *d);
+
+/* Runs the pass. The scene needs a camera and at least one light. Returns 0, or -1 with the
+ * error set. `r` is freed with importance_result_free() either way. */
+int importance_run(device *d, const scene *s, const bvh *b, const importance_options *o,
+                   importance_result *r);
+void importance_result_free(importance_result *r);
+
+/* I(T) for scene triangle t, with hit point factor gamma (see above). */
+double importance_triangle(const importance_result *r, const scene *s, float gamma, uint64_t t);
+
+/* I per vertex of mesh m into vertex_importance[vertex_count]. */
+void importance_mesh_vertices(const importance_result *r, const scene *s, size_t m, float gamma,
+                              double *vertex_importance);
+
+/* Unnormalised sums over mesh m: γ camera + light, camera, light; each / iterations. */
+void importance_mesh_sums(const importance_result *r, const scene *s, size_t m, float gamma,
+                          double *importance_sum, double *camera_sum, double *light_sum);
+
+#endif

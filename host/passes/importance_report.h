@@ -1,0 +1,33 @@
+/* importance_report.h — what `idmr importance` and `idmr reduce` write:
+ *
+ *   DIR/report.json          options, per-stage seconds, per-mesh sums, convergence, counts
+ *   DIR/convergence.csv      iteration, change Δ, gather radius
+ *   DIR/importance/<m>.ply   each mesh (world space) with a per-vertex `importance` property
+ *                            and false-colour vertex colours
+ *   DIR/importance.png       the importance of what the scene camera sees, per triangle, in
+ *                            false colour (the paper's Fig. 3)
+ * Colours map log10(I) over three decades below the 99th percentile of the scene's non-zero
+ * values to the ramp of image_false_colour(); zero importance is black. Every file is written
+ * under a temporary name and renamed. */
+#ifndef IDMR_IMPORTANCE_REPORT_H
+#define IDMR_IMPORTANCE_REPORT_H
+
+#include <cjson/cJSON.h>
+
+#include "device/bvh.h"
+#include "device/device.h"
+#include "passes/importance.h"
+#include "core/scene.h"
+
+/* The report as a JSON object (the caller adds keys and deletes it). */
+cJSON *importance_report_json(const scene *s, const device *d, const importance_options *o,
+                              const importance_result *r);
+
+/* Writes report.json (from `report`), convergence.csv, importance/ and importance.png. */
+int importance_write_outputs(const char *dir, const cJSON *report, const scene *s, const bvh *b,
+                             device *d, const importance_options *o, const importance_result *r);
+
+/* A file name made from a mesh name: letters, digits, '-', '_' and '.' kept, others '_'. */
+void importance_file_name(const char *mesh_name, char *out, size_t size);
+
+#endif

@@ -1,0 +1,90 @@
+/* pass_grid.c — the hit-point grid and radius schedule shared by the importance pass and the
+ * renderer (see pass_grid.h). */
+#include "passes/pass_grid.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "core/error.h"
+
+int pass_grid_create(device *d, cl_program program, unsigned int hit_points, pass_grid *g)
+{
+    memset(g, 0, sizeof *g);
+    g->hit_points = hit_points;
+    g->cells = 1024;
+    while (g->cells < 2u * hit_points)
+        g->cells *= 2;
+    g->chunks = (g->cells + IDMR_SCAN_CHUNK - 1) / IDMR_SCAN_CHUNK;
+    if (device_create_kernel(program, "grid_count", &g->count) ||
+        device_create_kernel(program, "scan_chunks", &g->scan_chunks) ||
+        device_create_kernel(program, "scan_chunk_sums", &g->scan_chunk_sums) ||
+        device_create_kernel(program, "scan_apply", &g->scan_apply) ||
+        device_create_kernel(program, "grid_scatter", &g->scatter))
+        return -1;
+    const device_buffer_request buffers[] = {
+        {&g->cell_counts, g->cells * sizeof(cl_uint), "grid cell counts"},
+        {&g->cell_start, (g->cells + 1) * sizeof(cl_uint), "grid cell starts"},
+        {&g->cell_cursor, g->cells * sizeof(cl_uint), "grid cursors"},
+        {&g->chunk_sums, g->chunks * sizeof(cl_uint), "grid prefix sums"},
+        {&g->grid_points, (hit_points ? hit_points : 1) * sizeof(cl_uint), "grid hit point lists"},
+    };
+    return device_buffers(d, buffers, sizeof buffers / sizeof *buffers, &g->bytes);
+}
+
+void pass_grid_release(pass_grid *g)
+{
+    cl_kernel kernels[] = {g->count, g->scan_chunks, g->scan_chunk_sums, g->scan_apply,
+                           g->scatter};
+    device_release_kernels(kernels, sizeof kernels / sizeof *kernels);
+    cl_mem buffers[] = {g->cell_counts, g->cell_start, g->cell_cursor, g->chunk_sums,
+                        g->grid_points};
+    device_release_buffers(buffers, sizeof buffers / sizeof *buffers);
+    memset(g, 0, sizeof *g);
+}
+
+int pass_grid_build(device *d, pass_grid *g, const idmr_pass_params *params, cl_mem hit_points,
+                    size_t local_size)
+{
+    cl_uint cells = g->cells, chunks = g->chunks;
+    return device_clear(d, g->cell_counts, g->cells * sizeof(cl_uint), "grid cell counts") ||
+                   DEVICE_SET_ARGS(g->count, "grid_count", DEVICE_ARG(*params),
+                                   DEVICE_ARG(hit_points), DEVICE_ARG(g->cell_counts)) ||
+                   device_run(d, g->count, "grid_count", g->hit_points, local_size) ||
+                   DEVICE_SET_ARGS(g->scan_chunks, "scan_chunks", DEVICE_ARG(g->cell_counts),
+                                   DEVICE_ARG(cells), DEVICE_ARG(g->chunk_sums)) ||
+                   device_run(d, g->scan_chunks, "scan_chunks", g->chunks, 0) ||
+                   DEVICE_SET_ARGS(g->scan_chunk_sums, "scan_chunk_sums",
+                                   DEVICE_ARG(g->chunk_sums), DEVICE_ARG(chunks)) ||
+                   device_run(d, g->scan_chunk_sums, "scan_chunk_sums", 1, 0) ||
+                   DEVICE_SET_ARGS(g->scan_apply, "scan_apply", DEVICE_ARG(g->cell_counts),
+                                   DEVICE_ARG(cells), DEVICE_ARG(g->chunk_sums),
+                                   DEVICE_ARG(g->cell_start), DEVICE_ARG(g->cell_cursor)) ||
+                   device_run(d, g->scan_apply, "scan_apply", g->chunks, 0) ||
+                   DEVICE_SET_ARGS(g->scatter, "grid_scatter", DEVICE_ARG(*params),
+                                   DEVICE_ARG(hit_points), DEVICE_ARG(g->cell_cursor),
+                                   DEVICE_ARG(g->grid_points)) ||
+                   device_run(d, g->scatter, "grid_scatter", g->hit_points, local_size)
+               ? -1
+               : 0;
+}
+
+double pass_initial_radius2(const scene *s, unsigned int width, unsigned int height)
+{
+    double radius = 5.0 * scene_diagonal(s) / ((double)width + height);
+    double radius2 = radius * radius;
+    return radius2 > 0 ? radius2 : 1e-12; /* a scene of one point: nothing to gather anyway */
+}
+
+double pass_next_radius2(double radius2, unsigned int n, float alpha)
+{
+    return radius2 * (n + 1 + alpha) / (n + 2.0);
+}
+
+void pass_grid_place(const pass_grid *g, const scene *s, double radius2, idmr_pass_params *params)
+{
+    params->radius = (float)sqrt(radius2);
+    params->cell_size = 2.0f * params->radius * 1.0001f;
+    params->cell_count = g->cells;
+    for (int k = 0; k < 3; k++)
+        params->grid_origin[k] = s->bbox_min[k] - params->radius;
+}

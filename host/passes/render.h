@@ -1,0 +1,105 @@
+/* render.h — the stochastic progressive photon mapping renderer behind `idmr render`
+ * (kernels/render.cl): what a reduction costs in image error and saves in render time and
+ * device memory, measured on our own kernels (the paper's Table 1 renders with SPPM too).
+ *
+ * Each iteration is an independent photon-mapping estimate of every pixel at that iteration's
+ * global radius (pass_grid.h: r_1 = 5 |diagonal| / (w + h), r²_{n+1} = r²_n (n + α)/(n + 1)):
+ *   L(pixel) = E + T Σ_photons f(ω_i, ω_o) Φ / (π r²)
+ * with E the emission the camera path saw directly (or through specular surfaces), T the
+ * specular throughput to the hit point, f its BRDF and Φ each photon's flux (light power /
+ * photons emitted, times the path's scattering weights). The image is the mean of the
+ * iterations' estimates (Knaus and Zwicker 2011): consistent, since the radius shrinks slowly
+ * enough that the variance of the mean and the bias both vanish.
+ *
+ * What is simulated, and what is not:
+ *   - materials and lights as in the importance pass (kernels/scene.h); glossy lobes have a
+ *     roughness of at least 0.05 (a smooth plastic's coating becomes slightly rough);
+ *   - geometric normals (no shading-normal interpolation): curved meshes show their facets;
+ *   - textured reflectance by the texture's mean colour (textures are not looked up);
+ *   - an envmap by its mean radiance, seen and lit uniformly;
+ *   - photon paths store at most 8 photons (non-specular surfaces) and end after 32 surface
+ *     interactions; camera paths follow at most 16 specular interactions.
+ * Sums are exact: per pixel and channel in 64-bit fixed point (idmr/render.h), and the mean over
+ * iterations in double on the host; a render is bit-identical for the same seed, device and
+ * options, whatever the work-group size. */
+#ifndef IDMR_RENDER_H
+#define IDMR_RENDER_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include <cjson/cJSON.h>
+
+#include "device/bvh.h"
+#include "device/device.h"
+#include "idmr/importance.h"
+#include "idmr/render.h"
+#include "core/scene.h"
+
+/* Copies of the last iteration's device buffers, for tests. */
+typedef struct render_snapshot {
+    idmr_pass_params params;
+    idmr_hit_point *hit_points;  /* pixels */
+    idmr_render_photon *photons; /* params.path_count * IDMR_PATH_VERTICES */
+    uint32_t *path_length;       /* params.path_count */
+} render_snapshot;
+
+void render_snapshot_free(render_snapshot *snapshot);
+
+typedef struct render_options {
+    unsigned int iterations; /* at most this many (default 64) */
+    unsigned int photons;    /* photon paths per iteration; 0: importance_default_photons() */
+    double time_limit;       /* seconds; > 0 stops after the iteration in which it passes */
+    unsigned int seed;       /* default 1 */
+    float alpha;             /* radius reduction (default 0.7) */
+    float resolution;        /* scale of the scene's film (default 1) */
+    size_t local_size;       /* work-group size; 0 lets the runtime choose */
+    int generic;             /* build the all-features program instead of the scene's */
+    int progress;            /* report progress on stderr */
+    render_snapshot *snapshot; /* when not NULL, receives the last iteration's buffers */
+} render_options;
+
+typedef struct render_seconds {
+    double build;                               /* kernel build (or cache load) */
+    double camera, photon, grid, gather, readback; /* summed over iterations */
+    double total;                               /* all iterations, build excluded */
+} render_seconds;
+
+/* Device memory of a render, in bytes. */
+typedef struct render_memory {
+    uint64_t geometry; /* per-triangle normals and materials, materials, lights, emitters */
+    uint64_t bvh;      /* nodes and leaf triangles */
+    uint64_t sppm;     /* hit points, photons, grid, pixel accumulators */
+} render_memory;
+
+typedef struct render_result {
+    unsigned int width, height;
+    float *image;            /* linear RGB, 3 floats per pixel, top row first: the mean */
+    unsigned int iterations; /* run */
+    unsigned int photons;    /* paths per iteration */
+    double first_radius, last_radius;
+    uint64_t photons_stored; /* first iteration */
+    render_memory memory;
+    char *build_options;
+    render_seconds seconds;
+} render_result;
+
+void render_options_default(render_options *o);
+
+/* Renders scene `s` (which needs a camera and a light) with BVH `b`. Returns 0, or -1 with the
+ * error set; free `r` with render_result_free() either way. */
+int render_run(device *d, const scene *s, const bvh *b, const render_options *o,
+               render_result *r);
+void render_result_free(render_result *r);
+
+/* Writes the image as EXR (linear, half float) at `exr_path` and as PNG (sRGB, values × 2^ev
+ * clamped to [0, 1]) at `png_path`; either may be NULL. Both atomically. */
+int render_write_images(const render_result *r, const char *exr_path, const char *png_path,
+                        double ev);
+
+/* The render's report (IMAGE.json): size, iterations, photons, radii, seconds per iteration in
+ * all and by stage, device memory by kind. */
+cJSON *render_report_json(const scene *s, const device *d, const render_options *o,
+                          const render_result *r);
+
+#endif

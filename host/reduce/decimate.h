@@ -1,0 +1,97 @@
+/* decimate.h — the OpenMesh bridge for the reduction: one mesh in, its decimated copy out.
+ *
+ * Methods:
+ *   DECIMATE_IMPORTANCE  our importance module (paper 3.4): a vertex's collapse priority is
+ *                        the sum of importance over its one-ring, centre included; its target is
+ *                        the least important neighbour among legal collapses; after a collapse
+ *                        the removed vertex's importance is added to the kept one
+ *   DECIMATE_QUADRIC     OpenMesh's ModQuadricT (Garland-Heckbert), the view-independent baseline
+ * Both run with our normal-limit module (a collapse may not turn any remaining face's normal by
+ * more than max_normal_angle degrees, nor create a zero-area face) and our history module (for
+ * each removed vertex, the vertex it went into). We use our own normal limit rather than
+ * OpenMesh's ModNormalFlippingT because that one compares against stored face normals, which
+ * must be refreshed after every collapse, and normalises zero-area faces into NaN; ours computes
+ * both normals from the current positions and rejects degenerate results. The limit holds per
+ * collapse, as in the paper; rotations can add up over many collapses (a sphere decimated by
+ * importance to 20 % ended with one inward face in 5 of 20 random importance fields).
+ *
+ * The collapse loop is ours too (on OpenMesh's BaseDecimaterT, which runs the modules): after a
+ * collapse it re-scores the kept vertex and its whole new one-ring, because the importance moved
+ * to the kept vertex changes the ring sums of *its* neighbours, which OpenMesh's DecimaterT (it
+ * re-scores only the removed vertex's former ring) would leave stale. Ties in priority go to the
+ * least important target.
+ *
+ * Non-manifold input: OpenMesh's reader splits vertices where the surface is not manifold and
+ * adds faces it cannot attach as loose triangles with copied vertices. Here the mesh is rebuilt:
+ * vertices at identical positions are welded, faces are attached in order and those that fail
+ * are retried until no more attach; faces that still cannot be attached keep copied vertices,
+ * which are locked (they cannot be collapsed) and counted apart, so the collapsible surface
+ * gets the budget that remains after them. Faces that weld into zero area are dropped. */
+#ifndef IDMR_DECIMATE_H
+#define IDMR_DECIMATE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "io/mesh_io.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum decimate_method { DECIMATE_IMPORTANCE, DECIMATE_QUADRIC } decimate_method;
+
+typedef struct decimate_input {
+    const char *name; /* for messages */
+    const float *positions;
+    uint32_t vertex_count;
+    const uint32_t *indices;
+    uint32_t triangle_count;
+    const double *vertex_importance; /* per input vertex; needed by DECIMATE_IMPORTANCE */
+    uint64_t target_vertices;        /* vertices to keep; where welding leaves fewer, fewer */
+    double max_normal_angle;         /* degrees; default 60 (the paper's α_max) */
+    int verify_heap;  /* tests: after every collapse, count heap entries whose stored priority or
+                         target differs from a fresh evaluation (heap_violations) */
+    int reheap_removed_ring_only; /* tests: re-score as OpenMesh's DecimaterT does */
+} decimate_input;
+
+typedef struct decimate_output {
+    mesh_data mesh;                  /* the decimated mesh (positions as the input's) */
+    uint32_t vertices_welded;        /* after welding and copying (the mesh decimated) */
+    uint32_t vertices_uncollapsible; /* copies in faces that could not be attached */
+    uint32_t faces_patched;          /* faces attached to a separate patch of copied vertices */
+    uint32_t faces_loose;            /* faces that could not be attached at all */
+    uint32_t faces_dropped;          /* faces that welded into zero area */
+    uint32_t collapses;
+    uint32_t *collapsed_into; /* per welded vertex: the vertex it was collapsed into, or itself */
+    uint32_t *welded_of;      /* per input vertex: its welded vertex */
+    uint64_t heap_violations;
+} decimate_output;
+
+/* The vertices the decimater starts from (welded, plus the copies of faces that cannot be
+ * attached) and how many of those are uncollapsible copies, without decimating: the figures
+ * decimate_mesh() reports as vertices_welded and vertices_uncollapsible. */
+int decimate_measure(const decimate_input *in, uint32_t *vertices, uint32_t *uncollapsible);
+
+/* Decimates one mesh. Returns 0, or -1 with the error set (OpenMesh failure, such as a
+ * decimater that does not initialise). The target may not be reached when collapses run out
+ * (out->mesh.vertex_count says what was). */
+int decimate_mesh(const decimate_input *in, decimate_method method, decimate_output *out);
+void decimate_output_free(decimate_output *out);
+
+/* The benchmark's baseline: stock OpenMesh (DecimaterT with ModQuadricT, nothing else) on the
+ * mesh as OpenMesh builds it, to target_vertices of in->vertex_count. Returns the output vertex
+ * count, or -1 with the error set. */
+long decimate_stock_quadric(const decimate_input *in);
+
+/* Decimates `count` meshes on `threads` threads, largest first. status[i] is 0 or -1;
+ * messages[i] (may be NULL) gets the error of a failed mesh. Returns the number that failed. */
+size_t decimate_many(const decimate_input *in, decimate_output *out, int *status,
+                     char (*messages)[512], size_t count, decimate_method method,
+                     unsigned int threads);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
