@@ -16,7 +16,8 @@
  * `make bench` compares against) and IDMR_CAMERA_IMPORTANCE (0 when γ = 0: camera importance
  * would be multiplied by zero, so its atomics are compiled out). Layouts: idmr/importance.h. */
 #include "idmr/camera.h"
-#include "idmr/importance.h"
+#include "idmr/importance_layout.h"
+#include "idmr/sppm_layout.h"
 #include "lib/fixed_point.h"
 #include "lib/hit_point_grid.h"
 #include "lib/scene.h"
@@ -34,7 +35,7 @@ inline ulong fixed_units(float weight)
     return (ulong)(weight * IDMR_FIXED_SCALE + 0.5f);
 }
 
-kernel void camera_pass(idmr_pass_params params, idmr_camera camera,
+kernel void camera_pass(idmr_sppm_params params, idmr_camera camera,
                         global const idmr_bvh_node *nodes, global const idmr_triangle4 *leaves,
                         global const float4 *triangle_normals,
                         global const uint *triangle_materials,
@@ -80,7 +81,7 @@ kernel void camera_pass(idmr_pass_params params, idmr_camera camera,
     hit_points[pixel] = hp;
 }
 
-kernel void photon_pass(idmr_pass_params params, global const idmr_light *lights,
+kernel void photon_pass(idmr_sppm_params params, global const idmr_light *lights,
                         global const float *light_cdf, global const float *emitter_cdf,
                         global const float4 *emitter_triangles,
                         global const idmr_bvh_node *nodes, global const idmr_triangle4 *leaves,
@@ -125,7 +126,7 @@ kernel void photon_pass(idmr_pass_params params, global const idmr_light *lights
 /* Hit points within the radius of point p whose normal faces the same side as `side` (cosine
  * above 1e-3, so that faces meeting at a right angle never gather each other's hit points on
  * the sign of a rounding error: that made the result depend on the scene's scale). */
-inline uint count_hit_points_near(float3 p, float3 side, const idmr_pass_params *params,
+inline uint count_hit_points_near(float3 p, float3 side, const idmr_sppm_params *params,
                                   global const idmr_hit_point *hit_points,
                                   global const uint *cell_start, global const uint *grid_points)
 {
@@ -143,7 +144,7 @@ inline uint count_hit_points_near(float3 p, float3 side, const idmr_pass_params 
     return count;
 }
 
-kernel void gather_count(idmr_pass_params params, global const idmr_photon_vertex *vertices,
+kernel void gather_count(idmr_sppm_params params, global const idmr_photon_vertex *vertices,
                          global const uint *path_length, global const idmr_hit_point *hit_points,
                          global const uint *cell_start, global const uint *grid_points,
                          global uint *gathered)
@@ -161,7 +162,7 @@ kernel void gather_count(idmr_pass_params params, global const idmr_photon_verte
                                         &params, hit_points, cell_start, grid_points);
 }
 
-kernel void path_importance(idmr_pass_params params,
+kernel void path_importance(idmr_sppm_params params,
                             global const idmr_photon_vertex *vertices,
                             global const uint *path_length, global const uint *gathered,
                             volatile global fixed_word *light_importance)

@@ -19,8 +19,9 @@
 #pragma OPENCL FP_CONTRACT OFF
 #include "lib/fixed_point.h"
 #include "lib/hit_point_grid.h"
-#include "idmr/importance.h"
-#include "idmr/render.h"
+#include "idmr/importance_layout.h"
+#include "idmr/sppm_layout.h"
+#include "idmr/render_layout.h"
 #include "lib/scene.h"
 #include "lib/traverse.h"
 
@@ -52,13 +53,12 @@ inline float3 environment_radiance(global const idmr_light *lights, uint light_c
     return radiance;
 }
 
-kernel void render_camera(idmr_pass_params params, idmr_camera camera,
+kernel void render_camera(idmr_sppm_params params, idmr_camera camera,
                           global const idmr_bvh_node *nodes, global const idmr_triangle4 *leaves,
                           global const float4 *triangle_normals,
                           global const uint *triangle_materials,
                           global const idmr_material *materials, global const idmr_light *lights,
-                          global idmr_hit_point *hit_points, global idmr_render_hit *render_hits,
-                          global float4 *emitted)
+                          global idmr_hit_point *hit_points, global idmr_render_hit *render_hits)
 {
     uint pixel = get_global_id(0);
     if (pixel >= params.width * params.height)
@@ -77,6 +77,7 @@ kernel void render_camera(idmr_pass_params params, idmr_camera camera,
     vstore3((float3)(0.0f), 0, rh.outgoing);
     rh.material = 0u;
     rh.pad = 0.0f;
+    rh.pad2 = 0.0f;
     for (int depth = 0; depth < IDMR_CAMERA_DEPTH; depth++) {
         idmr_hit hit = traverse_closest(nodes, leaves, origin, d, 0.0f, INFINITY);
         if (hit.triangle == IDMR_NO_HIT) {
@@ -107,11 +108,11 @@ kernel void render_camera(idmr_pass_params params, idmr_camera camera,
 #endif
     }
     hit_points[pixel] = hp;
+    vstore3(radiance, 0, rh.emitted);
     render_hits[pixel] = rh;
-    emitted[pixel] = (float4)(radiance, 0.0f);
 }
 
-kernel void render_photon(idmr_pass_params params, global const idmr_light *lights,
+kernel void render_photon(idmr_sppm_params params, global const idmr_light *lights,
                           global const float *light_cdf, global const float *emitter_cdf,
                           global const float4 *emitter_triangles,
                           global const idmr_bvh_node *nodes, global const idmr_triangle4 *leaves,
@@ -136,7 +137,7 @@ kernel void render_photon(idmr_pass_params params, global const idmr_light *ligh
                                                 params.scene_radius) /
                        (probability * (float)params.path_count));
         global idmr_render_photon *slot = photons + (size_t)path * IDMR_PATH_VERTICES;
-        for (int bounce = 0; bounce < IDMR_RENDER_PHOTON_BOUNCES && stored < IDMR_PATH_VERTICES;
+        for (int bounce = 0; bounce < IDMR_PHOTON_BOUNCES && stored < IDMR_PATH_VERTICES;
              bounce++) {
             idmr_hit hit = traverse_closest(nodes, leaves, origin, d, 0.0f, INFINITY);
             if (hit.triangle == IDMR_NO_HIT)
@@ -173,7 +174,7 @@ inline ulong radiance_units(float c, float scale)
     return units > 0.0f ? (ulong)(fmin(units, IDMR_RENDER_CONTRIBUTION_LIMIT) + 0.5f) : 0ul;
 }
 
-kernel void render_gather(idmr_pass_params params, global const idmr_render_photon *photons,
+kernel void render_gather(idmr_sppm_params params, global const idmr_render_photon *photons,
                           global const uint *path_length, global const idmr_hit_point *hit_points,
                           global const idmr_render_hit *render_hits,
                           global const idmr_material *materials, global const uint *cell_start,

@@ -20,7 +20,7 @@
 #include "passes/importance.h"
 #include "io/mitsuba.h"
 #include "passes/render.h"
-#include "core/report.h"
+#include "core/progress.h"
 
 #define ROUNDS 2
 #define ITERATIONS 3

@@ -16,7 +16,8 @@
 #include <string.h>
 
 #include "idmr/camera.h"
-#include "idmr/importance.h"
+#include "idmr/importance_layout.h"
+#include "idmr/sppm_layout.h"
 #include "idmr/light.h"
 #include "idmr/material.h"
 #include "idmr/rng.h"

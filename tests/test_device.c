@@ -14,14 +14,15 @@
 
 #include "device/device.h"
 #include "core/error.h"
-#include "idmr/bvh.h"
+#include "idmr/bvh_layout.h"
 #include "idmr/camera.h"
 #include "idmr/features.h"
-#include "idmr/importance.h"
+#include "idmr/importance_layout.h"
+#include "idmr/sppm_layout.h"
 #include "idmr/light.h"
 #include "idmr/material.h"
 #include "idmr/ray.h"
-#include "idmr/render.h"
+#include "idmr/render_layout.h"
 
 static void test_list_devices(void **state)
 {

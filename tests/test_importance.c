@@ -428,7 +428,7 @@ static void test_camera_pass_through_mirror(void **state)
  * the kernel's float test and fails on a mismatch; returns the valid hit points. */
 static unsigned int expect_gather_counts(const importance_snapshot *snap)
 {
-    const idmr_pass_params *pp = &snap->params;
+    const idmr_sppm_params *pp = &snap->params;
     unsigned int pixels = pp->width * pp->height;
     idmr_hit_point *valid = malloc(pixels * sizeof *valid);
     unsigned int valid_count = 0;
@@ -493,7 +493,7 @@ static unsigned int expect_gather_counts(const importance_snapshot *snap)
 static void test_gather_count_matches_brute_force(void **state)
 {
     const importance_snapshot *snap = cornell_pass();
-    const idmr_pass_params *pp = &snap->params;
+    const idmr_sppm_params *pp = &snap->params;
     assert_int_equal(pp->width, 64);
     assert_int_equal(pp->height, 64);
     unsigned int valid = expect_gather_counts(snap);
@@ -513,7 +513,7 @@ static void test_gather_count_matches_brute_force(void **state)
 static void expect_path_importance(const scene *s, const importance_snapshot *snap,
                                    const importance_result *r)
 {
-    const idmr_pass_params *pp = &snap->params;
+    const idmr_sppm_params *pp = &snap->params;
     size_t triangles = (size_t)s->triangle_count;
     uint64_t *expected = calloc(triangles, sizeof *expected);
     double diagonal = imp_scene_diagonal(s);

@@ -28,7 +28,8 @@
 #include "io/mitsuba.h"
 #include "reduce/reduce.h"
 #include "passes/render.h"
-#include "core/report.h"
+#include "core/files.h"
+#include "core/json.h"
 #include "core/scene.h"
 
 #define IDMR_VERSION "0.1.0"
@@ -168,7 +169,7 @@ static int command_devices(int argc, char **argv)
             cJSON_AddBoolToObject(d, "int64_atomics", list[i].int64_atomics);
             cJSON_AddItemToArray(root, d);
         }
-        report_print_json(root);
+        json_print(root);
         cJSON_Delete(root);
     } else {
         printf("%-3s %-20s %-5s %5s %10s  %-22s %s\n", "#", "platform", "kind", "CUs", "memory",
@@ -229,7 +230,7 @@ static cJSON *info_json(const scene *s, const bvh *b)
         const idmr_light *l = &s->lights[i];
         cJSON *o = cJSON_CreateObject();
         cJSON_AddStringToObject(o, "type", scene_light_kind_name(l->kind));
-        report_add_vec3(o, "emission", l->emission);
+        json_add_vec3(o, "emission", l->emission);
         cJSON_AddNumberToObject(o, "power", l->power);
         if (l->kind == IDMR_LIGHT_AREA)
             cJSON_AddNumberToObject(o, "area", l->area);
@@ -237,17 +238,17 @@ static cJSON *info_json(const scene *s, const bvh *b)
     }
     if (s->has_camera) {
         cJSON *cam = cJSON_AddObjectToObject(root, "camera");
-        report_add_vec3(cam, "origin", s->camera.origin);
-        report_add_vec3(cam, "forward", s->camera.forward);
-        report_add_vec3(cam, "up", s->camera.up);
+        json_add_vec3(cam, "origin", s->camera.origin);
+        json_add_vec3(cam, "forward", s->camera.forward);
+        json_add_vec3(cam, "up", s->camera.up);
         cJSON_AddNumberToObject(cam, "fov", s->camera_info.fov_degrees);
         cJSON_AddStringToObject(cam, "fov_axis", s->camera_info.fov_axis);
         cJSON_AddNumberToObject(cam, "width", s->camera.width);
         cJSON_AddNumberToObject(cam, "height", s->camera.height);
     }
     cJSON *bbox = cJSON_AddObjectToObject(root, "bbox");
-    report_add_vec3(bbox, "min", s->bbox_min);
-    report_add_vec3(bbox, "max", s->bbox_max);
+    json_add_vec3(bbox, "min", s->bbox_min);
+    json_add_vec3(bbox, "max", s->bbox_max);
     cJSON_AddItemToObject(root, "features", features_json(s->features));
     cJSON_AddNumberToObject(root, "vertices", (double)s->vertex_count);
     cJSON_AddNumberToObject(root, "triangles", (double)s->triangle_count);
@@ -354,7 +355,7 @@ static int command_info(int argc, char **argv)
     }
     if (json) {
         cJSON *root = info_json(s, build ? &b : NULL);
-        report_print_json(root);
+        json_print(root);
         cJSON_Delete(root);
     } else {
         info_print(s, build ? &b : NULL);
@@ -590,7 +591,7 @@ static int command_render(int argc, char **argv)
     int status = 0;
     if (slash && slash != directory) { /* the images' directory, created if missing */
         *slash = '\0';
-        status = report_make_directory(directory);
+        status = files_make_directory(directory);
     }
     if (!status)
         status = device_open(&d, device_index);
@@ -600,7 +601,7 @@ static int command_render(int argc, char **argv)
             status = render_run(&d, s, &b, &o, &r) || render_write_images(&r, exr, png, exposure);
             if (!status) {
                 cJSON *report = render_report_json(s, &d, &o, &r);
-                status = report_write_json(report, json);
+                status = json_write(report, json);
                 cJSON_Delete(report);
             }
             bvh_free(&b);
@@ -666,7 +667,7 @@ static int command_compare(int argc, char **argv)
         cJSON_AddNumberToObject(root, "relative_mse", result.relative_mse);
         cJSON_AddNumberToObject(root, "max_error", result.max_error);
         cJSON_AddNumberToObject(root, "error_p99", result.error_p99);
-        report_print_json(root);
+        json_print(root);
         cJSON_Delete(root);
     } else {
         printf("rmse %.6g  psnr %.2f dB  relative_mse %.6g  max_error %.6g  (%dx%d)\n", result.rmse,

@@ -15,7 +15,7 @@
 #include <time.h>
 
 #include "core/error.h"
-#include "core/report.h"
+#include "core/progress.h"
 
 enum { BUILD_NODE, BUILD_LEAF };
 

@@ -11,7 +11,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "idmr/bvh.h"
+#include "idmr/bvh_layout.h"
 #include "core/scene.h"
 
 typedef struct bvh {

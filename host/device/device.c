@@ -9,7 +9,7 @@
 #include <sys/stat.h>
 
 #include "core/error.h"
-#include "core/report.h"
+#include "core/files.h"
 
 #ifndef IDMR_ROOT
 #define IDMR_ROOT "."
@@ -381,7 +381,7 @@ static void store_cached(cl_program program, const char *path)
     unsigned char *binaries[] = {binary};
     if (clGetProgramInfo(program, CL_PROGRAM_BINARIES, sizeof binaries, binaries, NULL) ==
             CL_SUCCESS &&
-        report_write_file(path, binary, size) != 0)
+        files_write_atomic(path, binary, size) != 0)
         log_verbose("program cache: %s", error_message());
     free(binary);
 }

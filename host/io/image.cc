@@ -14,7 +14,7 @@
 
 extern "C" {
 #include "core/error.h"
-#include "core/report.h"
+#include "core/files.h"
 #include "io/image.h"
 }
 
@@ -89,7 +89,7 @@ static int write_image(const char *path, int width, int height, OIIO::TypeDesc f
     size_t dot = target.find_last_of('.');
     std::string extension = dot == std::string::npos ? "" : target.substr(dot);
     std::vector<char> name(target.size() + extension.size() + 32);
-    int fd = report_create_temporary(path, extension.c_str(), name.data(), name.size());
+    int fd = files_create_temporary(path, extension.c_str(), name.data(), name.size());
     if (fd < 0)
         return -1;
     close(fd);

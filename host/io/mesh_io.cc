@@ -16,7 +16,7 @@
 
 extern "C" {
 #include "core/error.h"
-#include "core/report.h"
+#include "core/files.h"
 #include "io/mesh_io.h"
 }
 
@@ -170,7 +170,7 @@ extern "C" int mesh_io_write_ply(const char *path, const mesh_data *mesh, const 
     }
 
     std::vector<char> name(std::strlen(path) + 32);
-    int fd = report_create_temporary(path, ".ply", name.data(), name.size());
+    int fd = files_create_temporary(path, ".ply", name.data(), name.size());
     if (fd < 0)
         return -1;
     close(fd);

@@ -25,7 +25,7 @@
 #include "core/error.h"
 #include "io/mitsuba.h"
 #include "io/mitsuba_text.h"
-#include "core/report.h"
+#include "core/files.h"
 
 #define WRITE_INCLUDES_DIR "includes"
 
@@ -452,7 +452,7 @@ static int write_tree(const write_doc *d, const char *target)
         status = error_set(IDMR_EXIT_FAILURE, "%s: cannot serialise the XML of '%s'", target,
                            d->path);
     else
-        status = report_write_file(target, xmlBufferContent(buffer), (size_t)xmlBufferLength(buffer));
+        status = files_write_atomic(target, xmlBufferContent(buffer), (size_t)xmlBufferLength(buffer));
     xmlBufferFree(buffer);
     return status;
 }
@@ -557,7 +557,7 @@ int mitsuba_write_reduced(const char *scene_file, const char *outdir,
             copies += w.docs[i].copy != 0;
         if (copies) {
             char *dir = mitsuba_path_join(outdir, WRITE_INCLUDES_DIR);
-            status = report_make_directory(dir);
+            status = files_make_directory(dir);
             free(dir);
         }
         for (size_t i = 1; i < w.doc_count && status == 0; i++)

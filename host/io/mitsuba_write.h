@@ -51,7 +51,7 @@ typedef struct mitsuba_replacement {
 
 /* Writes outdir/scene.xml (and outdir/includes/ copies where needed, see above) for the scene
  * file `scene_file` with `count` shapes replaced. outdir must exist; the input files are never
- * written; every file goes through report_write_file() (temporary name + rename), the scene
+ * written; every file goes through files_write_atomic() (temporary name + rename), the scene
  * last. Returns 0, or -1 with the error set naming the file (and line): unreadable or malformed
  * XML, an unresolvable include, a replacement whose file:line matches no <shape> element (or
  * more than one), two replacements of one shape, a failed write. */

@@ -14,9 +14,10 @@
 
 #include "device/device_scene.h"
 #include "core/error.h"
-#include "idmr/importance.h"
+#include "idmr/importance_layout.h"
+#include "idmr/sppm_layout.h"
 #include "passes/pass_grid.h"
-#include "core/report.h"
+#include "core/progress.h"
 
 #define STOP_AFTER_CALM_ITERATIONS 3
 
@@ -108,7 +109,7 @@ static int pass_allocate(pass *p, const scene *s, unsigned int photons)
 
 /* Runs one iteration's kernels, timing each stage (the queue is drained between stages). */
 static int pass_iterate(pass *p, const scene *s, const importance_options *o,
-                        idmr_pass_params *params, importance_result *r)
+                        idmr_sppm_params *params, importance_result *r)
 {
     size_t local = o->local_size;
     double t0 = monotonic_seconds();
@@ -167,7 +168,7 @@ void importance_snapshot_free(importance_snapshot *snapshot)
     memset(snapshot, 0, sizeof *snapshot);
 }
 
-static int pass_snapshot(pass *p, const idmr_pass_params *params, size_t triangles,
+static int pass_snapshot(pass *p, const idmr_sppm_params *params, size_t triangles,
                          importance_snapshot *out)
 {
     importance_snapshot_free(out);
@@ -316,7 +317,7 @@ int importance_run(device *d, const scene *s, const bvh *b, const importance_opt
                           "light importance");
 
     double radius2 = pass_initial_radius2(s, r->width, r->height);
-    idmr_pass_params params;
+    idmr_sppm_params params;
     memset(&params, 0, sizeof params);
     params.seed = o->seed;
     params.width = r->width;

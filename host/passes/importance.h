@@ -31,12 +31,13 @@
 
 #include "device/bvh.h"
 #include "device/device.h"
-#include "idmr/importance.h"
+#include "idmr/importance_layout.h"
+#include "idmr/sppm_layout.h"
 #include "core/scene.h"
 
 /* Copies of one iteration's device buffers (the last one run), for tests and debugging. */
 typedef struct importance_snapshot {
-    idmr_pass_params params;
+    idmr_sppm_params params;
     idmr_hit_point *hit_points; /* params.width * params.height */
     idmr_photon_vertex *vertices; /* params.path_count * IDMR_PATH_VERTICES */
     uint32_t *path_length;        /* params.path_count */

@@ -13,7 +13,8 @@
 #include "idmr/ray.h"
 #include "io/image.h"
 #include "io/mesh_io.h"
-#include "core/report.h"
+#include "core/files.h"
+#include "core/json.h"
 
 void importance_file_name(const char *mesh_name, char *out, size_t size)
 {
@@ -119,7 +120,7 @@ static int write_convergence_csv(const char *path, const importance_result *r)
     for (unsigned int n = 0; n < r->iterations; n++)
         length += (size_t)snprintf(text + length, size - length, "%u,%.9g,%.9g\n", n + 1,
                                    r->convergence[n], r->radius[n]);
-    int status = report_write_file(path, text, length);
+    int status = files_write_atomic(path, text, length);
     free(text);
     return status;
 }
@@ -234,10 +235,10 @@ int importance_write_outputs(const char *dir, const cJSON *report, const scene *
 {
     char path[4096];
     snprintf(path, sizeof path, "%s/importance", dir);
-    if (report_make_directory(dir) || report_make_directory(path))
+    if (files_make_directory(dir) || files_make_directory(path))
         return -1;
     snprintf(path, sizeof path, "%s/report.json", dir);
-    if (report_write_json(report, path))
+    if (json_write(report, path))
         return -1;
     snprintf(path, sizeof path, "%s/convergence.csv", dir);
     if (write_convergence_csv(path, r))

@@ -42,7 +42,7 @@ void pass_grid_release(pass_grid *g)
     memset(g, 0, sizeof *g);
 }
 
-int pass_grid_build(device *d, pass_grid *g, const idmr_pass_params *params, cl_mem hit_points,
+int pass_grid_build(device *d, pass_grid *g, const idmr_sppm_params *params, cl_mem hit_points,
                     size_t local_size)
 {
     cl_uint cells = g->cells, chunks = g->chunks;
@@ -80,7 +80,7 @@ double pass_next_radius2(double radius2, unsigned int n, float alpha)
     return radius2 * (n + 1 + alpha) / (n + 2.0);
 }
 
-void pass_grid_place(const pass_grid *g, const scene *s, double radius2, idmr_pass_params *params)
+void pass_grid_place(const pass_grid *g, const scene *s, double radius2, idmr_sppm_params *params)
 {
     params->radius = (float)sqrt(radius2);
     params->cell_size = 2.0f * params->radius * 1.0001f;

@@ -12,7 +12,8 @@
 #include <stdint.h>
 
 #include "device/device.h"
-#include "idmr/importance.h"
+#include "idmr/importance_layout.h"
+#include "idmr/sppm_layout.h"
 #include "core/scene.h"
 
 typedef struct pass_grid {
@@ -29,7 +30,7 @@ void pass_grid_release(pass_grid *g);
 
 /* Sorts the hit points into the grid for this iteration's params (radius, cell size, origin
  * and cell_count set by pass_grid_place). Returns 0 or -1. */
-int pass_grid_build(device *d, pass_grid *g, const idmr_pass_params *params, cl_mem hit_points,
+int pass_grid_build(device *d, pass_grid *g, const idmr_sppm_params *params, cl_mem hit_points,
                     size_t local_size);
 
 /* r_1² for a scene and hit-point image (a tiny positive value for a scene of one point). */
@@ -39,6 +40,6 @@ double pass_initial_radius2(const scene *s, unsigned int width, unsigned int hei
 double pass_next_radius2(double radius2, unsigned int n, float alpha);
 
 /* Sets params' radius, cell size, grid origin and cell count for radius² `radius2`. */
-void pass_grid_place(const pass_grid *g, const scene *s, double radius2, idmr_pass_params *params);
+void pass_grid_place(const pass_grid *g, const scene *s, double radius2, idmr_sppm_params *params);
 
 #endif

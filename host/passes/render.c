@@ -16,7 +16,7 @@
 #include "io/image.h"
 #include "passes/importance.h"
 #include "passes/pass_grid.h"
-#include "core/report.h"
+#include "core/progress.h"
 #include "io/spectrum.h"
 
 void render_options_default(render_options *o)
@@ -41,7 +41,7 @@ typedef struct renderer {
     device *dev;
     cl_program program;
     cl_kernel camera, photon, gather;
-    cl_mem hit_points, render_hits, emitted, photons, path_length, pixel_radiance;
+    cl_mem hit_points, render_hits, photons, path_length, pixel_radiance;
     device_scene scene;
     pass_grid grid;
     unsigned int pixels;
@@ -52,7 +52,7 @@ static void renderer_release(renderer *p)
 {
     cl_kernel kernels[] = {p->camera, p->photon, p->gather};
     device_release_kernels(kernels, sizeof kernels / sizeof *kernels);
-    cl_mem buffers[] = {p->hit_points, p->render_hits, p->emitted,
+    cl_mem buffers[] = {p->hit_points, p->render_hits,
                         p->photons,    p->path_length, p->pixel_radiance};
     device_release_buffers(buffers, sizeof buffers / sizeof *buffers);
     pass_grid_release(&p->grid);
@@ -83,7 +83,6 @@ static int renderer_allocate(renderer *p, unsigned int photons)
     const device_buffer_request buffers[] = {
         {&p->hit_points, p->pixels * sizeof(idmr_hit_point), "hit points"},
         {&p->render_hits, p->pixels * sizeof(idmr_render_hit), "hit point throughputs"},
-        {&p->emitted, p->pixels * 4 * sizeof(cl_float), "directly seen emission"},
         {&p->photons, slots * sizeof(idmr_render_photon), "photons"},
         {&p->path_length, photons * sizeof(cl_uint), "photon path lengths"},
         {&p->pixel_radiance, p->pixels * 3 * sizeof(cl_ulong), "pixel radiance"},
@@ -120,7 +119,7 @@ static double fixed_scale(const scene *s, const device_scene *ds, unsigned int p
 }
 
 static int renderer_iterate(renderer *p, const scene *s, const render_options *o,
-                            const idmr_pass_params *params, render_result *r)
+                            const idmr_sppm_params *params, render_result *r)
 {
     size_t local = o->local_size;
     double t0 = monotonic_seconds();
@@ -130,7 +129,7 @@ static int renderer_iterate(renderer *p, const scene *s, const render_options *o
                         DEVICE_ARG(p->scene.triangle_normals),
                         DEVICE_ARG(p->scene.triangle_materials), DEVICE_ARG(p->scene.materials),
                         DEVICE_ARG(p->scene.lights), DEVICE_ARG(p->hit_points),
-                        DEVICE_ARG(p->render_hits), DEVICE_ARG(p->emitted)) ||
+                        DEVICE_ARG(p->render_hits)) ||
         device_run(p->dev, p->camera, "render_camera", p->pixels, local))
         return -1;
     double t1 = monotonic_seconds();
@@ -165,14 +164,14 @@ static int renderer_iterate(renderer *p, const scene *s, const render_options *o
 
 /* Adds this iteration's estimate to `sum` (double, 3 per pixel): emission seen directly plus
  * the photon estimate, units / (fixed_scale π r²). Checks saturation; clears the accumulators. */
-static int renderer_collect(renderer *p, const idmr_pass_params *params, double *sum,
-                            uint64_t *units, float *emitted, render_result *r)
+static int renderer_collect(renderer *p, const idmr_sppm_params *params, double *sum,
+                            uint64_t *units, idmr_render_hit *hits, render_result *r)
 {
     double start = monotonic_seconds();
     size_t pixels = p->pixels;
     if (device_read(p->dev, p->pixel_radiance, pixels * 3 * sizeof *units, units,
                     "pixel radiance") ||
-        device_read(p->dev, p->emitted, pixels * 4 * sizeof *emitted, emitted,
+        device_read(p->dev, p->render_hits, pixels * sizeof *hits, hits,
                     "directly seen emission"))
         return -1;
     double per_unit = 1.0 / ((double)params->fixed_scale * M_PI * (double)params->radius *
@@ -186,7 +185,7 @@ static int renderer_collect(renderer *p, const idmr_pass_params *params, double 
                                  "64-bit fixed-point limit in one iteration; use fewer photons "
                                  "per iteration",
                                  i % r->width, i / r->width);
-            double e = emitted[4 * i + c];
+            double e = hits[i].emitted[c];
             sum[3 * i + c] += (isfinite(e) ? e : 0.0) + (double)u * per_unit;
         }
     if (device_clear(p->dev, p->pixel_radiance, pixels * 3 * sizeof *units, "pixel radiance"))
@@ -195,7 +194,7 @@ static int renderer_collect(renderer *p, const idmr_pass_params *params, double 
     return 0;
 }
 
-static int renderer_snapshot(renderer *p, const idmr_pass_params *params, render_snapshot *out)
+static int renderer_snapshot(renderer *p, const idmr_sppm_params *params, render_snapshot *out)
 {
     render_snapshot_free(out);
     out->params = *params;
@@ -264,7 +263,7 @@ int render_run(device *d, const scene *s, const bvh *b, const render_options *o,
     r->memory.geometry = p.scene.bytes - p.scene.bvh_bytes;
     r->memory.sppm = p.sppm_bytes;
 
-    idmr_pass_params params;
+    idmr_sppm_params params;
     memset(&params, 0, sizeof params);
     params.seed = o->seed;
     params.width = r->width;
@@ -283,7 +282,7 @@ int render_run(device *d, const scene *s, const bvh *b, const render_options *o,
 
     double *sum = xcalloc((size_t)p.pixels * 3, sizeof *sum);
     uint64_t *units = xmalloc((size_t)p.pixels * 3 * sizeof *units);
-    float *emitted = xmalloc((size_t)p.pixels * 4 * sizeof *emitted);
+    idmr_render_hit *hits = xmalloc((size_t)p.pixels * sizeof *hits);
     double radius2 = pass_initial_radius2(s, r->width, r->height);
     progress bar;
     progress_begin(&bar, "render", o->iterations, o->progress);
@@ -297,7 +296,7 @@ int render_run(device *d, const scene *s, const bvh *b, const render_options *o,
         if (renderer_iterate(&p, s, o, &params, r) ||
             (o->snapshot && renderer_snapshot(&p, &params, o->snapshot)) ||
             (n == 0 && count_stored_photons(&p, r->photons, r)) ||
-            renderer_collect(&p, &params, sum, units, emitted, r)) {
+            renderer_collect(&p, &params, sum, units, hits, r)) {
             status = -1;
             break;
         }
@@ -319,7 +318,7 @@ int render_run(device *d, const scene *s, const bvh *b, const render_options *o,
     }
     free(sum);
     free(units);
-    free(emitted);
+    free(hits);
     renderer_release(&p);
     return status ? -1 : 0;
 }

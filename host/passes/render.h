@@ -32,13 +32,14 @@
 
 #include "device/bvh.h"
 #include "device/device.h"
-#include "idmr/importance.h"
-#include "idmr/render.h"
+#include "idmr/importance_layout.h"
+#include "idmr/sppm_layout.h"
+#include "idmr/render_layout.h"
 #include "core/scene.h"
 
 /* Copies of the last iteration's device buffers, for tests. */
 typedef struct render_snapshot {
-    idmr_pass_params params;
+    idmr_sppm_params params;
     idmr_hit_point *hit_points;  /* pixels */
     idmr_render_photon *photons; /* params.path_count * IDMR_PATH_VERTICES */
     uint32_t *path_length;       /* params.path_count */

@@ -17,7 +17,9 @@
 #include "passes/importance_report.h"
 #include "io/mesh_io.h"
 #include "io/mitsuba_write.h"
-#include "core/report.h"
+#include "core/files.h"
+#include "core/json.h"
+#include "core/progress.h"
 
 void reduce_options_default(reduce_options *o)
 {
@@ -48,7 +50,7 @@ static int prepare_outdir(const scene *s, const char *outdir, int force)
                              "into it)",
                              outdir);
     }
-    if (report_make_directory(outdir))
+    if (files_make_directory(outdir))
         return -1;
     if (realpath(s->dir, scene_dir) && realpath(outdir, out) && strcmp(scene_dir, out) == 0)
         return error_set(IDMR_EXIT_INPUT,
@@ -57,7 +59,7 @@ static int prepare_outdir(const scene *s, const char *outdir, int force)
                          outdir);
     char meshes[PATH_MAX];
     snprintf(meshes, sizeof meshes, "%s/meshes", outdir);
-    return report_make_directory(meshes);
+    return files_make_directory(meshes);
 }
 
 static int is_kept(const reduce_options *o, const char *name)
@@ -378,7 +380,7 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
         } else {
             char path[PATH_MAX];
             snprintf(path, sizeof path, "%s/report.json", outdir);
-            status = report_write_json(report, path);
+            status = json_write(report, path);
         }
         cJSON_Delete(report);
         if (!status)

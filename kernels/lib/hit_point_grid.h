@@ -12,9 +12,10 @@
 #ifndef IDMR_KERNEL_HIT_POINT_GRID_H
 #define IDMR_KERNEL_HIT_POINT_GRID_H
 
-#include "idmr/importance.h"
+#include "idmr/importance_layout.h"
+#include "idmr/sppm_layout.h"
 
-inline int3 grid_cell(float3 p, const idmr_pass_params *params)
+inline int3 grid_cell(float3 p, const idmr_sppm_params *params)
 {
     return convert_int3_rtn((p - vload3(0, params->grid_origin)) / params->cell_size);
 }
@@ -25,7 +26,7 @@ inline uint grid_hash(int3 c, uint cell_count)
            (cell_count - 1u);
 }
 
-kernel void grid_count(idmr_pass_params params, global const idmr_hit_point *hit_points,
+kernel void grid_count(idmr_sppm_params params, global const idmr_hit_point *hit_points,
                        volatile global uint *cell_counts)
 {
     uint i = get_global_id(0);
@@ -83,7 +84,7 @@ kernel void scan_apply(global const uint *cell_counts, uint cell_count,
         cell_start[cell_count] = running;
 }
 
-kernel void grid_scatter(idmr_pass_params params, global const idmr_hit_point *hit_points,
+kernel void grid_scatter(idmr_sppm_params params, global const idmr_hit_point *hit_points,
                          volatile global uint *cell_cursor, global uint *grid_points)
 {
     uint i = get_global_id(0);
@@ -95,7 +96,7 @@ kernel void grid_scatter(idmr_pass_params params, global const idmr_hit_point *h
 
 /* The distinct buckets of the cells that the ball of radius params->radius around p touches,
  * into buckets[8]; returns how many. */
-inline uint grid_buckets_near(float3 p, const idmr_pass_params *params, uint buckets[8])
+inline uint grid_buckets_near(float3 p, const idmr_sppm_params *params, uint buckets[8])
 {
     float r = params->radius;
     int3 lo = grid_cell(p - r, params), hi = grid_cell(p + r, params);

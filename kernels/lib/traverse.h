@@ -18,7 +18,7 @@
 #ifndef IDMR_TRAVERSE_H
 #define IDMR_TRAVERSE_H
 
-#include "idmr/bvh.h"
+#include "idmr/bvh_layout.h"
 #include "idmr/ray.h"
 
 /* Watertightness needs every edge function rounded the same way in both triangles that share

@@ -1,0 +1,31 @@
+/* progress.h — the monotonic clock for timings, and progress on stderr for long work: a bar
+ * redrawn in place when stderr is a terminal, otherwise one line at every tenth of the work. */
+#ifndef IDMR_PROGRESS_H
+#define IDMR_PROGRESS_H
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Seconds on the monotonic clock. */
+double monotonic_seconds(void);
+
+typedef struct progress {
+    const char *label;
+    unsigned int total;
+    int enabled;
+    int terminal;
+    unsigned int next_line; /* non-terminal: the next count that gets a line */
+    double start;
+} progress;
+
+void progress_begin(progress *p, const char *label, unsigned int total, int enabled);
+/* `done` of total finished; `detail` (may be NULL) is shown after the bar. */
+void progress_update(progress *p, unsigned int done, const char *detail);
+void progress_end(progress *p);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,70 @@
+/* idmr/sppm_layout.h — what the SPPM core keeps on the device for both passes (the importance
+ * pass and the renderer: host/passes/sppm.c, kernels/sppm.cl):
+ *
+ *   idmr_sppm_params   per-iteration constants, passed by value to every kernel
+ *   idmr_hit_point     hit_points[pixels]: one slot per pixel of the hit-point image; valid = 0
+ *                      when the camera path found no non-specular surface
+ *   uint               path_length[paths]: photon path p's records sit at slots
+ *                      p * IDMR_PATH_VERTICES + j, j < path_length[p], so a path is consecutive
+ *                      in memory; what a record holds is the pass's (idmr/importance_layout.h,
+ *                      idmr/render_layout.h)
+ * The hash grid over hit points: cell_start[cells + 1] (prefix sums of the counts, computed in
+ * chunks of IDMR_SCAN_CHUNK cells) and grid_points[pixels] (hit point indices sorted by cell).
+ *
+ * Both passes sum into 64-bit fixed-point words with integer atomics (kernels/lib/fixed_point.h),
+ * cleared every iteration; the host stops with an error when a word reaches
+ * IDMR_FIXED_SATURATION, a factor 2 below overflow. */
+#ifndef IDMR_SPPM_LAYOUT_H
+#define IDMR_SPPM_LAYOUT_H
+
+#include "idmr/layout.h"
+
+#define IDMR_PATH_VERTICES 8     /* records per photon path slot (paper: 8) */
+#define IDMR_CAMERA_DEPTH 16     /* camera path: surface interactions (paper: 16) */
+#define IDMR_PHOTON_BOUNCES 32   /* photon path: surface interactions, at most */
+#define IDMR_SCAN_CHUNK 256      /* grid prefix sum: cells per work-item */
+#define IDMR_FIXED_SATURATION (1ull << 62)
+
+/* The two passes on the SPPM core, as the kernels' IDMR_SPPM_PASS build option names them. */
+#define IDMR_SPPM_IMPORTANCE 1
+#define IDMR_SPPM_RENDER 2
+
+typedef struct idmr_hit_point {
+    float position[3];
+    unsigned int pixel;
+    float normal[3]; /* geometric, facing the camera path that arrived */
+    unsigned int valid;
+} idmr_hit_point;
+
+IDMR_STATIC_ASSERT(sizeof(idmr_hit_point) == 32, "idmr_hit_point must be 32 bytes");
+IDMR_OFFSET_ASSERT(idmr_hit_point, normal, 16);
+
+typedef struct idmr_sppm_params {
+    unsigned int seed;
+    unsigned int iteration;
+    unsigned int width; /* hit-point image: one camera path per pixel */
+    unsigned int height;
+
+    unsigned int path_count; /* photon paths this iteration */
+    unsigned int light_count;
+    unsigned int cell_count; /* hash-grid buckets (a power of two) */
+    unsigned int triangle_count;
+
+    float grid_origin[3];
+    float radius; /* gather radius this iteration */
+
+    float scene_center[3];
+    float scene_radius; /* bounding sphere: directional lights start outside it */
+
+    float ray_epsilon; /* origin offset of secondary rays, along the normal */
+    float cell_size;
+    float fixed_scale; /* renderer: fixed-point units per unit of pixel radiance */
+    float pad;
+} idmr_sppm_params;
+
+IDMR_STATIC_ASSERT(sizeof(idmr_sppm_params) == 80, "idmr_sppm_params is 80 bytes");
+IDMR_OFFSET_ASSERT(idmr_sppm_params, grid_origin, 32);
+IDMR_OFFSET_ASSERT(idmr_sppm_params, scene_center, 48);
+IDMR_OFFSET_ASSERT(idmr_sppm_params, ray_epsilon, 64);
+
+#endif
