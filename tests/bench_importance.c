@@ -25,7 +25,7 @@ static double seconds_per_iteration(device *d, const scene *s, const bvh *b, int
 {
     importance_options o;
     importance_options_default(&o);
-    o.iterations = iterations;
+    o.sppm.iterations = iterations;
     o.bookkeeping = bookkeeping;
     if (importance_run(d, s, b, &o, r)) {
         fprintf(stderr, "bench_importance: %s\n", error_message());
@@ -71,7 +71,7 @@ int main(void)
         }
     printf("importance-iteration: seconds=%.3f plain=%.3f ratio=%.2f photons=%u triangles=%llu "
            "device=\"%s\"\n",
-           best[1], best[0], best[1] / best[0], importance_default_photons(&d),
+           best[1], best[0], best[1] / best[0], sppm_default_photons(&d),
            (unsigned long long)s->triangle_count, d.info.name);
     printf("importance-iteration: stages camera=%.3f photon=%.3f grid=%.3f gather=%.3f "
            "path=%.3f (plain: camera=%.3f photon=%.3f)\n",

@@ -61,7 +61,7 @@ static void prepare(device *d, const char *path, timed_scene *t)
         die();
     render_options o;
     render_options_default(&o);
-    o.iterations = 1; /* warm-up: program build or cache load, first-touch costs */
+    o.sppm.iterations = 1; /* warm-up: program build or cache load, first-touch costs */
     render_result r;
     if (render_run(d, t->s, &t->b, &o, &r))
         die();
@@ -74,7 +74,7 @@ static void time_once(device *d, timed_scene *t)
 {
     render_options o;
     render_options_default(&o);
-    o.iterations = ITERATIONS;
+    o.sppm.iterations = ITERATIONS;
     render_result r;
     if (render_run(d, t->s, &t->b, &o, &r))
         die();
@@ -112,7 +112,7 @@ int main(void)
     reduce_options o;
     reduce_options_default(&o);
     o.target = TARGET;
-    o.importance.iterations = REDUCE_ITERATIONS;
+    o.importance.sppm.iterations = REDUCE_ITERATIONS;
     o.force = 1;
     warn_silence(1);
     int status = reduce_run(&d, s, outdir, &o);

@@ -34,8 +34,8 @@ static double per_iteration(device *d, const scene *s, const bvh *b, enum pass p
     if (pass == PASS_RENDER) {
         render_options o;
         render_options_default(&o);
-        o.iterations = iterations;
-        o.generic = generic;
+        o.sppm.iterations = iterations;
+        o.sppm.generic = generic;
         render_result r;
         if (render_run(d, s, b, &o, &r)) {
             fprintf(stderr, "bench_specialise: %s\n", error_message());
@@ -47,8 +47,8 @@ static double per_iteration(device *d, const scene *s, const bvh *b, enum pass p
     }
     importance_options o;
     importance_options_default(&o);
-    o.iterations = iterations;
-    o.generic = generic;
+    o.sppm.iterations = iterations;
+    o.sppm.generic = generic;
     importance_result r;
     if (importance_run(d, s, b, &o, &r)) {
         fprintf(stderr, "bench_specialise: %s\n", error_message());

@@ -81,9 +81,9 @@ static void small_options(importance_options *o, unsigned int iterations, unsign
                           importance_snapshot *snapshot)
 {
     importance_options_default(o);
-    o->iterations = iterations;
-    o->photons = photons;
-    o->seed = 7;
+    o->sppm.iterations = iterations;
+    o->sppm.photons = photons;
+    o->sppm.seed = 7;
     o->snapshot = snapshot;
 }
 
@@ -124,7 +124,7 @@ static const importance_snapshot *cornell_pass(void)
         cornell = load_or_fail(CORNELL);
         importance_options o;
         small_options(&o, 1, 20000, &cornell_snapshot);
-        o.resolution = 0.25f; /* 256 x 256 film -> 64 x 64 hit points */
+        o.sppm.resolution = 0.25f; /* 256 x 256 film -> 64 x 64 hit points */
         run_or_fail(cornell, &o, &cornell_result);
         cornell_ready = 1;
     }
@@ -206,7 +206,7 @@ static void test_camera_weight_head_on_quad(void **state)
     const float n[3] = {0, 0, 1};
     for (unsigned int p = 0; p < pixels; p++) {
         float d[3];
-        imp_camera_direction(&s->camera, 64, 48, o.seed, 0, p, d);
+        imp_camera_direction(&s->camera, 64, 48, o.sppm.seed, 0, p, d);
         double t = -5.0 / d[2];
         double x = eye[0] + t * d[0], y = eye[1] + t * d[1];
         double w = idmr_eq2_weight(n[0], n[1], n[2], d[0], d[1], d[2]);
@@ -261,7 +261,7 @@ static void test_camera_pass_matches_embree(void **state)
     importance_snapshot snap = {0};
     importance_options o;
     small_options(&o, 1, 20000, &snap);
-    o.resolution = 0.5f;
+    o.sppm.resolution = 0.5f;
     importance_result r;
     run_or_fail(s, &o, &r);
     unsigned int width = 96, height = 64;
@@ -277,7 +277,7 @@ static void test_camera_pass_matches_embree(void **state)
     RTCScene es = trace_embree_scene(s);
     for (unsigned int p = 0; p < width * height; p++) {
         float d[3];
-        imp_camera_direction(&s->camera, width, height, o.seed, 0, p, d);
+        imp_camera_direction(&s->camera, width, height, o.sppm.seed, 0, p, d);
         idmr_ray ray;
         trace_set_ray(&ray, s->camera.origin, d, 0.0f, INFINITY);
         idmr_hit hit;
@@ -385,7 +385,7 @@ static void test_camera_pass_through_mirror(void **state)
     size_t valid = 0;
     for (unsigned int p = 0; p < pixels; p++) {
         float d[3];
-        imp_camera_direction(&s->camera, 48, 40, o.seed, 0, p, d);
+        imp_camera_direction(&s->camera, 48, 40, o.sppm.seed, 0, p, d);
         expected_mirror += idmr_eq2_weight(nm[0], nm[1], nm[2], d[0], d[1], d[2]);
         /* hit on the mirror plane x + z = -2, reflection about its normal */
         double t = -2.0 / (d[0] + d[2]);
@@ -575,7 +575,7 @@ static void test_gather_and_paths_on_glass_of_water(void **state)
     importance_snapshot snap = {0};
     importance_options o;
     small_options(&o, 1, 20000, &snap);
-    o.resolution = 0.05f;
+    o.sppm.resolution = 0.05f;
     importance_result r;
     run_or_fail(s, &o, &r);
     expect_all_finite(&r);
@@ -892,9 +892,9 @@ static void cornell_run(const scene *s, const bvh *b, unsigned int seed, size_t 
 {
     importance_options o;
     small_options(&o, 2, 20000, NULL);
-    o.resolution = 0.25f;
-    o.seed = seed;
-    o.local_size = local;
+    o.sppm.resolution = 0.25f;
+    o.sppm.seed = seed;
+    o.sppm.local_size = local;
     run_on_bvh(s, b, &o, r);
 }
 
@@ -1115,7 +1115,7 @@ static void test_scale_invariance(void **state)
         assert_true(meshes <= 16);
         importance_options o;
         small_options(&o, 2, 20000, NULL);
-        o.resolution = 0.25f;
+        o.sppm.resolution = 0.25f;
         importance_result r;
         run_or_fail(s, &o, &r);
         expect_all_finite(&r);
@@ -1165,7 +1165,7 @@ static void test_convergence_and_early_stop(void **state)
     small_options(&o, 1, 20000, NULL);
     importance_result one, two;
     run_or_fail(s, &o, &one);
-    o.iterations = 2;
+    o.sppm.iterations = 2;
     run_or_fail(s, &o, &two);
     double change = 0, magnitude = 0;
     for (size_t t = 0; t < s->triangle_count; t++) {
@@ -1181,7 +1181,7 @@ static void test_convergence_and_early_stop(void **state)
     importance_result_free(&one);
     importance_result_free(&two);
 
-    o.iterations = 60;
+    o.sppm.iterations = 60;
     o.tolerance = 1e-3;
     importance_result r;
     run_or_fail(s, &o, &r);
@@ -1193,15 +1193,15 @@ static void test_convergence_and_early_stop(void **state)
             stop = (int)n + 1;
     }
     print_message("  tolerance %.0e: stopped after %u of %u iterations; Δ_1 %.3g, last %.3g\n",
-                  o.tolerance, r.iterations, o.iterations, r.convergence[0],
+                  o.tolerance, r.iterations, o.sppm.iterations, r.convergence[0],
                   r.convergence[r.iterations - 1]);
     assert_true(r.convergence[0] == 1.0);
-    assert_true(r.iterations < o.iterations);
+    assert_true(r.iterations < o.sppm.iterations);
     assert_int_equal(stop, (int)r.iterations); /* stopped at the first calm triple */
     double r1 = 5.0 * imp_scene_diagonal(s) / (r.width + r.height), r2 = r1 * r1;
     for (unsigned int n = 0; n < r.iterations; n++) {
         assert_float_equal(r.radius[n], sqrt(r2), 1e-6 * sqrt(r2));
-        r2 *= (n + 1 + o.alpha) / (n + 2.0);
+        r2 *= (n + 1 + o.sppm.alpha) / (n + 2.0);
     }
     importance_result_free(&r);
     scene_free(s);

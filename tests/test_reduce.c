@@ -63,9 +63,9 @@ static void small_options(reduce_options *o)
 {
     reduce_options_default(o);
     o->target = 0.1;
-    o->importance.iterations = 3;
-    o->importance.photons = 20000;
-    o->importance.progress = 0;
+    o->importance.sppm.iterations = 3;
+    o->importance.sppm.photons = 20000;
+    o->importance.sppm.progress = 0;
     o->threads = 2;
 }
 

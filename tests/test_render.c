@@ -61,10 +61,10 @@ static void render_or_fail(const scene *s, unsigned int iterations, unsigned int
 {
     render_options o;
     render_options_default(&o);
-    o.iterations = iterations;
-    o.photons = photons;
+    o.sppm.iterations = iterations;
+    o.sppm.photons = photons;
     o.snapshot = snapshot;
-    o.local_size = local_size;
+    o.sppm.local_size = local_size;
     bvh b;
     if (bvh_build(s, &b))
         fail_msg("bvh_build: %s", error_message());

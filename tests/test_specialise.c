@@ -72,10 +72,10 @@ static void run_pass(const scene *s, const bvh *b, int generic, float gamma,
 {
     importance_options o;
     importance_options_default(&o);
-    o.iterations = 2;
-    o.photons = 20000;
-    o.resolution = 0.25f;
-    o.generic = generic;
+    o.sppm.iterations = 2;
+    o.sppm.photons = 20000;
+    o.sppm.resolution = 0.25f;
+    o.sppm.generic = generic;
     o.gamma = gamma;
     if (importance_run(&dev, s, b, &o, r))
         fail_msg("%s", error_message());
@@ -109,10 +109,10 @@ static void render_scene(const scene *s, const bvh *b, int generic, render_resul
 {
     render_options o;
     render_options_default(&o);
-    o.iterations = 2;
-    o.photons = 20000;
-    o.resolution = 0.25f;
-    o.generic = generic;
+    o.sppm.iterations = 2;
+    o.sppm.photons = 20000;
+    o.sppm.resolution = 0.25f;
+    o.sppm.generic = generic;
     if (render_run(&dev, s, b, &o, r))
         fail_msg("%s", error_message());
 }

@@ -391,38 +391,35 @@ enum {
     OPT_EXPOSURE,
 };
 
-/* Options of the importance pass, shared by `importance` and `reduce`. */
-#define IMPORTANCE_LONG_OPTIONS                                                             \
+/* Options of the SPPM core, shared by `importance`, `reduce` and `render`. */
+#define SPPM_LONG_OPTIONS                                                                   \
     {"output", required_argument, NULL, 'o'},                                               \
         {"iterations", required_argument, NULL, OPT_ITERATIONS},                            \
-        {"tolerance", required_argument, NULL, OPT_TOLERANCE},                              \
         {"photons", required_argument, NULL, OPT_PHOTONS},                                  \
-        {"gamma", required_argument, NULL, OPT_GAMMA},                                      \
         {"alpha", required_argument, NULL, OPT_ALPHA},                                      \
         {"resolution", required_argument, NULL, OPT_RESOLUTION},                            \
         {"seed", required_argument, NULL, OPT_SEED},                                        \
+        {"time-limit", required_argument, NULL, OPT_TIME_LIMIT},                            \
         {"device", required_argument, NULL, OPT_DEVICE},                                    \
         {"quiet", no_argument, NULL, OPT_QUIET},                                            \
         {"local-size", required_argument, NULL, OPT_LOCAL_SIZE},                            \
         {"generic", no_argument, NULL, OPT_GENERIC}
 
-/* Applies importance option `c`; returns 1 if it was one, 0 if not, -1 on a bad value. */
-static int parse_importance_option(int c, importance_options *o, int *device_index)
+/* Options of the importance pass, shared by `importance` and `reduce`. */
+#define IMPORTANCE_LONG_OPTIONS                                                             \
+    SPPM_LONG_OPTIONS, {"tolerance", required_argument, NULL, OPT_TOLERANCE},               \
+        {"gamma", required_argument, NULL, OPT_GAMMA}
+
+/* Applies SPPM option `c`; returns 1 if it was one, 0 if not, -1 on a bad value. */
+static int parse_sppm_option(int c, sppm_options *o, int *device_index)
 {
     double value;
     unsigned int whole;
     switch (c) {
     case OPT_ITERATIONS:
         return parse_unsigned("--iterations", optarg, 1, 1000000, &o->iterations) ? -1 : 1;
-    case OPT_TOLERANCE:
-        return parse_double("--tolerance", optarg, 0, 1e30, &o->tolerance) ? -1 : 1;
     case OPT_PHOTONS:
         return parse_unsigned("--photons", optarg, 1, 1u << 26, &o->photons) ? -1 : 1;
-    case OPT_GAMMA:
-        if (parse_double("--gamma", optarg, 0, 1e6, &value))
-            return -1;
-        o->gamma = (float)value;
-        return 1;
     case OPT_ALPHA:
         if (parse_double("--alpha", optarg, 1e-3, 1, &value))
             return -1;
@@ -435,6 +432,8 @@ static int parse_importance_option(int c, importance_options *o, int *device_ind
         return 1;
     case OPT_SEED:
         return parse_unsigned("--seed", optarg, 0, 0xffffffffu, &o->seed) ? -1 : 1;
+    case OPT_TIME_LIMIT:
+        return parse_double("--time-limit", optarg, 0, 1e9, &o->time_limit) ? -1 : 1;
     case OPT_DEVICE:
         if (parse_unsigned("--device", optarg, 0, 1000, &whole))
             return -1;
@@ -456,12 +455,29 @@ static int parse_importance_option(int c, importance_options *o, int *device_ind
     }
 }
 
+/* Applies importance option `c` (the SPPM ones included); returns as parse_sppm_option(). */
+static int parse_importance_option(int c, importance_options *o, int *device_index)
+{
+    double value;
+    switch (c) {
+    case OPT_TOLERANCE:
+        return parse_double("--tolerance", optarg, 0, 1e30, &o->tolerance) ? -1 : 1;
+    case OPT_GAMMA:
+        if (parse_double("--gamma", optarg, 0, 1e6, &value))
+            return -1;
+        o->gamma = (float)value;
+        return 1;
+    default:
+        return parse_sppm_option(c, &o->sppm, device_index);
+    }
+}
+
 static int command_importance(int argc, char **argv)
 {
     static const struct option options[] = {IMPORTANCE_LONG_OPTIONS, {0, 0, 0, 0}};
     importance_options o;
     importance_options_default(&o);
-    o.progress = 1;
+    o.sppm.progress = 1;
     const char *output = NULL;
     int device_index = -1;
     int c;
@@ -528,48 +544,30 @@ static void image_stem(const char *image, char *stem, size_t size)
 static int command_render(int argc, char **argv)
 {
     static const struct option options[] = {IMPORTANCE_LONG_OPTIONS,
-                                            {"time-limit", required_argument, NULL, OPT_TIME_LIMIT},
                                             {"exposure", required_argument, NULL, OPT_EXPOSURE},
                                             {0, 0, 0, 0}};
     render_options o;
     render_options_default(&o);
-    o.progress = 1;
-    /* The importance options the renderer shares are parsed into an importance_options and
-     * copied; --gamma and --tolerance mean nothing to a render. */
-    importance_options shared;
-    importance_options_default(&shared);
-    shared.iterations = o.iterations;
-    shared.progress = 1;
+    o.sppm.progress = 1;
     const char *output = NULL;
     double exposure = 0;
     int device_index = -1, c;
     while ((c = getopt_long(argc, argv, "o:", options, NULL)) != -1) {
         if (c == 'o') {
             output = optarg;
-        } else if (c == OPT_TIME_LIMIT) {
-            if (parse_double("--time-limit", optarg, 0, 1e9, &o.time_limit))
-                return fail();
         } else if (c == OPT_EXPOSURE) {
             if (parse_double("--exposure", optarg, -64, 64, &exposure))
                 return fail();
         } else if (c == OPT_GAMMA || c == OPT_TOLERANCE) {
             return usage_error("render: %s is an importance pass option", argv[optind - 1]);
         } else {
-            int parsed = parse_importance_option(c, &shared, &device_index);
+            int parsed = parse_sppm_option(c, &o.sppm, &device_index);
             if (parsed < 0)
                 return fail();
             if (parsed == 0)
                 return usage_error("render: unknown option %s", argv[optind - 1]);
         }
     }
-    o.iterations = shared.iterations;
-    o.photons = shared.photons;
-    o.seed = shared.seed;
-    o.alpha = shared.alpha;
-    o.resolution = shared.resolution;
-    o.local_size = shared.local_size;
-    o.generic = shared.generic;
-    o.progress = shared.progress;
     if (optind != argc - 1)
         return usage_error("render: expected one SCENE argument%s", "");
     if (!output)
@@ -692,7 +690,7 @@ static int command_reduce(int argc, char **argv)
         {0, 0, 0, 0}};
     reduce_options o;
     reduce_options_default(&o);
-    o.importance.progress = 1;
+    o.importance.sppm.progress = 1;
     const char *output = NULL;
     int device_index = -1, have_target = 0;
     const char **keep = xcalloc((size_t)argc + 1, sizeof *keep);

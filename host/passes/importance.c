@@ -24,17 +24,22 @@
 void importance_options_default(importance_options *o)
 {
     memset(o, 0, sizeof *o);
-    o->iterations = 100;
-    o->photons = 0;
+    sppm_options_default(&o->sppm, 100);
     o->gamma = 1.0f;
-    o->seed = 1;
-    o->alpha = 0.7f;
     o->tolerance = 0.0;
-    o->resolution = 1.0f;
     o->bookkeeping = 1;
 }
 
-unsigned int importance_default_photons(const device *d)
+void sppm_options_default(sppm_options *o, unsigned int iterations)
+{
+    memset(o, 0, sizeof *o);
+    o->iterations = iterations;
+    o->seed = 1;
+    o->alpha = 0.7f;
+    o->resolution = 1.0f;
+}
+
+unsigned int sppm_default_photons(const device *d)
 {
     return strcmp(d->info.kind, "gpu") == 0 ? 1000000u : 500000u;
 }
@@ -72,7 +77,7 @@ static int pass_build(pass *p, const scene *s, const importance_options *o, impo
     snprintf(extra, sizeof extra, "-D IDMR_BOOKKEEPING=%d -D IDMR_CAMERA_IMPORTANCE=%d",
              o->bookkeeping ? 1 : 0, o->gamma > 0 ? 1 : 0);
     r->build_options =
-        device_build_options(p->dev, o->generic ? IDMR_FEATURES_ALL : s->features, extra);
+        device_build_options(p->dev, o->sppm.generic ? IDMR_FEATURES_ALL : s->features, extra);
     if (device_build_program(p->dev, "importance.cl", r->build_options, &p->program))
         return -1;
     struct {
@@ -111,7 +116,7 @@ static int pass_allocate(pass *p, const scene *s, unsigned int photons)
 static int pass_iterate(pass *p, const scene *s, const importance_options *o,
                         idmr_sppm_params *params, importance_result *r)
 {
-    size_t local = o->local_size;
+    size_t local = o->sppm.local_size;
     double t0 = monotonic_seconds();
     idmr_camera camera = s->camera;
     if (DEVICE_SET_ARGS(p->camera, "camera_pass", DEVICE_ARG(*params), DEVICE_ARG(camera),
@@ -282,19 +287,19 @@ int importance_run(device *d, const scene *s, const bvh *b, const importance_opt
                          "%s: the scene has no emitter that idmr simulates (area, point, spot, "
                          "directional): no light can reach the camera",
                          s->file);
-    if (o->iterations == 0)
+    if (o->sppm.iterations == 0)
         return error_set(IDMR_EXIT_INPUT, "the importance pass needs at least one iteration");
-    if (!(o->resolution > 0) || !(o->alpha > 0 && o->alpha <= 1) || !(o->gamma >= 0))
+    if (!(o->sppm.resolution > 0) || !(o->sppm.alpha > 0 && o->sppm.alpha <= 1) || !(o->gamma >= 0))
         return error_set(IDMR_EXIT_INPUT, "resolution must be > 0, alpha in (0, 1], gamma >= 0");
 
     r->triangle_count = (size_t)s->triangle_count;
     r->camera = xcalloc(r->triangle_count + 1, sizeof *r->camera);
     r->light = xcalloc(r->triangle_count + 1, sizeof *r->light);
-    r->convergence = xcalloc(o->iterations, sizeof *r->convergence);
-    r->radius = xcalloc(o->iterations, sizeof *r->radius);
-    r->photons = o->photons ? o->photons : importance_default_photons(d);
-    double w = fmax(1.0, floor(s->camera.width * o->resolution + 0.5));
-    double h = fmax(1.0, floor(s->camera.height * o->resolution + 0.5));
+    r->convergence = xcalloc(o->sppm.iterations, sizeof *r->convergence);
+    r->radius = xcalloc(o->sppm.iterations, sizeof *r->radius);
+    r->photons = o->sppm.photons ? o->sppm.photons : sppm_default_photons(d);
+    double w = fmax(1.0, floor(s->camera.width * o->sppm.resolution + 0.5));
+    double h = fmax(1.0, floor(s->camera.height * o->sppm.resolution + 0.5));
     if (w * h > 1 << 26)
         return error_set(IDMR_EXIT_INPUT, "hit-point image %gx%g is too large", w, h);
     r->width = (unsigned int)w;
@@ -319,7 +324,7 @@ int importance_run(device *d, const scene *s, const bvh *b, const importance_opt
     double radius2 = pass_initial_radius2(s, r->width, r->height);
     idmr_sppm_params params;
     memset(&params, 0, sizeof params);
-    params.seed = o->seed;
+    params.seed = o->sppm.seed;
     params.width = r->width;
     params.height = r->height;
     params.path_count = r->photons;
@@ -333,10 +338,10 @@ int importance_run(device *d, const scene *s, const bvh *b, const importance_opt
     double *previous_light = xcalloc(r->triangle_count + 1, sizeof *previous_light);
     uint64_t *scratch = xmalloc((r->triangle_count + 1) * sizeof *scratch);
     progress bar;
-    progress_begin(&bar, "importance", o->iterations, o->progress);
+    progress_begin(&bar, "importance", o->sppm.iterations, o->sppm.progress);
     double start = monotonic_seconds();
     unsigned int calm = 0;
-    for (unsigned int n = 0; n < o->iterations && !status; n++) {
+    for (unsigned int n = 0; n < o->sppm.iterations && !status; n++) {
         params.iteration = n;
         pass_grid_place(&p.grid, s, radius2, &params);
         r->radius[n] = params.radius;
@@ -355,7 +360,7 @@ int importance_run(device *d, const scene *s, const bvh *b, const importance_opt
         char detail[64];
         snprintf(detail, sizeof detail, "change %.2e", r->convergence[n]);
         progress_update(&bar, n + 1, detail);
-        radius2 = pass_next_radius2(radius2, n, o->alpha);
+        radius2 = pass_next_radius2(radius2, n, o->sppm.alpha);
         calm = (o->tolerance > 0 && r->convergence[n] < o->tolerance) ? calm + 1 : 0;
         if (calm >= STOP_AFTER_CALM_ITERATIONS)
             break;

@@ -31,6 +31,7 @@
 
 #include "device/bvh.h"
 #include "device/device.h"
+#include "passes/sppm.h"
 #include "idmr/importance_layout.h"
 #include "idmr/sppm_layout.h"
 #include "core/scene.h"
@@ -49,17 +50,10 @@ typedef struct importance_snapshot {
 void importance_snapshot_free(importance_snapshot *snapshot);
 
 typedef struct importance_options {
-    unsigned int iterations; /* at most this many (default 100) */
-    unsigned int photons;    /* paths per iteration; 0: importance_default_photons() */
+    sppm_options sppm;       /* iterations default to 100 */
     float gamma;             /* hit point importance factor γ (default 1) */
-    unsigned int seed;       /* default 1 */
-    float alpha;             /* SPPM radius reduction (default 0.7) */
     double tolerance;        /* stop once Δ stays below it; 0: run all iterations */
-    float resolution;        /* scale of the scene's film for the hit-point image (default 1) */
-    size_t local_size;       /* work-group size; 0 lets the runtime choose */
     int bookkeeping;         /* 1; 0 compiles the importance accumulation out (benchmark) */
-    int generic;             /* build the all-features program instead of the scene's */
-    int progress;            /* report progress on stderr */
     importance_snapshot *snapshot; /* when not NULL, receives the last iteration's buffers */
 } importance_options;
 
@@ -87,11 +81,6 @@ typedef struct importance_result {
 } importance_result;
 
 void importance_options_default(importance_options *o);
-
-/* Photon paths per iteration when none are asked for: 1,000,000 on a GPU (the paper's
- * figure); 500,000 on a CPU, which keeps an iteration of the DRAGON CORNELL BOX (871k
- * triangles) near 0.68 s on 2 cores with PoCL (make bench). */
-unsigned int importance_default_photons(const device *d);
 
 /* Runs the pass. The scene needs a camera and at least one light. Returns 0, or -1 with the
  * error set. `r` is freed with importance_result_free() either way. */

@@ -36,12 +36,12 @@ cJSON *importance_report_json(const scene *s, const device *d, const importance_
     cJSON_AddStringToObject(root, "scene", s->file);
     cJSON_AddStringToObject(root, "device", d->info.name);
     cJSON_AddNumberToObject(root, "iterations", r->iterations);
-    cJSON_AddNumberToObject(root, "iterations_requested", o->iterations);
+    cJSON_AddNumberToObject(root, "iterations_requested", o->sppm.iterations);
     cJSON_AddNumberToObject(root, "tolerance", o->tolerance);
     cJSON_AddNumberToObject(root, "photons_per_iteration", r->photons);
     cJSON_AddNumberToObject(root, "gamma", o->gamma);
-    cJSON_AddNumberToObject(root, "seed", o->seed);
-    cJSON_AddNumberToObject(root, "alpha", o->alpha);
+    cJSON_AddNumberToObject(root, "seed", o->sppm.seed);
+    cJSON_AddNumberToObject(root, "alpha", o->sppm.alpha);
     cJSON *film = cJSON_AddArrayToObject(root, "hit_point_image");
     cJSON_AddItemToArray(film, cJSON_CreateNumber(r->width));
     cJSON_AddItemToArray(film, cJSON_CreateNumber(r->height));

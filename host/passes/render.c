@@ -22,10 +22,7 @@
 void render_options_default(render_options *o)
 {
     memset(o, 0, sizeof *o);
-    o->iterations = 64;
-    o->seed = 1;
-    o->alpha = 0.7f;
-    o->resolution = 1.0f;
+    sppm_options_default(&o->sppm, 64);
 }
 
 void render_snapshot_free(render_snapshot *snapshot)
@@ -64,7 +61,7 @@ static void renderer_release(renderer *p)
 static int renderer_build(renderer *p, const scene *s, const render_options *o, render_result *r)
 {
     double start = monotonic_seconds();
-    r->build_options = device_build_options(p->dev, o->generic ? IDMR_FEATURES_ALL : s->features,
+    r->build_options = device_build_options(p->dev, o->sppm.generic ? IDMR_FEATURES_ALL : s->features,
                                             NULL);
     if (device_build_program(p->dev, "render.cl", r->build_options, &p->program) ||
         device_create_kernel(p->program, "render_camera", &p->camera) ||
@@ -121,7 +118,7 @@ static double fixed_scale(const scene *s, const device_scene *ds, unsigned int p
 static int renderer_iterate(renderer *p, const scene *s, const render_options *o,
                             const idmr_sppm_params *params, render_result *r)
 {
-    size_t local = o->local_size;
+    size_t local = o->sppm.local_size;
     double t0 = monotonic_seconds();
     idmr_camera camera = s->camera;
     if (DEVICE_SET_ARGS(p->camera, "render_camera", DEVICE_ARG(*params), DEVICE_ARG(camera),
@@ -235,17 +232,17 @@ int render_run(device *d, const scene *s, const bvh *b, const render_options *o,
                          "%s: the scene has no emitter that idmr simulates (area, point, spot, "
                          "directional, constant, envmap): the image would be black",
                          s->file);
-    if (o->iterations == 0)
+    if (o->sppm.iterations == 0)
         return error_set(IDMR_EXIT_INPUT, "render: at least one iteration is needed");
-    if (!(o->resolution > 0) || !(o->alpha > 0 && o->alpha <= 1))
+    if (!(o->sppm.resolution > 0) || !(o->sppm.alpha > 0 && o->sppm.alpha <= 1))
         return error_set(IDMR_EXIT_INPUT, "render: resolution must be > 0 and alpha in (0, 1]");
-    double w = fmax(1.0, floor(s->camera.width * o->resolution + 0.5));
-    double h = fmax(1.0, floor(s->camera.height * o->resolution + 0.5));
+    double w = fmax(1.0, floor(s->camera.width * o->sppm.resolution + 0.5));
+    double h = fmax(1.0, floor(s->camera.height * o->sppm.resolution + 0.5));
     if (w * h > (1 << 26))
         return error_set(IDMR_EXIT_INPUT, "render: image %gx%g is too large", w, h);
     r->width = (unsigned int)w;
     r->height = (unsigned int)h;
-    r->photons = o->photons ? o->photons : importance_default_photons(d);
+    r->photons = o->sppm.photons ? o->sppm.photons : sppm_default_photons(d);
     if ((uint64_t)r->photons * IDMR_PATH_VERTICES > 0xffffffffu)
         return error_set(IDMR_EXIT_INPUT, "render: %u photon paths per iteration are too many",
                          r->photons);
@@ -265,7 +262,7 @@ int render_run(device *d, const scene *s, const bvh *b, const render_options *o,
 
     idmr_sppm_params params;
     memset(&params, 0, sizeof params);
-    params.seed = o->seed;
+    params.seed = o->sppm.seed;
     params.width = r->width;
     params.height = r->height;
     params.path_count = r->photons;
@@ -285,9 +282,9 @@ int render_run(device *d, const scene *s, const bvh *b, const render_options *o,
     idmr_render_hit *hits = xmalloc((size_t)p.pixels * sizeof *hits);
     double radius2 = pass_initial_radius2(s, r->width, r->height);
     progress bar;
-    progress_begin(&bar, "render", o->iterations, o->progress);
+    progress_begin(&bar, "render", o->sppm.iterations, o->sppm.progress);
     double start = monotonic_seconds();
-    for (unsigned int n = 0; n < o->iterations && !status; n++) {
+    for (unsigned int n = 0; n < o->sppm.iterations && !status; n++) {
         params.iteration = n;
         pass_grid_place(&p.grid, s, radius2, &params);
         if (n == 0)
@@ -305,8 +302,8 @@ int render_run(device *d, const scene *s, const bvh *b, const render_options *o,
         char detail[64];
         snprintf(detail, sizeof detail, "%.2f s/iteration", elapsed / r->iterations);
         progress_update(&bar, n + 1, detail);
-        radius2 = pass_next_radius2(radius2, n, o->alpha);
-        if (o->time_limit > 0 && elapsed >= o->time_limit)
+        radius2 = pass_next_radius2(radius2, n, o->sppm.alpha);
+        if (o->sppm.time_limit > 0 && elapsed >= o->sppm.time_limit)
             break;
     }
     progress_end(&bar);
@@ -361,8 +358,8 @@ cJSON *render_report_json(const scene *s, const device *d, const render_options 
     cJSON_AddNumberToObject(root, "iterations", r->iterations);
     cJSON_AddNumberToObject(root, "photons_per_iteration", r->photons);
     cJSON_AddNumberToObject(root, "photons_stored_first_iteration", (double)r->photons_stored);
-    cJSON_AddNumberToObject(root, "seed", o->seed);
-    cJSON_AddNumberToObject(root, "alpha", o->alpha);
+    cJSON_AddNumberToObject(root, "seed", o->sppm.seed);
+    cJSON_AddNumberToObject(root, "alpha", o->sppm.alpha);
     cJSON_AddNumberToObject(root, "first_radius", r->first_radius);
     cJSON_AddNumberToObject(root, "last_radius", r->last_radius);
     cJSON_AddNumberToObject(root, "triangles", (double)s->triangle_count);

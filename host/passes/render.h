@@ -32,6 +32,7 @@
 
 #include "device/bvh.h"
 #include "device/device.h"
+#include "passes/sppm.h"
 #include "idmr/importance_layout.h"
 #include "idmr/sppm_layout.h"
 #include "idmr/render_layout.h"
@@ -48,15 +49,7 @@ typedef struct render_snapshot {
 void render_snapshot_free(render_snapshot *snapshot);
 
 typedef struct render_options {
-    unsigned int iterations; /* at most this many (default 64) */
-    unsigned int photons;    /* photon paths per iteration; 0: importance_default_photons() */
-    double time_limit;       /* seconds; > 0 stops after the iteration in which it passes */
-    unsigned int seed;       /* default 1 */
-    float alpha;             /* radius reduction (default 0.7) */
-    float resolution;        /* scale of the scene's film (default 1) */
-    size_t local_size;       /* work-group size; 0 lets the runtime choose */
-    int generic;             /* build the all-features program instead of the scene's */
-    int progress;            /* report progress on stderr */
+    sppm_options sppm;         /* iterations default to 64 */
     render_snapshot *snapshot; /* when not NULL, receives the last iteration's buffers */
 } render_options;
 

@@ -330,7 +330,7 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
     for (size_t m = 0; m < st.count && !status; m++) /* no plan if an earlier stage failed */
         redo[m] = (unsigned char)st.plan.decimate[m];
     progress bar;
-    progress_begin(&bar, "decimation", COMPENSATION_ROUNDS + 1, o->importance.progress);
+    progress_begin(&bar, "decimation", COMPENSATION_ROUNDS + 1, o->importance.sppm.progress);
     for (unsigned int round = 0; !status && round <= COMPENSATION_ROUNDS; round++) {
         status = decimate_selected(&st, o->method == DECIMATE_IMPORTANCE && !o->quadric_collapses
                                             ? DECIMATE_IMPORTANCE
