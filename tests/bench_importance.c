@@ -31,7 +31,7 @@ static double seconds_per_iteration(device *d, const scene *s, const bvh *b, int
         fprintf(stderr, "bench_importance: %s\n", error_message());
         exit(1);
     }
-    return r->seconds.total / r->iterations;
+    return r->sppm.seconds.total / r->sppm.iterations;
 }
 
 int main(void)
@@ -61,11 +61,11 @@ int main(void)
             if (seconds < best[variant]) {
                 best[variant] = seconds;
                 double *st = stage[variant];
-                st[0] = r.seconds.camera / r.iterations;
-                st[1] = r.seconds.photon / r.iterations;
-                st[2] = r.seconds.grid / r.iterations;
-                st[3] = r.seconds.gather / r.iterations;
-                st[4] = r.seconds.path / r.iterations;
+                st[0] = r.sppm.seconds.camera / r.sppm.iterations;
+                st[1] = r.sppm.seconds.photon / r.sppm.iterations;
+                st[2] = r.sppm.seconds.grid / r.sppm.iterations;
+                st[3] = r.sppm.seconds.gather / r.sppm.iterations;
+                st[4] = r.path_seconds / r.sppm.iterations;
             }
             importance_result_free(&r);
         }

@@ -41,7 +41,7 @@ static double per_iteration(device *d, const scene *s, const bvh *b, enum pass p
             fprintf(stderr, "bench_specialise: %s\n", error_message());
             exit(1);
         }
-        double seconds = r.seconds.total / r.iterations;
+        double seconds = r.sppm.seconds.total / r.sppm.iterations;
         render_result_free(&r);
         return seconds;
     }
@@ -54,7 +54,7 @@ static double per_iteration(device *d, const scene *s, const bvh *b, enum pass p
         fprintf(stderr, "bench_specialise: %s\n", error_message());
         exit(1);
     }
-    double seconds = r.seconds.total / r.iterations;
+    double seconds = r.sppm.seconds.total / r.sppm.iterations;
     importance_result_free(&r);
     return seconds;
 }
@@ -94,23 +94,24 @@ static void bench_build(device *d)
         return;
     setenv("IDMR_CACHE_DIR", cache, 1);
     char *options = device_build_options(d, IDMR_FEATURE_DIFFUSE | IDMR_FEATURE_AREA,
-                                         "-D IDMR_BOOKKEEPING=1 -D IDMR_CAMERA_IMPORTANCE=1");
+                                         "-D IDMR_SPPM_PASS=1 -D IDMR_BOOKKEEPING=1 "
+                                         "-D IDMR_CAMERA_IMPORTANCE=1");
     cl_program program;
     double t0 = monotonic_seconds();
-    if (device_build_program(d, "importance.cl", options, &program)) {
+    if (device_build_program(d, "sppm.cl", options, &program)) {
         fprintf(stderr, "bench_specialise: %s\n", error_message());
         exit(1);
     }
     double cold = monotonic_seconds() - t0;
     clReleaseProgram(program);
     t0 = monotonic_seconds();
-    if (device_build_program(d, "importance.cl", options, &program) || !device_last_build_cached()) {
+    if (device_build_program(d, "sppm.cl", options, &program) || !device_last_build_cached()) {
         fprintf(stderr, "bench_specialise: the second build did not come from the cache\n");
         exit(1);
     }
     double cached = monotonic_seconds() - t0;
     clReleaseProgram(program);
-    printf("program-build: kernel=importance.cl cold=%.2f cached=%.3f speedup=%.0f\n", cold, cached,
+    printf("program-build: kernel=sppm.cl pass=importance cold=%.2f cached=%.3f speedup=%.0f\n", cold, cached,
            cold / cached);
     free(options);
     char command[256];

@@ -172,20 +172,19 @@ static inline void imp_look_at(scene *s, const float origin[3], const float targ
 }
 
 /* The camera pass's ray direction for pixel `pixel` of a width x height hit-point image, from
- * the same rng stream (x jitter, then y jitter) and the same float formula as camera_direction
- * in kernels/scene.h. */
+ * the same rng stream (x jitter, then y jitter) and the shared formula idmr_camera_direction()
+ * (include/idmr/camera.h), as camera_ray() in kernels/lib/paths.h takes them. */
 static inline void imp_camera_direction(const idmr_camera *c, unsigned int width,
                                         unsigned int height, unsigned int seed,
                                         unsigned int iteration, unsigned int pixel, float d[3])
 {
-    idmr_rng rng = idmr_rng_init(seed, iteration, IDMR_PASS_CAMERA, pixel);
-    unsigned int x = pixel % width, y = pixel / width;
-    float jx = idmr_rng_float(&rng);
-    float jy = idmr_rng_float(&rng);
-    float sx = (2.0f * ((float)x + jx) / (float)width - 1.0f) * c->tan_half_x;
-    float sy = (1.0f - 2.0f * ((float)y + jy) / (float)height) * c->tan_half_y;
-    for (int k = 0; k < 3; k++)
-        d[k] = (c->forward[k] + sx * c->right[k]) + sy * c->up[k];
+    idmr_rng rng = idmr_rng_init(seed, iteration, IDMR_STREAM_IMPORTANCE_CAMERA, pixel);
+    idmr_camera film = *c;
+    film.width = width;
+    film.height = height;
+    float film_x = (float)(pixel % width) + idmr_rng_float(&rng);
+    float film_y = (float)(pixel / width) + idmr_rng_float(&rng);
+    idmr_camera_direction(&film, film_x, film_y, d);
     imp_normalize(d);
 }
 

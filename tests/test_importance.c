@@ -1,4 +1,4 @@
-/* test_importance.c — the importance pass (kernels/importance.cl, host/importance.c) against
+/* test_importance.c — the importance pass (kernels/sppm.cl, host/passes/importance.c) against
  * host references and exact formulas.
  *
  *   Eq. 2 on the host (edge cases), and on the device against the same jittered camera rays
@@ -214,9 +214,9 @@ static void test_camera_weight_head_on_quad(void **state)
         expected[y < x ? 0 : 1] += w;
         if (fabs(x - y) < 1e-4)
             ambiguous += w;
-        assert_true(snap.hit_points[p].valid);
-        assert_float_equal(snap.hit_points[p].position[0], x, 1e-4);
-        assert_float_equal(snap.hit_points[p].position[1], y, 1e-4);
+        assert_true(snap.core.hit_points[p].valid);
+        assert_float_equal(snap.core.hit_points[p].position[0], x, 1e-4);
+        assert_float_equal(snap.core.hit_points[p].position[1], y, 1e-4);
     }
     double bound = pixels * (0.5 * FIXED_UNIT + 1e-6) + ambiguous;
     for (int t = 0; t < 2; t++) {
@@ -265,9 +265,9 @@ static void test_camera_pass_matches_embree(void **state)
     importance_result r;
     run_or_fail(s, &o, &r);
     unsigned int width = 96, height = 64;
-    assert_int_equal(r.width, width);
-    assert_int_equal(r.height, height);
-    assert_int_equal(snap.params.width, width);
+    assert_int_equal(r.sppm.width, width);
+    assert_int_equal(r.sppm.height, height);
+    assert_int_equal(snap.core.params.width, width);
 
     size_t triangles = (size_t)s->triangle_count;
     double *expected = calloc(triangles, sizeof *expected);
@@ -282,7 +282,7 @@ static void test_camera_pass_matches_embree(void **state)
         trace_set_ray(&ray, s->camera.origin, d, 0.0f, INFINITY);
         idmr_hit hit;
         trace_embree_closest(es, &ray, &hit);
-        const idmr_hit_point *hp = &snap.hit_points[p];
+        const idmr_hit_point *hp = &snap.core.hit_points[p];
         if (hit.triangle == IDMR_NO_HIT) {
             valid_mismatches += hp->valid != 0;
             continue;
@@ -395,7 +395,7 @@ static void test_camera_pass_through_mirror(void **state)
             at[k] = (float)(t * d[k]);
         }
         expected_wall += idmr_eq2_weight(nw[0], nw[1], nw[2], out[0], out[1], out[2]);
-        const idmr_hit_point *hp = &snap.hit_points[p];
+        const idmr_hit_point *hp = &snap.core.hit_points[p];
         valid += hp->valid;
         if (!hp->valid)
             continue;
@@ -428,20 +428,20 @@ static void test_camera_pass_through_mirror(void **state)
  * the kernel's float test and fails on a mismatch; returns the valid hit points. */
 static unsigned int expect_gather_counts(const importance_snapshot *snap)
 {
-    const idmr_sppm_params *pp = &snap->params;
+    const idmr_sppm_params *pp = &snap->core.params;
     unsigned int pixels = pp->width * pp->height;
     idmr_hit_point *valid = malloc(pixels * sizeof *valid);
     unsigned int valid_count = 0;
     for (unsigned int i = 0; i < pixels; i++)
-        if (snap->hit_points[i].valid)
-            valid[valid_count++] = snap->hit_points[i];
+        if (snap->core.hit_points[i].valid)
+            valid[valid_count++] = snap->core.hit_points[i];
     float r = pp->radius, r2 = r * r;
     size_t vertices = 0, mismatches = 0, boundary_disagreements = 0, nonzero = 0;
     uint64_t total = 0;
     for (uint32_t path = 0; path < pp->path_count; path++) {
         for (uint32_t j = 0; j < IDMR_PATH_VERTICES; j++) {
             size_t slot = (size_t)path * IDMR_PATH_VERTICES + j;
-            if (j >= snap->path_length[path]) {
+            if (j >= snap->core.path_length[path]) {
                 assert_int_equal(snap->gathered[slot], 0);
                 continue;
             }
@@ -455,7 +455,7 @@ static unsigned int expect_gather_counts(const importance_snapshot *snap)
                 float d2 = dx * dx + dy * dy + dz * dz;
                 float side = hp->normal[0] * v->normal[0] + hp->normal[1] * v->normal[1] +
                              hp->normal[2] * v->normal[2];
-                if (!(side > 1e-3f)) /* the kernel's side test (importance.cl) */
+                if (!(side > 1e-3f)) /* the kernel's side test (kernels/lib/hit_point_grid.h) */
                     continue;
                 count += d2 < r2;
                 near += fabsf(d2 - r2) <= 1e-5f * r2;
@@ -493,7 +493,7 @@ static unsigned int expect_gather_counts(const importance_snapshot *snap)
 static void test_gather_count_matches_brute_force(void **state)
 {
     const importance_snapshot *snap = cornell_pass();
-    const idmr_sppm_params *pp = &snap->params;
+    const idmr_sppm_params *pp = &snap->core.params;
     assert_int_equal(pp->width, 64);
     assert_int_equal(pp->height, 64);
     unsigned int valid = expect_gather_counts(snap);
@@ -513,13 +513,13 @@ static void test_gather_count_matches_brute_force(void **state)
 static void expect_path_importance(const scene *s, const importance_snapshot *snap,
                                    const importance_result *r)
 {
-    const idmr_sppm_params *pp = &snap->params;
+    const idmr_sppm_params *pp = &snap->core.params;
     size_t triangles = (size_t)s->triangle_count;
     uint64_t *expected = calloc(triangles, sizeof *expected);
     double diagonal = imp_scene_diagonal(s);
     size_t vertices = 0, long_paths = 0, empty = 0;
     for (uint32_t path = 0; path < pp->path_count; path++) {
-        uint32_t length = snap->path_length[path];
+        uint32_t length = snap->core.path_length[path];
         assert_true(length <= IDMR_PATH_VERTICES);
         empty += length == 0;
         long_paths += length == IDMR_PATH_VERTICES;
@@ -555,7 +555,7 @@ static void expect_path_importance(const scene *s, const importance_snapshot *sn
                   pp->path_count, vertices, empty, long_paths, nonzero, mismatches);
     assert_int_equal(mismatches, 0);
     assert_true(nonzero > 100);
-    assert_int_equal(r->photon_vertices, vertices);
+    assert_int_equal(r->sppm.photon_records, vertices);
     free(expected);
 }
 
@@ -580,7 +580,7 @@ static void test_gather_and_paths_on_glass_of_water(void **state)
     run_or_fail(s, &o, &r);
     expect_all_finite(&r);
     unsigned int valid = expect_gather_counts(&snap);
-    assert_true(valid > snap.params.width * snap.params.height / 2);
+    assert_true(valid > snap.core.params.width * snap.core.params.height / 2);
     expect_path_importance(s, &snap, &r);
     importance_snapshot_free(&snap);
     importance_result_free(&r);
@@ -620,10 +620,10 @@ static void test_point_light_emission_solid_angle(void **state)
     importance_result r;
     run_or_fail(s, &o, &r);
 
-    size_t n = snap.params.path_count, first = 0, quadrant[4] = {0, 0, 0, 0};
+    size_t n = snap.core.params.path_count, first = 0, quadrant[4] = {0, 0, 0, 0};
     double worst_weight = 0;
     for (size_t p = 0; p < n; p++) {
-        if (snap.path_length[p] == 0)
+        if (snap.core.path_length[p] == 0)
             continue;
         first++;
         const idmr_photon_vertex *vx = &snap.vertices[p * IDMR_PATH_VERTICES];
@@ -679,10 +679,10 @@ static void test_area_light_emission_cosine(void **state)
     importance_result r;
     run_or_fail(s, &o, &r);
 
-    size_t n = snap.params.path_count, first = 0, bins[4] = {0, 0, 0, 0};
+    size_t n = snap.core.params.path_count, first = 0, bins[4] = {0, 0, 0, 0};
     double sum = 0;
     for (size_t p = 0; p < n; p++) {
-        if (snap.path_length[p] == 0)
+        if (snap.core.path_length[p] == 0)
             continue;
         first++;
         const idmr_photon_vertex *vx = &snap.vertices[p * IDMR_PATH_VERTICES];
@@ -751,13 +751,13 @@ static void test_roulette_and_one_sided_back(void **state)
         importance_result r;
         run_or_fail(s, &o, &r);
         size_t on[2] = {0, 0}, going_on[2] = {0, 0};
-        for (size_t p = 0; p < snap.params.path_count; p++) {
-            if (snap.path_length[p] == 0)
+        for (size_t p = 0; p < snap.core.params.path_count; p++) {
+            if (snap.core.path_length[p] == 0)
                 continue;
             const idmr_photon_vertex *vx = &snap.vertices[p * IDMR_PATH_VERTICES];
             int ceiling = vx->triangle >= 2;
             on[ceiling]++;
-            going_on[ceiling] += snap.path_length[p] > 1;
+            going_on[ceiling] += snap.core.path_length[p] > 1;
             if (ceiling)
                 assert_true(vx->normal[1] < -0.999f);
         }
@@ -812,12 +812,12 @@ static void test_hidden_triangle(void **state)
         double light = imp_mesh_total(s, (size_t)wall, r.light);
         double floor_camera = imp_mesh_total(s, (size_t)floor_mesh, r.camera);
         size_t on_wall = 0;
-        for (size_t p = 0; p < snap.params.path_count; p++)
-            for (uint32_t j = 0; j < snap.path_length[p]; j++)
+        for (size_t p = 0; p < snap.core.params.path_count; p++)
+            for (uint32_t j = 0; j < snap.core.path_length[p]; j++)
                 on_wall += snap.vertices[p * IDMR_PATH_VERTICES + j].triangle >= 2;
-        for (unsigned int p = 0; p < snap.params.width * snap.params.height; p++)
-            if (snap.hit_points[p].valid)
-                assert_float_equal(snap.hit_points[p].position[1], 0.0, 1e-5); /* floor only */
+        for (unsigned int p = 0; p < snap.core.params.width * snap.core.params.height; p++)
+            if (snap.core.hit_points[p].valid)
+                assert_float_equal(snap.core.hit_points[p].position[1], 0.0, 1e-5); /* floor only */
         print_message("  wall albedo %.1f: %zu photon vertices on it; camera %.3g, light %.6g "
                       "(floor camera %.1f)\n",
                       albedo[i], on_wall, camera, light, floor_camera);
@@ -863,8 +863,8 @@ static void test_glass_caustic(void **state)
     expect_all_finite(&r);
     size_t floor_mesh = (size_t)imp_mesh_index(s, "floor"), sphere = (size_t)imp_mesh_index(s, "sphere");
     size_t direct = 0, through_glass = 0;
-    for (size_t p = 0; p < snap.params.path_count; p++)
-        for (uint32_t j = 0; j < snap.path_length[p]; j++)
+    for (size_t p = 0; p < snap.core.params.path_count; p++)
+        for (uint32_t j = 0; j < snap.core.path_length[p]; j++)
             if (snap.vertices[p * IDMR_PATH_VERTICES + j].triangle < 2) {
                 direct += j == 0;
                 through_glass += j > 0;
@@ -924,8 +924,8 @@ static void test_deterministic(void **state)
     cornell_run(s, &b, 1, 0, &no_int64);
     dev.info.int64_atomics = had_int64;
     print_message("  device int64 atomics: %d; fallback options: %s\n", had_int64,
-                  no_int64.build_options);
-    assert_non_null(strstr(no_int64.build_options, "IDMR_INT64_ATOMICS=0"));
+                  no_int64.sppm.build_options);
+    assert_non_null(strstr(no_int64.sppm.build_options, "IDMR_INT64_ATOMICS=0"));
     double total = 0;
     for (size_t t = 0; t < base.triangle_count; t++)
         total += base.light[t];
@@ -1186,21 +1186,21 @@ static void test_convergence_and_early_stop(void **state)
     importance_result r;
     run_or_fail(s, &o, &r);
     int calm = 0, stop = 0;
-    for (unsigned int n = 0; n < r.iterations; n++) {
+    for (unsigned int n = 0; n < r.sppm.iterations; n++) {
         assert_true(isfinite(r.convergence[n]) && r.convergence[n] >= 0);
         calm = r.convergence[n] < o.tolerance ? calm + 1 : 0;
         if (calm == 3 && !stop)
             stop = (int)n + 1;
     }
     print_message("  tolerance %.0e: stopped after %u of %u iterations; Δ_1 %.3g, last %.3g\n",
-                  o.tolerance, r.iterations, o.sppm.iterations, r.convergence[0],
-                  r.convergence[r.iterations - 1]);
+                  o.tolerance, r.sppm.iterations, o.sppm.iterations, r.convergence[0],
+                  r.convergence[r.sppm.iterations - 1]);
     assert_true(r.convergence[0] == 1.0);
-    assert_true(r.iterations < o.sppm.iterations);
-    assert_int_equal(stop, (int)r.iterations); /* stopped at the first calm triple */
-    double r1 = 5.0 * imp_scene_diagonal(s) / (r.width + r.height), r2 = r1 * r1;
-    for (unsigned int n = 0; n < r.iterations; n++) {
-        assert_float_equal(r.radius[n], sqrt(r2), 1e-6 * sqrt(r2));
+    assert_true(r.sppm.iterations < o.sppm.iterations);
+    assert_int_equal(stop, (int)r.sppm.iterations); /* stopped at the first calm triple */
+    double r1 = 5.0 * imp_scene_diagonal(s) / (r.sppm.width + r.sppm.height), r2 = r1 * r1;
+    for (unsigned int n = 0; n < r.sppm.iterations; n++) {
+        assert_float_equal(r.sppm.radius[n], sqrt(r2), 1e-6 * sqrt(r2));
         r2 *= (n + 1 + o.sppm.alpha) / (n + 2.0);
     }
     importance_result_free(&r);

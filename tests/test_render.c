@@ -1,4 +1,4 @@
-/* test_render.c — the SPPM renderer (kernels/render.cl, host/render.c) against exact formulas.
+/* test_render.c — the SPPM renderer (kernels/sppm.cl, host/passes/render.c) against exact formulas.
  *
  *   point light on a plane   radiance ρ/π · I cosθ / d² at every pixel, and the error falls
  *                            as iterations grow (4, 16, 64)
@@ -18,7 +18,7 @@
  *                            missing camera or light is an input error
  *
  * Scenes are built in code (tests/importance_common.h); one OpenCL device for the file;
- * render_run() builds render.cl once and later runs load it from the program cache. */
+ * render_run() builds sppm.cl once and later runs load it from the program cache. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -72,7 +72,7 @@ static void render_or_fail(const scene *s, unsigned int iterations, unsigned int
     bvh_free(&b);
     if (status)
         fail_msg("render_run: %s", error_message());
-    for (size_t i = 0; i < (size_t)r->width * r->height * 3; i++)
+    for (size_t i = 0; i < (size_t)r->sppm.width * r->sppm.height * 3; i++)
         if (!isfinite(r->image[i]) || r->image[i] < 0)
             fail_msg("pixel value %zu is %g", i / 3, r->image[i]);
 }
@@ -130,17 +130,17 @@ static double plane_error(const scene *s, const render_result *r, double *sum_ra
     double squares = 0, rendered = 0, exact = 0;
     size_t count = 0;
     const idmr_camera *c = &s->camera;
-    for (unsigned int y = 0; y < r->height; y++)
-        for (unsigned int x = 0; x < r->width; x++) {
+    for (unsigned int y = 0; y < r->sppm.height; y++)
+        for (unsigned int x = 0; x < r->sppm.width; x++) {
             double p[3];
-            if (!pixel_centre_on_floor(c, r->width, r->height, x, y, p))
+            if (!pixel_centre_on_floor(c, r->sppm.width, r->sppm.height, x, y, p))
                 continue;
             double rho2 = p[0] * p[0] + p[1] * p[1];
             if (rho2 > 1.5 * 1.5)
                 continue;
             double h = PLANE_LIGHT_HEIGHT, dist2 = rho2 + h * h;
             double expected = PLANE_ALBEDO / M_PI * PLANE_INTENSITY * (h / sqrt(dist2)) / dist2;
-            double value = pixel_mean(r, (size_t)y * r->width + x);
+            double value = pixel_mean(r, (size_t)y * r->sppm.width + x);
             squares += (value - expected) * (value - expected) / (expected * expected);
             rendered += value;
             exact += expected;
@@ -164,7 +164,8 @@ static void test_point_light_on_plane_and_convergence(void **state)
         errors[i] = plane_error(s, &r, &ratio);
         print_message("  %2u iterations: RMS relative error %.4f, rendered / exact over the lit "
                       "disc %.4f (radius %.3f -> %.3f)\n",
-                      iterations[i], errors[i], ratio, r.first_radius, r.last_radius);
+                      iterations[i], errors[i], ratio, r.sppm.radius[0],
+                      r.sppm.radius[r.sppm.iterations - 1]);
         if (i == 2) {
             assert_true(fabs(ratio - 1.0) < 0.01);
             assert_true(errors[i] < 0.05);
@@ -182,8 +183,8 @@ static void test_point_light_on_plane_and_convergence(void **state)
 static double first_photon_flux(const render_snapshot *snap)
 {
     double sum = 0;
-    for (size_t p = 0; p < snap->params.path_count; p++)
-        if (snap->path_length[p] > 0) {
+    for (size_t p = 0; p < snap->core.params.path_count; p++)
+        if (snap->core.path_length[p] > 0) {
             const idmr_render_photon *ph = &snap->photons[p * IDMR_PATH_VERTICES];
             sum += ((double)ph->flux_r + ph->flux_g + ph->flux_b) / 3.0;
         }
@@ -325,7 +326,7 @@ static void expect_furnace(float radius)
     for (int k = 0; k <= IDMR_PATH_VERTICES; k++)
         expected += emitted * pow(albedo, k);
     double sum = 0, squares = 0;
-    size_t pixels = (size_t)r.width * r.height;
+    size_t pixels = (size_t)r.sppm.width * r.sppm.height;
     for (size_t p = 0; p < pixels; p++) {
         double value = pixel_mean(&r, p);
         sum += value;
@@ -371,8 +372,8 @@ static void test_glass_ball_caustic(void **state)
     /* Pixels by where their (last iteration's) hit point lies on the floor. */
     double focus = 0, around = 0;
     size_t focus_count = 0, around_count = 0;
-    for (size_t p = 0; p < (size_t)r.width * r.height; p++) {
-        const idmr_hit_point *hp = &snap.hit_points[p];
+    for (size_t p = 0; p < (size_t)r.sppm.width * r.sppm.height; p++) {
+        const idmr_hit_point *hp = &snap.core.hit_points[p];
         if (!hp->valid || fabsf(hp->position[2]) > 1e-3f)
             continue;
         double rho = hypot(hp->position[0], hp->position[1]);
@@ -490,10 +491,10 @@ static void test_glossy_plane_under_point_light(void **state)
     const idmr_camera *cam = &s->camera;
     double rendered = 0, exact = 0, squares = 0, peak = 0;
     size_t count = 0;
-    for (unsigned int y = 0; y < r.height; y++)
-        for (unsigned int x = 0; x < r.width; x++) {
+    for (unsigned int y = 0; y < r.sppm.height; y++)
+        for (unsigned int x = 0; x < r.sppm.width; x++) {
             double p[3];
-            if (!pixel_centre_on_floor(cam, r.width, r.height, x, y, p))
+            if (!pixel_centre_on_floor(cam, r.sppm.width, r.sppm.height, x, y, p))
                 continue;
             if (fabs(p[0]) > 1.5 || fabs(p[1]) > 1.5)
                 continue;
@@ -509,7 +510,7 @@ static void test_glossy_plane_under_point_light(void **state)
                 view[k] /= sqrt(view2);
             }
             double expected = glossy_brdf(l, view, 0, 1) * PLANE_INTENSITY * l[2] / dist2;
-            double value = pixel_mean(&r, (size_t)y * r.width + x);
+            double value = pixel_mean(&r, (size_t)y * r.sppm.width + x);
             rendered += value;
             exact += expected;
             squares += (value - expected) * (value - expected);
@@ -553,9 +554,9 @@ static void test_glossy_scattering_keeps_the_albedo(void **state)
         render_or_fail(s, 1, 200000, &snap, 0, &r);
         double landed = 0, expected = 0, variance = 0;
         size_t on_plane = 0;
-        for (size_t p = 0; p < snap.params.path_count; p++) {
+        for (size_t p = 0; p < snap.core.params.path_count; p++) {
             const idmr_render_photon *first = &snap.photons[p * IDMR_PATH_VERTICES];
-            if (snap.path_length[p] == 0 || fabsf(first->position[2] + 1) > 1e-4f)
+            if (snap.core.path_length[p] == 0 || fabsf(first->position[2] + 1) > 1e-4f)
                 continue;
             on_plane++;
             double flux = (first->flux_r + first->flux_g + first->flux_b) / 3.0;
@@ -563,7 +564,7 @@ static void test_glossy_scattering_keeps_the_albedo(void **state)
             int k = (int)fmin(89, whole);
             double a = albedo[k] + (at - k) * (albedo[k + 1] - albedo[k]);
             double after = 0;
-            if (snap.path_length[p] > 1) {
+            if (snap.core.path_length[p] > 1) {
                 const idmr_render_photon *second = first + 1;
                 after = (second->flux_r + second->flux_g + second->flux_b) / 3.0;
             }
@@ -593,8 +594,8 @@ static void test_same_image_for_any_local_size(void **state)
     render_result a, b;
     render_or_fail(s, 2, 20000, NULL, 0, &a);
     render_or_fail(s, 2, 20000, NULL, 1, &b);
-    size_t bytes = (size_t)a.width * a.height * 3 * sizeof(float);
-    assert_int_equal(a.width, b.width);
+    size_t bytes = (size_t)a.sppm.width * a.sppm.height * 3 * sizeof(float);
+    assert_int_equal(a.sppm.width, b.sppm.width);
     assert_memory_equal(a.image, b.image, bytes);
     render_result_free(&b);
     render_or_fail(s, 2, 20000, NULL, 64, &b);

@@ -89,8 +89,8 @@ static void expect_identical(const char *path)
     importance_result specialised, generic;
     run_pass(s, &b, 0, 1.0f, &specialised);
     run_pass(s, &b, 1, 1.0f, &generic);
-    assert_non_null(strstr(generic.build_options, "IDMR_FEATURES=0x3ffu"));
-    assert_null(strstr(specialised.build_options, "IDMR_FEATURES=0x3ffu"));
+    assert_non_null(strstr(generic.sppm.build_options, "IDMR_FEATURES=0x3ffu"));
+    assert_null(strstr(specialised.sppm.build_options, "IDMR_FEATURES=0x3ffu"));
     size_t n = specialised.triangle_count;
     double total = 0;
     for (size_t t = 0; t < n; t++)
@@ -126,16 +126,16 @@ static void expect_identical_render(const char *path)
     render_result specialised, generic;
     render_scene(s, &b, 0, &specialised);
     render_scene(s, &b, 1, &generic);
-    assert_non_null(strstr(generic.build_options, "IDMR_FEATURES=0x3ffu"));
-    assert_null(strstr(specialised.build_options, "IDMR_FEATURES=0x3ffu"));
-    size_t values = (size_t)specialised.width * specialised.height * 3;
+    assert_non_null(strstr(generic.sppm.build_options, "IDMR_FEATURES=0x3ffu"));
+    assert_null(strstr(specialised.sppm.build_options, "IDMR_FEATURES=0x3ffu"));
+    size_t values = (size_t)specialised.sppm.width * specialised.sppm.height * 3;
     double total = 0;
     for (size_t i = 0; i < values; i++)
         total += specialised.image[i];
     assert_true(total > 0);
     assert_memory_equal(specialised.image, generic.image, values * sizeof(float));
-    print_message("  %s: %ux%u, identical images (mean %.6g)\n", path, specialised.width,
-                  specialised.height, total / values);
+    print_message("  %s: %ux%u, identical images (mean %.6g)\n", path, specialised.sppm.width,
+                  specialised.sppm.height, total / values);
     render_result_free(&specialised);
     render_result_free(&generic);
     bvh_free(&b);
@@ -164,7 +164,7 @@ static void test_gamma_zero_skips_camera_importance(void **state)
     importance_result with, without;
     run_pass(s, &b, 0, 1.0f, &with);
     run_pass(s, &b, 0, 0.0f, &without);
-    assert_non_null(strstr(without.build_options, "-D IDMR_CAMERA_IMPORTANCE=0"));
+    assert_non_null(strstr(without.sppm.build_options, "-D IDMR_CAMERA_IMPORTANCE=0"));
     double camera = 0, camera_with = 0;
     for (size_t t = 0; t < without.triangle_count; t++) {
         camera += without.camera[t];

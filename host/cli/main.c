@@ -24,7 +24,7 @@
 #include "core/error.h"
 #include "io/image.h"
 #include "passes/importance.h"
-#include "passes/importance_report.h"
+#include "passes/importance_outputs.h"
 #include "io/mitsuba.h"
 #include "reduce/reduce.h"
 #include "passes/render.h"
@@ -510,7 +510,9 @@ static int command_importance(int argc, char **argv)
             status = importance_run(&d, s, &b, &o, &r);
             if (!status) {
                 cJSON *report = importance_report_json(s, &d, &o, &r);
-                status = importance_write_outputs(output, report, s, &b, &d, &o, &r);
+                double **values = importance_vertex_values(&r, s, o.gamma);
+                status = importance_write_outputs(output, report, s, &o, &r, values);
+                importance_vertex_values_free(values, s);
                 cJSON_Delete(report);
             }
             bvh_free(&b);
@@ -522,7 +524,7 @@ static int command_importance(int argc, char **argv)
         fprintf(stderr,
                 "idmr: %u iterations of %u photon paths in %.1f s; outputs in %s/ (report.json, "
                 "importance.png, importance/*.ply, convergence.csv)\n",
-                r.iterations, r.photons, r.seconds.total, output);
+                r.sppm.iterations, r.sppm.photons, r.sppm.seconds.total, output);
     importance_result_free(&r);
     scene_free(s);
     return code;
@@ -608,16 +610,17 @@ static int command_render(int argc, char **argv)
     }
     int code = status ? fail() : 0;
     if (!status) {
-        double n = r.iterations;
+        const sppm_summary *run = &r.sppm;
+        double n = run->iterations;
         printf("%s: %ux%u, %u iterations of %u photon paths, %.3f s per iteration (camera %.3f, "
                "photons %.3f, grid %.3f, gather %.3f); device memory %.1f MiB (geometry %.1f, "
                "BVH %.1f, SPPM %.1f)\n",
-               exr, r.width, r.height, r.iterations, r.photons, r.seconds.total / n,
-               r.seconds.camera / n, r.seconds.photon / n, r.seconds.grid / n,
-               r.seconds.gather / n,
-               (r.memory.geometry + r.memory.bvh + r.memory.sppm) / 1048576.0,
-               r.memory.geometry / 1048576.0, r.memory.bvh / 1048576.0,
-               r.memory.sppm / 1048576.0);
+               exr, run->width, run->height, run->iterations, run->photons,
+               run->seconds.total / n, run->seconds.camera / n, run->seconds.photon / n,
+               run->seconds.grid / n, run->seconds.gather / n,
+               (run->geometry_bytes + run->bvh_bytes + run->buffer_bytes) / 1048576.0,
+               run->geometry_bytes / 1048576.0, run->bvh_bytes / 1048576.0,
+               run->buffer_bytes / 1048576.0);
     }
     render_result_free(&r);
     scene_free(s);

@@ -519,14 +519,15 @@ int device_clear(device *d, cl_mem buffer, size_t bytes, const char *what)
     return 0;
 }
 
-int device_set_args(cl_kernel kernel, const char *kernel_name, const device_arg *args,
-                    size_t count)
+int device_set_args(cl_kernel kernel, const char *kernel_name, cl_uint first,
+                    const device_arg *args, size_t count)
 {
     for (size_t i = 0; i < count; i++) {
-        cl_int err = clSetKernelArg(kernel, (cl_uint)i, args[i].size, args[i].value);
+        cl_uint index = first + (cl_uint)i;
+        cl_int err = clSetKernelArg(kernel, index, args[i].size, args[i].value);
         if (err != CL_SUCCESS)
-            return error_set(IDMR_EXIT_FAILURE, "clSetKernelArg(%s, %zu) failed: %s", kernel_name,
-                             i, device_error_string(err));
+            return error_set(IDMR_EXIT_FAILURE, "clSetKernelArg(%s, %u) failed: %s", kernel_name,
+                             index, device_error_string(err));
     }
     return 0;
 }

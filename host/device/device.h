@@ -106,12 +106,18 @@ typedef struct device_arg {
 } device_arg;
 #define DEVICE_ARG(x) ((device_arg){sizeof(x), &(x)})
 
-/* Sets all arguments of `kernel` in order: DEVICE_SET_ARGS(k, "name", DEVICE_ARG(a), ...). */
-int device_set_args(cl_kernel kernel, const char *kernel_name, const device_arg *args,
-                    size_t count);
-#define DEVICE_SET_ARGS(kernel, name, ...)                                                  \
-    device_set_args(kernel, name, (const device_arg[]){__VA_ARGS__},                        \
+/* Sets `count` arguments of `kernel` in order, from argument `first` on:
+ * DEVICE_SET_ARGS(k, "name", DEVICE_ARG(a), ...) from argument 0,
+ * DEVICE_SET_ARGS_FROM(k, "name", first, DEVICE_ARG(a), ...) from argument `first`, and
+ * DEVICE_SET_ARG(k, "name", index, a) one argument. */
+int device_set_args(cl_kernel kernel, const char *kernel_name, cl_uint first,
+                    const device_arg *args, size_t count);
+#define DEVICE_SET_ARGS_FROM(kernel, name, first, ...)                                      \
+    device_set_args(kernel, name, first, (const device_arg[]){__VA_ARGS__},                 \
                     sizeof((const device_arg[]){__VA_ARGS__}) / sizeof(device_arg))
+#define DEVICE_SET_ARGS(kernel, name, ...) DEVICE_SET_ARGS_FROM(kernel, name, 0, __VA_ARGS__)
+#define DEVICE_SET_ARG(kernel, name, index, value)                                          \
+    DEVICE_SET_ARGS_FROM(kernel, name, index, DEVICE_ARG(value))
 
 /* Enqueues a 1-D range of `global` work-items (rounded up to `local`, 0 = let the runtime
  * choose) and waits for it. */

@@ -44,9 +44,10 @@ static void triangle_data(const scene *s, float *normals, uint32_t *material_of)
     }
 }
 
-int device_scene_upload_bvh(device *d, const bvh *b, cl_mem *nodes, cl_mem *leaves)
+/* The BVH's nodes and leaf triangles (an empty scene still binds a leaf buffer). */
+static int upload_bvh(device *d, const bvh *b, cl_mem *nodes, cl_mem *leaves)
 {
-    idmr_triangle4 empty_leaf; /* an empty scene still binds a leaf buffer */
+    idmr_triangle4 empty_leaf;
     memset(&empty_leaf, 0, sizeof empty_leaf);
     return device_buffer(d, CL_MEM_READ_ONLY, b->node_count * sizeof(idmr_bvh_node), b->nodes,
                          "BVH nodes", nodes) ||
@@ -141,7 +142,7 @@ int device_scene_upload(device *d, const scene *s, const bvh *b, device_scene *o
     idmr_material no_material; /* a scene without materials still binds the buffer */
     memset(&no_material, 0, sizeof no_material);
     int status =
-        device_scene_upload_bvh(d, b, &out->nodes, &out->leaves) ||
+        upload_bvh(d, b, &out->nodes, &out->leaves) ||
         device_buffer(d, CL_MEM_READ_ONLY, 4 * sizeof(float) * (triangles ? triangles : 1), normals,
                       "triangle normals", &out->triangle_normals) ||
         device_buffer(d, CL_MEM_READ_ONLY, sizeof(uint32_t) * (triangles ? triangles : 1),
@@ -173,14 +174,28 @@ int device_scene_upload(device *d, const scene *s, const bvh *b, device_scene *o
     return 0;
 }
 
+/* The buffers in SCENE_BUFFERS order (kernels/lib/scene.h). */
+#define SCENE_BUFFER_LIST(ds)                                                                \
+    {&(ds)->nodes,     &(ds)->leaves,    &(ds)->triangle_normals, &(ds)->triangle_materials,  \
+     &(ds)->materials, &(ds)->lights,    &(ds)->light_cdf,        &(ds)->emitter_cdf,         \
+     &(ds)->emitter_triangles}
+
 void device_scene_release(device_scene *ds)
 {
-    cl_mem *buffers[] = {&ds->nodes,     &ds->leaves,   &ds->triangle_normals,
-                         &ds->triangle_materials, &ds->materials, &ds->lights,
-                         &ds->light_cdf, &ds->emitter_cdf, &ds->emitter_triangles};
-    for (size_t i = 0; i < sizeof buffers / sizeof *buffers; i++)
+    cl_mem *buffers[DEVICE_SCENE_BUFFERS] = SCENE_BUFFER_LIST(ds);
+    for (size_t i = 0; i < DEVICE_SCENE_BUFFERS; i++)
         if (*buffers[i]) {
             clReleaseMemObject(*buffers[i]);
             *buffers[i] = NULL;
         }
+}
+
+int device_scene_set_args(const device_scene *ds, cl_kernel kernel, const char *kernel_name,
+                          unsigned int first)
+{
+    cl_mem *const buffers[DEVICE_SCENE_BUFFERS] = SCENE_BUFFER_LIST((device_scene *)ds);
+    for (unsigned int i = 0; i < DEVICE_SCENE_BUFFERS; i++)
+        if (DEVICE_SET_ARG(kernel, kernel_name, first + i, *buffers[i]))
+            return -1;
+    return 0;
 }

@@ -1,5 +1,5 @@
 /* device_scene.h — a scene's data on the OpenCL device, as the light transport kernels read it
- * (kernels/scene.h, kernels/traverse.h):
+ * (kernels/lib/scene.h, kernels/lib/traverse.h), in the order kernels take them (SCENE_BUFFERS):
  *
  *   nodes, leaves            the BVH (idmr/bvh.h)
  *   triangle_normals         float4 per scene triangle: unit winding normal, w = area
@@ -35,9 +35,6 @@ typedef struct device_scene {
     uint64_t bvh_bytes; /* of which the BVH (nodes and leaves) */
 } device_scene;
 
-/* Uploads the BVH alone (nodes and leaf triangles), for kernels that only trace rays. */
-int device_scene_upload_bvh(device *d, const bvh *b, cl_mem *nodes, cl_mem *leaves);
-
 /* Device memory of the scene's buffers other than the BVH (what `idmr info` and the passes
  * report as geometry), as device_scene_upload() allocates them. */
 uint64_t device_scene_geometry_bytes(const scene *s);
@@ -46,6 +43,14 @@ uint64_t device_scene_geometry_bytes(const scene *s);
  * then hold one unused entry). Returns 0, or -1 with the error set. */
 int device_scene_upload(device *d, const scene *s, const bvh *b, device_scene *out);
 void device_scene_release(device_scene *ds);
+
+/* The buffers a kernel's SCENE_BUFFERS parameters take (kernels/lib/scene.h). */
+#define DEVICE_SCENE_BUFFERS 9u
+
+/* Binds the scene's buffers as arguments first .. first + DEVICE_SCENE_BUFFERS - 1 of `kernel`
+ * (named `kernel_name` in errors). Returns 0, or -1 with the error set. */
+int device_scene_set_args(const device_scene *ds, cl_kernel kernel, const char *kernel_name,
+                          unsigned int first);
 
 /* Secondary-ray offset for a scene: 1e-6 of the largest coordinate magnitude plus 1e-7 of the
  * scene diagonal, so it scales with the scene and stays above float rounding of positions far

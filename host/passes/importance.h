@@ -1,6 +1,9 @@
-/* importance.h — the importance pass (paper sections 3.2, 3.3, 4.1): iterations of camera
- * paths, photon paths, a hash grid, gather counts and the reverse path walk on the OpenCL
- * device (kernels/importance.cl), and the host-side importance per triangle, vertex and mesh.
+/* importance.h — the importance pass (paper sections 3.2, 3.3, 4.1) on the SPPM core
+ * (passes/sppm.h): camera paths add Eq. 2 weights to the triangles they see, photon paths store
+ * a vertex at every surface, and after the grid each path is walked back from its last vertex,
+ * every vertex adding weight × (hit points gathered by it and the vertices after it) to its
+ * triangle (kernels/sppm.cl). Then the host turns the per-triangle sums into importance per
+ * triangle, vertex and mesh.
  *
  * What is accumulated: per scene triangle T, camera(T) = Σ Eq. 2 weights of camera path
  * vertices on T and light(T) = Σ over photon vertices on T of weight × (the number of hit
@@ -12,13 +15,9 @@
  *   mesh sum   = Σ (γ camera + light) / iterations over its triangles (unnormalised: no area
  *                division, for the decimation budget)
  *
- * Kernels are built for the scene's feature bits (idmr/features.h): only the material and light
- * branches the scene has are compiled in (`generic` builds them all, for comparison), and with
- * γ = 0 the camera importance atomics are left out (camera importance is then 0: it would be
- * multiplied by γ = 0 anyway).
- *
- * Gather radius: r_1 = 5 × |scene box diagonal| / (width + height) of the hit-point image, and
- * r_{n+1}² = r_n² (n + α) / (n + 1) (the SPPM schedule with one global radius).
+ * Kernels are built for the scene's feature bits (idmr/features.h); with γ = 0 the camera
+ * importance atomics are left out (camera importance is then 0: it would be multiplied by γ = 0
+ * anyway).
  *
  * Convergence after iteration n: Δ_n = Σ_T (I_n(T) - I_{n-1}(T))² / Σ_T I_n(T)², with I_n the
  * per-triangle importance after n iterations (normalised by n); Δ_1 = 1. It is scale-free. With
@@ -29,21 +28,18 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "core/scene.h"
 #include "device/bvh.h"
 #include "device/device.h"
-#include "passes/sppm.h"
 #include "idmr/importance_layout.h"
-#include "idmr/sppm_layout.h"
-#include "core/scene.h"
+#include "passes/sppm.h"
 
-/* Copies of one iteration's device buffers (the last one run), for tests and debugging. */
+/* Copies of the last iteration's buffers, for tests and debugging. */
 typedef struct importance_snapshot {
-    idmr_sppm_params params;
-    idmr_hit_point *hit_points; /* params.width * params.height */
-    idmr_photon_vertex *vertices; /* params.path_count * IDMR_PATH_VERTICES */
-    uint32_t *path_length;        /* params.path_count */
-    uint32_t *gathered;           /* params.path_count * IDMR_PATH_VERTICES */
-    uint64_t *camera_fixed;       /* this iteration's accumulators, fixed point */
+    sppm_snapshot core;             /* hit points, path lengths, params, photon records */
+    const idmr_photon_vertex *vertices; /* core.photon_records as the pass's records */
+    uint32_t *gathered;             /* params.path_count * IDMR_PATH_VERTICES */
+    uint64_t *camera_fixed;         /* this iteration's accumulators, fixed point */
     uint64_t *light_fixed;
 } importance_snapshot;
 
@@ -57,27 +53,16 @@ typedef struct importance_options {
     importance_snapshot *snapshot; /* when not NULL, receives the last iteration's buffers */
 } importance_options;
 
-typedef struct importance_seconds {
-    double build; /* kernel build */
-    double camera, photon, grid, gather, path, readback;
-    double total; /* all iterations, build excluded */
-} importance_seconds;
-
 typedef struct importance_result {
     size_t triangle_count;
-    double *camera; /* per scene triangle, summed over iterations, in weight units */
+    double *camera;          /* per scene triangle, summed over iterations, in weight units */
     double *light;
-    unsigned int iterations; /* run */
-    double *convergence;     /* Δ per iteration */
-    double *radius;          /* gather radius per iteration */
-    unsigned int width, height; /* hit-point image */
-    unsigned int photons;       /* per iteration */
-    uint64_t hit_points;        /* valid hit points, first iteration */
-    uint64_t photon_vertices;   /* stored, first iteration */
-    uint64_t gathered;          /* hit points found by photon vertices, first iteration */
-    uint64_t device_bytes;      /* scene + pass buffers */
-    char *build_options;
-    importance_seconds seconds;
+    double *convergence;     /* Δ per iteration run */
+    uint32_t *pixel_triangle; /* per pixel of the hit-point image, the scene triangle seen
+                                 through its centre (IDMR_NO_HIT: none): the importance image */
+    uint64_t gathered;       /* hit points found by photon vertices, first iteration */
+    double path_seconds;     /* the path walk, part of sppm.seconds.gather */
+    sppm_summary sppm;       /* iterations, radii, image size, photons, bytes, timings */
 } importance_result;
 
 void importance_options_default(importance_options *o);

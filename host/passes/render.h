@@ -1,9 +1,10 @@
-/* render.h — the stochastic progressive photon mapping renderer behind `idmr render`
- * (kernels/render.cl): what a reduction costs in image error and saves in render time and
- * device memory, measured on our own kernels (the paper's Table 1 renders with SPPM too).
+/* render.h — the stochastic progressive photon mapping renderer behind `idmr render`, on the
+ * SPPM core (passes/sppm.h, kernels/sppm.cl): what a reduction costs in image error and saves
+ * in render time and device memory, measured on our own kernels (the paper's Table 1 renders
+ * with SPPM too).
  *
  * Each iteration is an independent photon-mapping estimate of every pixel at that iteration's
- * global radius (pass_grid.h: r_1 = 5 |diagonal| / (w + h), r²_{n+1} = r²_n (n + α)/(n + 1)):
+ * global radius (sppm.h: r_1 = 5 |diagonal| / (w + h), r²_{n+1} = r²_n (n + α)/(n + 1)):
  *   L(pixel) = E + T Σ_photons f(ω_i, ω_o) Φ / (π r²)
  * with E the emission the camera path saw directly (or through specular surfaces), T the
  * specular throughput to the hit point, f its BRDF and Φ each photon's flux (light power /
@@ -12,16 +13,17 @@
  * enough that the variance of the mean and the bias both vanish.
  *
  * What is simulated, and what is not:
- *   - materials and lights as in the importance pass (kernels/scene.h); glossy lobes have a
- *     roughness of at least 0.05 (a smooth plastic's coating becomes slightly rough);
+ *   - materials and lights as in the importance pass (kernels/lib/materials.h, lights.h);
+ *     glossy lobes have a roughness of at least 0.05 (a smooth plastic's coating becomes
+ *     slightly rough);
  *   - geometric normals (no shading-normal interpolation): curved meshes show their facets;
  *   - textured reflectance by the texture's mean colour (textures are not looked up);
  *   - an envmap by its mean radiance, seen and lit uniformly;
  *   - photon paths store at most 8 photons (non-specular surfaces) and end after 32 surface
  *     interactions; camera paths follow at most 16 specular interactions.
- * Sums are exact: per pixel and channel in 64-bit fixed point (idmr/render.h), and the mean over
- * iterations in double on the host; a render is bit-identical for the same seed, device and
- * options, whatever the work-group size. */
+ * Sums are exact: per pixel and channel in 64-bit fixed point (idmr/render_layout.h), and the
+ * mean over iterations in double on the host; a render is bit-identical for the same seed,
+ * device and options, whatever the work-group size. */
 #ifndef IDMR_RENDER_H
 #define IDMR_RENDER_H
 
@@ -30,20 +32,16 @@
 
 #include <cjson/cJSON.h>
 
+#include "core/scene.h"
 #include "device/bvh.h"
 #include "device/device.h"
-#include "passes/sppm.h"
-#include "idmr/importance_layout.h"
-#include "idmr/sppm_layout.h"
 #include "idmr/render_layout.h"
-#include "core/scene.h"
+#include "passes/sppm.h"
 
-/* Copies of the last iteration's device buffers, for tests. */
+/* Copies of the last iteration's buffers, for tests. */
 typedef struct render_snapshot {
-    idmr_sppm_params params;
-    idmr_hit_point *hit_points;  /* pixels */
-    idmr_render_photon *photons; /* params.path_count * IDMR_PATH_VERTICES */
-    uint32_t *path_length;       /* params.path_count */
+    sppm_snapshot core;                /* hit points, path lengths, params, photon records */
+    const idmr_render_photon *photons; /* core.photon_records as the pass's records */
 } render_snapshot;
 
 void render_snapshot_free(render_snapshot *snapshot);
@@ -53,29 +51,9 @@ typedef struct render_options {
     render_snapshot *snapshot; /* when not NULL, receives the last iteration's buffers */
 } render_options;
 
-typedef struct render_seconds {
-    double build;                               /* kernel build (or cache load) */
-    double camera, photon, grid, gather, readback; /* summed over iterations */
-    double total;                               /* all iterations, build excluded */
-} render_seconds;
-
-/* Device memory of a render, in bytes. */
-typedef struct render_memory {
-    uint64_t geometry; /* per-triangle normals and materials, materials, lights, emitters */
-    uint64_t bvh;      /* nodes and leaf triangles */
-    uint64_t sppm;     /* hit points, photons, grid, pixel accumulators */
-} render_memory;
-
 typedef struct render_result {
-    unsigned int width, height;
-    float *image;            /* linear RGB, 3 floats per pixel, top row first: the mean */
-    unsigned int iterations; /* run */
-    unsigned int photons;    /* paths per iteration */
-    double first_radius, last_radius;
-    uint64_t photons_stored; /* first iteration */
-    render_memory memory;
-    char *build_options;
-    render_seconds seconds;
+    float *image;      /* linear RGB, 3 floats per pixel, top row first: the mean */
+    sppm_summary sppm; /* size (width, height), iterations, radii, photons, bytes, timings */
 } render_result;
 
 void render_options_default(render_options *o);

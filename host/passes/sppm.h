@@ -1,11 +1,36 @@
-/* sppm.h — the options of the SPPM core that both passes run on (the importance pass,
- * passes/importance.h, and the renderer, passes/render.h). */
+/* sppm.h — the one stochastic progressive photon mapping core under both passes: the importance
+ * pass (passes/importance.h, paper 3.2–4.1) and the renderer (passes/render.h).
+ *
+ * The core owns everything the two share: the scene's upload (device/device_scene.h), the
+ * program (kernels/sppm.cl built for the pass and the scene's features), the hit points of one
+ * camera path per pixel, the photon slots (IDMR_PATH_VERTICES records per path, of the pass's
+ * record type), the hash grid over the hit points (passes/hit_point_grid.h), the per-iteration
+ * parameters, the radius schedule, the iteration loop with its stop rules, progress, timings
+ * and snapshots. A pass plugs in through an sppm_pass: its build defines, its record size, and
+ * hooks for what only it does — its own buffers and kernels, its gather after the grid is
+ * built, reading its accumulators back, its snapshot, and work after the last iteration.
+ *
+ * One iteration: camera_paths → photon_paths → grid → pass->gather → pass->collect.
+ *
+ * Gather radius: r_1 = 5 × |scene box diagonal| / (width + height) of the hit-point image, and
+ * r_{n+1}² = r_n² (n + α) / (n + 1): one global radius per iteration, so that every iteration
+ * is an independent estimate at its own radius (Knaus and Zwicker's probabilistic formulation
+ * of progressive photon mapping).
+ *
+ * Stops: after options.iterations, after the iteration in which options.time_limit seconds pass
+ * (when > 0), or when the pass's collect hook says so. */
 #ifndef IDMR_SPPM_H
 #define IDMR_SPPM_H
 
 #include <stddef.h>
+#include <stdint.h>
 
+#include "core/scene.h"
+#include "device/bvh.h"
 #include "device/device.h"
+#include "device/device_scene.h"
+#include "idmr/sppm_layout.h"
+#include "passes/hit_point_grid.h"
 
 typedef struct sppm_options {
     unsigned int iterations; /* at most this many */
@@ -26,5 +51,95 @@ void sppm_options_default(sppm_options *o, unsigned int iterations);
  * figure); 500,000 on a CPU, which keeps an iteration of the DRAGON CORNELL BOX (871k
  * triangles) near 0.68 s on 2 cores with PoCL (make bench). */
 unsigned int sppm_default_photons(const device *d);
+
+/* r_1² for a scene and hit-point image (a tiny positive value for a scene of one point), and
+ * r_{n+1}² from r_n² after iteration n (counted from 0). */
+double sppm_initial_radius2(const scene *s, unsigned int width, unsigned int height);
+double sppm_next_radius2(double radius2, unsigned int n, float alpha);
+
+typedef struct sppm_seconds {
+    double build;                                 /* kernel build (or program cache load) */
+    double camera, photon, grid, gather, collect; /* summed over iterations */
+    double total;                                 /* all iterations, build excluded */
+} sppm_seconds;
+
+/* What a run of the core did, for the passes' results and reports. */
+typedef struct sppm_summary {
+    unsigned int width, height; /* hit-point image */
+    unsigned int photons;       /* photon paths per iteration */
+    unsigned int iterations;    /* run */
+    double *radius;             /* gather radius per iteration run */
+    uint64_t hit_points;        /* valid hit points, first iteration */
+    uint64_t photon_records;    /* records stored in the photon slots, first iteration */
+    uint64_t geometry_bytes;    /* device memory: the scene's geometry buffers */
+    uint64_t bvh_bytes;         /*                the BVH */
+    uint64_t buffer_bytes;      /*                the core's and the pass's buffers */
+    char *build_options;
+    sppm_seconds seconds;
+} sppm_summary;
+
+void sppm_summary_free(sppm_summary *summary);
+
+/* Copies of the core's buffers after the last iteration run (for tests and debugging). */
+typedef struct sppm_snapshot {
+    idmr_sppm_params params;
+    idmr_hit_point *hit_points; /* params.width * params.height */
+    void *photon_records;       /* params.path_count * IDMR_PATH_VERTICES of the pass's records */
+    uint32_t *path_length;      /* params.path_count */
+} sppm_snapshot;
+
+void sppm_snapshot_free(sppm_snapshot *snapshot);
+
+/* The core while it runs; the pass's hooks read it and add their kernels' work. */
+typedef struct sppm {
+    device *dev;
+    const scene *scene;
+    const sppm_options *options;
+    device_scene uploaded;
+    cl_program program;
+    cl_kernel camera_paths, photon_paths;
+    cl_mem hit_points, path_length, photon_records;
+    hit_point_grid grid;
+    unsigned int pixels;
+    idmr_sppm_params params; /* this iteration's */
+    sppm_summary *summary;
+} sppm;
+
+/* A pass on the core. Hooks return 0, or -1 with the error set. */
+typedef struct sppm_pass {
+    const char *name;            /* "importance", "render": the progress label */
+    int pass;                    /* IDMR_SPPM_IMPORTANCE or IDMR_SPPM_RENDER */
+    const char *defines;         /* more build options (-D ...), or NULL */
+    size_t photon_record_bytes;  /* one record of the photon slots */
+    void *state;                 /* the pass's own data, handed to every hook */
+    /* Once the program is built and the core's buffers exist: creates the pass's kernels and
+     * buffers (adding their bytes to core->summary->buffer_bytes), binds camera_paths'
+     * arguments after the core's (sppm_first_pass_argument), and may set constant params. */
+    int (*prepare)(sppm *core, void *state);
+    /* Every iteration, once the grid is built: the pass's gather kernels. */
+    int (*gather)(sppm *core, void *state);
+    /* Every iteration: reads the pass's accumulators back, adds them up and clears them;
+     * iteration n (from 0) has just finished. Sets *stop to end the run early, and may write a
+     * progress detail. */
+    int (*collect)(sppm *core, void *state, unsigned int n, int *stop, char *detail,
+                   size_t detail_size);
+    /* When a snapshot is asked for: copies the pass's buffers of the iteration (may be NULL). */
+    int (*snapshot)(sppm *core, void *state);
+    /* After the last iteration, before the core is released (may be NULL). */
+    int (*finish)(sppm *core, void *state);
+    /* Releases what prepare created (always called). */
+    void (*release)(void *state);
+} sppm_pass;
+
+/* The index of camera_paths' first argument after the core's (params, camera, the scene's
+ * buffers, hit points): where a pass binds its camera records. */
+unsigned int sppm_first_pass_argument(void);
+
+/* Runs `pass` on scene `s` (which needs a camera and a light) with BVH `b`: validates the
+ * options, uploads, builds, iterates, and releases everything. `summary` is filled (free it
+ * with sppm_summary_free() either way); `snapshot` (may be NULL) receives the last iteration's
+ * core buffers. Returns 0, or -1 with the error set. */
+int sppm_run(device *d, const scene *s, const bvh *b, const sppm_options *o, sppm_pass *pass,
+             sppm_summary *summary, sppm_snapshot *snapshot);
 
 #endif

@@ -14,7 +14,7 @@
 #include "reduce/budget.h"
 #include "device/bvh.h"
 #include "core/error.h"
-#include "passes/importance_report.h"
+#include "passes/importance_outputs.h"
 #include "io/mesh_io.h"
 #include "io/mitsuba_write.h"
 #include "core/files.h"
@@ -376,7 +376,8 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
     if (!status) {
         cJSON *report = reduce_report(s, d, o, &r, &st, after);
         if (o->method == DECIMATE_IMPORTANCE) {
-            status = importance_write_outputs(outdir, report, s, &b, d, &o->importance, &r);
+            status = importance_write_outputs(outdir, report, s, &o->importance, &r,
+                                              st.vertex_importance);
         } else {
             char path[PATH_MAX];
             snprintf(path, sizeof path, "%s/report.json", outdir);

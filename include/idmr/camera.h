@@ -1,10 +1,9 @@
-/* idmr/camera.h — a pinhole camera (64 bytes).
+/* idmr/camera.h — a pinhole camera (64 bytes) and the one formula for its rays, shared by the
+ * kernels (camera paths), the host (the importance image) and the tests' references.
  *
- * The ray through pixel (x, y) with sub-pixel offset (jx, jy) in [0,1)² is
- *   d = forward + ((2(x + jx)/width - 1) * tan_half_x) * right
- *               + ((1 - 2(y + jy)/height) * tan_half_y) * up
- * with y = 0 the top row. right/up/forward form an orthonormal frame in world space, built
- * from the sensor's to_world transform (Mitsuba looks down +z of camera space, x to the left). */
+ * right/up/forward form an orthonormal frame in world space, built from the sensor's to_world
+ * transform (Mitsuba looks down +z of camera space, x to the left); width and height are the
+ * film's pixels, tan_half_x and tan_half_y the tangents of half the field of view. */
 #ifndef IDMR_CAMERA_H
 #define IDMR_CAMERA_H
 
@@ -25,5 +24,19 @@ IDMR_STATIC_ASSERT(sizeof(idmr_camera) == 64, "idmr_camera must be 64 bytes");
 IDMR_OFFSET_ASSERT(idmr_camera, forward, 16);
 IDMR_OFFSET_ASSERT(idmr_camera, right, 32);
 IDMR_OFFSET_ASSERT(idmr_camera, up, 48);
+
+/* The (unnormalised) direction of the ray through film position (film_x, film_y), in pixels
+ * from the film's top-left corner (pixel (x, y) spans [x, x + 1) × [y, y + 1); y = 0 is the
+ * top row):
+ *   d = forward + ((2 film_x / width - 1) tan_half_x) right + ((1 - 2 film_y / height) tan_half_y) up
+ * Evaluated in this order everywhere, so host references reproduce the kernels' rays. */
+IDMR_INLINE void idmr_camera_direction(const idmr_camera *c, float film_x, float film_y,
+                                       float direction[3])
+{
+    float sx = (2.0f * film_x / (float)c->width - 1.0f) * c->tan_half_x;
+    float sy = (1.0f - 2.0f * film_y / (float)c->height) * c->tan_half_y;
+    for (int k = 0; k < 3; k++)
+        direction[k] = c->forward[k] + sx * c->right[k] + sy * c->up[k];
+}
 
 #endif

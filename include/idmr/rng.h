@@ -1,8 +1,9 @@
-/* idmr/rng.h — counter-based random numbers, the same on the host and in the kernels.
+/* idmr/rng.h — counter-based random numbers, the same on the host, in the kernels and in the
+ * tests (the project's one generator).
  *
- * A stream is keyed by (seed, iteration, pass, index) — index is the pixel or photon path —
- * and its draws are numbered, so a number depends on nothing but those five values: not on
- * the work-group size, the device, or the order work-items run in. The mixing function is
+ * A stream is keyed by (seed, iteration, stream family, index) — index is the pixel or photon
+ * path — and its draws are numbered, so a number depends on nothing but those five values: not
+ * on the work-group size, the device, or the order work-items run in. The mixing function is
  * Chris Wellons' "lowbias32" integer hash (32-bit multiplies and shifts only: cheap on GPUs
  * and CPUs alike); keys are chained through it, and draw k of a stream is hash(key ^ hash(k)).
  * Floats take the top 24 bits, so they lie in [0, 1) exactly. */
@@ -11,11 +12,13 @@
 
 #include "idmr/layout.h"
 
-/* Pass identifiers: one stream family per pass. */
-#define IDMR_PASS_CAMERA 1u
-#define IDMR_PASS_PHOTON 2u
-#define IDMR_PASS_RENDER_CAMERA 3u
-#define IDMR_PASS_RENDER_PHOTON 4u
+/* Stream families: one per kind of path and pass, so the importance pass and the renderer never
+ * share random numbers for the same seed. Tests key their own data with IDMR_STREAM_TEST. */
+#define IDMR_STREAM_IMPORTANCE_CAMERA 1u
+#define IDMR_STREAM_IMPORTANCE_PHOTON 2u
+#define IDMR_STREAM_RENDER_CAMERA 3u
+#define IDMR_STREAM_RENDER_PHOTON 4u
+#define IDMR_STREAM_TEST 5u
 
 typedef struct idmr_rng {
     unsigned int key;
@@ -32,13 +35,13 @@ IDMR_INLINE unsigned int idmr_hash(unsigned int x)
     return x;
 }
 
-IDMR_INLINE idmr_rng idmr_rng_init(unsigned int seed, unsigned int iteration, unsigned int pass,
-                                   unsigned int index)
+IDMR_INLINE idmr_rng idmr_rng_init(unsigned int seed, unsigned int iteration,
+                                   unsigned int stream, unsigned int index)
 {
     idmr_rng r;
     unsigned int key = idmr_hash(seed ^ 0x9e3779b9u);
     key = idmr_hash(key ^ iteration);
-    key = idmr_hash(key ^ (pass * 0x85ebca6bu));
+    key = idmr_hash(key ^ (stream * 0x85ebca6bu));
     key = idmr_hash(key ^ index);
     r.key = key;
     r.counter = 0u;

@@ -1,6 +1,6 @@
-/* hit_point_grid.h — the hash grid over one iteration's hit points, shared by the importance
- * pass (importance.cl) and the renderer (render.cl): a counting sort of hit point indices by
- * the hashed cell of their position.
+/* hit_point_grid.h — the hash grid over one iteration's hit points, shared by both passes of the
+ * SPPM core (kernels/sppm.cl): a counting sort of hit point indices by the hashed cell of their
+ * position, and the one test of which hit points a photon reaches.
  *
  *   grid_count       hit points per bucket (cell_counts, cleared by the host)
  *   scan_chunks, scan_chunk_sums, scan_apply
@@ -8,11 +8,10 @@
  *   grid_scatter     grid_points: hit point indices sorted by bucket
  * The cell size is at least twice the gather radius (the host sets it), so a ball of that
  * radius touches at most 2 x 2 x 2 cells; grid_buckets_near() lists their buckets once each
- * (two cells may hash to one bucket). Host side: host/pass_grid.c. */
+ * (two cells may hash to one bucket). Host side: host/passes/hit_point_grid.c. */
 #ifndef IDMR_KERNEL_HIT_POINT_GRID_H
 #define IDMR_KERNEL_HIT_POINT_GRID_H
 
-#include "idmr/importance_layout.h"
 #include "idmr/sppm_layout.h"
 
 inline int3 grid_cell(float3 p, const idmr_sppm_params *params)
@@ -112,6 +111,16 @@ inline uint grid_buckets_near(float3 p, const idmr_sppm_params *params, uint buc
                     buckets[count++] = h;
             }
     return count;
+}
+
+/* Whether hit point hp gathers a photon (or photon vertex) at p arriving on the side `side`
+ * faces: closer than the radius (r2 = radius²), and facing the same side with a cosine above
+ * 1e-3, so that faces meeting at a right angle never gather each other's photons on the sign of
+ * a rounding error (that made results depend on the scene's scale). */
+inline bool hit_point_gathers(global const idmr_hit_point *hp, float3 p, float3 side, float r2)
+{
+    float3 delta = vload3(0, hp->position) - p;
+    return dot(delta, delta) < r2 && dot(vload3(0, hp->normal), side) > 1e-3f;
 }
 
 #endif

@@ -1,4 +1,4 @@
-/* traverse.h — ray traversal of the 4-wide BVH (include/idmr/bvh.h) with a watertight
+/* traverse.h — ray traversal of the 4-wide BVH (include/idmr/bvh_layout.h) with a watertight
  * ray/triangle test.
  *
  * Robustness: the triangle test is the watertight one of Woop, Benthin and Wald (JCGT 2013):

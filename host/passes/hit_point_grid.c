@@ -1,13 +1,13 @@
-/* pass_grid.c — the hit-point grid and radius schedule shared by the importance pass and the
- * renderer (see pass_grid.h). */
-#include "passes/pass_grid.h"
+/* hit_point_grid.c — the hash grid over an iteration's hit points (see hit_point_grid.h). */
+#include "passes/hit_point_grid.h"
 
 #include <math.h>
 #include <string.h>
 
 #include "core/error.h"
 
-int pass_grid_create(device *d, cl_program program, unsigned int hit_points, pass_grid *g)
+int hit_point_grid_create(device *d, cl_program program, unsigned int hit_points,
+                          hit_point_grid *g)
 {
     memset(g, 0, sizeof *g);
     g->hit_points = hit_points;
@@ -31,7 +31,7 @@ int pass_grid_create(device *d, cl_program program, unsigned int hit_points, pas
     return device_buffers(d, buffers, sizeof buffers / sizeof *buffers, &g->bytes);
 }
 
-void pass_grid_release(pass_grid *g)
+void hit_point_grid_release(hit_point_grid *g)
 {
     cl_kernel kernels[] = {g->count, g->scan_chunks, g->scan_chunk_sums, g->scan_apply,
                            g->scatter};
@@ -42,8 +42,8 @@ void pass_grid_release(pass_grid *g)
     memset(g, 0, sizeof *g);
 }
 
-int pass_grid_build(device *d, pass_grid *g, const idmr_sppm_params *params, cl_mem hit_points,
-                    size_t local_size)
+int hit_point_grid_build(device *d, hit_point_grid *g, const idmr_sppm_params *params,
+                         cl_mem hit_points, size_t local_size)
 {
     cl_uint cells = g->cells, chunks = g->chunks;
     return device_clear(d, g->cell_counts, g->cells * sizeof(cl_uint), "grid cell counts") ||
@@ -68,19 +68,8 @@ int pass_grid_build(device *d, pass_grid *g, const idmr_sppm_params *params, cl_
                : 0;
 }
 
-double pass_initial_radius2(const scene *s, unsigned int width, unsigned int height)
-{
-    double radius = 5.0 * scene_diagonal(s) / ((double)width + height);
-    double radius2 = radius * radius;
-    return radius2 > 0 ? radius2 : 1e-12; /* a scene of one point: nothing to gather anyway */
-}
-
-double pass_next_radius2(double radius2, unsigned int n, float alpha)
-{
-    return radius2 * (n + 1 + alpha) / (n + 2.0);
-}
-
-void pass_grid_place(const pass_grid *g, const scene *s, double radius2, idmr_sppm_params *params)
+void hit_point_grid_place(const hit_point_grid *g, const scene *s, double radius2,
+                          idmr_sppm_params *params)
 {
     params->radius = (float)sqrt(radius2);
     params->cell_size = 2.0f * params->radius * 1.0001f;

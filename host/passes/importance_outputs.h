@@ -1,4 +1,4 @@
-/* importance_report.h — what `idmr importance` and `idmr reduce` write:
+/* importance_outputs.h — what `idmr importance` and `idmr reduce` write of an importance pass:
  *
  *   DIR/report.json          options, per-stage seconds, per-mesh sums, convergence, counts
  *   DIR/convergence.csv      iteration, change Δ, gather radius
@@ -9,12 +9,11 @@
  * Colours map log10(I) over three decades below the 99th percentile of the scene's non-zero
  * values to the ramp of image_false_colour(); zero importance is black. Every file is written
  * under a temporary name and renamed. */
-#ifndef IDMR_IMPORTANCE_REPORT_H
-#define IDMR_IMPORTANCE_REPORT_H
+#ifndef IDMR_IMPORTANCE_OUTPUTS_H
+#define IDMR_IMPORTANCE_OUTPUTS_H
 
 #include <cjson/cJSON.h>
 
-#include "device/bvh.h"
 #include "device/device.h"
 #include "passes/importance.h"
 #include "core/scene.h"
@@ -23,9 +22,16 @@
 cJSON *importance_report_json(const scene *s, const device *d, const importance_options *o,
                               const importance_result *r);
 
-/* Writes report.json (from `report`), convergence.csv, importance/ and importance.png. */
-int importance_write_outputs(const char *dir, const cJSON *report, const scene *s, const bvh *b,
-                             device *d, const importance_options *o, const importance_result *r);
+/* Per-vertex importance of every mesh (importance_mesh_vertices), as one array per mesh:
+ * computed once, for the outputs and the decimation. Free with importance_vertex_values_free(). */
+double **importance_vertex_values(const importance_result *r, const scene *s, float gamma);
+void importance_vertex_values_free(double **values, const scene *s);
+
+/* Writes report.json (from `report`), convergence.csv, importance/ and importance.png, with the
+ * per-vertex importance `vertex_values` (importance_vertex_values()). */
+int importance_write_outputs(const char *dir, const cJSON *report, const scene *s,
+                             const importance_options *o, const importance_result *r,
+                             double *const *vertex_values);
 
 /* A file name made from a mesh name: letters, digits, '-', '_' and '.' kept, others '_'. */
 void importance_file_name(const char *mesh_name, char *out, size_t size);

@@ -1,0 +1,39 @@
+/* hit_point_grid.h — the hash grid over an iteration's hit points (kernels/lib/hit_point_grid.h),
+ * built on the device by counting sort: cell counts with atomics, a three-step prefix sum, a
+ * scatter of hit point indices by cell. Part of the SPPM core (passes/sppm.h).
+ *
+ * The cells are 2r (and a little more) wide for the gather radius r, so a gather ball touches
+ * at most 2 x 2 x 2 of them; buckets are a power of two, at least twice the hit points, at
+ * least 1024. */
+#ifndef IDMR_HIT_POINT_GRID_H
+#define IDMR_HIT_POINT_GRID_H
+
+#include <stdint.h>
+
+#include "core/scene.h"
+#include "device/device.h"
+#include "idmr/sppm_layout.h"
+
+typedef struct hit_point_grid {
+    cl_kernel count, scan_chunks, scan_chunk_sums, scan_apply, scatter;
+    cl_mem cell_counts, cell_start, cell_cursor, chunk_sums, grid_points;
+    unsigned int hit_points, cells, chunks;
+    uint64_t bytes; /* device memory of the grid's buffers */
+} hit_point_grid;
+
+/* Creates the grid kernels from `program` (built from kernels/sppm.cl) and the buffers for
+ * `hit_points` hit points. Returns 0, or -1 with the error set; release either way. */
+int hit_point_grid_create(device *d, cl_program program, unsigned int hit_points,
+                          hit_point_grid *g);
+void hit_point_grid_release(hit_point_grid *g);
+
+/* Sets params' radius, cell size, grid origin and cell count for gather radius² `radius2`. */
+void hit_point_grid_place(const hit_point_grid *g, const scene *s, double radius2,
+                          idmr_sppm_params *params);
+
+/* Sorts the hit points into the grid for this iteration's params (placed with
+ * hit_point_grid_place). Returns 0 or -1. */
+int hit_point_grid_build(device *d, hit_point_grid *g, const idmr_sppm_params *params,
+                         cl_mem hit_points, size_t local_size);
+
+#endif

@@ -1,0 +1,298 @@
+/* sppm.c — the SPPM core under both passes (see sppm.h): upload, program, the core's buffers,
+ * per-iteration parameters, the radius schedule, the iteration loop, progress, timings and
+ * snapshots. A pass adds its work through the hooks of its sppm_pass. */
+#include "passes/sppm.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/error.h"
+#include "core/progress.h"
+
+#define MAX_PIXELS (1u << 26)
+
+/* Kernel arguments bound by the core: camera_paths (params, camera, scene buffers, hit points)
+ * and photon_paths (params, scene buffers, path lengths, records). */
+#define CAMERA_CORE_ARGUMENTS (2 + DEVICE_SCENE_BUFFERS + 1)
+
+void sppm_options_default(sppm_options *o, unsigned int iterations)
+{
+    memset(o, 0, sizeof *o);
+    o->iterations = iterations;
+    o->seed = 1;
+    o->alpha = 0.7f;
+    o->resolution = 1.0f;
+}
+
+unsigned int sppm_default_photons(const device *d)
+{
+    return strcmp(d->info.kind, "gpu") == 0 ? 1000000u : 500000u;
+}
+
+double sppm_initial_radius2(const scene *s, unsigned int width, unsigned int height)
+{
+    double radius = 5.0 * scene_diagonal(s) / ((double)width + height);
+    double radius2 = radius * radius;
+    return radius2 > 0 ? radius2 : 1e-12; /* a scene of one point: nothing to gather anyway */
+}
+
+double sppm_next_radius2(double radius2, unsigned int n, float alpha)
+{
+    return radius2 * (n + 1 + alpha) / (n + 2.0);
+}
+
+unsigned int sppm_first_pass_argument(void) { return CAMERA_CORE_ARGUMENTS; }
+
+void sppm_summary_free(sppm_summary *summary)
+{
+    free(summary->radius);
+    free(summary->build_options);
+    memset(summary, 0, sizeof *summary);
+}
+
+void sppm_snapshot_free(sppm_snapshot *snapshot)
+{
+    free(snapshot->hit_points);
+    free(snapshot->photon_records);
+    free(snapshot->path_length);
+    memset(snapshot, 0, sizeof *snapshot);
+}
+
+/* What the core needs of the scene and the options; sets the summary's image and photons. */
+static int check_inputs(const device *d, const scene *s, const sppm_options *o,
+                        const sppm_pass *pass, sppm_summary *summary)
+{
+    if (!s->has_camera)
+        return error_set(IDMR_EXIT_INPUT, "%s: the scene has no sensor: the %s pass needs a camera",
+                         s->file, pass->name);
+    if (s->light_count == 0)
+        return error_set(IDMR_EXIT_INPUT,
+                         "%s: the scene has no emitter that idmr simulates (area, point, spot, "
+                         "directional, constant, envmap): no light can reach the camera",
+                         s->file);
+    if (o->iterations == 0)
+        return error_set(IDMR_EXIT_INPUT, "%s: at least one iteration is needed", pass->name);
+    if (!(o->resolution > 0) || !(o->alpha > 0 && o->alpha <= 1))
+        return error_set(IDMR_EXIT_INPUT, "%s: resolution must be > 0 and alpha in (0, 1]",
+                         pass->name);
+    double w = fmax(1.0, floor(s->camera.width * o->resolution + 0.5));
+    double h = fmax(1.0, floor(s->camera.height * o->resolution + 0.5));
+    if (w * h > MAX_PIXELS)
+        return error_set(IDMR_EXIT_INPUT, "%s: the hit-point image %gx%g is too large (at most "
+                                          "%u pixels)", pass->name, w, h, MAX_PIXELS);
+    summary->width = (unsigned int)w;
+    summary->height = (unsigned int)h;
+    summary->photons = o->photons ? o->photons : sppm_default_photons(d);
+    if ((uint64_t)summary->photons * IDMR_PATH_VERTICES > 0xffffffffu)
+        return error_set(IDMR_EXIT_INPUT, "%s: %u photon paths per iteration are too many",
+                         pass->name, summary->photons);
+    return 0;
+}
+
+static int build_program(sppm *core, const sppm_pass *pass)
+{
+    double start = monotonic_seconds();
+    char defines[256];
+    snprintf(defines, sizeof defines, "-D IDMR_SPPM_PASS=%d%s%s", pass->pass,
+             pass->defines ? " " : "", pass->defines ? pass->defines : "");
+    unsigned int features = core->options->generic ? IDMR_FEATURES_ALL : core->scene->features;
+    core->summary->build_options = device_build_options(core->dev, features, defines);
+    if (device_build_program(core->dev, "sppm.cl", core->summary->build_options, &core->program) ||
+        device_create_kernel(core->program, "camera_paths", &core->camera_paths) ||
+        device_create_kernel(core->program, "photon_paths", &core->photon_paths))
+        return -1;
+    core->summary->seconds.build = monotonic_seconds() - start;
+    return 0;
+}
+
+/* The core's buffers, and the arguments of camera_paths and photon_paths that do not change. */
+static int allocate(sppm *core, const sppm_pass *pass)
+{
+    sppm_summary *summary = core->summary;
+    size_t slots = (size_t)summary->photons * IDMR_PATH_VERTICES;
+    if (hit_point_grid_create(core->dev, core->program, core->pixels, &core->grid))
+        return -1;
+    const device_buffer_request buffers[] = {
+        {&core->hit_points, core->pixels * sizeof(idmr_hit_point), "hit points"},
+        {&core->path_length, summary->photons * sizeof(cl_uint), "photon path lengths"},
+        {&core->photon_records, slots * pass->photon_record_bytes, "photon paths"},
+    };
+    summary->buffer_bytes = core->grid.bytes;
+    if (device_buffers(core->dev, buffers, sizeof buffers / sizeof *buffers,
+                       &summary->buffer_bytes))
+        return -1;
+    idmr_camera camera = core->scene->camera;
+    return DEVICE_SET_ARG(core->camera_paths, "camera_paths", 1, camera) ||
+                   device_scene_set_args(&core->uploaded, core->camera_paths, "camera_paths", 2) ||
+                   DEVICE_SET_ARG(core->camera_paths, "camera_paths", CAMERA_CORE_ARGUMENTS - 1,
+                                  core->hit_points) ||
+                   device_scene_set_args(&core->uploaded, core->photon_paths, "photon_paths", 1) ||
+                   DEVICE_SET_ARG(core->photon_paths, "photon_paths", 1 + DEVICE_SCENE_BUFFERS,
+                                  core->path_length) ||
+                   DEVICE_SET_ARG(core->photon_paths, "photon_paths", 2 + DEVICE_SCENE_BUFFERS,
+                                  core->photon_records)
+               ? -1
+               : 0;
+}
+
+static void release(sppm *core)
+{
+    cl_kernel kernels[] = {core->camera_paths, core->photon_paths};
+    device_release_kernels(kernels, sizeof kernels / sizeof *kernels);
+    cl_mem buffers[] = {core->hit_points, core->path_length, core->photon_records};
+    device_release_buffers(buffers, sizeof buffers / sizeof *buffers);
+    hit_point_grid_release(&core->grid);
+    if (core->program)
+        clReleaseProgram(core->program);
+    core->program = NULL;
+    device_scene_release(&core->uploaded);
+}
+
+/* The parameters that stay the same over the iterations. */
+static void params_begin(sppm *core)
+{
+    idmr_sppm_params *params = &core->params;
+    memset(params, 0, sizeof *params);
+    params->seed = core->options->seed;
+    params->width = core->summary->width;
+    params->height = core->summary->height;
+    params->path_count = core->summary->photons;
+    params->light_count = core->uploaded.light_count;
+    params->triangle_count = (unsigned int)core->scene->triangle_count;
+    memcpy(params->scene_center, core->uploaded.center, sizeof params->scene_center);
+    params->scene_radius = core->uploaded.radius;
+    params->ray_epsilon = core->uploaded.ray_epsilon;
+}
+
+/* Camera paths, photon paths, grid and the pass's gather, each stage timed (the queue is
+ * drained between stages). */
+static int iterate(sppm *core, sppm_pass *pass)
+{
+    sppm_seconds *seconds = &core->summary->seconds;
+    size_t local = core->options->local_size;
+    double t0 = monotonic_seconds();
+    if (DEVICE_SET_ARG(core->camera_paths, "camera_paths", 0, core->params) ||
+        device_run(core->dev, core->camera_paths, "camera_paths", core->pixels, local))
+        return -1;
+    double t1 = monotonic_seconds();
+    if (DEVICE_SET_ARG(core->photon_paths, "photon_paths", 0, core->params) ||
+        device_run(core->dev, core->photon_paths, "photon_paths", core->params.path_count, local))
+        return -1;
+    double t2 = monotonic_seconds();
+    if (hit_point_grid_build(core->dev, &core->grid, &core->params, core->hit_points, local))
+        return -1;
+    double t3 = monotonic_seconds();
+    if (pass->gather(core, pass->state))
+        return -1;
+    double t4 = monotonic_seconds();
+    seconds->camera += t1 - t0;
+    seconds->photon += t2 - t1;
+    seconds->grid += t3 - t2;
+    seconds->gather += t4 - t3;
+    return 0;
+}
+
+static int take_snapshot(sppm *core, size_t record_bytes, sppm_snapshot *out)
+{
+    sppm_snapshot_free(out);
+    out->params = core->params;
+    size_t paths = core->params.path_count, slots = paths * IDMR_PATH_VERTICES;
+    out->hit_points = xmalloc(core->pixels * sizeof *out->hit_points);
+    out->photon_records = xmalloc(slots * record_bytes);
+    out->path_length = xmalloc(paths * sizeof *out->path_length);
+    return device_read(core->dev, core->hit_points, core->pixels * sizeof *out->hit_points,
+                       out->hit_points, "hit points") ||
+                   device_read(core->dev, core->photon_records, slots * record_bytes,
+                               out->photon_records, "photon paths") ||
+                   device_read(core->dev, core->path_length, paths * sizeof *out->path_length,
+                               out->path_length, "photon path lengths")
+               ? -1
+               : 0;
+}
+
+/* The first iteration's valid hit points and stored records, for the reports (read back once:
+ * they change little between iterations). */
+static int count_first_iteration(sppm *core)
+{
+    size_t paths = core->params.path_count;
+    idmr_hit_point *hit_points = xmalloc(core->pixels * sizeof *hit_points);
+    uint32_t *lengths = xmalloc(paths * sizeof *lengths);
+    int status = device_read(core->dev, core->hit_points, core->pixels * sizeof *hit_points,
+                             hit_points, "hit points") ||
+                 device_read(core->dev, core->path_length, paths * sizeof *lengths, lengths,
+                             "photon path lengths");
+    for (size_t i = 0; i < core->pixels && !status; i++)
+        core->summary->hit_points += hit_points[i].valid;
+    for (size_t i = 0; i < paths && !status; i++)
+        core->summary->photon_records += lengths[i];
+    free(hit_points);
+    free(lengths);
+    return status ? -1 : 0;
+}
+
+/* The iterations, until one of the stop rules (sppm.h) ends them. */
+static int run_iterations(sppm *core, sppm_pass *pass, sppm_snapshot *snapshot)
+{
+    const sppm_options *o = core->options;
+    sppm_summary *summary = core->summary;
+    summary->radius = xcalloc(o->iterations, sizeof *summary->radius);
+    double radius2 = sppm_initial_radius2(core->scene, summary->width, summary->height);
+    progress bar;
+    progress_begin(&bar, pass->name, o->iterations, o->progress);
+    double start = monotonic_seconds();
+    int status = 0, stop = 0;
+    for (unsigned int n = 0; n < o->iterations && !status && !stop; n++) {
+        core->params.iteration = n;
+        hit_point_grid_place(&core->grid, core->scene, radius2, &core->params);
+        summary->radius[n] = core->params.radius;
+        status = iterate(core, pass) ||
+                 (snapshot && (take_snapshot(core, pass->photon_record_bytes, snapshot) ||
+                               (pass->snapshot && pass->snapshot(core, pass->state)))) ||
+                 (n == 0 && count_first_iteration(core));
+        if (status)
+            break;
+        char detail[64] = "";
+        double collect_start = monotonic_seconds();
+        status = pass->collect(core, pass->state, n, &stop, detail, sizeof detail);
+        if (status)
+            break;
+        summary->seconds.collect += monotonic_seconds() - collect_start;
+        summary->iterations = n + 1;
+        progress_update(&bar, n + 1, detail);
+        radius2 = sppm_next_radius2(radius2, n, o->alpha);
+        if (o->time_limit > 0 && monotonic_seconds() - start >= o->time_limit)
+            stop = 1;
+    }
+    progress_end(&bar);
+    summary->seconds.total = monotonic_seconds() - start;
+    return status ? -1 : 0;
+}
+
+int sppm_run(device *d, const scene *s, const bvh *b, const sppm_options *o, sppm_pass *pass,
+             sppm_summary *summary, sppm_snapshot *snapshot)
+{
+    memset(summary, 0, sizeof *summary);
+    if (check_inputs(d, s, o, pass, summary))
+        return -1;
+    sppm core;
+    memset(&core, 0, sizeof core);
+    core.dev = d;
+    core.scene = s;
+    core.options = o;
+    core.summary = summary;
+    core.pixels = summary->width * summary->height;
+    int status = device_scene_upload(d, s, b, &core.uploaded);
+    if (!status) {
+        summary->bvh_bytes = core.uploaded.bvh_bytes;
+        summary->geometry_bytes = core.uploaded.bytes - core.uploaded.bvh_bytes;
+        params_begin(&core);
+        status = build_program(&core, pass) || allocate(&core, pass) ||
+                 pass->prepare(&core, pass->state) || run_iterations(&core, pass, snapshot) ||
+                 (pass->finish && pass->finish(&core, pass->state));
+    }
+    pass->release(pass->state);
+    release(&core);
+    return status ? -1 : 0;
+}

@@ -1,0 +1,196 @@
+/* materials.h — how the four material kinds (idmr/material.h) scatter light: Fresnel, the
+ * specular continuation of camera and photon paths, sampling a scattering event with Russian
+ * roulette, and the BRDF of non-specular surfaces. Branches of kinds the scene does not have are
+ * compiled out (features.h).
+ *
+ * Conventions: n is a triangle's unit winding normal (its "front" side, Mitsuba's convention
+ * for one-sided bsdfs); d is the unit direction a path travels; n_side is n turned to face the
+ * side a path arrives from. */
+#ifndef IDMR_KERNEL_MATERIALS_H
+#define IDMR_KERNEL_MATERIALS_H
+
+#include "idmr/material.h"
+#include "lib/features.h"
+#include "lib/sampling.h"
+
+/* Unpolarised Fresnel reflectance of a dielectric interface; eta = n_incident / n_transmitted,
+ * cos_i > 0. Total internal reflection returns 1. */
+inline float fresnel_dielectric(float cos_i, float eta)
+{
+    float sin2_t = eta * eta * fmax(0.0f, 1.0f - cos_i * cos_i);
+    if (sin2_t >= 1.0f)
+        return 1.0f;
+    float cos_t = sqrt(1.0f - sin2_t);
+    float rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    float rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    return 0.5f * (rs * rs + rp * rp);
+}
+
+/* The outcome of one scattering event. */
+#define SCATTER_ABSORBED 0
+#define SCATTER_DIFFUSE 1  /* a non-specular lobe: camera paths end here */
+#define SCATTER_SPECULAR 2 /* mirror reflection or dielectric reflection/refraction */
+
+inline bool material_is_specular(const global idmr_material *m)
+{
+#if HAS_FEATURE(IDMR_FEATURES_SPECULAR)
+    return m->kind == IDMR_MATERIAL_MIRROR || m->kind == IDMR_MATERIAL_DIELECTRIC;
+#else
+    return false;
+#endif
+}
+
+/* Whether the side of a surface with winding normal n that direction d arrives on scatters
+ * light: the front always, the back only for two-sided materials (and dielectrics). */
+inline bool side_reflects(const global idmr_material *m, float3 d, float3 n)
+{
+    return dot(d, n) <= 0.0f || (m->flags & IDMR_MATERIAL_TWOSIDED) ||
+           m->kind == IDMR_MATERIAL_DIELECTRIC;
+}
+
+/* Smooth specular continuation (mirror, dielectric): the direction after the interface, the
+ * choice between reflection and refraction made with probability Fresnel. n is the winding
+ * normal, d the unit incoming direction. */
+inline float3 scatter_specular(const global idmr_material *m, float3 d, float3 n, idmr_rng *rng)
+{
+    float cos_dn = dot(d, n);
+    float3 n_side = cos_dn < 0.0f ? n : -n; /* faces the incoming side */
+#if HAS_FEATURE(IDMR_FEATURE_DIELECTRIC)
+    if (m->kind == IDMR_MATERIAL_DIELECTRIC) {
+        bool entering = cos_dn < 0.0f;
+        float eta = entering ? m->ext_ior / m->int_ior : m->int_ior / m->ext_ior;
+        float cos_i = fabs(cos_dn);
+        float f = fresnel_dielectric(cos_i, eta);
+        if (m->flags & IDMR_MATERIAL_THIN) {
+            /* A thin slab: multiple internal reflections, no refraction of the direction. */
+            float reflect_probability = 2.0f * f / (1.0f + f);
+            return idmr_rng_float(rng) < reflect_probability ? reflect_about(d, n_side) : d;
+        }
+        if (idmr_rng_float(rng) < f)
+            return reflect_about(d, n_side);
+        float sin2_t = eta * eta * fmax(0.0f, 1.0f - cos_i * cos_i);
+        float cos_t = sqrt(fmax(0.0f, 1.0f - sin2_t));
+        return normalize(eta * d + (eta * cos_i - cos_t) * n_side);
+    }
+#endif
+    return reflect_about(d, n_side);
+}
+
+/* GGX (Trowbridge-Reitz) microfacet normal around n_side with roughness alpha, sampled in
+ * proportion to D(h) cos(theta_h). */
+inline float3 sample_ggx_normal(float3 n_side, float alpha, idmr_rng *rng)
+{
+    float u1 = idmr_rng_float(rng), u2 = idmr_rng_float(rng);
+    float tan2 = alpha * alpha * u1 / fmax(1e-7f, 1.0f - u1);
+    float cos_theta = 1.0f / sqrt(1.0f + tan2);
+    float sin_theta = sqrt(fmax(0.0f, 1.0f - cos_theta * cos_theta));
+    float phi = 2.0f * PI_F * u2;
+    float3 t, b;
+    frame_around(n_side, &t, &b);
+    return normalize(sin_theta * cos(phi) * t + sin_theta * sin(phi) * b + cos_theta * n_side);
+}
+
+/* Smith's shadowing-masking term of GGX for one direction at cosine cos_v to the normal. */
+inline float ggx_g1(float cos_v, float alpha)
+{
+    float a2 = alpha * alpha;
+    return 2.0f * cos_v / (cos_v + sqrt(a2 + (1.0f - a2) * cos_v * cos_v));
+}
+
+/* Scatters a path at a surface: *d becomes the new direction and *weight the factor the
+ * path's flux (or a camera path's throughput) is multiplied by — f cos / pdf divided by the
+ * survival probability, per RGB channel. Absorption is Russian roulette with survival
+ * probability equal to the largest channel of the chosen lobe's albedo, at every bounce:
+ * importance paths carry no flux, so the roulette is their only absorption. A one-sided
+ * surface absorbs what arrives at its back.
+ *
+ * Glossy lobes (GGX): the microfacet normal h is sampled in proportion to D(h) cos θ_h, so the
+ * weight of the reflection is the lobe colour × G(i, o) |i·h| / (cos_i cos θ_h). A plastic
+ * chooses its coating with probability Fresnel(cos_i), which the lobe's Fresnel factor cancels.
+ * Roughness is at least IDMR_MIN_GLOSSY_ROUGHNESS, so that a glossy lobe is never a delta the
+ * renderer's density estimate cannot see. */
+#define IDMR_MIN_GLOSSY_ROUGHNESS 0.05f
+inline int scatter(const global idmr_material *m, float3 *d, float3 n, idmr_rng *rng,
+                   float3 *weight)
+{
+    float cos_dn = dot(*d, n);
+    float3 n_side = cos_dn < 0.0f ? n : -n;
+    if (material_is_specular(m)) {
+        float3 colour = m->kind == IDMR_MATERIAL_MIRROR ? vload3(0, m->specular) : (float3)(1.0f);
+        float survival = max3(colour);
+        if (!side_reflects(m, *d, n))
+            return SCATTER_ABSORBED;
+        if (idmr_rng_float(rng) >= survival)
+            return SCATTER_ABSORBED;
+        *d = scatter_specular(m, *d, n, rng);
+        *weight = colour / survival;
+        return SCATTER_SPECULAR;
+    }
+    if (!side_reflects(m, *d, n))
+        return SCATTER_ABSORBED;
+    float3 diffuse = vload3(0, m->reflectance);
+#if HAS_FEATURE(IDMR_FEATURE_GLOSSY)
+    if (m->kind == IDMR_MATERIAL_GLOSSY) {
+        bool metal = max3(diffuse) <= 0.0f;
+        float cos_i = -dot(*d, n_side);
+        /* A plastic's coating reflects with Fresnel probability, a metal always. */
+        float f = metal ? 1.0f : fresnel_dielectric(cos_i, m->ext_ior / m->int_ior);
+        if (idmr_rng_float(rng) < f) {
+            float3 colour = vload3(0, m->specular);
+            float survival = max3(colour);
+            if (idmr_rng_float(rng) >= survival)
+                return SCATTER_ABSORBED;
+            float alpha = fmax(m->roughness, IDMR_MIN_GLOSSY_ROUGHNESS);
+            float3 h = sample_ggx_normal(n_side, alpha, rng);
+            float3 out = reflect_about(*d, h);
+            float cos_o = dot(out, n_side);
+            if (cos_o <= 0.0f)
+                return SCATTER_ABSORBED;
+            float cos_h = dot(h, n_side);
+            float shadowing = ggx_g1(fmax(cos_i, 1e-6f), alpha) * ggx_g1(cos_o, alpha);
+            *weight = colour / survival *
+                      (shadowing * fabs(dot(out, h)) / fmax(cos_i * cos_h, 1e-6f));
+            *d = out;
+            return SCATTER_DIFFUSE;
+        }
+    }
+#endif
+    float survival = max3(diffuse);
+    if (idmr_rng_float(rng) >= survival)
+        return SCATTER_ABSORBED;
+    *d = sample_cosine(n_side, rng);
+    *weight = diffuse / survival;
+    return SCATTER_DIFFUSE;
+}
+
+/* The BRDF of a non-specular surface for light arriving along direction `incoming` (towards
+ * the surface) and leaving along `outgoing` (away from it), on the side n_side faces (the
+ * caller makes sure that side reflects: the front, or either side of a two-sided material).
+ * It matches what scatter() samples: Lambert ρ/π; a metal's GGX lobe colour × D G /
+ * (4 cos_i cos_o); a plastic's coating weighted by Fresnel(cos_i) over its diffuse base
+ * weighted by 1 - Fresnel(cos_i). Zero when either direction is below the surface. */
+inline float3 brdf(const global idmr_material *m, float3 incoming, float3 outgoing, float3 n_side)
+{
+    float cos_i = -dot(incoming, n_side), cos_o = dot(outgoing, n_side);
+    if (cos_i <= 0.0f || cos_o <= 0.0f)
+        return (float3)(0.0f);
+    float3 diffuse = vload3(0, m->reflectance) * (1.0f / PI_F);
+#if HAS_FEATURE(IDMR_FEATURE_GLOSSY)
+    if (m->kind == IDMR_MATERIAL_GLOSSY) {
+        bool metal = max3(diffuse) <= 0.0f;
+        float f = metal ? 1.0f : fresnel_dielectric(cos_i, m->ext_ior / m->int_ior);
+        float alpha = fmax(m->roughness, IDMR_MIN_GLOSSY_ROUGHNESS);
+        float3 h = normalize(outgoing - incoming);
+        float cos_h = dot(h, n_side);
+        float a2 = alpha * alpha;
+        float denominator = cos_h * cos_h * (a2 - 1.0f) + 1.0f;
+        float distribution = cos_h > 0.0f ? a2 / (PI_F * denominator * denominator) : 0.0f;
+        float shadowing = ggx_g1(cos_i, alpha) * ggx_g1(cos_o, alpha);
+        return f * vload3(0, m->specular) * (distribution * shadowing / (4.0f * cos_i * cos_o)) +
+               (1.0f - f) * diffuse;
+    }
+#endif
+    return diffuse;
+}
+
+#endif

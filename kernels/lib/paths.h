@@ -1,0 +1,192 @@
+/* paths.h — the one camera path and the one photon path of the SPPM core, shared by both passes
+ * (kernels/sppm.cl). The pass the program is built for (IDMR_SPPM_PASS, features.h) decides
+ * what a path records on its way; where the two differ it is marked with #if:
+ *
+ *   camera path   one per pixel, jittered within it, through mirrors and dielectrics (Fresnel
+ *                 chooses reflection or refraction) to the first non-specular surface, where it
+ *                 leaves a hit point; at most IDMR_CAMERA_DEPTH surface interactions.
+ *     importance  adds the Eq. 2 weight 1 - |n·d| of every surface it hits to that triangle's
+ *                 camera importance (unless IDMR_CAMERA_IMPORTANCE or IDMR_BOOKKEEPING is 0)
+ *     render      carries the specular throughput (a mirror's colour), adds the emission it
+ *                 sees (an area light's front, the environment once it leaves the scene) and
+ *                 ends at the back of a one-sided surface (black, no hit point)
+ *   photon path   one per work-item, emitted by a light chosen in proportion to power, scattered
+ *                 with Russian roulette at every surface (materials.h), at most
+ *                 IDMR_PHOTON_BOUNCES interactions and IDMR_PATH_VERTICES records, which fill
+ *                 the path's slot in order (path p's record j at p * IDMR_PATH_VERTICES + j).
+ *     importance  records a vertex (triangle, side normal, Eq. 2 weight) at every surface,
+ *                 specular ones too; paths carry no flux
+ *     render      records a photon (flux, direction, side normal) at every non-specular surface
+ *                 on a side that reflects; flux is multiplied by each scattering weight */
+#ifndef IDMR_KERNEL_PATHS_H
+#define IDMR_KERNEL_PATHS_H
+
+#include "idmr/camera.h"
+#include "idmr/importance_layout.h"
+#include "idmr/render_layout.h"
+#include "idmr/weight.h"
+#include "lib/features.h"
+#include "lib/fixed_point.h"
+#include "lib/lights.h"
+#include "lib/materials.h"
+#include "lib/scene.h"
+#include "lib/traverse.h"
+
+#ifndef IDMR_SPPM_PASS
+#error "paths.h is for the SPPM kernels: IDMR_SPPM_PASS must be defined"
+#endif
+#ifndef IDMR_BOOKKEEPING
+#define IDMR_BOOKKEEPING 1 /* 0: the importance accumulation compiled out (make bench) */
+#endif
+#ifndef IDMR_CAMERA_IMPORTANCE
+#define IDMR_CAMERA_IMPORTANCE 1 /* 0 when γ = 0: camera importance would be multiplied by 0 */
+#endif
+
+#if PASS_IMPORTANCE
+#define CAMERA_STREAM IDMR_STREAM_IMPORTANCE_CAMERA
+#define PHOTON_STREAM IDMR_STREAM_IMPORTANCE_PHOTON
+typedef idmr_photon_vertex photon_record;
+#else
+#define CAMERA_STREAM IDMR_STREAM_RENDER_CAMERA
+#define PHOTON_STREAM IDMR_STREAM_RENDER_PHOTON
+typedef idmr_render_photon photon_record;
+#endif
+
+/* Fixed-point units of an Eq. 2 weight (idmr/importance_layout.h). */
+inline ulong weight_units(float weight)
+{
+    return (ulong)(weight * IDMR_FIXED_SCALE + 0.5f);
+}
+
+/* The unit direction of the camera ray through pixel `pixel` of the params' hit-point image,
+ * jittered within the pixel (x jitter, then y jitter, from the path's stream). The film may be
+ * scaled (--resolution): rays follow the scene camera's frame at the params' size. */
+inline float3 camera_ray(idmr_camera camera, const idmr_sppm_params *params, uint pixel,
+                         idmr_rng *rng)
+{
+    camera.width = params->width;
+    camera.height = params->height;
+    float film_x = (float)(pixel % params->width) + idmr_rng_float(rng);
+    float film_y = (float)(pixel / params->width) + idmr_rng_float(rng);
+    float d[3];
+    idmr_camera_direction(&camera, film_x, film_y, d);
+    return normalize(vload3(0, d));
+}
+
+/* Traces pixel `pixel`'s camera path and writes its hit point (and, rendering, its record). */
+inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
+                        idmr_camera camera, uint pixel, global idmr_hit_point *hit_points,
+                        volatile global fixed_word *camera_importance,
+                        global idmr_render_hit *render_hits)
+{
+    idmr_rng rng = idmr_rng_init(params->seed, params->iteration, CAMERA_STREAM, pixel);
+    float3 origin = vload3(0, camera.origin);
+    float3 d = camera_ray(camera, params, pixel, &rng);
+    idmr_hit_point hp;
+    hp.valid = 0u;
+    hp.pixel = pixel;
+#if PASS_RENDER
+    float3 throughput = (float3)(1.0f), radiance = (float3)(0.0f);
+    idmr_render_hit rh = {{0.0f, 0.0f, 0.0f}, 0u, {0.0f, 0.0f, 0.0f}, 0.0f,
+                          {0.0f, 0.0f, 0.0f}, 0.0f}; /* zero where there is no hit point */
+#endif
+    for (int depth = 0; depth < IDMR_CAMERA_DEPTH; depth++) {
+        idmr_hit hit = traverse_closest(scene->nodes, scene->leaves, origin, d, 0.0f, INFINITY);
+        if (hit.triangle == IDMR_NO_HIT) {
+#if PASS_RENDER
+            radiance += throughput * environment_radiance(scene, params->light_count);
+#endif
+            break;
+        }
+        float3 n = scene->triangle_normals[hit.triangle].xyz;
+        float3 p = origin + hit.t * d;
+        global const idmr_material *m = triangle_material(scene, hit.triangle);
+#if PASS_IMPORTANCE && IDMR_BOOKKEEPING && IDMR_CAMERA_IMPORTANCE
+        fixed_add(camera_importance, hit.triangle,
+                  weight_units(idmr_eq2_weight(n.x, n.y, n.z, d.x, d.y, d.z)));
+#endif
+#if PASS_RENDER
+        radiance += throughput * surface_emission(scene, params->light_count, hit.triangle, d, n);
+        if (!side_reflects(m, d, n))
+            break;
+#endif
+        float3 n_side = dot(d, n) < 0.0f ? n : -n;
+        if (!material_is_specular(m)) {
+            vstore3(p, 0, hp.position);
+            vstore3(n_side, 0, hp.normal);
+            hp.valid = 1u;
+#if PASS_RENDER
+            vstore3(throughput, 0, rh.throughput);
+            rh.material = scene->triangle_materials[hit.triangle];
+            vstore3(-d, 0, rh.outgoing);
+#endif
+            break;
+        }
+#if HAS_FEATURE(IDMR_FEATURES_SPECULAR)
+#if PASS_RENDER
+        if (m->kind == IDMR_MATERIAL_MIRROR)
+            throughput *= vload3(0, m->specular);
+#endif
+        d = scatter_specular(m, d, n, &rng);
+        origin = offset_origin(p, dot(d, n_side) > 0.0f ? n_side : -n_side, params->ray_epsilon);
+#endif
+    }
+    hit_points[pixel] = hp;
+#if PASS_RENDER
+    vstore3(radiance, 0, rh.emitted);
+    render_hits[pixel] = rh;
+#endif
+}
+
+/* Traces photon path `path` into its slot of records; returns how many it stored. */
+inline uint photon_path(const scene_view *scene, const idmr_sppm_params *params, uint path,
+                        global photon_record *slot)
+{
+    idmr_rng rng = idmr_rng_init(params->seed, params->iteration, PHOTON_STREAM, path);
+    float3 origin, d;
+    uint light_index;
+    if (!emit(scene, params, &rng, &origin, &d, &light_index))
+        return 0;
+#if PASS_RENDER
+    float3 flux = photon_initial_flux(scene, params, light_index);
+#endif
+    uint stored = 0;
+    for (int bounce = 0; bounce < IDMR_PHOTON_BOUNCES && stored < IDMR_PATH_VERTICES; bounce++) {
+        idmr_hit hit = traverse_closest(scene->nodes, scene->leaves, origin, d, 0.0f, INFINITY);
+        if (hit.triangle == IDMR_NO_HIT)
+            break;
+        float3 n = scene->triangle_normals[hit.triangle].xyz;
+        float3 p = origin + hit.t * d;
+        float3 n_side = dot(d, n) < 0.0f ? n : -n;
+        global const idmr_material *m = triangle_material(scene, hit.triangle);
+#if PASS_IMPORTANCE
+        idmr_photon_vertex v;
+        vstore3(p, 0, v.position);
+        v.triangle = hit.triangle;
+        vstore3(n_side, 0, v.normal);
+        v.weight = idmr_eq2_weight(n.x, n.y, n.z, d.x, d.y, d.z);
+        slot[stored++] = v;
+#else
+        if (!material_is_specular(m) && side_reflects(m, d, n)) {
+            idmr_render_photon photon;
+            vstore3(p, 0, photon.position);
+            vstore3(d, 0, photon.direction);
+            vstore3(n_side, 0, photon.normal);
+            photon.flux_r = flux.x;
+            photon.flux_g = flux.y;
+            photon.flux_b = flux.z;
+            slot[stored++] = photon;
+        }
+#endif
+        float3 weight;
+        if (scatter(m, &d, n, &rng, &weight) == SCATTER_ABSORBED)
+            break;
+#if PASS_RENDER
+        flux *= weight;
+#endif
+        origin = offset_origin(p, dot(d, n_side) > 0.0f ? n_side : -n_side, params->ray_epsilon);
+    }
+    return stored;
+}
+
+#endif

@@ -1,0 +1,154 @@
+/* sppm.cl — the kernels of one iteration of the SPPM core (host/passes/sppm.c), built for one
+ * pass (IDMR_SPPM_PASS, lib/features.h). Entry points only: the work is in lib/.
+ *
+ *   camera_paths      one camera path per pixel (lib/paths.h): hit points, and what the pass
+ *                     records (importance: camera importance; render: throughput and emission)
+ *   photon_paths      one photon path per work-item into its slot of records (lib/paths.h)
+ *   grid_count, scan_chunks, scan_chunk_sums, scan_apply, grid_scatter
+ *                     the hash grid over the hit points (lib/hit_point_grid.h)
+ * importance pass (paper 3.2, 3.3, 4.1; host/passes/importance.c):
+ *   gather_count      per photon vertex: the hit points that gather it
+ *   path_importance   per path, from its last vertex back: running sum s of gather counts;
+ *                     vertex j adds weight_j × s to its triangle's light importance
+ *   pixel_centre_hits the triangle seen through each pixel centre (the importance image)
+ * render pass (host/passes/render.c):
+ *   render_gather     per stored photon: every hit point that gathers it gets
+ *                     throughput × BRDF × flux, added in fixed point to its pixel
+ *
+ * Argument order: params first, then (for path kernels) the camera and SCENE_BUFFERS
+ * (lib/scene.h), then the core's buffers, then the pass's; host/passes/sppm.c binds them. */
+#pragma OPENCL FP_CONTRACT OFF
+#include "lib/hit_point_grid.h"
+#include "lib/paths.h"
+
+kernel void camera_paths(idmr_sppm_params params, idmr_camera camera, SCENE_BUFFERS,
+                         global idmr_hit_point *hit_points,
+#if PASS_IMPORTANCE
+                         volatile global fixed_word *camera_importance)
+#else
+                         global idmr_render_hit *render_hits)
+#endif
+{
+    uint pixel = get_global_id(0);
+    if (pixel >= params.width * params.height)
+        return;
+    scene_view scene = SCENE_VIEW();
+#if PASS_IMPORTANCE
+    camera_path(&scene, &params, camera, pixel, hit_points, camera_importance, NULL);
+#else
+    camera_path(&scene, &params, camera, pixel, hit_points, NULL, render_hits);
+#endif
+}
+
+kernel void photon_paths(idmr_sppm_params params, SCENE_BUFFERS, global uint *path_length,
+                         global photon_record *records)
+{
+    uint path = get_global_id(0);
+    if (path >= params.path_count)
+        return;
+    scene_view scene = SCENE_VIEW();
+    path_length[path] =
+        photon_path(&scene, &params, path, records + (size_t)path * IDMR_PATH_VERTICES);
+}
+
+#if PASS_IMPORTANCE
+
+kernel void gather_count(idmr_sppm_params params, global const idmr_photon_vertex *vertices,
+                         global const uint *path_length, global const idmr_hit_point *hit_points,
+                         global const uint *cell_start, global const uint *grid_points,
+                         global uint *gathered)
+{
+    uint v = get_global_id(0);
+    if (v >= params.path_count * IDMR_PATH_VERTICES)
+        return;
+    uint count = 0;
+    if (v % IDMR_PATH_VERTICES < path_length[v / IDMR_PATH_VERTICES]) {
+        float3 p = vload3(0, vertices[v].position), side = vload3(0, vertices[v].normal);
+        float r2 = params.radius * params.radius;
+        uint buckets[8];
+        uint bucket_count = grid_buckets_near(p, &params, buckets);
+        for (uint b = 0; b < bucket_count; b++)
+            for (uint i = cell_start[buckets[b]]; i < cell_start[buckets[b] + 1]; i++)
+                count += hit_point_gathers(hit_points + grid_points[i], p, side, r2);
+    }
+    gathered[v] = count;
+}
+
+kernel void path_importance(idmr_sppm_params params, global const idmr_photon_vertex *vertices,
+                            global const uint *path_length, global const uint *gathered,
+                            volatile global fixed_word *light_importance)
+{
+    uint path = get_global_id(0);
+    if (path >= params.path_count)
+        return;
+    uint base = path * IDMR_PATH_VERTICES;
+    ulong running = 0;
+    for (int j = (int)path_length[path] - 1; j >= 0; j--) {
+        running += gathered[base + j];
+        if (running != 0ul)
+            fixed_add(light_importance, vertices[base + j].triangle,
+                      weight_units(vertices[base + j].weight) * running);
+    }
+}
+
+kernel void pixel_centre_hits(idmr_sppm_params params, idmr_camera camera, SCENE_BUFFERS,
+                              global uint *triangles)
+{
+    uint pixel = get_global_id(0);
+    if (pixel >= params.width * params.height)
+        return;
+    camera.width = params.width;
+    camera.height = params.height;
+    float d[3];
+    idmr_camera_direction(&camera, (float)(pixel % params.width) + 0.5f,
+                          (float)(pixel / params.width) + 0.5f, d);
+    triangles[pixel] =
+        traverse_closest(nodes, leaves, vload3(0, camera.origin), vload3(0, d), 0.0f, INFINITY)
+            .triangle;
+}
+
+#else
+
+/* round(c × scale) as fixed-point units, for a contribution c >= 0; clamped to
+ * IDMR_RENDER_CONTRIBUTION_LIMIT, and 0 for NaN. */
+inline ulong radiance_units(float c, float scale)
+{
+    float units = c * scale;
+    return units > 0.0f ? (ulong)(fmin(units, IDMR_RENDER_CONTRIBUTION_LIMIT) + 0.5f) : 0ul;
+}
+
+kernel void render_gather(idmr_sppm_params params, global const idmr_render_photon *photons,
+                          global const uint *path_length, global const idmr_hit_point *hit_points,
+                          global const idmr_render_hit *render_hits,
+                          global const idmr_material *materials, global const uint *cell_start,
+                          global const uint *grid_points,
+                          volatile global fixed_word *pixel_radiance)
+{
+    uint slot = get_global_id(0);
+    if (slot >= params.path_count * IDMR_PATH_VERTICES ||
+        slot % IDMR_PATH_VERTICES >= path_length[slot / IDMR_PATH_VERTICES])
+        return;
+    global const idmr_render_photon *photon = photons + slot;
+    float3 p = vload3(0, photon->position), side = vload3(0, photon->normal);
+    float3 incoming = vload3(0, photon->direction);
+    float3 flux = (float3)(photon->flux_r, photon->flux_g, photon->flux_b);
+    float r2 = params.radius * params.radius;
+    uint buckets[8];
+    uint bucket_count = grid_buckets_near(p, &params, buckets);
+    for (uint b = 0; b < bucket_count; b++)
+        for (uint i = cell_start[buckets[b]]; i < cell_start[buckets[b] + 1]; i++) {
+            uint index = grid_points[i];
+            global const idmr_hit_point *hp = hit_points + index;
+            if (!hit_point_gathers(hp, p, side, r2))
+                continue;
+            global const idmr_render_hit *rh = render_hits + index;
+            float3 c = vload3(0, rh->throughput) * flux *
+                       brdf(materials + rh->material, incoming, vload3(0, rh->outgoing),
+                            vload3(0, hp->normal));
+            fixed_add(pixel_radiance, 3 * hp->pixel, radiance_units(c.x, params.fixed_scale));
+            fixed_add(pixel_radiance, 3 * hp->pixel + 1, radiance_units(c.y, params.fixed_scale));
+            fixed_add(pixel_radiance, 3 * hp->pixel + 2, radiance_units(c.z, params.fixed_scale));
+        }
+}
+
+#endif
