@@ -1,8 +1,14 @@
-# idmr — build, test, bench.  make [config=release|debug|sanitize] [all|test|bench|demo|clean]
+# idmr — build, test, bench.  make [config=release|debug|sanitize] [all|test|bench|demo|deps|clean]
 #
 # bin/idmr is the CLI. Every host source outside host/cli/ goes into build/$(config)/libidmr.a,
 # which the test and bench programs (tests/test_*.c, tests/bench_*.c) link as well.
-# Kernels are not built here: they are OpenCL C compiled at run time from kernels/.
+#
+# Dependencies: compiler and linker flags come from pkg-config for every library that has a .pc
+# file (Embree has none on Debian 12 and is linked by name). They are written once to
+# build/$(config)/flags.mk, *after* scripts/install-deps.sh has installed what is missing, and
+# make reads them from there (it restarts itself once the file is made). The installer runs only
+# when something is missing: flags.mk is remade when it does not exist, when the Makefile or the
+# installer changed, or when a quick check (pkg-config and Embree's header) finds a gap.
 
 config ?= release
 BUILD := build/$(config)
@@ -10,10 +16,14 @@ BUILD := build/$(config)
 CC ?= cc
 CXX ?= c++
 WARNINGS := -Wall -Wextra -Wshadow -Wno-unused-parameter
-CPPFLAGS += -Iinclude -Ihost -DIDMR_ROOT=\"$(CURDIR)\" -DCL_TARGET_OPENCL_VERSION=120 \
-            $(shell pkg-config --cflags libxml-2.0 libcjson 2>/dev/null)
+PKG_MODULES := libxml-2.0 libcjson OpenCL openmesh OpenImageIO
+TEST_PKG_MODULES := cmocka
+EMBREE_HEADER := /usr/include/embree3/rtcore.h
+
+CPPFLAGS += -Iinclude -Ihost -DIDMR_ROOT=\"$(CURDIR)\" -DCL_TARGET_OPENCL_VERSION=120
 CFLAGS += -std=gnu11 $(WARNINGS) -g -MMD -MP -pthread
-CXXFLAGS += -std=c++17 $(WARNINGS) -g -MMD -MP -pthread -Wno-deprecated-copy -Wno-class-memaccess -Wno-maybe-uninitialized
+CXXFLAGS += -std=c++17 $(WARNINGS) -g -MMD -MP -pthread -Wno-deprecated-copy -Wno-class-memaccess \
+            -Wno-maybe-uninitialized
 
 ifeq ($(config),release)
   CFLAGS += -O2
@@ -29,9 +39,6 @@ else
   $(error config must be release, debug or sanitize)
 endif
 
-LDLIBS := -lOpenCL -lembree3 -lOpenMeshTools -lOpenMeshCore -lOpenImageIO -lOpenImageIO_Util \
-          $(shell pkg-config --libs libxml-2.0 libcjson 2>/dev/null) -lstdc++ -lm -pthread
-
 LIB_SOURCES := $(filter-out host/cli/%,$(wildcard host/*/*.c host/*/*.cc))
 LIB_OBJECTS := $(patsubst host/%,$(BUILD)/host/%.o,$(LIB_SOURCES))
 CLI_OBJECTS := $(patsubst host/%,$(BUILD)/host/%.o,$(wildcard host/cli/*.c))
@@ -41,18 +48,46 @@ BENCH_PROGRAMS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/bench_*
 .PHONY: all deps test bench demo clean FORCE
 all: bin/idmr
 
-# Installs the Debian packages when one is missing (a quick dpkg query otherwise).
+# ---- dependencies and the flags they give ----
+
+FLAGS := $(BUILD)/flags.mk
+ifeq ($(filter clean,$(MAKECMDGOALS)),)
+-include $(FLAGS)
+endif
+DEPS_FOUND := $(shell pkg-config --exists $(PKG_MODULES) $(TEST_PKG_MODULES) 2>/dev/null && \
+                      test -f $(EMBREE_HEADER) && echo yes)
+ifneq ($(DEPS_FOUND),yes)
+$(FLAGS): FORCE
+endif
+
+$(FLAGS): Makefile scripts/install-deps.sh
+	@scripts/install-deps.sh
+	@mkdir -p $(dir $@)
+	@{ echo "# written by make from pkg-config: $(PKG_MODULES) $(TEST_PKG_MODULES)"; \
+	   echo "PKG_CFLAGS := $$(pkg-config --cflags $(PKG_MODULES))"; \
+	   echo "PKG_LIBS := $$(pkg-config --libs $(PKG_MODULES)) -lembree3"; \
+	   echo "TEST_LIBS := $$(pkg-config --libs $(TEST_PKG_MODULES))"; } > $@.tmp || \
+	 { rm -f $@.tmp; echo "make: pkg-config could not find $(PKG_MODULES) $(TEST_PKG_MODULES)" >&2; exit 1; }
+	@mv -f $@.tmp $@
+
+# Installs the Debian packages when one is missing (nothing to do otherwise).
 deps:
 	@scripts/install-deps.sh
 
-$(BUILD)/idmr: $(CLI_OBJECTS) $(BUILD)/libidmr.a | deps
+CPPFLAGS += $(PKG_CFLAGS)
+LDLIBS = $(PKG_LIBS) -lstdc++ -lm -pthread
+
+# ---- the CLI and the library ----
+
+$(BUILD)/idmr: $(CLI_OBJECTS) $(BUILD)/libidmr.a
 	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
-# bin/idmr is the binary of the config last asked for: copied every time, so that switching
-# config never leaves the other one's binary in place.
+# bin/idmr is the binary of the config last asked for. It is replaced only when it differs, and
+# by a rename, so a running idmr (a long render in another terminal) keeps its file and a
+# reader never sees half a binary.
 bin/idmr: $(BUILD)/idmr FORCE
 	@mkdir -p bin
-	@cp $< $@
+	@cmp -s $< $@ || { cp $< $@.tmp && mv -f $@.tmp $@; }
 
 FORCE:
 
@@ -60,20 +95,23 @@ $(BUILD)/libidmr.a: $(LIB_OBJECTS)
 	@rm -f $@
 	ar rcs $@ $^
 
-$(BUILD)/host/%.c.o: host/%.c | deps
+$(BUILD)/host/%.c.o: host/%.c $(FLAGS)
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) $(CFLAGS) -c -o $@ $<
 
-$(BUILD)/host/%.cc.o: host/%.cc | deps
+$(BUILD)/host/%.cc.o: host/%.cc $(FLAGS)
 	@mkdir -p $(dir $@)
 	$(CXX) $(CPPFLAGS) $(CXXFLAGS) -c -o $@ $<
 
-$(BUILD)/tests/%: tests/%.c $(BUILD)/libidmr.a | deps
-	@mkdir -p $(dir $@)
-	$(CC) $(CPPFLAGS) -Itests $(CFLAGS) $(LDFLAGS) -o $@ $< $(BUILD)/libidmr.a -lcmocka $(LDLIBS)
+# ---- tests and benchmarks ----
 
-# The decimation benchmark compares with meshoptimizer (a reference, not a dependency of idmr).
-$(BUILD)/tests/bench_decimation: tests/bench_decimation.c $(BUILD)/libidmr.a | deps
+$(BUILD)/tests/%: tests/%.c $(BUILD)/libidmr.a $(FLAGS)
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) -Itests $(CFLAGS) $(LDFLAGS) -o $@ $< $(BUILD)/libidmr.a $(TEST_LIBS) $(LDLIBS)
+
+# The decimation benchmark compares with meshoptimizer (a reference, not a dependency of idmr;
+# it has no pkg-config file).
+$(BUILD)/tests/bench_decimation: tests/bench_decimation.c $(BUILD)/libidmr.a $(FLAGS)
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) -Itests $(CFLAGS) $(LDFLAGS) -o $@ $< $(BUILD)/libidmr.a -lmeshoptimizer $(LDLIBS)
 

@@ -15,6 +15,7 @@
 
 #include "core/error.h"
 #include "io/image.h"
+#include "io/image_compare.h"
 
 static char dir[] = "/tmp/idmr-test-image-XXXXXX";
 

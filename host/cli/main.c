@@ -22,7 +22,7 @@
 #include "device/device.h"
 #include "device/device_scene.h"
 #include "core/error.h"
-#include "io/image.h"
+#include "io/image_compare.h"
 #include "passes/importance.h"
 #include "passes/importance_outputs.h"
 #include "io/mitsuba.h"

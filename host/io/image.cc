@@ -3,9 +3,7 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 
-#include <algorithm>
 #include <cerrno>
-#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <string>
@@ -131,65 +129,6 @@ extern "C" int image_info(const char *path, int *width, int *height, int *channe
     *channels = spec.nchannels;
     in->close();
     return 0;
-}
-
-extern "C" int image_compare(const char *a, const char *b, const char *diff_path,
-                             double diff_max, image_comparison *out)
-{
-    std::memset(out, 0, sizeof *out);
-    int wa, ha, ca, wb, hb, cb;
-    if (image_info(a, &wa, &ha, &ca) || image_info(b, &wb, &hb, &cb))
-        return -1;
-    if (wa != wb || ha != hb || ca != cb)
-        return error_set(IDMR_EXIT_INPUT,
-                         "cannot compare '%s' (%dx%d, %d channels) with '%s' (%dx%d, %d "
-                         "channels): sizes or channels differ",
-                         a, wa, ha, ca, b, wb, hb, cb);
-    float *pa = nullptr, *pb = nullptr;
-    if (image_read_rgb(a, &wa, &ha, &pa) || image_read_rgb(b, &wb, &hb, &pb)) {
-        std::free(pa);
-        return -1;
-    }
-    size_t pixels = (size_t)wa * (size_t)ha;
-    double sum2 = 0, relative = 0, peak = 1, largest = 0;
-    std::vector<float> error(pixels);
-    for (size_t p = 0; p < pixels; p++) {
-        double e = 0;
-        for (int c = 0; c < 3; c++) {
-            double x = pa[3 * p + c], y = pb[3 * p + c];
-            double d = x - y;
-            sum2 += d * d;
-            relative += d * d / (y * y + 0.01);
-            peak = std::max(peak, y);
-            largest = std::max(largest, std::fabs(d));
-            e += std::fabs(d) / 3;
-        }
-        error[p] = (float)e;
-    }
-    double n = 3.0 * (double)(pixels ? pixels : 1);
-    out->width = wa;
-    out->height = ha;
-    out->channels = ca;
-    out->rmse = std::sqrt(sum2 / n);
-    out->psnr = out->rmse > 0 ? 20.0 * std::log10(peak / out->rmse) : INFINITY;
-    out->relative_mse = relative / n;
-    out->max_error = largest;
-    std::vector<float> sorted(error);
-    std::sort(sorted.begin(), sorted.end());
-    out->error_p99 = pixels ? sorted[(size_t)(0.99 * (double)(pixels - 1))] : 0.0;
-    int status = 0;
-    if (diff_path) {
-        float top = diff_max > 0 ? (float)diff_max : (float)out->error_p99;
-        if (!(top > 0))
-            top = pixels ? sorted[pixels - 1] : 0.0f;
-        std::vector<unsigned char> rgb(3 * pixels);
-        for (size_t p = 0; p < pixels; p++)
-            image_false_colour(top > 0 ? error[p] / top : 0.0f, &rgb[3 * p]);
-        status = image_write_rgb8(diff_path, wa, ha, rgb.data());
-    }
-    std::free(pa);
-    std::free(pb);
-    return status;
 }
 
 extern "C" int image_write_rgb8(const char *path, int width, int height, const unsigned char *rgb)

@@ -1,4 +1,5 @@
-/* image.h — the OpenImageIO bridge: reading textures (and later writing and comparing images).
+/* image.h — the OpenImageIO bridge: reading and writing images (textures, renders, error
+ * images); comparing them is io/image_compare.h.
  *
  * Pixels cross the bridge as linear float RGB, row-major, top row first. 8-bit files (JPEG,
  * PNG, ...) are taken as sRGB-encoded and linearised; float files (EXR, HDR) as linear. */
@@ -23,24 +24,6 @@ int image_write_rgb_float(const char *path, int width, int height, const float *
 
 /* Width, height and channel count of an image file, without reading its pixels. */
 int image_info(const char *path, int *width, int *height, int *channels);
-
-typedef struct image_comparison {
-    int width, height, channels;
-    double rmse;         /* over all pixels and the R, G, B channels, linear values */
-    double psnr;         /* 20 log10(peak / rmse), peak = max(1, largest value of b); INFINITY
-                            when the images are equal */
-    double relative_mse; /* mean of (a - b)² / (b² + 0.01) over pixels and channels */
-    double max_error;    /* largest |a - b| */
-    double error_p99;    /* 99th percentile of the per-pixel error (mean |a - b| over R, G, B) */
-} image_comparison;
-
-/* Compares image a with the reference b (same size and channel count, else an error naming
- * both files and their sizes). If diff_path is not NULL, writes the per-pixel error |a - b|
- * (mean over R, G, B) in false colour, scaled so that diff_max is the top of the ramp, or the
- * 99th percentile when diff_max <= 0 (a common diff_max makes several difference images
- * comparable). */
-int image_compare(const char *a, const char *b, const char *diff_path, double diff_max,
-                  image_comparison *out);
 
 /* A false-colour ramp for t in [0, 1] (clamped): black, violet, red, orange, pale yellow;
  * brightness rises monotonically, so it reads in grey too. NaN maps to black. */

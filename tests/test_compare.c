@@ -1,0 +1,273 @@
+/* test_compare.c — the paired reduction error (io/image_compare.h) on synthetic images whose
+ * answer is known: renders are modelled as a converged image plus independent Gaussian noise
+ * per seed, a reduction as a known change of the converged image.
+ *
+ *   known bias          B = A + β everywhere: the estimate recovers β within 3 standard errors,
+ *                       while the plain RMSE of one noisy pair is dominated by the noise
+ *   no change           B = A: the estimated MSE is 0 within 3 standard errors
+ *   a changed region    β on a quarter of the image: MSE = β² / 4
+ *   common seeds        A1 and B1 share their noise: the noise cancels exactly
+ *   standard error      over many independent repetitions, the spread of the estimate agrees
+ *                       with the reported standard error (within 30 %)
+ *   files               the same through EXR files; NaN and size mismatches are errors naming
+ *                       the file */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "core/error.h"
+#include "idmr/rng.h"
+#include "io/image.h"
+#include "io/image_compare.h"
+
+#define WIDTH 128
+#define HEIGHT 96
+#define VALUES (3 * WIDTH * HEIGHT)
+
+/* A standard normal draw (Box–Muller) from the shared generator. */
+static double gaussian(idmr_rng *rng)
+{
+    double u1 = (idmr_rng_next(rng) + 0.5) / 4294967296.0;
+    double u2 = idmr_rng_float(rng);
+    return sqrt(-2.0 * log(u1)) * cos(6.283185307179586 * u2);
+}
+
+/* A converged image: a smooth gradient with some structure, values in [0.1, 1.1]. */
+static void converged(float *image)
+{
+    for (int y = 0; y < HEIGHT; y++)
+        for (int x = 0; x < WIDTH; x++)
+            for (int c = 0; c < 3; c++)
+                image[3 * (y * WIDTH + x) + c] =
+                    (float)(0.6 + 0.5 * sin(0.07 * x + 0.05 * y + c));
+}
+
+/* `truth` plus Gaussian noise of standard deviation sigma from stream `seed`. */
+static void render(const float *truth, double sigma, unsigned int seed, float *out)
+{
+    idmr_rng rng = idmr_rng_init(seed, 0, IDMR_STREAM_TEST, 0);
+    for (int i = 0; i < VALUES; i++)
+        out[i] = (float)(truth[i] + sigma * gaussian(&rng));
+}
+
+typedef struct four_renders {
+    float a1[VALUES], a2[VALUES], b1[VALUES], b2[VALUES];
+} four_renders;
+
+/* Renders of the original `a` and the reduced `b` with seeds 2k+1 and 2k+2 (independent noise
+ * for A and B too, unless common_seeds). */
+static void render_pairs(const float *a, const float *b, double sigma, unsigned int k,
+                         int common_seeds, four_renders *r)
+{
+    render(a, sigma, 4 * k + 1, r->a1);
+    render(a, sigma, 4 * k + 2, r->a2);
+    render(b, sigma, common_seeds ? 4 * k + 1 : 4 * k + 3, r->b1);
+    render(b, sigma, common_seeds ? 4 * k + 2 : 4 * k + 4, r->b2);
+}
+
+static image_paired_error paired(const four_renders *r)
+{
+    image_paired_error e;
+    image_paired_error_of(r->a1, r->a2, r->b1, r->b2, WIDTH, HEIGHT, 16, &e);
+    return e;
+}
+
+static float truth_a[VALUES], truth_b[VALUES];
+static four_renders renders;
+
+static void test_known_bias_is_recovered(void **state)
+{
+    const double bias = 0.02, sigma = 0.1;
+    converged(truth_a);
+    for (int i = 0; i < VALUES; i++)
+        truth_b[i] = truth_a[i] + (float)bias;
+    render_pairs(truth_a, truth_b, sigma, 0, 0, &renders);
+    image_paired_error e = paired(&renders);
+    printf("  bias %.3f under noise %.2f: reduction_rmse %.5f ± %.5f, noisy rmse %.4f\n", bias,
+           sigma, e.rmse, e.rmse_standard_error, e.noisy_rmse);
+    assert_int_equal(e.tiles, 8 * 6);
+    assert_true(fabs(e.rmse - bias) < 3 * e.rmse_standard_error);
+    assert_true(e.rmse_standard_error < 0.25 * bias); /* the test has the power to tell */
+    /* One noisy pair sees sqrt(bias² + 2 sigma²): seven times the bias here. */
+    assert_true(fabs(e.noisy_rmse - sqrt(bias * bias + 2 * sigma * sigma)) < 0.01);
+}
+
+static void test_no_change_gives_zero(void **state)
+{
+    converged(truth_a);
+    render_pairs(truth_a, truth_a, 0.1, 1, 0, &renders);
+    image_paired_error e = paired(&renders);
+    printf("  no change: mse %.2e ± %.2e, reduction_rmse %.5f\n", e.mse, e.mse_standard_error,
+           e.rmse);
+    assert_true(fabs(e.mse) < 3 * e.mse_standard_error);
+    assert_true(e.rmse < 0.01); /* against a noise of 0.1 */
+}
+
+static void test_changed_region_gives_its_share(void **state)
+{
+    const double bias = 0.05;
+    converged(truth_a);
+    memcpy(truth_b, truth_a, sizeof truth_b);
+    for (int y = 0; y < HEIGHT / 2; y++)
+        for (int x = 0; x < WIDTH / 2; x++)
+            for (int c = 0; c < 3; c++)
+                truth_b[3 * (y * WIDTH + x) + c] -= (float)bias;
+    render_pairs(truth_a, truth_b, 0.05, 2, 0, &renders);
+    image_paired_error e = paired(&renders);
+    double expected = bias * bias / 4;
+    printf("  quarter changed by %.2f: mse %.3e ± %.1e, expected %.3e\n", bias, e.mse,
+           e.mse_standard_error, expected);
+    assert_true(fabs(e.mse - expected) < 3 * e.mse_standard_error);
+}
+
+static void test_common_seeds_cancel_noise(void **state)
+{
+    const double bias = 0.01;
+    converged(truth_a);
+    for (int i = 0; i < VALUES; i++)
+        truth_b[i] = truth_a[i] + (float)bias;
+    render_pairs(truth_a, truth_b, 0.2, 3, 1, &renders);
+    image_paired_error e = paired(&renders);
+    assert_float_equal(e.rmse, bias, 1e-5);
+    assert_true(e.mse_standard_error < 1e-8);
+}
+
+/* Over independent repetitions the estimates scatter as the reported standard error says. */
+static void test_standard_error_matches_the_spread(void **state)
+{
+    enum { REPEATS = 40 };
+    converged(truth_a);
+    for (int i = 0; i < VALUES; i++)
+        truth_b[i] = truth_a[i] * 1.03f;
+    double sum = 0, sum2 = 0, reported = 0;
+    for (unsigned int k = 0; k < REPEATS; k++) {
+        render_pairs(truth_a, truth_b, 0.08, 10 + k, 0, &renders);
+        image_paired_error e = paired(&renders);
+        sum += e.mse;
+        sum2 += e.mse * e.mse;
+        reported += e.mse_standard_error / REPEATS;
+    }
+    double mean = sum / REPEATS;
+    double spread = sqrt((sum2 - REPEATS * mean * mean) / (REPEATS - 1));
+    double exact = 0;
+    for (int i = 0; i < VALUES; i++)
+        exact += pow(0.03 * truth_a[i], 2) / VALUES;
+    printf("  mse %.4e (exact %.4e), spread %.2e, reported standard error %.2e\n", mean, exact,
+           spread, reported);
+    assert_true(fabs(mean - exact) < 3 * spread / sqrt(REPEATS));
+    assert_true(reported > 0.7 * spread && reported < 1.3 * spread);
+}
+
+/* ---- files ---- */
+
+static char directory[] = "/tmp/idmr-test-compare-XXXXXX";
+
+static const char *path_of(const char *name)
+{
+    static char paths[8][256];
+    static int next;
+    char *path = paths[next++ % 8];
+    snprintf(path, 256, "%s/%s", directory, name);
+    return path;
+}
+
+static void write_or_fail(const char *path, int width, int height, const float *rgb)
+{
+    if (image_write_rgb_float(path, width, height, rgb))
+        fail_msg("%s", error_message());
+}
+
+static void test_paired_files(void **state)
+{
+    const double bias = 0.02;
+    converged(truth_a);
+    for (int i = 0; i < VALUES; i++)
+        truth_b[i] = truth_a[i] + (float)bias;
+    render_pairs(truth_a, truth_b, 0.05, 5, 0, &renders);
+    const char *names[4] = {"a1.exr", "a2.exr", "b1.exr", "b2.exr"};
+    const float *images[4] = {renders.a1, renders.a2, renders.b1, renders.b2};
+    for (int i = 0; i < 4; i++)
+        write_or_fail(path_of(names[i]), WIDTH, HEIGHT, images[i]);
+    image_paired_error e;
+    assert_int_equal(image_compare_paired(path_of("a1.exr"), path_of("a2.exr"),
+                                          path_of("b1.exr"), path_of("b2.exr"), 0, &e),
+                     0);
+    assert_int_equal(e.width, WIDTH);
+    /* EXR stores half floats: the estimate still holds within its error. */
+    assert_true(fabs(e.rmse - bias) < 3 * e.rmse_standard_error + 1e-3);
+}
+
+static void test_nan_is_an_error_naming_the_file(void **state)
+{
+    converged(truth_a);
+    truth_a[3 * (5 * WIDTH + 7) + 1] = NAN;
+    truth_a[3 * (9 * WIDTH + 2)] = INFINITY;
+    write_or_fail(path_of("nan.exr"), WIDTH, HEIGHT, truth_a);
+    converged(truth_b);
+    write_or_fail(path_of("clean.exr"), WIDTH, HEIGHT, truth_b);
+    image_comparison c;
+    assert_int_equal(image_compare(path_of("nan.exr"), path_of("clean.exr"), NULL, 0, &c), -1);
+    assert_int_equal(error_code(), IDMR_EXIT_INPUT);
+    assert_non_null(strstr(error_message(), "nan.exr"));
+    assert_non_null(strstr(error_message(), "2 values"));
+    assert_non_null(strstr(error_message(), "pixel (7, 5)"));
+    image_paired_error e;
+    assert_int_equal(image_compare_paired(path_of("clean.exr"), path_of("clean.exr"),
+                                          path_of("nan.exr"), path_of("clean.exr"), 0, &e),
+                     -1);
+    assert_non_null(strstr(error_message(), "nan.exr"));
+}
+
+static void test_size_mismatch_names_both_files(void **state)
+{
+    converged(truth_a);
+    write_or_fail(path_of("small.exr"), WIDTH / 2, HEIGHT, truth_a);
+    write_or_fail(path_of("large.exr"), WIDTH, HEIGHT, truth_a);
+    image_paired_error e;
+    assert_int_equal(image_compare_paired(path_of("large.exr"), path_of("large.exr"),
+                                          path_of("small.exr"), path_of("large.exr"), 0, &e),
+                     -1);
+    assert_non_null(strstr(error_message(), "small.exr"));
+    assert_non_null(strstr(error_message(), "large.exr"));
+}
+
+static int files_setup(void **state)
+{
+    return mkdtemp(directory) ? 0 : -1;
+}
+
+static int files_teardown(void **state)
+{
+    const char *names[] = {"a1.exr", "a2.exr", "b1.exr", "b2.exr", "nan.exr",
+                           "clean.exr", "small.exr", "large.exr"};
+    for (size_t i = 0; i < sizeof names / sizeof *names; i++)
+        unlink(path_of(names[i]));
+    return rmdir(directory);
+}
+
+int main(void)
+{
+    const struct CMUnitTest estimator[] = {
+        cmocka_unit_test(test_known_bias_is_recovered),
+        cmocka_unit_test(test_no_change_gives_zero),
+        cmocka_unit_test(test_changed_region_gives_its_share),
+        cmocka_unit_test(test_common_seeds_cancel_noise),
+        cmocka_unit_test(test_standard_error_matches_the_spread),
+    };
+    const struct CMUnitTest files[] = {
+        cmocka_unit_test(test_paired_files),
+        cmocka_unit_test(test_nan_is_an_error_naming_the_file),
+        cmocka_unit_test(test_size_mismatch_names_both_files),
+    };
+    int failed = cmocka_run_group_tests_name("paired estimator", estimator, NULL, NULL);
+    failed += cmocka_run_group_tests_name("image files", files, files_setup, files_teardown);
+    return failed;
+}
