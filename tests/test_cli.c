@@ -1,8 +1,12 @@
 /* test_cli.c — bin/idmr end to end: exit codes, messages, and the JSON of `devices` and
- * `info` on the shipped Cornell box and on real scenes from ../shared/data; one warning per
- * bsdf; option errors of importance, reduce and render; `reduce` (both importance methods) and
- * `render` on the shipped scene, with `compare` on its images.
- * Runs from the repository root (as `make test` does). */
+ * `info` on the shipped Cornell box and on real scenes from ../shared/data; `info` text and
+ * JSON agreeing; one warning per bsdf; every refused command line (usage and option errors of
+ * info, importance, reduce and render); `reduce` (both importance methods) and `render` on the
+ * shipped scene, with `compare` on its images.
+ *
+ * Each test is one case. The runs that several tests look at (the Cornell box's info, the two
+ * reductions, the two renders) are made once, by the first test that needs them, and removed
+ * by the group teardown. Runs from the repository root (as `make test` does). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -15,7 +19,10 @@
 #include <cjson/cJSON.h>
 #include <cmocka.h>
 
+/* ---- running bin/idmr ---- */
+
 typedef struct run_result {
+    char *command;
     int status;
     char *out;
     char *err;
@@ -37,16 +44,22 @@ static char *slurp(FILE *f)
     return text;
 }
 
-/* Runs a shell command line; captures stdout, stderr and the exit status. */
-static run_result run(const char *command)
+/* Runs a shell command line (printf-style); captures stdout, stderr and the exit status. */
+static run_result run(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+static run_result run(const char *fmt, ...)
 {
-    char err_path[] = "/tmp/idmr-test-cli-XXXXXX";
+    char command[2048], err_path[] = "/tmp/idmr-test-cli-XXXXXX";
+    va_list args;
+    va_start(args, fmt);
+    vsnprintf(command, sizeof command, fmt, args);
+    va_end(args);
     int fd = mkstemp(err_path);
     close(fd);
     char line[4096];
     snprintf(line, sizeof line, "%s 2>%s", command, err_path);
     FILE *p = popen(line, "r");
     run_result r;
+    r.command = strdup(command);
     r.out = slurp(p);
     int status = pclose(p);
     r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -59,9 +72,19 @@ static run_result run(const char *command)
 
 static void run_free(run_result *r)
 {
+    free(r->command);
     free(r->out);
     free(r->err);
 }
+
+/* A run that must succeed: fails the test with its stderr otherwise. */
+static void assert_succeeded(const run_result *r)
+{
+    if (r->status != 0)
+        fail_msg("'%s' failed (%d): %s", r->command, r->status, r->err);
+}
+
+/* ---- JSON ---- */
 
 static cJSON *parse_or_fail(const char *text)
 {
@@ -71,38 +94,134 @@ static cJSON *parse_or_fail(const char *text)
     return json;
 }
 
+/* The JSON on stdout of run `r`, which must have succeeded; frees `r`. */
+static cJSON *json_of(run_result r)
+{
+    assert_succeeded(&r);
+    cJSON *json = parse_or_fail(r.out);
+    run_free(&r);
+    return json;
+}
+
+static cJSON *json_of_file(const char *path)
+{
+    FILE *f = fopen(path, "r");
+    if (!f)
+        fail_msg("cannot read %s", path);
+    char *text = slurp(f);
+    fclose(f);
+    cJSON *json = parse_or_fail(text);
+    free(text);
+    return json;
+}
+
+static const cJSON *item(const cJSON *object, const char *key)
+{
+    const cJSON *found = cJSON_GetObjectItem(object, key);
+    if (!found)
+        fail_msg("no key '%s' in %.200s", key, cJSON_PrintUnformatted(object));
+    return found;
+}
+
+static double number(const cJSON *object, const char *key)
+{
+    return item(object, key)->valuedouble;
+}
+
+static const char *string(const cJSON *object, const char *key)
+{
+    return item(object, key)->valuestring;
+}
+
 static int array_has_string(const cJSON *array, const char *value)
 {
-    const cJSON *item;
-    cJSON_ArrayForEach(item, array) if (cJSON_IsString(item) && !strcmp(item->valuestring, value))
-        return 1;
+    const cJSON *element;
+    cJSON_ArrayForEach(element, array)
+    {
+        if (cJSON_IsString(element) && !strcmp(element->valuestring, value))
+            return 1;
+    }
     return 0;
 }
 
+/* ---- files ---- */
+
+/* A new directory /tmp/<prefix>-XXXXXX into dir (64 bytes). */
+static void make_temp_dir(char *dir, const char *prefix)
+{
+    snprintf(dir, 64, "/tmp/%s-XXXXXX", prefix);
+    assert_non_null(mkdtemp(dir));
+}
+
+static void remove_tree(const char *dir)
+{
+    char command[128];
+    snprintf(command, sizeof command, "rm -rf %s", dir);
+    assert_int_equal(system(command), 0);
+}
+
+/* ---- runs that several tests look at ---- */
+
+/* Runs of bin/idmr into one temporary directory (the %s of each command), made once, by the
+ * first test that asks, and removed by the group teardown. */
+typedef struct shared_runs {
+    const char *prefix;      /* of the directory's name */
+    const char *commands[2]; /* printf formats with one %s: the directory */
+    char dir[64];
+    run_result results[2];
+} shared_runs;
+
+/* The directory, after both runs succeeded. */
+static const char *shared_runs_dir(shared_runs *runs)
+{
+    if (!runs->dir[0]) {
+        make_temp_dir(runs->dir, runs->prefix);
+        for (int i = 0; i < 2; i++)
+            runs->results[i] = run(runs->commands[i], runs->dir);
+    }
+    for (int i = 0; i < 2; i++)
+        assert_succeeded(&runs->results[i]);
+    return runs->dir;
+}
+
+/* The JSON file at `path` in the runs' directory. */
+static cJSON *shared_runs_json(shared_runs *runs, const char *path)
+{
+    char full[256];
+    snprintf(full, sizeof full, "%s/%s", shared_runs_dir(runs), path);
+    return json_of_file(full);
+}
+
+static void shared_runs_remove(shared_runs *runs)
+{
+    if (!runs->dir[0])
+        return;
+    remove_tree(runs->dir);
+    for (int i = 0; i < 2; i++)
+        run_free(&runs->results[i]);
+}
+
+/* ---- devices ---- */
+
 static void test_devices_json(void **state)
 {
-    run_result r = run("bin/idmr devices --json");
-    assert_int_equal(r.status, 0);
-    cJSON *json = parse_or_fail(r.out);
+    cJSON *json = json_of(run("bin/idmr devices --json"));
     assert_true(cJSON_IsArray(json));
     assert_true(cJSON_GetArraySize(json) >= 1);
     const cJSON *d = cJSON_GetArrayItem(json, 0);
-    assert_true(cJSON_IsString(cJSON_GetObjectItem(d, "kind")));
-    assert_true(cJSON_GetObjectItem(d, "compute_units")->valuedouble >= 1);
-    assert_true(cJSON_GetObjectItem(d, "global_memory")->valuedouble > 0);
-    assert_non_null(strstr(cJSON_GetObjectItem(d, "opencl_c_version")->valuestring, "OpenCL C"));
+    assert_true(cJSON_IsString(item(d, "kind")));
+    assert_true(number(d, "compute_units") >= 1);
+    assert_true(number(d, "global_memory") > 0);
+    assert_non_null(strstr(string(d, "opencl_c_version"), "OpenCL C"));
     cJSON_Delete(json);
-    run_free(&r);
 }
 
 /* With no ICD registered the loader finds no platform: exit 2 and advice to install PoCL. */
 static void test_no_platform(void **state)
 {
-    char dir[] = "/tmp/idmr-no-icd-XXXXXX";
-    assert_non_null(mkdtemp(dir));
-    char command[256];
-    snprintf(command, sizeof command, "OCL_ICD_VENDORS=%s bin/idmr devices", dir);
-    run_result r = run(command);
+    char dir[64];
+    make_temp_dir(dir, "idmr-no-icd");
+    run_result r = run("OCL_ICD_VENDORS=%s bin/idmr devices", dir);
     rmdir(dir);
     assert_int_equal(r.status, 2);
     assert_non_null(strstr(r.err, "no OpenCL platform"));
@@ -110,60 +229,73 @@ static void test_no_platform(void **state)
     run_free(&r);
 }
 
-static void test_info_shipped_scene(void **state)
+/* ---- info ---- */
+
+/* `idmr info --json` of the shipped Cornell box, run once. */
+static cJSON *cornell_info_json;
+
+static const cJSON *cornell_info(void)
 {
-    run_result r = run("bin/idmr info --json data/cornell/scene.xml");
-    assert_int_equal(r.status, 0);
-    cJSON *json = parse_or_fail(r.out);
-    const cJSON *meshes = cJSON_GetObjectItem(json, "meshes");
+    if (!cornell_info_json)
+        cornell_info_json = json_of(run("bin/idmr info --json data/cornell/scene.xml"));
+    return cornell_info_json;
+}
+
+static void test_info_cornell_meshes(void **state)
+{
+    const cJSON *meshes = item(cornell_info(), "meshes"), *m;
     assert_int_equal(cJSON_GetArraySize(meshes), 8);
     int found_knot = 0;
-    const cJSON *m;
     cJSON_ArrayForEach(m, meshes)
     {
-        assert_true(cJSON_IsString(cJSON_GetObjectItem(m, "name")));
-        assert_true(cJSON_IsString(cJSON_GetObjectItem(m, "material")));
-        assert_true(cJSON_IsNumber(cJSON_GetObjectItem(m, "vertices")));
-        if (!strcmp(cJSON_GetObjectItem(m, "name")->valuestring, "knot")) {
+        assert_true(cJSON_IsString(item(m, "name")));
+        assert_true(cJSON_IsString(item(m, "material")));
+        assert_true(cJSON_IsNumber(item(m, "vertices")));
+        if (!strcmp(string(m, "name"), "knot")) {
             found_knot = 1;
-            assert_int_equal(cJSON_GetObjectItem(m, "vertices")->valueint, 48000);
-            assert_int_equal(cJSON_GetObjectItem(m, "triangles")->valueint, 96000);
+            assert_int_equal(item(m, "vertices")->valueint, 48000);
+            assert_int_equal(item(m, "triangles")->valueint, 96000);
         }
     }
     assert_true(found_knot);
-    const cJSON *lights = cJSON_GetObjectItem(json, "lights");
+}
+
+static void test_info_cornell_lights_and_features(void **state)
+{
+    const cJSON *lights = item(cornell_info(), "lights");
     assert_int_equal(cJSON_GetArraySize(lights), 1);
-    assert_string_equal(cJSON_GetObjectItem(cJSON_GetArrayItem(lights, 0), "type")->valuestring,
-                        "area");
-    const cJSON *features = cJSON_GetObjectItem(json, "features");
+    assert_string_equal(string(cJSON_GetArrayItem(lights, 0), "type"), "area");
+    const cJSON *features = item(cornell_info(), "features");
     assert_true(array_has_string(features, "diffuse"));
     assert_true(array_has_string(features, "area"));
     assert_false(array_has_string(features, "dielectric"));
     assert_false(array_has_string(features, "spot"));
-    const cJSON *bbox = cJSON_GetObjectItem(json, "bbox");
-    const cJSON *lo = cJSON_GetObjectItem(bbox, "min"), *hi = cJSON_GetObjectItem(bbox, "max");
+}
+
+static void test_info_cornell_bbox(void **state)
+{
+    const cJSON *bbox = item(cornell_info(), "bbox");
+    const cJSON *lo = item(bbox, "min"), *hi = item(bbox, "max");
     for (int k = 0; k < 3; k++) {
         assert_float_equal(cJSON_GetArrayItem(lo, k)->valuedouble, -1.0, 1e-5);
         assert_float_equal(cJSON_GetArrayItem(hi, k)->valuedouble, 1.0, 1e-5);
     }
-    const cJSON *memory = cJSON_GetObjectItem(json, "device_memory");
-    assert_true(cJSON_GetObjectItem(memory, "bvh")->valuedouble > 96000 * 48.0);
-    cJSON_Delete(json);
-    run_free(&r);
+}
+
+static void test_info_cornell_bvh_memory(void **state)
+{
+    assert_true(number(item(cornell_info(), "device_memory"), "bvh") > 96000 * 48.0);
 }
 
 static void test_info_glass_of_water(void **state)
 {
-    run_result r =
-        run("bin/idmr info --json ../shared/data/scenes/glass-of-water/scene-without-mesh000.xml");
-    assert_int_equal(r.status, 0);
-    cJSON *json = parse_or_fail(r.out);
-    const cJSON *features = cJSON_GetObjectItem(json, "features");
+    cJSON *json = json_of(
+        run("bin/idmr info --json ../shared/data/scenes/glass-of-water/scene-without-mesh000.xml"));
+    const cJSON *features = item(json, "features");
     assert_true(array_has_string(features, "dielectric"));
     assert_true(array_has_string(features, "glossy"));
     assert_true(array_has_string(features, "area"));
     cJSON_Delete(json);
-    run_free(&r);
 }
 
 static void test_info_living_room_warns_about_envmap(void **state)
@@ -172,10 +304,59 @@ static void test_info_living_room_warns_about_envmap(void **state)
     assert_int_equal(r.status, 0);
     assert_non_null(strstr(r.err, "envmap"));
     cJSON *json = parse_or_fail(r.out);
-    assert_true(cJSON_GetArraySize(cJSON_GetObjectItem(json, "meshes")) >= 60);
-    assert_true(array_has_string(cJSON_GetObjectItem(json, "features"), "textured"));
+    assert_true(cJSON_GetArraySize(item(json, "meshes")) >= 60);
+    assert_true(array_has_string(item(json, "features"), "textured"));
     cJSON_Delete(json);
     run_free(&r);
+}
+
+/* The text form says what the JSON says: mesh, material and light counts, the vertex and
+ * triangle totals, and one table row per mesh whose vertex column sums to the total. */
+static void assert_info_text_agrees_with_json(const char *scene)
+{
+    cJSON *json = json_of(run("bin/idmr info --json --no-bvh %s", scene));
+    run_result r = run("bin/idmr info --no-bvh %s", scene);
+    assert_succeeded(&r);
+    int meshes, materials, lights;
+    unsigned long long vertices, triangles;
+    const char *at = strstr(r.out, "\nmeshes (");
+    assert_non_null(at);
+    assert_int_equal(
+        sscanf(at, "\nmeshes (%d): %llu vertices, %llu triangles", &meshes, &vertices, &triangles),
+        3);
+    assert_int_equal(meshes, cJSON_GetArraySize(item(json, "meshes")));
+    assert_true(vertices == number(json, "vertices"));
+    assert_true(triangles == number(json, "triangles"));
+    /* The rows after the table's header: "  name(24) shape(10) vertices(10) ...". */
+    const size_t vertices_column = 2 + 24 + 1 + 10 + 1;
+    unsigned long long row_vertices = 0;
+    int rows = 0;
+    at = strchr(strchr(at + 1, '\n') + 1, '\n') + 1;
+    for (; !strncmp(at, "  ", 2); at = strchr(at, '\n') + 1, rows++) {
+        unsigned int v;
+        assert_int_equal(sscanf(at + vertices_column, "%u", &v), 1);
+        row_vertices += v;
+    }
+    assert_int_equal(rows, meshes);
+    assert_true(row_vertices == vertices);
+    assert_int_equal(sscanf(at, "\nmaterials (%d):", &materials), 1);
+    assert_int_equal(materials, cJSON_GetArraySize(item(json, "materials")));
+    at = strstr(at, "\nlights (");
+    assert_non_null(at);
+    assert_int_equal(sscanf(at, "\nlights (%d):", &lights), 1);
+    assert_int_equal(lights, cJSON_GetArraySize(item(json, "lights")));
+    cJSON_Delete(json);
+    run_free(&r);
+}
+
+static void test_info_text_agrees_with_json_cornell(void **state)
+{
+    assert_info_text_agrees_with_json("data/cornell/scene.xml");
+}
+
+static void test_info_text_agrees_with_json_living_room(void **state)
+{
+    assert_info_text_agrees_with_json("../shared/data/scenes/living-room/scene.xml");
 }
 
 static void test_missing_mesh_is_named(void **state)
@@ -194,30 +375,10 @@ static void test_malformed_xml(void **state)
     const char text[] = "<scene version=\"3.0.0\">\n  <shape type=\"obj\">\n</scene>\n";
     assert_int_equal(write(fd, text, sizeof text - 1), (ssize_t)(sizeof text - 1));
     close(fd);
-    char command[256];
-    snprintf(command, sizeof command, "bin/idmr info %s", path);
-    run_result r = run(command);
+    run_result r = run("bin/idmr info %s", path);
     unlink(path);
     assert_int_equal(r.status, 2);
     assert_non_null(strstr(r.err, path));
-    run_free(&r);
-}
-
-static void test_usage_errors(void **state)
-{
-    run_result r = run("bin/idmr frobnicate");
-    assert_int_equal(r.status, 2);
-    assert_non_null(strstr(r.err, "unknown command"));
-    run_free(&r);
-    r = run("bin/idmr info");
-    assert_int_equal(r.status, 2);
-    run_free(&r);
-    r = run("bin/idmr info --bogus data/cornell/scene.xml");
-    assert_int_equal(r.status, 2);
-    run_free(&r);
-    r = run("bin/idmr info /nonexistent/scene.xml");
-    assert_int_equal(r.status, 2);
-    assert_non_null(strstr(r.err, "/nonexistent/scene.xml"));
     run_free(&r);
 }
 
@@ -225,9 +386,8 @@ static void test_usage_errors(void **state)
  * an inline one once. */
 static void test_each_bsdf_warns_once(void **state)
 {
-    char dir[] = "/tmp/idmr-cli-warn-XXXXXX";
-    assert_non_null(mkdtemp(dir));
-    char path[256], command[512];
+    char dir[64], path[128];
+    make_temp_dir(dir, "idmr-cli-warn");
     snprintf(path, sizeof path, "%s/scene.xml", dir);
     FILE *f = fopen(path, "w");
     assert_non_null(f);
@@ -239,8 +399,7 @@ static void test_each_bsdf_warns_once(void **state)
           "</scene>\n",
           f);
     fclose(f);
-    snprintf(command, sizeof command, "bin/idmr info %s", path);
-    run_result r = run(command);
+    run_result r = run("bin/idmr info %s", path);
     assert_int_equal(r.status, 0);
     int count = 0;
     for (const char *at = r.err; (at = strstr(at, "roughdielectric is treated")); at++)
@@ -248,176 +407,190 @@ static void test_each_bsdf_warns_once(void **state)
     if (count != 2)
         fail_msg("expected 2 roughdielectric warnings, got %d:\n%s", count, r.err);
     run_free(&r);
-    snprintf(command, sizeof command, "rm -rf %s", dir);
-    assert_int_equal(system(command), 0);
+    remove_tree(dir);
 }
 
-/* importance, reduce and render: every bad option value is refused with exit 2 and a message naming it,
- * before any work starts. */
-static void test_pass_option_errors(void **state)
-{
-    const struct {
-        const char *command, *expect;
-    } cases[] = {
-        {"bin/idmr importance data/cornell/scene.xml", "-o DIR is required"},
-        {"bin/idmr importance data/cornell/scene.xml -o /tmp/x --iterations 0", "--iterations"},
-        {"bin/idmr importance data/cornell/scene.xml -o /tmp/x --photons many", "--photons"},
-        {"bin/idmr importance data/cornell/scene.xml -o /tmp/x --alpha 1.5", "--alpha"},
-        {"bin/idmr importance data/cornell/scene.xml -o /tmp/x --gamma -1", "--gamma"},
-        {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x", "--target D and -o OUTDIR"},
-        {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x --target 0", "--target"},
-        {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x --target 0.5 --method median",
-         "'median'"},
-        {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x --target 0.5 --max-normal-angle 0",
-         "--max-normal-angle"},
-        {"bin/idmr render data/cornell/scene.xml", "-o IMAGE is required"},
-        {"bin/idmr render data/cornell/scene.xml -o /tmp/x --iterations 0", "--iterations"},
-        {"bin/idmr render data/cornell/scene.xml -o /tmp/x --gamma 2", "importance pass option"},
-        {"bin/idmr render data/cornell/scene.xml -o /tmp/x --time-limit soon", "--time-limit"},
-        {"bin/idmr render data/cornell/scene.xml -o /tmp/x --exposure 100", "--exposure"},
-    };
-    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
-        run_result r = run(cases[i].command);
-        if (r.status != 2 || !strstr(r.err, cases[i].expect))
-            fail_msg("'%s': exit %d, message '%s' (expected 2 and '%s')", cases[i].command,
-                     r.status, r.err, cases[i].expect);
-        run_free(&r);
-    }
-}
+/* ---- refused command lines: exit 2 and a message naming the problem, before any work ---- */
 
-/* The main job from the command line: reduce the shipped scene (a short importance pass), and
- * the reduced scene loads again with the vertex total the report gives; importance-quadric
- * meets the same total with other collapses. */
-static void test_reduce_shipped_scene(void **state)
+typedef struct refusal {
+    const char *command, *expect;
+} refusal;
+
+static const refusal REFUSALS[] = {
+    {"bin/idmr frobnicate", "unknown command"},
+    {"bin/idmr info", "info: expected one SCENE argument"},
+    {"bin/idmr info --bogus data/cornell/scene.xml", "info: unknown option --bogus"},
+    {"bin/idmr info /nonexistent/scene.xml", "/nonexistent/scene.xml"},
+    {"bin/idmr importance data/cornell/scene.xml", "-o DIR is required"},
+    {"bin/idmr importance data/cornell/scene.xml -o /tmp/x --iterations 0", "--iterations"},
+    {"bin/idmr importance data/cornell/scene.xml -o /tmp/x --photons many", "--photons"},
+    {"bin/idmr importance data/cornell/scene.xml -o /tmp/x --alpha 1.5", "--alpha"},
+    {"bin/idmr importance data/cornell/scene.xml -o /tmp/x --gamma -1", "--gamma"},
+    {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x", "--target D and -o OUTDIR"},
+    {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x --target 0", "--target"},
+    {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x --target 0.5 --method median", "'median'"},
+    {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x --target 0.5 --max-normal-angle 0",
+     "--max-normal-angle"},
+    {"bin/idmr render data/cornell/scene.xml", "-o IMAGE is required"},
+    {"bin/idmr render data/cornell/scene.xml -o /tmp/x --iterations 0", "--iterations"},
+    {"bin/idmr render data/cornell/scene.xml -o /tmp/x --gamma 2", "importance pass option"},
+    {"bin/idmr render data/cornell/scene.xml -o /tmp/x --time-limit soon", "--time-limit"},
+    {"bin/idmr render data/cornell/scene.xml -o /tmp/x --exposure 100", "--exposure"},
+};
+
+/* state: the refusal. */
+static void test_refused(void **state)
 {
-    char dir[] = "/tmp/idmr-cli-reduce-XXXXXX";
-    assert_non_null(mkdtemp(dir));
-    char command[512];
-    snprintf(command, sizeof command,
-             "bin/idmr reduce data/cornell/scene.xml --target 0.2 -o %s/out --iterations 2 "
-             "--photons 20000 --resolution 0.25 --quiet",
-             dir);
-    run_result r = run(command);
-    if (r.status != 0)
-        fail_msg("reduce failed (%d): %s", r.status, r.err);
-    assert_non_null(strstr(r.err, "reduced scene in"));
+    const refusal *c = *state;
+    run_result r = run("%s", c->command);
+    if (r.status != 2 || !strstr(r.err, c->expect))
+        fail_msg("'%s': exit %d, message '%s' (expected 2 and '%s')", c->command, r.status, r.err,
+                 c->expect);
     run_free(&r);
-    snprintf(command, sizeof command, "cat %s/out/report.json", dir);
-    r = run(command);
-    cJSON *report = parse_or_fail(r.out);
-    double after = cJSON_GetObjectItem(report, "vertices_after")->valuedouble;
-    double requested = cJSON_GetObjectItem(report, "vertices_requested")->valuedouble;
-    assert_true(after == requested); /* the knot is the only mesh above the floor */
-    assert_string_equal(cJSON_GetObjectItem(report, "method")->valuestring, "importance");
+}
+
+/* ---- reduce ---- */
+
+#define SHORT_PASS "--iterations 2 --photons 20000 --resolution 0.25 --quiet"
+
+/* The shipped scene reduced to 0.2 by both importance methods (a short importance pass, the
+ * same seed): out/ by method importance, hybrid/ by importance-quadric. */
+static shared_runs reductions = {
+    .prefix = "idmr-cli-reduce",
+    .commands = {"bin/idmr reduce data/cornell/scene.xml --target 0.2 -o %s/out " SHORT_PASS,
+                 "bin/idmr reduce data/cornell/scene.xml --target 0.2 -o %s/hybrid "
+                 "--method importance-quadric " SHORT_PASS}};
+
+/* The knot is the only mesh above the floor: the reduction meets the request exactly. */
+static void test_reduce_meets_requested_vertices(void **state)
+{
+    cJSON *report = shared_runs_json(&reductions, "out/report.json");
+    assert_non_null(strstr(reductions.results[0].err, "reduced scene in"));
+    assert_true(number(report, "vertices_after") == number(report, "vertices_requested"));
+    assert_string_equal(string(report, "method"), "importance");
     cJSON_Delete(report);
-    run_free(&r);
-    snprintf(command, sizeof command, "bin/idmr info --json --no-bvh %s/out/scene.xml", dir);
-    r = run(command);
-    assert_int_equal(r.status, 0);
-    cJSON *info = parse_or_fail(r.out);
-    assert_true(cJSON_GetObjectItem(info, "vertices")->valuedouble == after);
-    cJSON_Delete(info);
-    run_free(&r);
+}
 
-    /* importance-quadric: the same budget (same seed, same importance), other collapses. */
-    snprintf(command, sizeof command,
-             "bin/idmr reduce data/cornell/scene.xml --target 0.2 -o %s/hybrid "
-             "--method importance-quadric --iterations 2 --photons 20000 --resolution 0.25 "
-             "--quiet",
-             dir);
-    r = run(command);
-    if (r.status != 0)
-        fail_msg("reduce --method importance-quadric failed (%d): %s", r.status, r.err);
-    run_free(&r);
-    snprintf(command, sizeof command, "cmp -s %s/out/meshes/knot.ply %s/hybrid/meshes/knot.ply",
-             dir, dir);
-    r = run(command);
+static void test_reduced_scene_loads_with_reported_vertices(void **state)
+{
+    cJSON *report = shared_runs_json(&reductions, "out/report.json");
+    cJSON *info = json_of(
+        run("bin/idmr info --json --no-bvh %s/out/scene.xml", shared_runs_dir(&reductions)));
+    assert_true(number(info, "vertices") == number(report, "vertices_after"));
+    cJSON_Delete(info);
+    cJSON_Delete(report);
+}
+
+/* importance-quadric: the same budget (same seed, same importance), other collapses. */
+static void test_importance_quadric_meets_same_total(void **state)
+{
+    cJSON *report = shared_runs_json(&reductions, "out/report.json"),
+          *hybrid = shared_runs_json(&reductions, "hybrid/report.json");
+    assert_string_equal(string(hybrid, "method"), "importance-quadric");
+    assert_true(number(hybrid, "vertices_after") == number(report, "vertices_after"));
+    cJSON_Delete(hybrid);
+    cJSON_Delete(report);
+}
+
+static void test_importance_quadric_collapses_differ(void **state)
+{
+    const char *dir = shared_runs_dir(&reductions);
+    run_result r = run("cmp -s %s/out/meshes/knot.ply %s/hybrid/meshes/knot.ply", dir, dir);
     assert_int_equal(r.status, 1); /* cmp: the files differ */
     run_free(&r);
-    snprintf(command, sizeof command, "cat %s/hybrid/report.json", dir);
-    r = run(command);
-    cJSON *hybrid = parse_or_fail(r.out);
-    assert_string_equal(cJSON_GetObjectItem(hybrid, "method")->valuestring, "importance-quadric");
-    assert_true(cJSON_GetObjectItem(hybrid, "vertices_after")->valuedouble == after);
-    cJSON_Delete(hybrid);
-    run_free(&r);
-    snprintf(command, sizeof command, "rm -rf %s", dir);
-    assert_int_equal(system(command), 0);
 }
 
-/* idmr render on the shipped scene: IMAGE.exr, IMAGE.png and IMAGE.json beside each other (the
- * directory created), the report's figures, --time-limit stopping after the first iteration,
- * and `compare` telling a render from itself and from another seed's. */
-static void test_render_shipped_scene(void **state)
+/* ---- render and compare ---- */
+
+#define SHORT_RENDER "--photons 20000 --resolution 0.25 --quiet"
+
+/* Two renders of the shipped scene into images/ (created by the first): a.exr (3 iterations)
+ * and b (seed 2, 5 iterations with a time limit that ends it after the first). */
+static shared_runs renders = {
+    .prefix = "idmr-cli-render",
+    .commands = {
+        "bin/idmr render data/cornell/scene.xml -o %s/images/a.exr --iterations 3 " SHORT_RENDER,
+        "bin/idmr render data/cornell/scene.xml -o %s/images/b --iterations 5 --seed 2 "
+        "--time-limit 0.000001 " SHORT_RENDER}};
+
+static void test_render_prints_summary(void **state)
 {
-    char dir[] = "/tmp/idmr-cli-render-XXXXXX";
-    assert_non_null(mkdtemp(dir));
-    char command[768];
-    const char *common = "--photons 20000 --resolution 0.25 --quiet";
-    snprintf(command, sizeof command,
-             "bin/idmr render data/cornell/scene.xml -o %s/images/a.exr --iterations 3 %s", dir,
-             common);
-    run_result r = run(command);
-    if (r.status != 0)
-        fail_msg("render failed (%d): %s", r.status, r.err);
-    assert_non_null(strstr(r.out, "s per iteration"));
-    run_free(&r);
-    snprintf(command, sizeof command, "cat %s/images/a.json", dir);
-    r = run(command);
-    cJSON *report = parse_or_fail(r.out);
-    assert_int_equal(cJSON_GetObjectItem(report, "iterations")->valueint, 3);
-    assert_int_equal(cJSON_GetObjectItem(report, "width")->valueint, 64);
-    assert_int_equal(cJSON_GetObjectItem(report, "photons_per_iteration")->valueint, 20000);
-    cJSON *memory = cJSON_GetObjectItem(report, "device_bytes");
-    double geometry = cJSON_GetObjectItem(memory, "geometry")->valuedouble;
-    double bvh = cJSON_GetObjectItem(memory, "bvh")->valuedouble;
-    double sppm = cJSON_GetObjectItem(memory, "sppm")->valuedouble;
+    shared_runs_dir(&renders);
+    assert_non_null(strstr(renders.results[0].out, "s per iteration"));
+}
+
+static void test_render_report_figures(void **state)
+{
+    cJSON *report = shared_runs_json(&renders, "images/a.json");
+    assert_int_equal(item(report, "iterations")->valueint, 3);
+    assert_int_equal(item(report, "width")->valueint, 64);
+    assert_int_equal(item(report, "photons_per_iteration")->valueint, 20000);
+    const cJSON *memory = item(report, "device_bytes");
+    double geometry = number(memory, "geometry"), bvh = number(memory, "bvh");
+    double sppm = number(memory, "sppm");
     assert_true(geometry > 0 && bvh > 0 && sppm > 0);
-    assert_true(cJSON_GetObjectItem(memory, "total")->valuedouble == geometry + bvh + sppm);
-    cJSON *seconds = cJSON_GetObjectItem(report, "seconds");
-    assert_true(cJSON_GetObjectItem(seconds, "per_iteration")->valuedouble > 0);
+    assert_true(number(memory, "total") == geometry + bvh + sppm);
+    const cJSON *seconds = item(report, "seconds");
+    assert_true(number(seconds, "per_iteration") > 0);
     assert_non_null(cJSON_GetObjectItem(seconds, "per_iteration_by_stage"));
     cJSON_Delete(report);
-    run_free(&r);
-    /* `info` reports the geometry memory the render allocated. */
-    r = run("bin/idmr info --json --no-bvh data/cornell/scene.xml");
-    cJSON *info = parse_or_fail(r.out);
-    assert_true(cJSON_GetObjectItem(cJSON_GetObjectItem(info, "device_memory"), "geometry")
-                    ->valuedouble == geometry);
-    cJSON_Delete(info);
-    run_free(&r);
+}
 
-    snprintf(command, sizeof command,
-             "bin/idmr render data/cornell/scene.xml -o %s/images/b --iterations 5 --seed 2 "
-             "--time-limit 0.000001 %s && cat %s/images/b.json && ls %s/images",
-             dir, common, dir, dir);
-    r = run(command);
-    if (r.status != 0)
-        fail_msg("render failed (%d): %s", r.status, r.err);
-    assert_non_null(strstr(r.out, "\"iterations\":\t1,"));
+/* `info` reports the geometry memory the render allocated. */
+static void test_render_geometry_memory_is_infos(void **state)
+{
+    cJSON *report = shared_runs_json(&renders, "images/a.json");
+    cJSON *info = json_of(run("bin/idmr info --json --no-bvh data/cornell/scene.xml"));
+    assert_true(number(item(info, "device_memory"), "geometry") ==
+                number(item(report, "device_bytes"), "geometry"));
+    cJSON_Delete(info);
+    cJSON_Delete(report);
+}
+
+static void test_render_time_limit_stops_after_first_iteration(void **state)
+{
+    cJSON *report = shared_runs_json(&renders, "images/b.json");
+    assert_int_equal(item(report, "iterations")->valueint, 1);
+    cJSON_Delete(report);
+}
+
+/* IMAGE.exr, IMAGE.png and IMAGE.json beside each other, with or without ".exr" in -o. */
+static void test_render_images_beside_each_other(void **state)
+{
+    run_result r = run("ls %s/images", shared_runs_dir(&renders));
     assert_non_null(strstr(r.out, "b.exr"));
     assert_non_null(strstr(r.out, "b.png"));
     assert_non_null(strstr(r.out, "a.png"));
     run_free(&r);
+}
 
-    snprintf(command, sizeof command, "bin/idmr compare --json %s/images/a.exr %s/images/a.exr",
-             dir, dir);
-    r = run(command);
-    assert_int_equal(r.status, 0);
-    cJSON *same = parse_or_fail(r.out);
-    assert_true(cJSON_GetObjectItem(same, "rmse")->valuedouble == 0);
-    cJSON_Delete(same);
-    run_free(&r);
-    snprintf(command, sizeof command, "bin/idmr compare --json %s/images/b.exr %s/images/a.exr",
-             dir, dir);
-    r = run(command);
-    assert_int_equal(r.status, 0);
-    cJSON *other = parse_or_fail(r.out);
-    assert_true(cJSON_GetObjectItem(other, "rmse")->valuedouble > 0);
-    cJSON_Delete(other);
-    run_free(&r);
-    snprintf(command, sizeof command, "rm -rf %s", dir);
-    assert_int_equal(system(command), 0);
+/* The RMSE `compare --json` gives for image `a` against the reference `b` (in DIR/images). */
+static double compare_rmse(const char *a, const char *b)
+{
+    const char *dir = shared_runs_dir(&renders);
+    cJSON *json = json_of(run("bin/idmr compare --json %s/images/%s %s/images/%s", dir, a, dir, b));
+    double rmse = number(json, "rmse");
+    cJSON_Delete(json);
+    return rmse;
+}
+
+static void test_compare_image_with_itself(void **state)
+{
+    assert_true(compare_rmse("a.exr", "a.exr") == 0);
+}
+
+static void test_compare_other_seed(void **state)
+{
+    assert_true(compare_rmse("b.exr", "a.exr") > 0);
+}
+
+/* Removes what the shared runs made. */
+static int remove_shared_runs(void **state)
+{
+    cJSON_Delete(cornell_info_json);
+    shared_runs_remove(&reductions);
+    shared_runs_remove(&renders);
+    return 0;
 }
 
 int main(void)
@@ -425,16 +598,33 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_devices_json),
         cmocka_unit_test(test_no_platform),
-        cmocka_unit_test(test_info_shipped_scene),
+        cmocka_unit_test(test_info_cornell_meshes),
+        cmocka_unit_test(test_info_cornell_lights_and_features),
+        cmocka_unit_test(test_info_cornell_bbox),
+        cmocka_unit_test(test_info_cornell_bvh_memory),
         cmocka_unit_test(test_info_glass_of_water),
         cmocka_unit_test(test_info_living_room_warns_about_envmap),
+        cmocka_unit_test(test_info_text_agrees_with_json_cornell),
+        cmocka_unit_test(test_info_text_agrees_with_json_living_room),
         cmocka_unit_test(test_missing_mesh_is_named),
         cmocka_unit_test(test_malformed_xml),
         cmocka_unit_test(test_each_bsdf_warns_once),
-        cmocka_unit_test(test_usage_errors),
-        cmocka_unit_test(test_pass_option_errors),
-        cmocka_unit_test(test_reduce_shipped_scene),
-        cmocka_unit_test(test_render_shipped_scene),
+        cmocka_unit_test(test_reduce_meets_requested_vertices),
+        cmocka_unit_test(test_reduced_scene_loads_with_reported_vertices),
+        cmocka_unit_test(test_importance_quadric_meets_same_total),
+        cmocka_unit_test(test_importance_quadric_collapses_differ),
+        cmocka_unit_test(test_render_prints_summary),
+        cmocka_unit_test(test_render_report_figures),
+        cmocka_unit_test(test_render_geometry_memory_is_infos),
+        cmocka_unit_test(test_render_time_limit_stops_after_first_iteration),
+        cmocka_unit_test(test_render_images_beside_each_other),
+        cmocka_unit_test(test_compare_image_with_itself),
+        cmocka_unit_test(test_compare_other_seed),
     };
-    return cmocka_run_group_tests_name("cli", tests, NULL, NULL);
+    struct CMUnitTest refused[sizeof REFUSALS / sizeof *REFUSALS];
+    for (size_t i = 0; i < sizeof REFUSALS / sizeof *REFUSALS; i++)
+        refused[i] = (struct CMUnitTest){REFUSALS[i].command, test_refused, NULL, NULL,
+                                         (void *)&REFUSALS[i]};
+    int failed = cmocka_run_group_tests_name("cli", tests, NULL, remove_shared_runs);
+    return failed + cmocka_run_group_tests_name("cli refusals", refused, NULL, NULL);
 }

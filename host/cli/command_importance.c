@@ -1,0 +1,75 @@
+/* command_importance.c — `idmr importance SCENE -o DIR [options]`: the importance pass on the
+ * scene (passes/importance.h) and its outputs in DIR (passes/importance_outputs.h), then one
+ * summary line on stderr. Options: the importance pass's (options.h). */
+#include <stdio.h>
+#include <string.h>
+
+#include "cli/commands.h"
+#include "cli/options.h"
+#include "cli/pass_setup.h"
+#include "io/mitsuba.h"
+#include "passes/importance.h"
+#include "passes/importance_outputs.h"
+
+/* What the pass runs with, and what it gives back. */
+typedef struct importance_cli_job {
+    importance_options options;
+    const char *output; /* DIR */
+    importance_result result;
+} importance_cli_job;
+
+static enum option_parse parse_option(int c, void *context, pass_arguments *arguments)
+{
+    importance_cli_job *job = context;
+    return parse_importance_option(c, &job->options, &arguments->device_index);
+}
+
+/* The pass and its outputs: this command's calls into passes/. */
+static int run_pass(device *d, const scene *s, const bvh *b, void *context)
+{
+    importance_cli_job *job = context;
+    if (importance_run(d, s, b, &job->options, &job->result))
+        return -1;
+    cJSON *report = importance_report_json(s, d, &job->options, &job->result);
+    double **values = importance_vertex_values(&job->result, s, job->options.gamma);
+    int status =
+        importance_write_outputs(job->output, report, s, &job->options, &job->result, values);
+    importance_vertex_values_free(values, s);
+    cJSON_Delete(report);
+    return status;
+}
+
+static void print_summary(const importance_cli_job *job)
+{
+    const importance_result *r = &job->result;
+    fprintf(stderr,
+            "idmr: %u iterations of %u photon paths in %.1f s; outputs in %s/ (report.json, "
+            "importance.png, importance/*.ply, convergence.csv)\n",
+            r->sppm.iterations, r->sppm.photons, r->sppm.seconds.total, job->output);
+}
+
+int command_importance(int argc, char **argv)
+{
+    static const struct option table[] = {IMPORTANCE_LONG_OPTIONS, {0, 0, 0, 0}};
+    importance_cli_job job;
+    memset(&job, 0, sizeof job);
+    importance_options_default(&job.options);
+    job.options.sppm.progress = 1;
+    pass_arguments arguments = {.command = "importance"};
+    int code = parse_pass_arguments(argc, argv, table, parse_option, &job, &arguments);
+    if (code)
+        return code;
+    if (!arguments.output)
+        return usage_error("importance: -o DIR is required");
+    job.output = arguments.output;
+    scene *s = mitsuba_load(arguments.scene);
+    if (!s)
+        return fail();
+    int status = pass_setup_run(s, arguments.device_index, run_pass, &job);
+    code = status ? fail() : 0;
+    if (!status)
+        print_summary(&job);
+    importance_result_free(&job.result);
+    scene_free(s);
+    return code;
+}

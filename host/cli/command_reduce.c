@@ -1,0 +1,111 @@
+/* command_reduce.c — `idmr reduce SCENE --target D -o OUTDIR [options]`: the reduced scene
+ * (reduce/reduce.h: importance pass, budget, decimation, writing OUTDIR). Options: the
+ * importance pass's (options.h) and the reduction's own. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli/commands.h"
+#include "cli/options.h"
+#include "core/error.h"
+#include "device/device.h"
+#include "io/mitsuba.h"
+#include "reduce/reduce.h"
+
+/* The options, and whether --target was given (it has no default on the command line). */
+typedef struct reduce_cli_request {
+    reduce_options options;
+    int have_target;
+} reduce_cli_request;
+
+static int parse_method(const char *name, reduce_options *o)
+{
+    if (!strcmp(name, "importance")) {
+        o->method = DECIMATE_IMPORTANCE;
+    } else if (!strcmp(name, "quadric")) {
+        o->method = DECIMATE_QUADRIC;
+    } else if (!strcmp(name, "importance-quadric")) {
+        o->method = DECIMATE_IMPORTANCE;
+        o->quadric_collapses = 1;
+    } else {
+        return error_set(IDMR_EXIT_INPUT,
+                         "--method: '%s' is none of 'importance', 'quadric' and "
+                         "'importance-quadric'",
+                         name);
+    }
+    return 0;
+}
+
+static enum option_parse parse_option(int c, void *context, pass_arguments *arguments)
+{
+    reduce_cli_request *request = context;
+    reduce_options *o = &request->options;
+    unsigned int whole;
+    switch (c) {
+    case OPT_TARGET:
+        request->have_target = 1;
+        return option_result(parse_double("--target", optarg, 1e-9, 1, &o->target));
+    case OPT_METHOD:
+        return option_result(parse_method(optarg, o));
+    case OPT_MIN_VERTICES:
+        if (parse_unsigned("--min-vertices", optarg, 0, 0xffffffffu, &whole))
+            return OPTION_BAD_VALUE;
+        o->min_vertices = whole;
+        return OPTION_TAKEN;
+    case OPT_MAX_NORMAL_ANGLE:
+        return option_result(
+            parse_double("--max-normal-angle", optarg, 1, 180, &o->max_normal_angle));
+    case OPT_KEEP:
+        o->keep[o->keep_count++] = optarg;
+        return OPTION_TAKEN;
+    case OPT_FORCE:
+        o->force = 1;
+        return OPTION_TAKEN;
+    case OPT_THREADS:
+        return option_result(parse_unsigned("--threads", optarg, 1, 1024, &o->threads));
+    default:
+        return parse_importance_option(c, &o->importance, &arguments->device_index);
+    }
+}
+
+/* The reduction: this command's call into reduce/. */
+static int run_reduce(const pass_arguments *arguments, const reduce_options *o)
+{
+    scene *s = mitsuba_load(arguments->scene);
+    if (!s)
+        return fail();
+    device d;
+    int status = device_open(&d, arguments->device_index);
+    if (!status) {
+        status = reduce_run(&d, s, arguments->output, o);
+        device_close(&d);
+    }
+    int code = status ? fail() : 0;
+    scene_free(s);
+    return code;
+}
+
+int command_reduce(int argc, char **argv)
+{
+    static const struct option table[] = {
+        IMPORTANCE_LONG_OPTIONS,
+        {"target", required_argument, NULL, OPT_TARGET},
+        {"method", required_argument, NULL, OPT_METHOD},
+        {"min-vertices", required_argument, NULL, OPT_MIN_VERTICES},
+        {"max-normal-angle", required_argument, NULL, OPT_MAX_NORMAL_ANGLE},
+        {"keep", required_argument, NULL, OPT_KEEP},
+        {"force", no_argument, NULL, OPT_FORCE},
+        {"threads", required_argument, NULL, OPT_THREADS},
+        {0, 0, 0, 0}};
+    reduce_cli_request request = {.have_target = 0};
+    reduce_options_default(&request.options);
+    request.options.importance.sppm.progress = 1;
+    request.options.keep = xcalloc((size_t)argc + 1, sizeof *request.options.keep);
+    pass_arguments arguments = {.command = "reduce"};
+    int code = parse_pass_arguments(argc, argv, table, parse_option, &request, &arguments);
+    if (!code && (!arguments.output || !request.have_target))
+        code = usage_error("reduce: --target D and -o OUTDIR are required");
+    if (!code)
+        code = run_reduce(&arguments, &request.options);
+    free((void *)request.options.keep);
+    return code;
+}

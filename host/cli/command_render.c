@@ -1,0 +1,117 @@
+/* command_render.c — `idmr render SCENE -o IMAGE [options]`: the SPPM render of the scene
+ * (passes/render.h) into IMAGE.exr (linear), IMAGE.png (sRGB, --exposure) and IMAGE.json (its
+ * report), the directory created if missing; then one summary line on stdout. IMAGE may end
+ * in .exr or .png: either names the same three files. Options: the SPPM core's (options.h) and
+ * --exposure; the importance pass's own are refused. */
+#include <stdio.h>
+#include <string.h>
+#include <strings.h>
+
+#include "cli/commands.h"
+#include "cli/options.h"
+#include "cli/pass_setup.h"
+#include "core/files.h"
+#include "core/json.h"
+#include "io/mitsuba.h"
+#include "passes/render.h"
+
+/* Where the render goes: the three files, and the directory to create ("" if none). */
+typedef struct render_cli_paths {
+    char exr[4200], png[4200], json[4200];
+    char directory[4096];
+} render_cli_paths;
+
+/* What the render runs with, and what it gives back. */
+typedef struct render_cli_job {
+    render_options options;
+    double exposure; /* EV of the PNG */
+    render_cli_paths paths;
+    render_result result;
+} render_cli_job;
+
+/* The paths of `-o image`: its stem (without a trailing ".exr" or ".png") with each
+ * extension, and the stem's directory. */
+static void render_paths_from(const char *image, render_cli_paths *paths)
+{
+    char stem[4096];
+    snprintf(stem, sizeof stem, "%s", image);
+    size_t length = strlen(stem);
+    if (length > 4 &&
+        (!strcasecmp(stem + length - 4, ".exr") || !strcasecmp(stem + length - 4, ".png")))
+        stem[length - 4] = '\0';
+    snprintf(paths->exr, sizeof paths->exr, "%s.exr", stem);
+    snprintf(paths->png, sizeof paths->png, "%s.png", stem);
+    snprintf(paths->json, sizeof paths->json, "%s.json", stem);
+    snprintf(paths->directory, sizeof paths->directory, "%s", stem);
+    char *slash = strrchr(paths->directory, '/');
+    if (slash && slash != paths->directory)
+        *slash = '\0';
+    else
+        paths->directory[0] = '\0';
+}
+
+static enum option_parse parse_option(int c, void *context, pass_arguments *arguments)
+{
+    render_cli_job *job = context;
+    if (c == OPT_EXPOSURE)
+        return option_result(parse_double("--exposure", optarg, -64, 64, &job->exposure));
+    if (c == OPT_GAMMA || c == OPT_TOLERANCE)
+        return OPTION_IMPORTANCE_ONLY;
+    return parse_sppm_option(c, &job->options.sppm, &arguments->device_index);
+}
+
+/* The render and its outputs: this command's calls into passes/. */
+static int run_pass(device *d, const scene *s, const bvh *b, void *context)
+{
+    render_cli_job *job = context;
+    if (render_run(d, s, b, &job->options, &job->result) ||
+        render_write_images(&job->result, job->paths.exr, job->paths.png, job->exposure))
+        return -1;
+    cJSON *report = render_report_json(s, d, &job->options, &job->result);
+    int status = json_write(report, job->paths.json);
+    cJSON_Delete(report);
+    return status;
+}
+
+static void print_summary(const render_cli_job *job)
+{
+    const sppm_summary *run = &job->result.sppm;
+    double n = run->iterations, mib = 1048576.0;
+    printf("%s: %ux%u, %u iterations of %u photon paths, %.3f s per iteration (camera %.3f, "
+           "photons %.3f, grid %.3f, gather %.3f); device memory %.1f MiB (geometry %.1f, "
+           "BVH %.1f, SPPM %.1f)\n",
+           job->paths.exr, run->width, run->height, run->iterations, run->photons,
+           run->seconds.total / n, run->seconds.camera / n, run->seconds.photon / n,
+           run->seconds.grid / n, run->seconds.gather / n,
+           (run->geometry_bytes + run->bvh_bytes + run->buffer_bytes) / mib,
+           run->geometry_bytes / mib, run->bvh_bytes / mib, run->buffer_bytes / mib);
+}
+
+int command_render(int argc, char **argv)
+{
+    static const struct option table[] = {
+        IMPORTANCE_LONG_OPTIONS, {"exposure", required_argument, NULL, OPT_EXPOSURE}, {0, 0, 0, 0}};
+    render_cli_job job;
+    memset(&job, 0, sizeof job);
+    render_options_default(&job.options);
+    job.options.sppm.progress = 1;
+    pass_arguments arguments = {.command = "render"};
+    int code = parse_pass_arguments(argc, argv, table, parse_option, &job, &arguments);
+    if (code)
+        return code;
+    if (!arguments.output)
+        return usage_error("render: -o IMAGE is required");
+    render_paths_from(arguments.output, &job.paths);
+    scene *s = mitsuba_load(arguments.scene);
+    if (!s)
+        return fail();
+    int status = job.paths.directory[0] ? files_make_directory(job.paths.directory) : 0;
+    if (!status)
+        status = pass_setup_run(s, arguments.device_index, run_pass, &job);
+    code = status ? fail() : 0;
+    if (!status)
+        print_summary(&job);
+    render_result_free(&job.result);
+    scene_free(s);
+    return code;
+}

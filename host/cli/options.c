@@ -1,0 +1,155 @@
+/* options.c — what the commands share of their command lines (see options.h): failure
+ * messages, strict number parsing, the SPPM and importance options, the pass commands' getopt
+ * loop. */
+#include "cli/options.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "core/error.h"
+
+int fail(void)
+{
+    fprintf(stderr, "idmr: %s\n", error_message());
+    return error_code();
+}
+
+int usage_error(const char *fmt, ...)
+{
+    va_list args;
+    va_start(args, fmt);
+    fputs("idmr: ", stderr);
+    vfprintf(stderr, fmt, args);
+    fputs("\n(see `idmr --help`)\n", stderr);
+    va_end(args);
+    return IDMR_EXIT_INPUT;
+}
+
+/* Strict number parsing for options: the whole argument, finite, in range. */
+int parse_unsigned(const char *option, const char *text, unsigned long min, unsigned long max,
+                   unsigned int *out)
+{
+    char *end;
+    errno = 0;
+    unsigned long value = strtoul(text, &end, 10);
+    if (errno || end == text || *end || text[0] == '-' || value < min || value > max)
+        return error_set(IDMR_EXIT_INPUT, "%s: '%s' is not a whole number from %lu to %lu", option,
+                         text, min, max);
+    *out = (unsigned int)value;
+    return 0;
+}
+
+int parse_double(const char *option, const char *text, double min, double max, double *out)
+{
+    char *end;
+    errno = 0;
+    double value = strtod(text, &end);
+    if (errno || end == text || *end || !isfinite(value) || value < min || value > max)
+        return error_set(IDMR_EXIT_INPUT, "%s: '%s' is not a number from %g to %g", option, text,
+                         min, max);
+    *out = value;
+    return 0;
+}
+
+enum option_parse option_result(int status)
+{
+    return status ? OPTION_BAD_VALUE : OPTION_TAKEN;
+}
+
+/* parse_double() into a float. */
+static int parse_float(const char *option, const char *text, double min, double max, float *out)
+{
+    double value;
+    if (parse_double(option, text, min, max, &value))
+        return -1;
+    *out = (float)value;
+    return 0;
+}
+
+enum option_parse parse_sppm_option(int c, sppm_options *o, int *device_index)
+{
+    unsigned int whole;
+    switch (c) {
+    case OPT_ITERATIONS:
+        return option_result(parse_unsigned("--iterations", optarg, 1, 1000000, &o->iterations));
+    case OPT_PHOTONS:
+        return option_result(parse_unsigned("--photons", optarg, 1, 1u << 26, &o->photons));
+    case OPT_ALPHA:
+        return option_result(parse_float("--alpha", optarg, 1e-3, 1, &o->alpha));
+    case OPT_RESOLUTION:
+        return option_result(parse_float("--resolution", optarg, 1e-3, 16, &o->resolution));
+    case OPT_SEED:
+        return option_result(parse_unsigned("--seed", optarg, 0, 0xffffffffu, &o->seed));
+    case OPT_TIME_LIMIT:
+        return option_result(parse_double("--time-limit", optarg, 0, 1e9, &o->time_limit));
+    case OPT_DEVICE:
+        if (parse_unsigned("--device", optarg, 0, 1000, &whole))
+            return OPTION_BAD_VALUE;
+        *device_index = (int)whole;
+        return OPTION_TAKEN;
+    case OPT_QUIET:
+        o->progress = 0;
+        return OPTION_TAKEN;
+    case OPT_LOCAL_SIZE:
+        if (parse_unsigned("--local-size", optarg, 0, 4096, &whole))
+            return OPTION_BAD_VALUE;
+        o->local_size = whole;
+        return OPTION_TAKEN;
+    case OPT_GENERIC:
+        o->generic = 1;
+        return OPTION_TAKEN;
+    default:
+        return OPTION_UNKNOWN;
+    }
+}
+
+enum option_parse parse_importance_option(int c, importance_options *o, int *device_index)
+{
+    switch (c) {
+    case OPT_TOLERANCE:
+        return option_result(parse_double("--tolerance", optarg, 0, 1e30, &o->tolerance));
+    case OPT_GAMMA:
+        return option_result(parse_float("--gamma", optarg, 0, 1e6, &o->gamma));
+    default:
+        return parse_sppm_option(c, &o->sppm, device_index);
+    }
+}
+
+int expect_one_scene(const char *command, int argc)
+{
+    if (optind != argc - 1)
+        return usage_error("%s: expected one SCENE argument", command);
+    return 0;
+}
+
+int parse_pass_arguments(int argc, char **argv, const struct option *table,
+                         pass_option_parser parse, void *context, pass_arguments *arguments)
+{
+    arguments->output = NULL;
+    arguments->device_index = -1;
+    int c;
+    while ((c = getopt_long(argc, argv, "o:", table, NULL)) != -1) {
+        if (c == 'o') {
+            arguments->output = optarg;
+            continue;
+        }
+        switch (parse(c, context, arguments)) {
+        case OPTION_TAKEN:
+            break;
+        case OPTION_BAD_VALUE:
+            return fail();
+        case OPTION_IMPORTANCE_ONLY:
+            return usage_error("%s: %s is an importance pass option", arguments->command,
+                               argv[optind - 1]);
+        case OPTION_UNKNOWN:
+            return usage_error("%s: unknown option %s", arguments->command, argv[optind - 1]);
+        }
+    }
+    int code = expect_one_scene(arguments->command, argc);
+    if (!code)
+        arguments->scene = argv[optind];
+    return code;
+}

@@ -1,0 +1,113 @@
+/* options.h — what the commands share of their command lines: strict number parsing, the ids
+ * and long-option tables of the SPPM core's options (importance, reduce, render) and of the
+ * importance pass's (importance, reduce), the parsers that apply them, the getopt loop of the
+ * pass commands, and the two ways a command fails.
+ *
+ * Failures: fail() prints the recorded error (core/error.h) as one "idmr: ..." line and returns
+ * its exit code; usage_error() prints "idmr: <message>" and a pointer to `idmr --help`, and
+ * returns 2 (IDMR_EXIT_INPUT). */
+#ifndef IDMR_CLI_OPTIONS_H
+#define IDMR_CLI_OPTIONS_H
+#include <getopt.h>
+
+#include "passes/importance.h"
+#include "passes/sppm.h"
+
+/* getopt_long values of the long options that have no short form. */
+enum option_id {
+    OPT_ITERATIONS = 256,
+    OPT_TOLERANCE,
+    OPT_PHOTONS,
+    OPT_GAMMA,
+    OPT_ALPHA,
+    OPT_RESOLUTION,
+    OPT_SEED,
+    OPT_DEVICE,
+    OPT_QUIET,
+    OPT_LOCAL_SIZE,
+    OPT_GENERIC,
+    OPT_TARGET,
+    OPT_METHOD,
+    OPT_MIN_VERTICES,
+    OPT_MAX_NORMAL_ANGLE,
+    OPT_KEEP,
+    OPT_FORCE,
+    OPT_THREADS,
+    OPT_TIME_LIMIT,
+    OPT_EXPOSURE,
+};
+
+/* Options of the SPPM core, shared by `importance`, `reduce` and `render` (-o among them). */
+#define SPPM_LONG_OPTIONS                                                                   \
+    {"output", required_argument, NULL, 'o'},                                               \
+        {"iterations", required_argument, NULL, OPT_ITERATIONS},                            \
+        {"photons", required_argument, NULL, OPT_PHOTONS},                                  \
+        {"alpha", required_argument, NULL, OPT_ALPHA},                                      \
+        {"resolution", required_argument, NULL, OPT_RESOLUTION},                            \
+        {"seed", required_argument, NULL, OPT_SEED},                                        \
+        {"time-limit", required_argument, NULL, OPT_TIME_LIMIT},                            \
+        {"device", required_argument, NULL, OPT_DEVICE},                                    \
+        {"quiet", no_argument, NULL, OPT_QUIET},                                            \
+        {"local-size", required_argument, NULL, OPT_LOCAL_SIZE},                            \
+        {"generic", no_argument, NULL, OPT_GENERIC}
+
+/* Options of the importance pass, shared by `importance` and `reduce`. */
+#define IMPORTANCE_LONG_OPTIONS                                                             \
+    SPPM_LONG_OPTIONS, {"tolerance", required_argument, NULL, OPT_TOLERANCE},               \
+        {"gamma", required_argument, NULL, OPT_GAMMA}
+
+/* Prints the recorded error as "idmr: <message>"; returns its exit code. */
+int fail(void);
+
+/* Prints "idmr: " and the printf-style message, then "(see `idmr --help`)"; returns
+ * IDMR_EXIT_INPUT. */
+int usage_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+
+/* The whole of `text` as a number from min to max into *out; 0, or -1 with an error naming
+ * `option` set (exit code 2). */
+int parse_unsigned(const char *option, const char *text, unsigned long min, unsigned long max,
+                   unsigned int *out);
+int parse_double(const char *option, const char *text, double min, double max, double *out);
+
+/* What a parser made of option `c` (its argument in optarg). */
+enum option_parse {
+    OPTION_TAKEN = 1,
+    OPTION_UNKNOWN = 0,          /* not one of the parser's */
+    OPTION_BAD_VALUE = -1,       /* a bad argument: the error is set */
+    OPTION_IMPORTANCE_ONLY = -2, /* an importance pass option the command does not take */
+};
+
+/* OPTION_TAKEN when `status` (of a parse_*() call) is 0, else OPTION_BAD_VALUE. */
+enum option_parse option_result(int status);
+
+/* Applies SPPM option `c` (--device into *device_index). */
+enum option_parse parse_sppm_option(int c, sppm_options *o, int *device_index);
+
+/* Applies importance option `c`, the SPPM ones included. */
+enum option_parse parse_importance_option(int c, importance_options *o, int *device_index);
+
+/* The command line of a pass command (importance, reduce, render) as far as they share it. */
+typedef struct pass_arguments {
+    const char *command; /* the command's name, for messages */
+    const char *scene;   /* the one SCENE argument */
+    const char *output;  /* -o, --output; NULL if not given */
+    int device_index;    /* --device; -1: IDMR_DEVICE, else the first GPU */
+} pass_arguments;
+
+/* A command's options besides -o: applies option `c` to the command's `context` (its options). */
+typedef enum option_parse (*pass_option_parser)(int c, void *context,
+                                                pass_arguments *arguments);
+
+/* Walks argv with getopt_long over `table`: -o into arguments->output, every other option to
+ * parse(c, context, arguments); an option it does not know is "<command>: unknown option X",
+ * one it calls OPTION_IMPORTANCE_ONLY "<command>: X is an importance pass option"; then the
+ * one SCENE argument. Stops at the first failure; returns 0, or the exit code of the failure
+ * it printed. */
+int parse_pass_arguments(int argc, char **argv, const struct option *table,
+                         pass_option_parser parse, void *context, pass_arguments *arguments);
+
+/* The "<command>: expected one SCENE argument" check shared by the commands that load a
+ * scene: 0, or the usage error's exit code. */
+int expect_one_scene(const char *command, int argc);
+
+#endif
