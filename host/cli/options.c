@@ -142,8 +142,8 @@ int parse_pass_arguments(int argc, char **argv, const struct option *table,
         case OPTION_BAD_VALUE:
             return fail();
         case OPTION_IMPORTANCE_ONLY:
-            return usage_error("%s: %s is an importance pass option", arguments->command,
-                               argv[optind - 1]);
+            return usage_error("%s: --%s is an importance pass option", arguments->command,
+                               c == OPT_GAMMA ? "gamma" : "tolerance");
         case OPTION_UNKNOWN:
             return usage_error("%s: unknown option %s", arguments->command, argv[optind - 1]);
         }
