@@ -1,4 +1,5 @@
-# idmr — build, test, bench.  make [config=release|debug|sanitize] [all|test|bench|demo|deps|clean]
+# idmr — build, test, bench.
+#   make [config=release|debug|sanitize] [all|kernels|test|bench|demo|deps|clean]
 #
 # bin/idmr is the CLI. Every host source outside host/cli/ goes into build/$(config)/libidmr.a,
 # which the test and bench programs (tests/test_*.c, tests/bench_*.c) link as well.
@@ -45,8 +46,8 @@ CLI_OBJECTS := $(patsubst host/%,$(BUILD)/host/%.o,$(wildcard host/cli/*.c))
 TEST_PROGRAMS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/test_*.c))
 BENCH_PROGRAMS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/bench_*.c))
 
-.PHONY: all deps test bench demo clean FORCE
-all: bin/idmr
+.PHONY: all deps kernels test bench demo clean FORCE
+all: bin/idmr kernels
 
 # ---- dependencies and the flags they give ----
 
@@ -103,6 +104,14 @@ $(BUILD)/host/%.cc.o: host/%.cc $(FLAGS)
 	@mkdir -p $(dir $@)
 	$(CXX) $(CPPFLAGS) $(CXXFLAGS) -c -o $@ $<
 
+# Every kernel program variant compiled on the OpenCL device (idmr kernels), again whenever a
+# kernel source, a shared layout or the binary changes: a kernel error fails the build.
+KERNEL_SOURCES := $(wildcard kernels/*.cl kernels/lib/*.h include/idmr/*.h)
+kernels: $(BUILD)/kernels.stamp
+$(BUILD)/kernels.stamp: $(BUILD)/idmr $(KERNEL_SOURCES)
+	@$(BUILD)/idmr kernels --quiet
+	@touch $@
+
 # ---- tests and benchmarks ----
 
 $(BUILD)/tests/%: tests/%.c $(BUILD)/libidmr.a $(FLAGS)
@@ -116,7 +125,7 @@ $(BUILD)/tests/bench_decimation: tests/bench_decimation.c $(BUILD)/libidmr.a $(F
 	$(CC) $(CPPFLAGS) -Itests $(CFLAGS) $(LDFLAGS) -o $@ $< $(BUILD)/libidmr.a -lmeshoptimizer $(LDLIBS)
 
 # Runs every test program; scripts/run-tests.sh prints one closing "N passed, N failed" line.
-test: bin/idmr $(TEST_PROGRAMS)
+test: bin/idmr kernels $(TEST_PROGRAMS)
 	@scripts/run-tests.sh $(TEST_PROGRAMS)
 
 bench: bin/idmr $(BENCH_PROGRAMS)

@@ -24,6 +24,9 @@ int command_render(int argc, char **argv);
 /* idmr compare A B [--diff D.png] [--diff-max E] [--json]: image A against the reference B. */
 int command_compare(int argc, char **argv);
 
+/* idmr kernels [--device N] [--quiet]: builds every kernel program variant (make kernels). */
+int command_kernels(int argc, char **argv);
+
 /* The help text (idmr --help, idmr help) on `out`. */
 void command_help(FILE *out);
 

@@ -26,6 +26,7 @@ static const struct {
 } COMMANDS[] = {
     {"devices", command_devices}, {"info", command_info},     {"importance", command_importance},
     {"reduce", command_reduce},   {"render", command_render}, {"compare", command_compare},
+    {"kernels", command_kernels},
 };
 
 int main(int argc, char **argv)

@@ -23,6 +23,12 @@ void importance_options_default(importance_options *o)
     o->bookkeeping = 1;
 }
 
+void importance_defines(int bookkeeping, int camera_importance, char *out, size_t size)
+{
+    snprintf(out, size, "-D IDMR_BOOKKEEPING=%d -D IDMR_CAMERA_IMPORTANCE=%d", bookkeeping ? 1 : 0,
+             camera_importance ? 1 : 0);
+}
+
 /* The pass's part while the core runs. */
 typedef struct importance_pass {
     const importance_options *options;
@@ -240,8 +246,7 @@ int importance_run(device *d, const scene *s, const bvh *b, const importance_opt
     state.options = o;
     state.result = r;
     char defines[96];
-    snprintf(defines, sizeof defines, "-D IDMR_BOOKKEEPING=%d -D IDMR_CAMERA_IMPORTANCE=%d",
-             o->bookkeeping ? 1 : 0, o->gamma > 0 ? 1 : 0);
+    importance_defines(o->bookkeeping, o->gamma > 0, defines, sizeof defines);
     sppm_pass pass = {"importance", IDMR_SPPM_IMPORTANCE, defines, sizeof(idmr_photon_vertex),
                       &state, prepare, gather, collect, o->snapshot ? snapshot : NULL, finish,
                       release};

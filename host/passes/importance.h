@@ -67,6 +67,9 @@ typedef struct importance_result {
 
 void importance_options_default(importance_options *o);
 
+/* The importance pass's own build defines (IDMR_BOOKKEEPING, IDMR_CAMERA_IMPORTANCE) into out. */
+void importance_defines(int bookkeeping, int camera_importance, char *out, size_t size);
+
 /* Runs the pass. The scene needs a camera and at least one light. Returns 0, or -1 with the
  * error set. `r` is freed with importance_result_free() either way. */
 int importance_run(device *d, const scene *s, const bvh *b, const importance_options *o,

@@ -91,14 +91,21 @@ static int check_inputs(const device *d, const scene *s, const sppm_options *o,
     return 0;
 }
 
+char *sppm_build_options(const device *d, unsigned int features, int pass,
+                         const char *pass_defines)
+{
+    char defines[256];
+    snprintf(defines, sizeof defines, "-D IDMR_SPPM_PASS=%d%s%s", pass,
+             pass_defines ? " " : "", pass_defines ? pass_defines : "");
+    return device_build_options(d, features, defines);
+}
+
 static int build_program(sppm *core, const sppm_pass *pass)
 {
     double start = monotonic_seconds();
-    char defines[256];
-    snprintf(defines, sizeof defines, "-D IDMR_SPPM_PASS=%d%s%s", pass->pass,
-             pass->defines ? " " : "", pass->defines ? pass->defines : "");
     unsigned int features = core->options->generic ? IDMR_FEATURES_ALL : core->scene->features;
-    core->summary->build_options = device_build_options(core->dev, features, defines);
+    core->summary->build_options =
+        sppm_build_options(core->dev, features, pass->pass, pass->defines);
     if (device_build_program(core->dev, "sppm.cl", core->summary->build_options, &core->program) ||
         device_create_kernel(core->program, "camera_paths", &core->camera_paths) ||
         device_create_kernel(core->program, "photon_paths", &core->photon_paths))

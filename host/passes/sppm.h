@@ -52,6 +52,12 @@ void sppm_options_default(sppm_options *o, unsigned int iterations);
  * triangles) near 0.68 s on 2 cores with PoCL (make bench). */
 unsigned int sppm_default_photons(const device *d);
 
+/* The build options of kernels/sppm.cl for `pass` (IDMR_SPPM_IMPORTANCE or IDMR_SPPM_RENDER)
+ * on a scene with feature bits `features`, plus the pass's own defines (may be NULL): the one
+ * place they are made, for the runs and for `idmr kernels`. Malloc'd. */
+char *sppm_build_options(const device *d, unsigned int features, int pass,
+                         const char *pass_defines);
+
 /* r_1² for a scene and hit-point image (a tiny positive value for a scene of one point), and
  * r_{n+1}² from r_n² after iteration n (counted from 0). */
 double sppm_initial_radius2(const scene *s, unsigned int width, unsigned int height);
