@@ -21,7 +21,8 @@ int command_reduce(int argc, char **argv);
 /* idmr render SCENE -o IMAGE [options]: the SPPM render and its report. */
 int command_render(int argc, char **argv);
 
-/* idmr compare A B [--diff D.png] [--diff-max E] [--json]: image A against the reference B. */
+/* idmr compare A B [--diff D.png] [--diff-max E] [--json]: image A against the reference B;
+ * idmr compare --paired A1 A2 B1 B2 [--tile N] [--json]: the reduction error, noise cancelled. */
 int command_compare(int argc, char **argv);
 
 /* idmr kernels [--device N] [--quiet]: builds every kernel program variant (make kernels). */
