@@ -25,6 +25,7 @@
 #include "core/error.h"
 #include "io/image.h"
 #include "io/mitsuba.h"
+#include "io/mitsuba_xml.h"
 #include "core/scene.h"
 #include "io/shapes.h"
 #include "io/spectrum.h"
