@@ -11,8 +11,7 @@
 #include <string.h>
 #include <strings.h>
 
-#include "core/error.h"
-
+/* Wrappers (twosided, mask, ...) nest at most this deep. */
 #define MITSUBA_MAX_NESTING 16
 
 /* Mitsuba's defaults (documented in both manuals). */

@@ -64,8 +64,8 @@ typedef struct writer {
     size_t include_count;
     const mitsuba_replacement *replacements;
     size_t replacement_count;
-    char **replacement_real;  /* realpath of each replacement's xml_file, or NULL */
-    xmlNodePtr *shapes;       /* the <shape> node of each replacement, once found */
+    char **replacement_real; /* realpath of each replacement's xml_file, or NULL */
+    xmlNodePtr *shapes;      /* the <shape> node of each replacement, once found */
 } writer;
 
 /* ---------------------------------------------------------------------------------------- */
@@ -150,7 +150,7 @@ static void note_path(writer *w, size_t doc, xmlNodePtr node, const char *attrib
         return;
     char *value = strchr(written, '$')
                       ? mitsuba_substitute(&w->params, written, missing, sizeof missing)
-                                       : xstrdup(written);
+                      : xstrdup(written);
     if (!value) /* an undefined parameter: left as written (the loader rejects it) */
         return;
     if (value[0] == '/' && !strchr(written, '$')) {
