@@ -1,15 +1,15 @@
-/* test_mitsuba_write.c — writing the reduced scene's XML (host/mitsuba_write.c).
+/* test_mitsuba_write.c — writing the reduced scene's XML (host/io/mitsuba_write*.c).
  *
- * Each test writes a small scene into a fresh input directory (an OBJ, a PLY written through
- * OpenMesh, a PNG texture, built-in shapes, <include> fragments, <default>/$name), loads it
- * with mitsuba_load(), writes the world-space geometry of some meshes as PLYs into
- * outdir/meshes, calls mitsuba_write_reduced() and loads outdir/scene.xml again. Checked: the
- * replaced meshes now come from the PLYs (type ply, same counts, positions and bbox), the other
- * meshes are unchanged, textures still load, fragment copies exist exactly when needed, the
- * input files are byte-identical to before, the raw text (<default>, $name, comments) survives,
- * and a replacement naming no <shape> is an error naming file and line. The last tests do the
- * same on real scenes from ../shared/data (via IDMR_ROOT); a missing data directory fails
- * them, it never skips. */
+ * Each scenario writes a small scene into a fresh input directory (an OBJ, a PLY written
+ * through OpenMesh, a PNG texture, built-in shapes, <include> fragments, <default>/$name),
+ * loads it with mitsuba_load(), writes the world-space geometry of some meshes as PLYs into
+ * outdir/meshes, calls mitsuba_write_reduced() and loads outdir/scene.xml again; each test then
+ * checks one aspect of the result. Checked: the replaced meshes now come from the PLYs (type
+ * ply, same counts, positions and bbox), the other meshes are unchanged, textures still load,
+ * fragment copies exist exactly when needed, the input files are byte-identical to before
+ * (after every scenario), the raw text (<default>, $name, comments) survives, and a replacement
+ * naming no <shape> is an error naming file and line. The last tests do the same on real scenes
+ * from ../shared/data (via IDMR_ROOT); a missing data directory fails them, it never skips. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -17,25 +17,11 @@
 
 #include <cmocka.h>
 
-#include <limits.h>
-#include <math.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-#include <sys/stat.h>
-#include <unistd.h>
+#include "mitsuba_common.h"
 
-#include "core/error.h"
 #include "io/image.h"
 #include "io/mesh_io.h"
-#include "io/mitsuba.h"
 #include "io/mitsuba_write.h"
-#include "core/scene.h"
-
-#ifndef IDMR_ROOT
-#define IDMR_ROOT "."
-#endif
-#define SCENES IDMR_ROOT "/../shared/data/scenes"
 
 /* ---------------------------------------------------------------------------------------- */
 /* Helpers                                                                                  */
@@ -44,67 +30,14 @@ static char in_dir[64], out_dir[64];
 
 static int make_dirs(void **state)
 {
-    char meshes[128];
-    snprintf(in_dir, sizeof in_dir, "/tmp/idmr-test-mw-in-XXXXXX");
-    snprintf(out_dir, sizeof out_dir, "/tmp/idmr-test-mw-out-XXXXXX");
-    if (!mkdtemp(in_dir) || !mkdtemp(out_dir))
+    if (temp_dir_make(in_dir, "mw-in") || temp_dir_make(out_dir, "mw-out"))
         return -1;
-    snprintf(meshes, sizeof meshes, "%s/meshes", out_dir);
-    return mkdir(meshes, 0755);
+    return mkdir(path_in(out_dir, "meshes"), 0755);
 }
 
 static int remove_dirs(void **state)
 {
-    char command[192];
-    snprintf(command, sizeof command, "rm -rf '%s' '%s'", in_dir, out_dir);
-    return system(command) == 0 ? 0 : -1;
-}
-
-/* dir/name into a static buffer (one of four, so a few can be alive at once). */
-static const char *path_in(const char *dir, const char *name)
-{
-    static char paths[4][2 * PATH_MAX];
-    static int next;
-    char *path = paths[next++ % 4];
-    snprintf(path, sizeof paths[0], "%s/%s", dir, name);
-    return path;
-}
-
-static void write_text(const char *name, const char *text)
-{
-    FILE *f = fopen(path_in(in_dir, name), "w");
-    assert_non_null(f);
-    fputs(text, f);
-    fclose(f);
-}
-
-static void make_subdir(const char *name)
-{
-    assert_int_equal(mkdir(path_in(in_dir, name), 0755), 0);
-}
-
-/* The whole file, malloc'd and NUL-terminated; NULL if it cannot be read. */
-static char *read_all(const char *path, size_t *size)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return NULL;
-    fseek(f, 0, SEEK_END);
-    long length = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *bytes = malloc((size_t)length + 1);
-    assert_non_null(bytes);
-    assert_int_equal(fread(bytes, 1, (size_t)length, f), (size_t)length);
-    bytes[length] = '\0';
-    fclose(f);
-    if (size)
-        *size = (size_t)length;
-    return bytes;
-}
-
-static int file_exists(const char *path)
-{
-    return access(path, F_OK) == 0;
+    return temp_dir_remove(in_dir) || temp_dir_remove(out_dir) ? -1 : 0;
 }
 
 /* The input files and their bytes, to prove they are never written. */
@@ -124,6 +57,13 @@ static void snapshot_add(snapshot *s, const char *path)
     s->count++;
 }
 
+/* Snapshots the files `names` in `dir`. */
+static void snapshot_files(snapshot *s, const char *dir, const char *const *names, size_t count)
+{
+    for (size_t i = 0; i < count; i++)
+        snapshot_add(s, path_in(dir, names[i]));
+}
+
 static void snapshot_check(snapshot *s)
 {
     for (size_t i = 0; i < s->count; i++) {
@@ -137,38 +77,95 @@ static void snapshot_check(snapshot *s)
     s->count = 0;
 }
 
-static scene *load_ok(const char *path)
+/* outdir/name, read whole (malloc'd); fails the test when it is missing. */
+static char *read_output(const char *name)
 {
-    error_clear();
-    warn_silence(1);
-    scene *s = mitsuba_load(path);
-    warn_silence(0);
-    if (!s)
-        fail_msg("loading %s failed: %s", path, error_message());
-    return s;
+    char *text = read_all(path_in(out_dir, name), NULL);
+    if (!text)
+        fail_msg("no %s in %s", name, out_dir);
+    return text;
 }
 
-static const scene_mesh *find_mesh(const scene *s, const char *name)
+static void assert_has(const char *text, const char *needle)
 {
-    for (size_t i = 0; i < s->mesh_count; i++)
-        if (strcmp(s->meshes[i].name, name) == 0)
-            return &s->meshes[i];
-    fail_msg("no mesh '%s' in %s", name, s->file);
-    return NULL;
+    if (!strstr(text, needle))
+        fail_msg("no '%s' in:\n%s", needle, text);
 }
 
-static void mesh_bbox(const scene_mesh *m, float lo[3], float hi[3])
+static void assert_lacks(const char *text, const char *needle)
 {
-    for (int c = 0; c < 3; c++) {
-        lo[c] = INFINITY;
-        hi[c] = -INFINITY;
-    }
-    for (uint32_t v = 0; v < m->vertex_count; v++)
-        for (int c = 0; c < 3; c++) {
-            lo[c] = fminf(lo[c], m->positions[3 * v + c]);
-            hi[c] = fmaxf(hi[c], m->positions[3 * v + c]);
-        }
+    if (strstr(text, needle))
+        fail_msg("'%s' still in:\n%s", needle, text);
 }
+
+static void assert_lacks_all(const char *text, const char *const *needles, size_t count)
+{
+    for (size_t i = 0; i < count; i++)
+        assert_lacks(text, needles[i]);
+}
+
+static size_t count_substrings(const char *text, const char *needle)
+{
+    size_t n = 0;
+    for (const char *p = strstr(text, needle); p; p = strstr(p + 1, needle))
+        n++;
+    return n;
+}
+
+/* The real path of in_dir/name (static buffer). */
+static const char *real_in(const char *name)
+{
+    static char real[PATH_MAX];
+    if (!realpath(path_in(in_dir, name), real))
+        fail_msg("realpath %s failed", name);
+    return real;
+}
+
+/* `format` with the real path of in_dir/name in place of its %s (static buffer). */
+static const char *with_real_in(const char *format, const char *name)
+{
+    static char text[PATH_MAX + 64];
+    snprintf(text, sizeof text, format, real_in(name));
+    return text;
+}
+
+/* Whether two paths name the same existing file. */
+static void assert_same_file(const char *a, const char *b)
+{
+    char real_a[PATH_MAX], real_b[PATH_MAX];
+    assert_non_null(realpath(a, real_a));
+    assert_non_null(realpath(b, real_b));
+    assert_string_equal(real_b, real_a);
+}
+
+/* A unit quad in the xy plane (OBJ, 4 vertices, 2 triangles). */
+static const char quad_obj[] = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
+
+/* Writes `data` as a PLY through OpenMesh. */
+static void write_ply(const char *path, const mesh_data *data)
+{
+    if (mesh_io_write_ply(path, data, NULL, NULL, NULL))
+        fail_msg("writing %s: %s", path, error_message());
+}
+
+/* A tetrahedron written through OpenMesh as in_dir/name. */
+static void write_tetrahedron_ply(const char *name)
+{
+    float positions[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+    uint32_t indices[] = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
+    mesh_data data = {4, 4, positions, indices, NULL};
+    write_ply(path_in(in_dir, name), &data);
+}
+
+static void write_png(const char *name)
+{
+    const unsigned char rgb[] = {255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255};
+    if (image_write_rgb8(path_in(in_dir, name), 2, 2, rgb))
+        fail_msg("%s", error_message());
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* Reducing a scene and checking every mesh                                                 */
 
 /* Same counts, same positions (in order) and indices, same bbox. */
 static void assert_same_mesh(const scene_mesh *a, const scene_mesh *b)
@@ -196,55 +193,91 @@ static void replace_mesh(const scene_mesh *m, mitsuba_replacement *r, char *ply,
 {
     mesh_data data = {m->vertex_count, m->triangle_count, m->positions, m->indices, NULL};
     snprintf(ply, size, "meshes/%s.ply", m->name);
-    if (mesh_io_write_ply(path_in(out_dir, ply), &data, NULL, NULL, NULL))
-        fail_msg("writing %s: %s", ply, error_message());
+    write_ply(path_in(out_dir, ply), &data);
     r->xml_file = m->xml_file;
     r->xml_line = m->xml_line;
     r->ply = ply;
 }
 
-static void write_ok(const char *scene_file, const mitsuba_replacement *r, size_t count)
+/* Output mesh b of input mesh a: the same geometry and light; a replaced one comes from its
+ * PLY, a kept one has its type and file. */
+static void check_output_mesh(const scene_mesh *a, const scene_mesh *b, int replaced)
 {
+    assert_same_mesh(a, b);
+    assert_int_equal(a->light >= 0, b->light >= 0);
+    if (replaced) {
+        char ply[PATH_MAX];
+        assert_string_equal(b->shape_type, "ply");
+        snprintf(ply, sizeof ply, "%s/meshes/%s.ply", out_dir, a->name);
+        assert_same_file(ply, b->file);
+    } else {
+        assert_string_equal(b->shape_type, a->shape_type);
+        if (a->file)
+            assert_same_file(a->file, b->file);
+    }
+}
+
+static int is_named(const char *name, const char *const *names, size_t count)
+{
+    for (size_t i = 0; i < count; i++)
+        if (strcmp(names[i], name) == 0)
+            return 1;
+    return 0;
+}
+
+/* A scene reduced: what was loaded before and after, and the written outdir/scene.xml. */
+typedef struct reduction {
+    snapshot inputs; /* the files the writer must leave untouched */
+    scene *input, *output;
+    char *text;
+} reduction;
+
+/* Replaces the meshes `names` of `scene_file`, writes, reloads, and checks every mesh: the
+ * scene's counts and bbox are the input's, each mesh as check_output_mesh says. */
+static void reduce_and_check(reduction *r, const char *scene_file, const char *const *names,
+                             size_t count)
+{
+    mitsuba_replacement replacements[8];
+    char ply[8][256];
+    assert_true(count <= 8);
+    r->input = load_or_fail(scene_file);
+    for (size_t i = 0; i < count; i++)
+        replace_mesh(find_mesh(r->input, names[i]), &replacements[i], ply[i], sizeof ply[i]);
     error_clear();
-    if (mitsuba_write_reduced(scene_file, out_dir, r, count))
+    if (mitsuba_write_reduced(scene_file, out_dir, replacements, count))
         fail_msg("mitsuba_write_reduced failed: %s", error_message());
+    r->output = load_or_fail(path_in(out_dir, "scene.xml"));
+    r->text = read_output("scene.xml");
+    assert_int_equal(r->output->mesh_count, r->input->mesh_count);
+    assert_int_equal(r->output->vertex_count, r->input->vertex_count);
+    assert_int_equal(r->output->triangle_count, r->input->triangle_count);
+    for (int c = 0; c < 3; c++) {
+        assert_float_equal(r->output->bbox_min[c], r->input->bbox_min[c], 1e-4f);
+        assert_float_equal(r->output->bbox_max[c], r->input->bbox_max[c], 1e-4f);
+    }
+    for (size_t m = 0; m < r->input->mesh_count; m++) {
+        const scene_mesh *a = &r->input->meshes[m];
+        check_output_mesh(a, find_mesh(r->output, a->name), is_named(a->name, names, count));
+    }
 }
 
-/* A unit quad in the xy plane (OBJ, 4 vertices, 2 triangles). */
-static const char quad_obj[] = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
-
-/* A tetrahedron written through OpenMesh as in_dir/name. */
-static void write_tetrahedron_ply(const char *name)
+/* Snapshots the inputs `files` (in in_dir), then reduces in_dir/scene.xml replacing `names`
+ * (reduce_and_check). */
+static void reduce_in_dir(reduction *r, const char *const *files, size_t file_count,
+                          const char *const *names, size_t name_count)
 {
-    float positions[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
-    uint32_t indices[] = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
-    mesh_data data = {4, 4, positions, indices, NULL};
-    if (mesh_io_write_ply(path_in(in_dir, name), &data, NULL, NULL, NULL))
-        fail_msg("%s", error_message());
+    memset(r, 0, sizeof *r);
+    snapshot_files(&r->inputs, in_dir, files, file_count);
+    reduce_and_check(r, path_in(in_dir, "scene.xml"), names, name_count);
 }
 
-static void write_png(const char *name)
+/* Checks that the inputs are unchanged and frees the reduction. */
+static void reduction_finish(reduction *r)
 {
-    const unsigned char rgb[] = {255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255};
-    if (image_write_rgb8(path_in(in_dir, name), 2, 2, rgb))
-        fail_msg("%s", error_message());
-}
-
-static size_t count_substrings(const char *text, const char *needle)
-{
-    size_t n = 0;
-    for (const char *p = strstr(text, needle); p; p = strstr(p + 1, needle))
-        n++;
-    return n;
-}
-
-/* The real path of in_dir/name (static buffer). */
-static const char *real_in(const char *name)
-{
-    static char real[PATH_MAX];
-    if (!realpath(path_in(in_dir, name), real))
-        fail_msg("realpath %s failed", name);
-    return real;
+    snapshot_check(&r->inputs);
+    scene_free(r->input);
+    scene_free(r->output);
+    free(r->text);
 }
 
 /* ---------------------------------------------------------------------------------------- */
@@ -316,217 +349,209 @@ static const char fragment3[] = "<scene version=\"3.0.0\">\n"
                                 "    </shape>\n"
                                 "</scene>\n";
 
-static void write_scene3(snapshot *inputs)
+/* The files of scene3, all inputs. */
+static const char *const scene3_files[] = {"scene.xml",      "parts/frag.xml", "quad.obj",
+                                           "parts/part.obj", "tet.ply",        "textures/tex.png"};
+
+static void write_scene3(void)
 {
-    make_subdir("textures");
-    make_subdir("parts");
-    write_text("quad.obj", quad_obj);
-    write_text("parts/part.obj", quad_obj);
+    make_subdir(in_dir, "textures");
+    make_subdir(in_dir, "parts");
+    write_text(in_dir, "quad.obj", quad_obj);
+    write_text(in_dir, "parts/part.obj", quad_obj);
     write_tetrahedron_ply("tet.ply");
     write_png("textures/tex.png");
-    write_text("scene.xml", scene3);
-    write_text("parts/frag.xml", fragment3);
-    const char *files[] = {"scene.xml",      "parts/frag.xml", "quad.obj",
-                           "parts/part.obj", "tet.ply",        "textures/tex.png"};
-    for (size_t i = 0; i < sizeof files / sizeof *files; i++)
-        snapshot_add(inputs, path_in(in_dir, files[i]));
+    write_text(in_dir, "scene.xml", scene3);
+    write_text(in_dir, "parts/frag.xml", fragment3);
 }
 
-/* Replaces `names` of the scene at in_dir/scene.xml, writes, reloads, and checks every mesh:
- * replaced ones come from their PLY with the input's geometry, the others are unchanged. */
-static scene *reduce_and_check(const char *scene_file, const char *const *names, size_t count,
-                               scene **input_out)
+/* scene3 with meshes of the scene file replaced (none of its fragment). */
+static void reduce_scene3_in_scene(reduction *r)
 {
-    scene *input = load_ok(scene_file);
-    mitsuba_replacement r[8];
-    char ply[8][256];
-    assert_true(count <= 8);
-    for (size_t i = 0; i < count; i++)
-        replace_mesh(find_mesh(input, names[i]), &r[i], ply[i], sizeof ply[i]);
-    write_ok(scene_file, r, count);
-    scene *output = load_ok(path_in(out_dir, "scene.xml"));
-    assert_int_equal(output->mesh_count, input->mesh_count);
-    assert_int_equal(output->vertex_count, input->vertex_count);
-    assert_int_equal(output->triangle_count, input->triangle_count);
-    for (int c = 0; c < 3; c++) {
-        assert_float_equal(output->bbox_min[c], input->bbox_min[c], 1e-4f);
-        assert_float_equal(output->bbox_max[c], input->bbox_max[c], 1e-4f);
-    }
-    for (size_t m = 0; m < input->mesh_count; m++) {
-        const scene_mesh *a = &input->meshes[m];
-        const scene_mesh *b = find_mesh(output, a->name);
-        assert_same_mesh(a, b);
-        assert_int_equal(a->light >= 0, b->light >= 0);
-        int replaced = 0;
-        for (size_t i = 0; i < count; i++)
-            replaced |= strcmp(names[i], a->name) == 0;
-        if (replaced) {
-            assert_string_equal(b->shape_type, "ply");
-            char expected[PATH_MAX], got[PATH_MAX], ply_path[PATH_MAX];
-            snprintf(ply_path, sizeof ply_path, "%s/meshes/%s.ply", out_dir, a->name);
-            assert_non_null(realpath(ply_path, expected));
-            assert_non_null(realpath(b->file, got));
-            assert_string_equal(got, expected);
-        } else {
-            assert_string_equal(b->shape_type, a->shape_type);
-            if (a->file) {
-                char ra[PATH_MAX], rb[PATH_MAX];
-                assert_non_null(realpath(a->file, ra));
-                assert_non_null(realpath(b->file, rb));
-                assert_string_equal(ra, rb);
-            }
-        }
-    }
-    if (input_out)
-        *input_out = input;
-    else
-        scene_free(input);
-    return output;
+    static const char *const names[] = {"quad", "lamp", "ball"};
+    write_scene3();
+    reduce_in_dir(r, scene3_files, ARRAY_COUNT(scene3_files), names, ARRAY_COUNT(names));
 }
 
-static void test_v3_replace_in_scene_keep_fragment(void **state)
+/* The replaced area light keeps its area. */
+static void test_v3_in_scene_meshes_replaced(void **state)
 {
-    snapshot inputs = {0};
-    write_scene3(&inputs);
-    const char *names[] = {"quad", "lamp", "ball"};
-    scene *input;
-    scene *output = reduce_and_check(path_in(in_dir, "scene.xml"), names, 3, &input);
+    reduction r;
+    reduce_scene3_in_scene(&r);
+    assert_float_equal(r.output->lights[find_mesh(r.output, "lamp")->light].area,
+                       r.input->lights[find_mesh(r.input, "lamp")->light].area, 1e-5f);
+    reduction_finish(&r);
+}
 
-    /* The texture still loads, from the input's file. */
-    assert_int_equal(output->texture_count, 1);
-    char expected[PATH_MAX], got[PATH_MAX];
-    assert_non_null(realpath(input->textures[0].file, expected));
-    assert_non_null(realpath(output->textures[0].file, got));
-    assert_string_equal(got, expected);
-    assert_true(output->materials[find_mesh(output, "quad")->material].texture >= 0);
-    assert_int_equal(output->camera.width, 32);
-    /* The replaced area light has the same area. */
-    assert_float_equal(output->lights[find_mesh(output, "lamp")->light].area,
-                       input->lights[find_mesh(input, "lamp")->light].area, 1e-5f);
+/* The texture still loads, from the input's file, and the $res default still applies. */
+static void test_v3_in_scene_texture_and_defaults_apply(void **state)
+{
+    reduction r;
+    reduce_scene3_in_scene(&r);
+    assert_int_equal(r.output->texture_count, 1);
+    assert_same_file(r.input->textures[0].file, r.output->textures[0].file);
+    assert_true(r.output->materials[find_mesh(r.output, "quad")->material].texture >= 0);
+    assert_int_equal(r.output->camera.width, 32);
+    reduction_finish(&r);
+}
 
-    /* Nothing replaced in the fragment: no copy, included from its place. */
+/* Nothing replaced in the fragment: no copy, included from its place. */
+static void test_v3_in_scene_fragment_stays(void **state)
+{
+    reduction r;
+    reduce_scene3_in_scene(&r);
     assert_false(file_exists(path_in(out_dir, "includes")));
-    char *text = read_all(path_in(out_dir, "scene.xml"), NULL);
-    assert_non_null(text);
-    char include[PATH_MAX + 32];
-    snprintf(include, sizeof include, "<include filename=\"%s\"/>", real_in("parts/frag.xml"));
-    if (!strstr(text, include))
-        fail_msg("no '%s' in:\n%s", include, text);
-
-    /* The raw text survives: declaration, defaults, $name, comments. */
-    assert_true(strncmp(text, "<?xml", 5) == 0);
-    assert_non_null(strstr(text, "<default name=\"res\" value=\"32\"/>"));
-    assert_non_null(strstr(text, "<default name=\"plyname\" value=\"tet.ply\"/>"));
-    assert_int_equal(count_substrings(text, "value=\"$res\""), 2);
-    assert_non_null(strstr(text, "<!-- the textured material -->"));
-    assert_non_null(strstr(text, "\n        <ref id=\"checker\"/>\n"));
-    /* Paths: absolute for what stays, the $name one resolved, the PLYs relative to outdir. */
-    snprintf(include, sizeof include, "value=\"%s\"", real_in("tet.ply"));
-    assert_non_null(strstr(text, include));
-    snprintf(include, sizeof include, "value=\"%s\"", real_in("textures/tex.png"));
-    assert_non_null(strstr(text, include));
-    assert_non_null(strstr(text, "<shape type=\"ply\" id=\"quad\">\n"
-                                 "        <string name=\"filename\" value=\"meshes/quad.ply\"/>\n"
-                                 "        <ref id=\"checker\"/>\n"
-                                 "    </shape>"));
-    assert_non_null(strstr(text, "<shape type=\"ply\" id=\"ball\">\n"
-                                 "        <string name=\"filename\" value=\"meshes/ball.ply\"/>\n"
-                                 "        <bsdf type=\"dielectric\"/>\n"
-                                 "    </shape>"));
-    assert_non_null(strstr(text, "<shape type=\"ply\" id=\"lamp\">\n"
-                                 "        <string name=\"filename\" value=\"meshes/lamp.ply\"/>\n"
-                                 "        <emitter type=\"area\">"));
-    assert_non_null(strstr(text, "<shape type=\"cube\" id=\"box\"/>"));
-    assert_null(strstr(text, "flip_normals"));
-    assert_null(strstr(text, "flip_tex_coords"));
-    assert_null(strstr(text, "center"));
-    assert_null(strstr(text, "radius\""));
-    assert_int_equal(count_substrings(text, "name=\"to_world\""), 1); /* the tet's */
-    free(text);
-    snapshot_check(&inputs);
-    scene_free(input);
-    scene_free(output);
+    assert_has(r.text, with_real_in("<include filename=\"%s\"/>", "parts/frag.xml"));
+    reduction_finish(&r);
 }
 
-static void test_v3_replace_in_fragment_copies_it(void **state)
+/* The raw text survives: declaration, defaults, $name, comments, indentation. */
+static void test_v3_in_scene_raw_text_survives(void **state)
 {
-    snapshot inputs = {0};
-    write_scene3(&inputs);
-    const char *names[] = {"part", "box"};
-    scene *output = reduce_and_check(path_in(in_dir, "scene.xml"), names, 2, NULL);
-    scene_free(output);
-
-    const char *copy = path_in(out_dir, "includes/frag.xml");
-    assert_true(file_exists(copy));
-    char *text = read_all(path_in(out_dir, "scene.xml"), NULL);
-    assert_non_null(strstr(text, "<include filename=\"includes/frag.xml\"/>"));
-    assert_non_null(strstr(text, "<shape type=\"ply\" id=\"box\">\n"
-                                 "        <string name=\"filename\" value=\"meshes/box.ply\"/>\n"
-                                 "    </shape>"));
-    free(text);
-    /* In the copy: the replaced shape names its PLY relative to outdir, the kept disk keeps its
-     * transform, and no <?xml?> declaration appears where the input had none. */
-    text = read_all(copy, NULL);
-    assert_true(strncmp(text, "<scene version=\"3.0.0\">\n", 24) == 0);
-    assert_non_null(strstr(text, "<shape type=\"ply\" id=\"part\">\n"
-                                 "        <string name=\"filename\" value=\"meshes/part.ply\"/>\n"
-                                 "    </shape>"));
-    assert_int_equal(count_substrings(text, "to_world"), 1);
-    free(text);
-    snapshot_check(&inputs);
+    reduction r;
+    reduce_scene3_in_scene(&r);
+    assert_true(strncmp(r.text, "<?xml", 5) == 0);
+    assert_has(r.text, "<default name=\"res\" value=\"32\"/>");
+    assert_has(r.text, "<default name=\"plyname\" value=\"tet.ply\"/>");
+    assert_int_equal(count_substrings(r.text, "value=\"$res\""), 2);
+    assert_has(r.text, "<!-- the textured material -->");
+    assert_has(r.text, "\n        <ref id=\"checker\"/>\n");
+    reduction_finish(&r);
 }
 
-/* A fragment's relative path that resolves only from the scene's directory (the cbox
- * fragments' convention) would break from outdir: the fragment is copied with it absolute. Two
- * replaced fragments with one base name get distinct copies. */
-static void test_v3_fragment_copies_fallback_and_names(void **state)
+/* Paths: absolute for what stays, the $name one resolved, the PLYs relative to outdir. */
+static void test_v3_in_scene_paths(void **state)
 {
-    snapshot inputs = {0};
-    make_subdir("a");
-    make_subdir("b");
-    make_subdir("c");
-    write_text("quad.obj", quad_obj);
-    write_text("scene.xml", "<scene version=\"3.0.0\">\n"
-                            "    <include filename=\"a/shapes.xml\"/>\n"
-                            "    <include filename=\"b/shapes.xml\"/>\n"
-                            "    <include filename=\"c/kept.xml\"/>\n"
-                            "</scene>\n");
-    write_text("a/shapes.xml", "<scene version=\"3.0.0\">\n"
-                               "    <shape type=\"rectangle\" id=\"ra\"/>\n"
-                               "</scene>\n");
-    write_text("b/shapes.xml", "<scene version=\"3.0.0\">\n"
-                               "    <shape type=\"rectangle\" id=\"rb\">\n"
-                               "        <transform name=\"to_world\"><translate x=\"3\"/></transform>\n"
-                               "    </shape>\n"
-                               "</scene>\n");
-    write_text("c/kept.xml", "<scene version=\"3.0.0\">\n"
-                             "    <shape type=\"obj\" id=\"q\">\n"
-                             "        <string name=\"filename\" value=\"quad.obj\"/>\n"
-                             "    </shape>\n"
-                             "</scene>\n");
-    const char *files[] = {"scene.xml", "a/shapes.xml", "b/shapes.xml", "c/kept.xml", "quad.obj"};
-    for (size_t i = 0; i < sizeof files / sizeof *files; i++)
-        snapshot_add(&inputs, path_in(in_dir, files[i]));
+    reduction r;
+    reduce_scene3_in_scene(&r);
+    assert_has(r.text, with_real_in("value=\"%s\"", "tet.ply"));
+    assert_has(r.text, with_real_in("value=\"%s\"", "textures/tex.png"));
+    assert_has(r.text, "<shape type=\"ply\" id=\"quad\">\n"
+                       "        <string name=\"filename\" value=\"meshes/quad.ply\"/>\n"
+                       "        <ref id=\"checker\"/>\n"
+                       "    </shape>");
+    assert_has(r.text, "<shape type=\"ply\" id=\"ball\">\n"
+                       "        <string name=\"filename\" value=\"meshes/ball.ply\"/>\n"
+                       "        <bsdf type=\"dielectric\"/>\n"
+                       "    </shape>");
+    assert_has(r.text, "<shape type=\"ply\" id=\"lamp\">\n"
+                       "        <string name=\"filename\" value=\"meshes/lamp.ply\"/>\n"
+                       "        <emitter type=\"area\">");
+    assert_has(r.text, "<shape type=\"cube\" id=\"box\"/>");
+    reduction_finish(&r);
+}
 
-    const char *names[] = {"ra", "rb"};
-    scene *output = reduce_and_check(path_in(in_dir, "scene.xml"), names, 2, NULL);
-    scene_free(output);
-    char *text = read_all(path_in(out_dir, "scene.xml"), NULL);
-    assert_non_null(strstr(text, "<include filename=\"includes/shapes.xml\"/>"));
-    assert_non_null(strstr(text, "<include filename=\"includes/shapes-2.xml\"/>"));
-    assert_non_null(strstr(text, "<include filename=\"includes/kept.xml\"/>"));
-    free(text);
-    text = read_all(path_in(out_dir, "includes/kept.xml"), NULL);
-    assert_non_null(text);
-    char value[PATH_MAX + 16];
-    snprintf(value, sizeof value, "value=\"%s\"", real_in("quad.obj"));
-    assert_non_null(strstr(text, value));
-    free(text);
-    text = read_all(path_in(out_dir, "includes/shapes-2.xml"), NULL);
-    assert_non_null(strstr(text, "value=\"meshes/rb.ply\""));
-    assert_null(strstr(text, "to_world"));
-    free(text);
-    snapshot_check(&inputs);
+/* What a world-space PLY no longer has is gone: flip_normals, the obj's flip_tex_coords, the
+ * sphere's center and radius, every replaced shape's to_world (the tet's stays). */
+static void test_v3_in_scene_properties_dropped(void **state)
+{
+    static const char *const dropped[] = {"flip_normals", "flip_tex_coords", "center",
+                                          "radius\""};
+    reduction r;
+    reduce_scene3_in_scene(&r);
+    assert_lacks_all(r.text, dropped, ARRAY_COUNT(dropped));
+    assert_int_equal(count_substrings(r.text, "name=\"to_world\""), 1);
+    reduction_finish(&r);
+}
+
+/* scene3 with a mesh of its fragment and one of the scene replaced. */
+static void reduce_scene3_in_fragment(reduction *r)
+{
+    static const char *const names[] = {"part", "box"};
+    write_scene3();
+    reduce_in_dir(r, scene3_files, ARRAY_COUNT(scene3_files), names, ARRAY_COUNT(names));
+}
+
+static void test_v3_in_fragment_copies_it(void **state)
+{
+    reduction r;
+    reduce_scene3_in_fragment(&r);
+    assert_true(file_exists(path_in(out_dir, "includes/frag.xml")));
+    assert_has(r.text, "<include filename=\"includes/frag.xml\"/>");
+    assert_has(r.text, "<shape type=\"ply\" id=\"box\">\n"
+                       "        <string name=\"filename\" value=\"meshes/box.ply\"/>\n"
+                       "    </shape>");
+    reduction_finish(&r);
+}
+
+/* In the copy: the replaced shape names its PLY relative to outdir, the kept disk keeps its
+ * transform, and no <?xml?> declaration appears where the input had none. */
+static void test_v3_in_fragment_copy_contents(void **state)
+{
+    reduction r;
+    reduce_scene3_in_fragment(&r);
+    char *copy = read_output("includes/frag.xml");
+    assert_true(strncmp(copy, "<scene version=\"3.0.0\">\n", 24) == 0);
+    assert_has(copy, "<shape type=\"ply\" id=\"part\">\n"
+                     "        <string name=\"filename\" value=\"meshes/part.ply\"/>\n"
+                     "    </shape>");
+    assert_int_equal(count_substrings(copy, "to_world"), 1);
+    free(copy);
+    reduction_finish(&r);
+}
+
+/* Three fragments: a/shapes.xml and b/shapes.xml (one base name) with a replaced rectangle
+ * each, and c/kept.xml naming quad.obj relative to the scene's directory (the cbox fragments'
+ * convention), which would break from outdir. */
+static void reduce_three_fragments(reduction *r)
+{
+    static const char *const names[] = {"ra", "rb"};
+    static const char *const files[] = {"scene.xml", "a/shapes.xml", "b/shapes.xml",
+                                        "c/kept.xml", "quad.obj"};
+    make_subdir(in_dir, "a");
+    make_subdir(in_dir, "b");
+    make_subdir(in_dir, "c");
+    write_text(in_dir, "quad.obj", quad_obj);
+    write_text(in_dir, "scene.xml",
+               "<scene version=\"3.0.0\">\n"
+               "    <include filename=\"a/shapes.xml\"/>\n"
+               "    <include filename=\"b/shapes.xml\"/>\n"
+               "    <include filename=\"c/kept.xml\"/>\n"
+               "</scene>\n");
+    write_text(in_dir, "a/shapes.xml",
+               "<scene version=\"3.0.0\">\n"
+               "    <shape type=\"rectangle\" id=\"ra\"/>\n"
+               "</scene>\n");
+    write_text(in_dir, "b/shapes.xml",
+               "<scene version=\"3.0.0\">\n"
+               "    <shape type=\"rectangle\" id=\"rb\">\n"
+               "        <transform name=\"to_world\"><translate x=\"3\"/></transform>\n"
+               "    </shape>\n"
+               "</scene>\n");
+    write_text(in_dir, "c/kept.xml",
+               "<scene version=\"3.0.0\">\n"
+               "    <shape type=\"obj\" id=\"q\">\n"
+               "        <string name=\"filename\" value=\"quad.obj\"/>\n"
+               "    </shape>\n"
+               "</scene>\n");
+    reduce_in_dir(r, files, ARRAY_COUNT(files), names, ARRAY_COUNT(names));
+}
+
+/* Two replaced fragments with one base name get distinct copies. */
+static void test_fragment_copies_named_apart(void **state)
+{
+    reduction r;
+    reduce_three_fragments(&r);
+    assert_has(r.text, "<include filename=\"includes/shapes.xml\"/>");
+    assert_has(r.text, "<include filename=\"includes/shapes-2.xml\"/>");
+    char *copy = read_output("includes/shapes-2.xml");
+    assert_has(copy, "value=\"meshes/rb.ply\"");
+    assert_lacks(copy, "to_world");
+    free(copy);
+    reduction_finish(&r);
+}
+
+/* A fragment whose relative path resolves only from the scene's directory is copied with the
+ * path made absolute. */
+static void test_fragment_with_scene_relative_path_copied(void **state)
+{
+    reduction r;
+    reduce_three_fragments(&r);
+    assert_has(r.text, "<include filename=\"includes/kept.xml\"/>");
+    char *copy = read_output("includes/kept.xml");
+    assert_has(copy, with_real_in("value=\"%s\"", "quad.obj"));
+    free(copy);
+    reduction_finish(&r);
 }
 
 /* ---------------------------------------------------------------------------------------- */
@@ -586,164 +611,178 @@ static const char scene05[] =
     "\t<include filename=\"more.xml\" />\n"
     "</scene>\n";
 
-static void test_v05_replace(void **state)
+/* scene05 (tab-indented, camelCase names) with an obj, a sphere light and a rectangle
+ * replaced; more.xml is included and kept. */
+static void reduce_scene05(reduction *r)
 {
-    snapshot inputs = {0};
-    make_subdir("models");
-    write_text("models/quad.obj", quad_obj);
-    write_text("models/other.obj", quad_obj);
+    static const char *const names[] = {"quad", "Light", "Backdrop"};
+    static const char *const files[] = {"scene.xml",        "more.xml", "models/quad.obj",
+                                        "models/other.obj", "tet.ply",  "tex.png"};
+    make_subdir(in_dir, "models");
+    write_text(in_dir, "models/quad.obj", quad_obj);
+    write_text(in_dir, "models/other.obj", quad_obj);
     write_tetrahedron_ply("tet.ply");
     write_png("tex.png");
-    write_text("scene.xml", scene05);
-    write_text("more.xml", "<scene version=\"0.5.0\">\n"
-                           "\t<shape type=\"cube\" id=\"crate\">\n"
-                           "\t\t<transform name=\"toWorld\"><scale value=\"0.5\"/></transform>\n"
-                           "\t</shape>\n"
-                           "</scene>\n");
-    const char *files[] = {"scene.xml", "more.xml", "models/quad.obj", "models/other.obj",
-                           "tet.ply", "tex.png"};
-    for (size_t i = 0; i < sizeof files / sizeof *files; i++)
-        snapshot_add(&inputs, path_in(in_dir, files[i]));
+    write_text(in_dir, "scene.xml", scene05);
+    write_text(in_dir, "more.xml",
+               "<scene version=\"0.5.0\">\n"
+               "\t<shape type=\"cube\" id=\"crate\">\n"
+               "\t\t<transform name=\"toWorld\"><scale value=\"0.5\"/></transform>\n"
+               "\t</shape>\n"
+               "</scene>\n");
+    reduce_in_dir(r, files, ARRAY_COUNT(files), names, ARRAY_COUNT(names));
+}
 
-    const char *names[] = {"quad", "Light", "Backdrop"};
-    scene *input;
-    scene *output = reduce_and_check(path_in(in_dir, "scene.xml"), names, 3, &input);
-    assert_int_equal(output->texture_count, 1);
-    assert_true(output->materials[find_mesh(output, "other")->material].texture >= 0);
-    assert_int_equal(output->light_count, 1);
-    assert_float_equal(output->lights[0].area, input->lights[0].area, 1e-5f);
-    assert_true(output->has_camera);
-    assert_int_equal(output->camera.width, 40);
+static void test_v05_scene_reloads(void **state)
+{
+    reduction r;
+    reduce_scene05(&r);
+    assert_int_equal(r.output->texture_count, 1);
+    assert_true(r.output->materials[find_mesh(r.output, "other")->material].texture >= 0);
+    assert_int_equal(r.output->light_count, 1);
+    assert_float_equal(r.output->lights[0].area, r.input->lights[0].area, 1e-5f);
+    assert_true(r.output->has_camera);
+    assert_int_equal(r.output->camera.width, 40);
+    reduction_finish(&r);
+}
 
-    char *text = read_all(path_in(out_dir, "scene.xml"), NULL);
-    assert_true(strncmp(text, "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n", 39) == 0);
-    assert_non_null(strstr(text, "\t<shape type=\"ply\">\n"
-                                 "\t\t<string name=\"filename\" value=\"meshes/quad.ply\"/>\n"
-                                 "\t\t<ref id=\"Floor\"/>\n"
-                                 "\t</shape>"));
-    assert_non_null(strstr(text, "<shape type=\"ply\" id=\"Light\">\n"
-                                 "\t\t<string name=\"filename\" value=\"meshes/Light.ply\"/>\n"
-                                 "\t\t<emitter type=\"area\">"));
-    assert_non_null(strstr(text, "<shape type=\"ply\" id=\"Backdrop\">\n"
-                                 "\t\t<string name=\"filename\" value=\"meshes/Backdrop.ply\"/>\n"
-                                 "\t</shape>"));
-    assert_null(strstr(text, "flipNormals"));
-    assert_null(strstr(text, "flipTexCoords"));
-    assert_null(strstr(text, "center"));
+/* The replaced shapes keep the tab indentation and the declaration stays. */
+static void test_v05_replaced_shapes_text(void **state)
+{
+    reduction r;
+    reduce_scene05(&r);
+    assert_true(strncmp(r.text, "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n", 39) == 0);
+    assert_has(r.text, "\t<shape type=\"ply\">\n"
+                       "\t\t<string name=\"filename\" value=\"meshes/quad.ply\"/>\n"
+                       "\t\t<ref id=\"Floor\"/>\n"
+                       "\t</shape>");
+    assert_has(r.text, "<shape type=\"ply\" id=\"Light\">\n"
+                       "\t\t<string name=\"filename\" value=\"meshes/Light.ply\"/>\n"
+                       "\t\t<emitter type=\"area\">");
+    assert_has(r.text, "<shape type=\"ply\" id=\"Backdrop\">\n"
+                       "\t\t<string name=\"filename\" value=\"meshes/Backdrop.ply\"/>\n"
+                       "\t</shape>");
+    reduction_finish(&r);
+}
+
+/* camelCase properties are dropped as their snake_case forms are; what stays is absolute. */
+static void test_v05_properties_and_paths(void **state)
+{
+    static const char *const dropped[] = {"flipNormals", "flipTexCoords", "center"};
+    reduction r;
+    reduce_scene05(&r);
+    assert_lacks_all(r.text, dropped, ARRAY_COUNT(dropped));
     /* The sensor's and other.obj's toWorld stay. */
-    assert_int_equal(count_substrings(text, "name=\"toWorld\""), 2);
-    char value[PATH_MAX + 32];
-    snprintf(value, sizeof value, "value=\"%s\"", real_in("models/other.obj"));
-    assert_non_null(strstr(text, value));
-    snprintf(value, sizeof value, "<include filename=\"%s\"/>", real_in("more.xml"));
-    assert_non_null(strstr(text, value));
-    free(text);
+    assert_int_equal(count_substrings(r.text, "name=\"toWorld\""), 2);
+    assert_has(r.text, with_real_in("value=\"%s\"", "models/other.obj"));
+    assert_has(r.text, with_real_in("<include filename=\"%s\"/>", "more.xml"));
     assert_false(file_exists(path_in(out_dir, "includes")));
-    snapshot_check(&inputs);
-    scene_free(input);
-    scene_free(output);
+    reduction_finish(&r);
 }
 
 /* ---------------------------------------------------------------------------------------- */
 /* Errors                                                                                   */
 
-static void test_error_no_shape_at_line(void **state)
+/* mitsuba_write_reduced fails with an input error whose message holds `where` and `what` (may
+ * be NULL), and writes no scene. */
+static void assert_write_fails(const char *scene_file, const mitsuba_replacement *r,
+                               size_t count, const char *where, const char *what)
+{
+    error_clear();
+    assert_int_equal(mitsuba_write_reduced(scene_file, out_dir, r, count), -1);
+    if (!strstr(error_message(), where) || (what && !strstr(error_message(), what)))
+        fail_msg("message '%s' lacks '%s' or '%s'", error_message(), where, what ? what : "");
+    assert_int_equal(error_code(), IDMR_EXIT_INPUT);
+    assert_false(file_exists(path_in(out_dir, "scene.xml")));
+}
+
+/* scene3 written, a replacement of `file` (in_dir/file when relative) at `line` fails with
+ * "file:line:" and `what`, and the inputs are unchanged. */
+static void write_failing_replacement(const char *file, int line, const char *what)
 {
     snapshot inputs = {0};
-    write_scene3(&inputs);
-    const char *scene_file = path_in(in_dir, "scene.xml");
-    mitsuba_replacement r = {scene_file, 13, "meshes/x.ply"}; /* the <bsdf> line */
-    error_clear();
-    assert_int_equal(mitsuba_write_reduced(scene_file, out_dir, &r, 1), -1);
-    char where[PATH_MAX + 16];
-    snprintf(where, sizeof where, "%s:13:", scene_file);
-    if (!strstr(error_message(), where) || !strstr(error_message(), "no <shape>"))
-        fail_msg("unexpected message: %s", error_message());
-    assert_int_equal(error_code(), IDMR_EXIT_INPUT);
-
-    /* A line of the fragment that holds no shape, and a file that is not part of the scene. */
-    char fragment[PATH_MAX];
-    snprintf(fragment, sizeof fragment, "%s/parts/frag.xml", in_dir);
-    mitsuba_replacement fr = {fragment, 4, "meshes/x.ply"};
-    error_clear();
-    assert_int_equal(mitsuba_write_reduced(scene_file, out_dir, &fr, 1), -1);
-    snprintf(where, sizeof where, "%s:4:", fragment);
-    if (!strstr(error_message(), where))
-        fail_msg("unexpected message: %s", error_message());
-    mitsuba_replacement other = {"/nonexistent/other.xml", 2, "meshes/x.ply"};
-    error_clear();
-    assert_int_equal(mitsuba_write_reduced(scene_file, out_dir, &other, 1), -1);
-    if (!strstr(error_message(), "/nonexistent/other.xml:2:"))
-        fail_msg("unexpected message: %s", error_message());
-
-    /* The same shape twice. */
-    scene *s = load_ok(scene_file);
-    const scene_mesh *quad = find_mesh(s, "quad");
-    mitsuba_replacement twice[2] = {{quad->xml_file, quad->xml_line, "meshes/a.ply"},
-                                    {quad->xml_file, quad->xml_line, "meshes/b.ply"}};
-    error_clear();
-    assert_int_equal(mitsuba_write_reduced(scene_file, out_dir, twice, 2), -1);
-    assert_non_null(strstr(error_message(), "replaced twice"));
-    scene_free(s);
-
-    assert_false(file_exists(path_in(out_dir, "scene.xml")));
+    char path[PATH_MAX], where[PATH_MAX + 16];
+    write_scene3();
+    snapshot_files(&inputs, in_dir, scene3_files, ARRAY_COUNT(scene3_files));
+    snprintf(path, sizeof path, "%s", file[0] == '/' ? file : path_in(in_dir, file));
+    mitsuba_replacement r = {path, line, "meshes/x.ply"};
+    snprintf(where, sizeof where, "%s:%d:", path, line);
+    assert_write_fails(path_in(in_dir, "scene.xml"), &r, 1, where, what);
     snapshot_check(&inputs);
 }
 
-static void test_error_malformed_and_missing(void **state)
+/* Line 13 of the scene is its <bsdf>. */
+static void test_error_no_shape_at_line(void **state)
 {
-    write_text("bad.xml", "<scene version=\"3.0.0\">\n  <shape type=\"cube\">\n</scene>\n");
-    error_clear();
-    assert_int_equal(mitsuba_write_reduced(path_in(in_dir, "bad.xml"), out_dir, NULL, 0), -1);
-    if (!strstr(error_message(), "bad.xml:") || !strstr(error_message(), "malformed XML"))
-        fail_msg("unexpected message: %s", error_message());
-    error_clear();
-    assert_int_equal(mitsuba_write_reduced(path_in(in_dir, "absent.xml"), out_dir, NULL, 0), -1);
-    assert_non_null(strstr(error_message(), "absent.xml"));
-    write_text("inc.xml", "<scene version=\"3.0.0\">\n  <include filename=\"gone.xml\"/>\n</scene>\n");
-    error_clear();
-    assert_int_equal(mitsuba_write_reduced(path_in(in_dir, "inc.xml"), out_dir, NULL, 0), -1);
-    if (!strstr(error_message(), "inc.xml:2:") || !strstr(error_message(), "gone.xml"))
-        fail_msg("unexpected message: %s", error_message());
-    assert_false(file_exists(path_in(out_dir, "scene.xml")));
+    write_failing_replacement("scene.xml", 13, "no <shape>");
+}
+
+/* A line of the fragment that holds no shape. */
+static void test_error_no_shape_at_fragment_line(void **state)
+{
+    write_failing_replacement("parts/frag.xml", 4, "no <shape>");
+}
+
+/* A file that is not part of the scene. */
+static void test_error_file_not_in_scene(void **state)
+{
+    write_failing_replacement("/nonexistent/other.xml", 2, "no <shape>");
+}
+
+static void test_error_shape_replaced_twice(void **state)
+{
+    snapshot inputs = {0};
+    write_scene3();
+    snapshot_files(&inputs, in_dir, scene3_files, ARRAY_COUNT(scene3_files));
+    const char *scene_file = path_in(in_dir, "scene.xml");
+    scene *s = load_or_fail(scene_file);
+    const scene_mesh *quad = find_mesh(s, "quad");
+    mitsuba_replacement twice[2] = {{quad->xml_file, quad->xml_line, "meshes/a.ply"},
+                                    {quad->xml_file, quad->xml_line, "meshes/b.ply"}};
+    assert_write_fails(scene_file, twice, 2, "scene.xml:", "replaced twice");
+    scene_free(s);
+    snapshot_check(&inputs);
+}
+
+static void test_error_malformed_scene(void **state)
+{
+    const char *bad = write_text(in_dir, "bad.xml",
+                                 "<scene version=\"3.0.0\">\n  <shape type=\"cube\">\n</scene>\n");
+    assert_write_fails(bad, NULL, 0, "bad.xml:", "malformed XML");
+}
+
+static void test_error_missing_scene(void **state)
+{
+    assert_write_fails(path_in(in_dir, "absent.xml"), NULL, 0, "absent.xml", NULL);
+}
+
+static void test_error_missing_include(void **state)
+{
+    const char *scene_file = write_text(in_dir, "inc.xml",
+                                        "<scene version=\"3.0.0\">\n"
+                                        "  <include filename=\"gone.xml\"/>\n"
+                                        "</scene>\n");
+    assert_write_fails(scene_file, NULL, 0, "inc.xml:2:", "gone.xml");
 }
 
 /* ---------------------------------------------------------------------------------------- */
 /* Real scenes                                                                              */
 
-static void require_shared_data(void)
-{
-    if (access(SCENES, R_OK) != 0)
-        fail_msg("%s is missing: the real-scene tests need ../shared/data (see DESIGN.md); "
-                 "they fail rather than skip",
-                 SCENES);
-}
-
-/* Snapshots the files `names` in `dir` (the XML files a test must leave untouched). */
-static void snapshot_xml(snapshot *s, const char *dir, const char *const *names, size_t count)
-{
-    for (size_t i = 0; i < count; i++)
-        snapshot_add(s, path_in(dir, names[i]));
-}
-
 static void test_real_cbox(void **state)
 {
+    static const char *const xml[] = {"cbox.xml", "meshes/cbox_luminaire.obj"};
+    static const char *const names[] = {"cbox_luminaire"}; /* with a to_world and an emitter */
     require_shared_data();
-    snapshot inputs = {0};
-    const char *xml[] = {"cbox.xml", "meshes/cbox_luminaire.obj"};
-    snapshot_xml(&inputs, SCENES "/cbox-mitsuba", xml, 2);
-    const char *names[] = {"cbox_luminaire"}; /* the one with a to_world and an emitter */
-    scene *output = reduce_and_check(SCENES "/cbox-mitsuba/cbox.xml", names, 1, NULL);
-    assert_int_equal(output->mesh_count, 8);
-    assert_int_equal(output->light_count, 1);
-    assert_int_equal(output->camera.width, 256);
-    scene_free(output);
-    char *text = read_all(path_in(out_dir, "scene.xml"), NULL);
-    assert_non_null(strstr(text, "<integer name=\"width\" value=\"$res\"/>"));
-    assert_non_null(strstr(text, "<default name=\"res\" value=\"256\"/>"));
-    assert_non_null(strstr(text, "value=\"meshes/cbox_luminaire.ply\""));
-    free(text);
-    snapshot_check(&inputs);
+    reduction r = {0};
+    snapshot_files(&r.inputs, SCENES "/cbox-mitsuba", xml, ARRAY_COUNT(xml));
+    reduce_and_check(&r, SCENES "/cbox-mitsuba/cbox.xml", names, ARRAY_COUNT(names));
+    assert_int_equal(r.output->mesh_count, 8);
+    assert_int_equal(r.output->light_count, 1);
+    assert_int_equal(r.output->camera.width, 256);
+    assert_has(r.text, "<integer name=\"width\" value=\"$res\"/>");
+    assert_has(r.text, "<default name=\"res\" value=\"256\"/>");
+    assert_has(r.text, "value=\"meshes/cbox_luminaire.ply\"");
+    reduction_finish(&r);
 }
 
 /* The cbox fragments (shapes.xml names its meshes relative to the scene's directory) included
@@ -751,8 +790,10 @@ static void test_real_cbox(void **state)
  * where they are, and their <default>s still apply. */
 static void test_real_cbox_fragments(void **state)
 {
+    static const char *const fragment_names[] = {"base.xml", "bsdfs-rgb.xml", "shapes.xml"};
+    static const char *const replace[] = {"cbox_luminaire", "cbox_floor"};
     require_shared_data();
-    char fragments[PATH_MAX], meshes[PATH_MAX], xml[4 * PATH_MAX];
+    char fragments[PATH_MAX], meshes[PATH_MAX], xml[4 * PATH_MAX], expected[PATH_MAX + 64];
     assert_non_null(realpath(SCENES "/cbox-mitsuba/fragments", fragments));
     assert_non_null(realpath(SCENES "/cbox-mitsuba/meshes", meshes));
     assert_int_equal(symlink(meshes, path_in(in_dir, "meshes")), 0);
@@ -766,70 +807,71 @@ static void test_real_cbox_fragments(void **state)
              "    <include filename=\"%s/shapes.xml\"/>\n"
              "</scene>\n",
              fragments, fragments, fragments);
-    write_text("scene.xml", xml);
-    snapshot inputs = {0};
-    const char *names[] = {"base.xml", "bsdfs-rgb.xml", "shapes.xml"};
-    snapshot_xml(&inputs, fragments, names, 3);
-
-    const char *replace[] = {"cbox_luminaire", "cbox_floor"};
-    scene *output = reduce_and_check(path_in(in_dir, "scene.xml"), replace, 2, NULL);
-    assert_int_equal(output->mesh_count, 8);
-    assert_int_equal(output->light_count, 1);
-    assert_int_equal(output->camera.width, 256);
-    scene_free(output);
-    char *text = read_all(path_in(out_dir, "scene.xml"), NULL);
-    char include[PATH_MAX + 64];
-    snprintf(include, sizeof include, "<include filename=\"%s/base.xml\"/>", fragments);
-    assert_non_null(strstr(text, include));
-    assert_non_null(strstr(text, "<include filename=\"includes/shapes.xml\"/>"));
-    free(text);
-    text = read_all(path_in(out_dir, "includes/shapes.xml"), NULL);
-    assert_non_null(text);
-    assert_non_null(strstr(text, "value=\"meshes/cbox_floor.ply\""));
-    assert_non_null(strstr(text, "<ref id=\"area-emitter\"/>"));
-    char value[PATH_MAX + 64];
-    snprintf(value, sizeof value, "value=\"%s/cbox_back.obj\"", meshes);
-    assert_non_null(strstr(text, value));
-    free(text);
+    reduction r = {0};
+    snapshot_files(&r.inputs, fragments, fragment_names, ARRAY_COUNT(fragment_names));
+    reduce_and_check(&r, write_text(in_dir, "scene.xml", xml), replace, ARRAY_COUNT(replace));
+    assert_int_equal(r.output->mesh_count, 8);
+    assert_int_equal(r.output->light_count, 1);
+    assert_int_equal(r.output->camera.width, 256);
+    snprintf(expected, sizeof expected, "<include filename=\"%s/base.xml\"/>", fragments);
+    assert_has(r.text, expected);
+    assert_has(r.text, "<include filename=\"includes/shapes.xml\"/>");
+    char *copy = read_output("includes/shapes.xml");
+    assert_has(copy, "value=\"meshes/cbox_floor.ply\"");
+    assert_has(copy, "<ref id=\"area-emitter\"/>");
+    snprintf(expected, sizeof expected, "value=\"%s/cbox_back.obj\"", meshes);
+    assert_has(copy, expected);
+    free(copy);
     assert_false(file_exists(path_in(out_dir, "includes/base.xml")));
-    snapshot_check(&inputs);
+    reduction_finish(&r);
 }
 
 static void test_real_glass_of_water(void **state)
 {
-    require_shared_data();
-    snapshot inputs = {0};
-    const char *xml[] = {"scene-without-mesh000.xml"};
-    snapshot_xml(&inputs, SCENES "/glass-of-water", xml, 1);
+    static const char *const xml[] = {"scene-without-mesh000.xml"};
     const char *file = SCENES "/glass-of-water/scene-without-mesh000.xml";
-    scene *input = load_ok(file);
-    const char *name = input->meshes[0].name;
+    require_shared_data();
+    reduction r = {0};
+    snapshot_files(&r.inputs, SCENES "/glass-of-water", xml, ARRAY_COUNT(xml));
+    scene *first = load_or_fail(file);
     char chosen[256];
-    snprintf(chosen, sizeof chosen, "%s", name);
-    scene_free(input);
+    snprintf(chosen, sizeof chosen, "%s", first->meshes[0].name);
+    scene_free(first);
     const char *names[] = {chosen};
-    scene *output = reduce_and_check(file, names, 1, NULL);
-    assert_int_equal(output->mesh_count, 16);
-    assert_int_equal(output->camera.width, 1280);
-    scene_free(output);
-    snapshot_check(&inputs);
+    reduce_and_check(&r, file, names, ARRAY_COUNT(names));
+    assert_int_equal(r.output->mesh_count, 16);
+    assert_int_equal(r.output->camera.width, 1280);
+    reduction_finish(&r);
 }
 
 int main(void)
 {
+#define WRITER_TEST(f) cmocka_unit_test_setup_teardown(f, make_dirs, remove_dirs)
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test_setup_teardown(test_v3_replace_in_scene_keep_fragment, make_dirs,
-                                        remove_dirs),
-        cmocka_unit_test_setup_teardown(test_v3_replace_in_fragment_copies_it, make_dirs,
-                                        remove_dirs),
-        cmocka_unit_test_setup_teardown(test_v3_fragment_copies_fallback_and_names, make_dirs,
-                                        remove_dirs),
-        cmocka_unit_test_setup_teardown(test_v05_replace, make_dirs, remove_dirs),
-        cmocka_unit_test_setup_teardown(test_error_no_shape_at_line, make_dirs, remove_dirs),
-        cmocka_unit_test_setup_teardown(test_error_malformed_and_missing, make_dirs, remove_dirs),
-        cmocka_unit_test_setup_teardown(test_real_cbox, make_dirs, remove_dirs),
-        cmocka_unit_test_setup_teardown(test_real_cbox_fragments, make_dirs, remove_dirs),
-        cmocka_unit_test_setup_teardown(test_real_glass_of_water, make_dirs, remove_dirs),
+        WRITER_TEST(test_v3_in_scene_meshes_replaced),
+        WRITER_TEST(test_v3_in_scene_texture_and_defaults_apply),
+        WRITER_TEST(test_v3_in_scene_fragment_stays),
+        WRITER_TEST(test_v3_in_scene_raw_text_survives),
+        WRITER_TEST(test_v3_in_scene_paths),
+        WRITER_TEST(test_v3_in_scene_properties_dropped),
+        WRITER_TEST(test_v3_in_fragment_copies_it),
+        WRITER_TEST(test_v3_in_fragment_copy_contents),
+        WRITER_TEST(test_fragment_copies_named_apart),
+        WRITER_TEST(test_fragment_with_scene_relative_path_copied),
+        WRITER_TEST(test_v05_scene_reloads),
+        WRITER_TEST(test_v05_replaced_shapes_text),
+        WRITER_TEST(test_v05_properties_and_paths),
+        WRITER_TEST(test_error_no_shape_at_line),
+        WRITER_TEST(test_error_no_shape_at_fragment_line),
+        WRITER_TEST(test_error_file_not_in_scene),
+        WRITER_TEST(test_error_shape_replaced_twice),
+        WRITER_TEST(test_error_malformed_scene),
+        WRITER_TEST(test_error_missing_scene),
+        WRITER_TEST(test_error_missing_include),
+        WRITER_TEST(test_real_cbox),
+        WRITER_TEST(test_real_cbox_fragments),
+        WRITER_TEST(test_real_glass_of_water),
     };
+#undef WRITER_TEST
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

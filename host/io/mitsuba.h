@@ -13,7 +13,7 @@
  *             re-orthonormalised (a mirroring <scale x="-1"/> therefore mirrors the image, as in
  *             Mitsuba). No sensor: a warning, and has_camera stays 0.
  *   shape     obj, ply, off, stl (through OpenMesh), rectangle, cube, disk, sphere (tessellated,
- *             host/shapes.h); to_world, flip_normals; a bsdf by <ref> or inline (none: diffuse
+ *             host/io/shapes.h); to_world, flip_normals; a bsdf by <ref> or inline (none: diffuse
  *             0.5, as Mitsuba); an area emitter inline or by <ref>.
  *   bsdf      diffuse, dielectric, thindielectric, roughdielectric (as smooth, warned),
  *             conductor, roughconductor, plastic, roughplastic, twosided, mask (opacity
@@ -26,28 +26,17 @@
  *   texture   bitmap (top level with an id, or inline).
  *   include   <include filename=...>: the fragment's elements are read in place.
  *   ignored   integrator, sampler, rfilter, other film settings, unknown properties.
- * Colours: rgb (linear), srgb (linearised), spectrum (grey value or λ:v pairs, host/spectrum.h),
- * float (grey). Relative paths resolve from the directory of the file that names them, then
- * from the scene's directory. */
+ * Colours: rgb (linear), srgb (linearised), spectrum (grey value or λ:v pairs,
+ * host/io/spectrum.h), float (grey). Relative paths resolve from the directory of the file that
+ * names them, then from the scene's directory. The loader's files are listed in
+ * mitsuba_loader.h. */
 #ifndef IDMR_MITSUBA_H
 #define IDMR_MITSUBA_H
-
-#include <stddef.h>
 
 #include "core/scene.h"
 
 /* Loads `path` and returns the finalized scene, or NULL with the error set (IDMR_EXIT_INPUT for
  * bad input); messages read "file:line: <element type="...">: what is wrong". */
 scene *mitsuba_load(const char *path);
-
-/* The raw document (no substitution or renaming), read with the options the loader uses, so
- * that line numbers agree with scene_mesh.xml_line: network off, blanks kept, big line numbers.
- * NULL with the error set ("file:line: malformed XML: ..."). Free with xmlFreeDoc(). Shared by
- * the loader and the reduced-scene writer (host/mitsuba_write.c). */
-struct _xmlDoc *mitsuba_read_xml(const char *path);
-
-/* Writes the snake_case form of a camelCase property name (toWorld → to_world, intIOR →
- * int_ior; snake_case stays as it is) into out (truncated to size). */
-void mitsuba_snake_case(const char *name, char *out, size_t size);
 
 #endif

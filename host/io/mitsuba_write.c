@@ -5,27 +5,27 @@
  * collecting the <default> parameters, the path rewrites (node, attribute, new value), the
  * include links (node → fragment) and the <shape> node of each replacement; it also notes
  * which fragments must be copied. The second edits the trees that are written (the scene and
- * the copies) and writes them, copies first and the scene last. All state lives in one
- * `writer`; every function that can fail returns -1 with the error set. */
+ * the copies) and writes them, copies first and the scene last; a replaced <shape> is edited by
+ * mitsuba_write_shape.c. All state lives in one `writer`; every function that can fail returns
+ * -1 with the error set. */
 #include "io/mitsuba_write.h"
 
-#include <ctype.h>
 #include <errno.h>
 #include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <libxml/parser.h>
 #include <libxml/tree.h>
 #include <libxml/xmlsave.h>
 
 #include "core/error.h"
-#include "io/mitsuba.h"
-#include "io/mitsuba_text.h"
 #include "core/files.h"
+#include "io/mitsuba_params.h"
+#include "io/mitsuba_paths.h"
+#include "io/mitsuba_write_shape.h"
+#include "io/mitsuba_xml.h"
 
 #define WRITE_INCLUDES_DIR "includes"
 
@@ -64,41 +64,9 @@ typedef struct writer {
     size_t include_count;
     const mitsuba_replacement *replacements;
     size_t replacement_count;
-    char **replacement_real;  /* realpath of each replacement's xml_file, or NULL */
-    xmlNodePtr *shapes;       /* the <shape> node of each replacement, once found */
+    char **replacement_real; /* realpath of each replacement's xml_file, or NULL */
+    xmlNodePtr *shapes;      /* the <shape> node of each replacement, once found */
 } writer;
-
-/* ---------------------------------------------------------------------------------------- */
-/* Small helpers                                                                            */
-
-/* Whether the node's name attribute is `snake` in either dialect (toWorld == to_world). */
-static int has_property_name(xmlNodePtr node, const char *snake)
-{
-    const char *name = mitsuba_attr(node, "name");
-    char normal[256];
-    if (!name)
-        return 0;
-    mitsuba_snake_case(name, normal, sizeof normal);
-    return strcmp(normal, snake) == 0;
-}
-
-static char *real_path(const char *path)
-{
-    char buffer[PATH_MAX];
-    return realpath(path, buffer) ? xstrdup(buffer) : NULL;
-}
-
-/* The absolute form of a path that may not exist: cwd/path, without resolving links. */
-static char *absolute_path(const char *path)
-{
-    char cwd[PATH_MAX];
-    if (path[0] == '/' || !getcwd(cwd, sizeof cwd))
-        return xstrdup(path);
-    char *real_cwd = real_path(cwd);
-    char *out = mitsuba_path_join(real_cwd ? real_cwd : cwd, path[0] == '.' && path[1] == '/' ? path + 2 : path);
-    free(real_cwd);
-    return out;
-}
 
 /* ---------------------------------------------------------------------------------------- */
 /* Reading documents                                                                        */
@@ -116,35 +84,15 @@ static int file_has_declaration(const char *path)
     return n >= skip + 5 && memcmp(head + skip, "<?xml", 5) == 0;
 }
 
-/* Records the <default> elements directly under `root`; an earlier definition wins. */
-static void collect_params(writer *w, xmlNodePtr root)
-{
-    for (xmlNodePtr child = root->children; child; child = child->next) {
-        const char *name = mitsuba_attr(child, "name"), *value = mitsuba_attr(child, "value");
-        if (mitsuba_is_tag(child, "default") && name && value)
-            mitsuba_params_add(&w->params, name, value);
-    }
-}
-
-/* `written` (already substituted) resolved as the loader resolves it: from the directory of
- * the file naming it, then from the scene's; when neither exists, the first. Returns the
- * malloc'd path in the loader's spelling (relative if the scene path is) and sets *fallback
- * when only the scene's directory found it. */
-static char *resolve_loader(const writer *w, const write_doc *doc, const char *written,
-                            int *fallback)
-{
-    return mitsuba_resolve(doc->path, w->scene_dir, written, fallback);
-}
-
 /* The absolute path to write for `written`: realpath of what the loader resolves it to, or
  * the absolute form of its first candidate when nothing exists there. */
 static char *resolve_absolute(const writer *w, const write_doc *doc, const char *written,
                               int *fallback)
 {
-    char *path = resolve_loader(w, doc, written, fallback);
-    char *real = real_path(path);
+    char *path = mitsuba_resolve(doc->path, w->scene_dir, written, fallback);
+    char *real = mitsuba_path_real(path);
     if (!real)
-        real = absolute_path(path);
+        real = mitsuba_path_absolute(path);
     free(path);
     return real;
 }
@@ -166,7 +114,7 @@ static size_t doc_find(const writer *w, const char *real)
 /* Reads a document (scene or fragment) and walks it; *index gets its number. */
 static int doc_open(writer *w, const char *path, int depth, size_t *index)
 {
-    char *real = real_path(path);
+    char *real = mitsuba_path_real(path);
     if (!real)
         return error_set(IDMR_EXIT_INPUT, "cannot read scene '%s': %s", path, strerror(errno));
     *index = doc_find(w, real);
@@ -188,7 +136,7 @@ static int doc_open(writer *w, const char *path, int depth, size_t *index)
     d->has_declaration = file_has_declaration(path);
     *index = w->doc_count++;
     xmlNodePtr root = xmlDocGetRootElement(tree);
-    collect_params(w, root);
+    mitsuba_params_collect(&w->params, root); /* an incomplete <default>: the loader says so */
     return walk(w, *index, root, depth);
 }
 
@@ -202,7 +150,7 @@ static void note_path(writer *w, size_t doc, xmlNodePtr node, const char *attrib
         return;
     char *value = strchr(written, '$')
                       ? mitsuba_substitute(&w->params, written, missing, sizeof missing)
-                                       : xstrdup(written);
+                      : xstrdup(written);
     if (!value) /* an undefined parameter: left as written (the loader rejects it) */
         return;
     if (value[0] == '/' && !strchr(written, '$')) {
@@ -233,7 +181,7 @@ static int walk_include(writer *w, size_t doc, xmlNodePtr node, int depth)
         return error_set(IDMR_EXIT_INPUT,
                          "%s:%ld: <include>: undefined parameter '%s' (no <default name=\"%s\">)",
                          path_of, xmlGetLineNo(node), missing, missing + 1);
-    char *path = resolve_loader(w, &w->docs[doc], value, &fallback);
+    char *path = mitsuba_resolve(path_of, w->scene_dir, value, &fallback);
     free(value);
     w->docs[doc].fallback |= fallback;
     size_t child;
@@ -272,8 +220,9 @@ static int note_shape(writer *w, size_t doc, xmlNodePtr node)
 /* Walks the elements under `parent` in document order. <default> values stay as written. */
 static int walk(writer *w, size_t doc, xmlNodePtr parent, int depth)
 {
-    for (xmlNodePtr node = parent->children; node; node = node->next) {
-        if (node->type != XML_ELEMENT_NODE || mitsuba_is_tag(node, "default"))
+    MITSUBA_FOR_EACH_ELEMENT(node, parent)
+    {
+        if (mitsuba_is_tag(node, "default"))
             continue;
         if (mitsuba_is_tag(node, "include")) {
             if (walk_include(w, doc, node, depth))
@@ -282,7 +231,7 @@ static int walk(writer *w, size_t doc, xmlNodePtr parent, int depth)
         }
         if (mitsuba_is_tag(node, "shape") && note_shape(w, doc, node))
             return -1;
-        if (has_property_name(node, "filename") && mitsuba_attr(node, "value"))
+        if (mitsuba_is_property(node, "filename") && mitsuba_attr(node, "value"))
             note_path(w, doc, node, "value");
         if (mitsuba_attr(node, "filename"))
             note_path(w, doc, node, "filename");
@@ -295,9 +244,35 @@ static int walk(writer *w, size_t doc, xmlNodePtr parent, int depth)
 /* ---------------------------------------------------------------------------------------- */
 /* Pass 2: editing and writing                                                              */
 
-/* Which fragments are copied, and under which names. */
-static void plan_copies(writer *w)
+/* Whether `name` is the copy name of one of the documents 1 .. before-1. */
+static int copy_name_taken(const writer *w, size_t before, const char *name)
 {
+    for (size_t j = 1; j < before; j++)
+        if (w->docs[j].copy_name && strcmp(w->docs[j].copy_name, name) == 0)
+            return 1;
+    return 0;
+}
+
+/* "includes/<base name>" for the copy of document i, made unique with -2, -3, ... before the
+ * extension. */
+static char *copy_name_for(const writer *w, size_t i)
+{
+    const char *path = w->docs[i].path;
+    const char *base = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
+    const char *dot = strrchr(base, '.');
+    int stem = dot && dot != base ? (int)(dot - base) : (int)strlen(base);
+    const char *extension = dot && dot != base ? dot : "";
+    char name[PATH_MAX];
+    snprintf(name, sizeof name, WRITE_INCLUDES_DIR "/%s", base);
+    for (int n = 2; copy_name_taken(w, i, name); n++)
+        snprintf(name, sizeof name, WRITE_INCLUDES_DIR "/%.*s-%d%s", stem, base, n, extension);
+    return xstrdup(name);
+}
+
+/* Which fragments are copied, and under which names; returns how many. */
+static size_t plan_copies(writer *w)
+{
+    size_t copies = 0;
     for (size_t i = 1; i < w->doc_count; i++)
         w->docs[i].copy = w->docs[i].replaced || w->docs[i].fallback;
     /* A fragment that includes a copy must point at it, so it is copied too. */
@@ -309,131 +284,12 @@ static void plan_copies(writer *w)
                 parent->copy = changed = 1;
         }
     }
-    for (size_t i = 1; i < w->doc_count; i++) {
-        if (!w->docs[i].copy)
-            continue;
-        const char *base = strrchr(w->docs[i].path, '/') ? strrchr(w->docs[i].path, '/') + 1
-                                                         : w->docs[i].path;
-        const char *dot = strrchr(base, '.');
-        int stem = dot && dot != base ? (int)(dot - base) : (int)strlen(base);
-        const char *extension = dot && dot != base ? dot : "";
-        char name[PATH_MAX];
-        for (int n = 1;; n++) {
-            if (n == 1)
-                snprintf(name, sizeof name, WRITE_INCLUDES_DIR "/%s", base);
-            else
-                snprintf(name, sizeof name, WRITE_INCLUDES_DIR "/%.*s-%d%s", stem, base, n,
-                         extension);
-            size_t j = 1;
-            while (j < i && !(w->docs[j].copy_name && strcmp(w->docs[j].copy_name, name) == 0))
-                j++;
-            if (j == i)
-                break;
+    for (size_t i = 1; i < w->doc_count; i++)
+        if (w->docs[i].copy) {
+            w->docs[i].copy_name = copy_name_for(w, i);
+            copies++;
         }
-        w->docs[i].copy_name = xstrdup(name);
-    }
-}
-
-/* Unlinks and frees `node` with the blank text before it (its indentation). */
-static void remove_with_indent(xmlNodePtr node)
-{
-    xmlNodePtr before = node->prev;
-    if (before && before->type == XML_TEXT_NODE && xmlIsBlankNode(before)) {
-        xmlUnlinkNode(before);
-        xmlFreeNode(before);
-    }
-    xmlUnlinkNode(node);
-    xmlFreeNode(node);
-}
-
-/* The whitespace after the last newline of a blank text node before `node` ("" if none). */
-static void indentation_of(xmlNodePtr node, char *out, size_t size)
-{
-    out[0] = '\0';
-    xmlNodePtr before = node ? node->prev : NULL;
-    if (!before || before->type != XML_TEXT_NODE || !xmlIsBlankNode(before) || !before->content)
-        return;
-    const char *text = (const char *)before->content;
-    const char *line = strrchr(text, '\n');
-    snprintf(out, size, "%s", line ? line + 1 : text);
-}
-
-/* Adds <string name="filename" value="ply"/> as the shape's first element child, indented as
- * its siblings are (or one level deeper than the shape when it has none). */
-static void add_filename(xmlNodePtr shape, const char *ply)
-{
-    xmlNodePtr first = xmlFirstElementChild(shape);
-    xmlNodePtr element = xmlNewDocNode(shape->doc, NULL, (const xmlChar *)"string", NULL);
-    xmlNewProp(element, (const xmlChar *)"name", (const xmlChar *)"filename");
-    xmlNewProp(element, (const xmlChar *)"value", (const xmlChar *)ply);
-    char indent[256], text[300];
-    if (first) {
-        indentation_of(first, indent, sizeof indent);
-        snprintf(text, sizeof text, "\n%s", indent);
-        xmlAddPrevSibling(first, element);
-        if (first->prev == element && element->prev && element->prev->type == XML_TEXT_NODE) {
-            /* [blank][element][first]: give `first` its own indentation back. */
-            xmlAddPrevSibling(first, xmlNewDocText(shape->doc, (const xmlChar *)text));
-        } else if (indent[0]) {
-            xmlAddPrevSibling(element, xmlNewDocText(shape->doc, (const xmlChar *)text));
-        }
-        return;
-    }
-    indentation_of(shape, indent, sizeof indent);
-    const char *unit = strchr(indent, '\t') ? "\t" : "    ";
-    snprintf(text, sizeof text, "\n%s%s", indent, unit);
-    xmlNodePtr tail = shape->last;
-    if (tail && tail->type == XML_TEXT_NODE && xmlIsBlankNode(tail)) {
-        /* [... blank before </shape>]: the element goes before it, indented. */
-        xmlAddPrevSibling(tail, element);
-        xmlAddPrevSibling(element, xmlNewDocText(shape->doc, (const xmlChar *)text));
-        return;
-    }
-    xmlAddChild(shape, xmlNewDocText(shape->doc, (const xmlChar *)text));
-    xmlAddChild(shape, element);
-    snprintf(text, sizeof text, "\n%s", indent);
-    xmlAddChild(shape, xmlNewDocText(shape->doc, (const xmlChar *)text));
-}
-
-/* Whether a property of a shape of type `type` no longer applies once it is a world-space PLY. */
-static int property_dropped(const char *type, xmlNodePtr child)
-{
-    static const char *const always[] = {"to_world", "flip_normals"};
-    static const char *const sphere[] = {"center", "radius"};
-    static const char *const obj[] = {"flip_tex_coords", "shape_index", "collapse"};
-    for (size_t i = 0; i < sizeof always / sizeof *always; i++)
-        if (has_property_name(child, always[i]))
-            return 1;
-    if (strcmp(type, "sphere") == 0)
-        for (size_t i = 0; i < sizeof sphere / sizeof *sphere; i++)
-            if (has_property_name(child, sphere[i]))
-                return 1;
-    if (strcmp(type, "obj") == 0)
-        for (size_t i = 0; i < sizeof obj / sizeof *obj; i++)
-            if (has_property_name(child, obj[i]))
-                return 1;
-    return 0;
-}
-
-static void replace_shape(xmlNodePtr shape, const char *ply)
-{
-    char type[64];
-    snprintf(type, sizeof type, "%s", mitsuba_attr(shape, "type") ? mitsuba_attr(shape, "type") : "");
-    xmlNodePtr filename = NULL;
-    for (xmlNodePtr child = xmlFirstElementChild(shape), next; child; child = next) {
-        next = xmlNextElementSibling(child);
-        if (mitsuba_is_tag(child, "bsdf") || mitsuba_is_tag(child, "emitter") || mitsuba_is_tag(child, "ref"))
-            continue;
-        if (has_property_name(child, "filename") && !filename)
-            filename = child;
-        else if (property_dropped(type, child))
-            remove_with_indent(child);
-    }
-    xmlSetProp(shape, (const xmlChar *)"type", (const xmlChar *)"ply");
-    if (filename)
-        xmlSetProp(filename, (const xmlChar *)"value", (const xmlChar *)ply);
-    else
-        add_filename(shape, ply);
+    return copies;
 }
 
 /* Serialises a tree as it was read (no reformatting) and writes it atomically. */
@@ -443,7 +299,8 @@ static int write_tree(const write_doc *d, const char *target)
     if (!buffer)
         return error_set(IDMR_EXIT_FAILURE, "%s: out of memory serialising XML", target);
     const char *encoding = d->doc->encoding ? (const char *)d->doc->encoding : "UTF-8";
-    xmlSaveCtxtPtr save = xmlSaveToBuffer(buffer, encoding, d->has_declaration ? 0 : XML_SAVE_NO_DECL);
+    int options = d->has_declaration ? 0 : XML_SAVE_NO_DECL;
+    xmlSaveCtxtPtr save = xmlSaveToBuffer(buffer, encoding, options);
     long written = save ? xmlSaveDoc(save, d->doc) : -1;
     if (save)
         xmlSaveClose(save);
@@ -452,7 +309,8 @@ static int write_tree(const write_doc *d, const char *target)
         status = error_set(IDMR_EXIT_FAILURE, "%s: cannot serialise the XML of '%s'", target,
                            d->path);
     else
-        status = files_write_atomic(target, xmlBufferContent(buffer), (size_t)xmlBufferLength(buffer));
+        status = files_write_atomic(target, xmlBufferContent(buffer),
+                                    (size_t)xmlBufferLength(buffer));
     xmlBufferFree(buffer);
     return status;
 }
@@ -475,7 +333,7 @@ static int write_doc_out(writer *w, size_t index, const char *target)
     }
     for (size_t i = 0; i < w->replacement_count; i++)
         if (w->shapes[i]->doc == d->doc)
-            replace_shape(w->shapes[i], w->replacements[i].ply);
+            mitsuba_shape_to_ply(w->shapes[i], w->replacements[i].ply);
     char *path = mitsuba_path_join(w->outdir, target);
     int status = write_tree(d, path);
     free(path);
@@ -524,6 +382,20 @@ static int check_replacements(const writer *w)
     return 0;
 }
 
+/* Makes outdir/includes when a fragment is copied, and writes the copies. */
+static int write_copies(writer *w)
+{
+    if (plan_copies(w) == 0)
+        return 0;
+    char *dir = mitsuba_path_join(w->outdir, WRITE_INCLUDES_DIR);
+    int status = files_make_directory(dir);
+    free(dir);
+    for (size_t i = 1; i < w->doc_count && status == 0; i++)
+        if (w->docs[i].copy)
+            status = write_doc_out(w, i, w->docs[i].copy_name);
+    return status;
+}
+
 int mitsuba_write_reduced(const char *scene_file, const char *outdir,
                           const mitsuba_replacement *replacements, size_t count)
 {
@@ -536,34 +408,22 @@ int mitsuba_write_reduced(const char *scene_file, const char *outdir,
     w.replacement_count = count;
     w.replacement_real = xcalloc(count ? count : 1, sizeof *w.replacement_real);
     w.shapes = xcalloc(count ? count : 1, sizeof *w.shapes);
-    for (size_t i = 0; i < count; i++)
-        w.replacement_real[i] = replacements[i].xml_file ? real_path(replacements[i].xml_file)
-                                                         : NULL;
+    for (size_t i = 0; i < count; i++) {
+        const char *xml_file = replacements[i].xml_file;
+        w.replacement_real[i] = xml_file ? mitsuba_path_real(xml_file) : NULL;
+    }
     for (size_t i = 0; i < count; i++)
         if (!replacements[i].xml_file || !replacements[i].ply) {
             writer_free(&w);
             return error_set(IDMR_EXIT_FAILURE, "replacement %zu of %s has no %s", i,
                              scene_file, replacements[i].ply ? "xml_file" : "ply");
         }
-
     size_t scene_index;
     int status = doc_open(&w, scene_file, 0, &scene_index);
     if (status == 0)
         status = check_replacements(&w);
-    if (status == 0) {
-        plan_copies(&w);
-        int copies = 0;
-        for (size_t i = 1; i < w.doc_count; i++)
-            copies += w.docs[i].copy != 0;
-        if (copies) {
-            char *dir = mitsuba_path_join(outdir, WRITE_INCLUDES_DIR);
-            status = files_make_directory(dir);
-            free(dir);
-        }
-        for (size_t i = 1; i < w.doc_count && status == 0; i++)
-            if (w.docs[i].copy)
-                status = write_doc_out(&w, i, w.docs[i].copy_name);
-    }
+    if (status == 0)
+        status = write_copies(&w);
     if (status == 0)
         status = write_doc_out(&w, 0, "scene.xml");
     writer_free(&w);

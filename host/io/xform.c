@@ -25,22 +25,26 @@ xform xform_multiply(const xform *a, const xform *b)
     return out;
 }
 
-xform xform_translate(double x, double y, double z)
+/* The identity with x, y, z at the row-major positions `at` (one per row). */
+static xform identity_with(const int at[3], double x, double y, double z)
 {
     xform t = xform_identity();
-    t.m[3] = x;
-    t.m[7] = y;
-    t.m[11] = z;
+    t.m[at[0]] = x;
+    t.m[at[1]] = y;
+    t.m[at[2]] = z;
     return t;
+}
+
+xform xform_translate(double x, double y, double z)
+{
+    static const int last_column[3] = {3, 7, 11};
+    return identity_with(last_column, x, y, z);
 }
 
 xform xform_scale(double x, double y, double z)
 {
-    xform t = xform_identity();
-    t.m[0] = x;
-    t.m[5] = y;
-    t.m[10] = z;
-    return t;
+    static const int diagonal[3] = {0, 5, 10};
+    return identity_with(diagonal, x, y, z);
 }
 
 /* Rodrigues' formula: R = cos·I + sin·[a]× + (1 - cos)·a aᵀ for the unit axis a. */

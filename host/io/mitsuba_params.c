@@ -1,14 +1,13 @@
-/* mitsuba_text.c — parameters, substitution and path resolution shared by the Mitsuba loader
- * and writer (see mitsuba_text.h). */
-#include "io/mitsuba_text.h"
+/* mitsuba_params.c — <default> parameters and $name substitution (see mitsuba_params.h). */
+#include "io/mitsuba_params.h"
 
 #include <ctype.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "core/error.h"
+#include "io/mitsuba_xml.h"
 
 const char *mitsuba_params_lookup(const mitsuba_params *p, const char *name, size_t length)
 {
@@ -27,6 +26,22 @@ void mitsuba_params_add(mitsuba_params *p, const char *name, const char *value)
     p->names[p->count] = xstrdup(name);
     p->values[p->count] = xstrdup(value);
     p->count++;
+}
+
+xmlNodePtr mitsuba_params_collect(mitsuba_params *p, xmlNodePtr root)
+{
+    xmlNodePtr incomplete = NULL;
+    MITSUBA_FOR_EACH_ELEMENT(child, root)
+    {
+        if (!mitsuba_is_tag(child, "default"))
+            continue;
+        const char *name = mitsuba_attr(child, "name"), *value = mitsuba_attr(child, "value");
+        if (name && value)
+            mitsuba_params_add(p, name, value);
+        else if (!incomplete)
+            incomplete = child;
+    }
+    return incomplete;
 }
 
 void mitsuba_params_free(mitsuba_params *p)
@@ -76,60 +91,4 @@ char *mitsuba_substitute(const mitsuba_params *p, const char *text, char *missin
     }
     out[used] = '\0';
     return out;
-}
-
-char *mitsuba_path_join(const char *dir, const char *file)
-{
-    if (file[0] == '/' || !dir || !dir[0] || strcmp(dir, ".") == 0)
-        return xstrdup(file);
-    size_t size = strlen(dir) + strlen(file) + 2;
-    char *out = xmalloc(size);
-    snprintf(out, size, "%s/%s", dir, file);
-    return out;
-}
-
-char *mitsuba_path_directory(const char *path)
-{
-    const char *slash = strrchr(path, '/');
-    if (!slash)
-        return xstrdup("");
-    if (slash == path)
-        return xstrdup("/");
-    char *dir = xstrdup(path);
-    dir[slash - path] = '\0';
-    return dir;
-}
-
-char *mitsuba_resolve(const char *naming_file, const char *scene_dir, const char *written,
-                      int *from_scene_dir)
-{
-    if (from_scene_dir)
-        *from_scene_dir = 0;
-    char *dir = mitsuba_path_directory(naming_file);
-    char *first = mitsuba_path_join(dir, written);
-    free(dir);
-    if (written[0] == '/' || access(first, F_OK) == 0)
-        return first;
-    char *second = mitsuba_path_join(scene_dir, written);
-    if (access(second, F_OK) == 0) {
-        free(first);
-        if (from_scene_dir)
-            *from_scene_dir = 1;
-        return second;
-    }
-    free(second);
-    return first;
-}
-
-int mitsuba_is_tag(xmlNodePtr node, const char *tag)
-{
-    return node && node->type == XML_ELEMENT_NODE && strcmp((const char *)node->name, tag) == 0;
-}
-
-const char *mitsuba_attr(xmlNodePtr node, const char *name)
-{
-    xmlAttrPtr a = xmlHasProp(node, (const xmlChar *)name);
-    if (!a)
-        return NULL;
-    return a->children && a->children->content ? (const char *)a->children->content : "";
 }

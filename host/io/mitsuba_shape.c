@@ -1,0 +1,209 @@
+/* mitsuba_shape.c — <shape> elements → world-space meshes: mesh files (obj, ply, off, stl,
+ * read through OpenMesh, oriented by their normals unless face_normals is set) and built-in
+ * shapes (rectangle, cube, disk, sphere, tessellated by host/io/shapes.h); to_world and
+ * flip_normals; a bsdf by <ref> or inline (none: Mitsuba's diffuse 0.5); an area emitter inline
+ * or by <ref>. A mesh is named by its id, else its file's stem, else its type. */
+#include "io/mitsuba_loader.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "core/error.h"
+#include "io/mesh_io.h"
+#include "io/shapes.h"
+
+static int is_mesh_file_type(const char *type)
+{
+    return strcmp(type, "obj") == 0 || strcmp(type, "ply") == 0 || strcmp(type, "off") == 0 ||
+           strcmp(type, "stl") == 0;
+}
+
+/* Reads a mesh file shape; *file gets the resolved path, *written the path as in the file. */
+static int shape_read_file(loader *ld, xmlNodePtr node, mesh_data *mesh, char **file,
+                           const char **written)
+{
+    if (mitsuba_prop_string(node, "filename", NULL, written))
+        return -1;
+    if (!*written)
+        return mitsuba_fail(node, "missing <string name=\"filename\">");
+    *file = mitsuba_resolve_path(ld, mitsuba_prop_find(node, "filename"), *written);
+    if (access(*file, R_OK) != 0)
+        return mitsuba_fail(node, "cannot read '%s' (%s): %s", *written, *file, strerror(errno));
+    /* Mitsuba's front side comes from the file's normals unless face_normals is set. */
+    int face_normals;
+    if (mitsuba_prop_bool(node, "face_normals", 0, &face_normals))
+        return -1;
+    if (mesh_io_read_oriented(*file, mesh, !face_normals, NULL))
+        return mitsuba_fail_prefix(node);
+    return 0;
+}
+
+static int shape_sphere(xmlNodePtr node, mesh_data *mesh)
+{
+    double center[3] = {0, 0, 0}, radius;
+    int found;
+    if (mitsuba_prop_vector(node, "center", center, &found) ||
+        mitsuba_prop_float(node, "radius", 1.0, &radius))
+        return -1;
+    if (radius <= 0.0)
+        return mitsuba_fail(node, "the radius must be positive");
+    shapes_sphere(center, radius, SHAPES_SPHERE_RINGS, SHAPES_SPHERE_SEGMENTS, mesh);
+    return 0;
+}
+
+/* Tessellates a built-in shape; returns 1 if `type` is not one. */
+static int shape_builtin(xmlNodePtr node, const char *type, mesh_data *mesh)
+{
+    if (strcmp(type, "rectangle") == 0)
+        shapes_rectangle(mesh);
+    else if (strcmp(type, "cube") == 0)
+        shapes_cube(mesh);
+    else if (strcmp(type, "disk") == 0)
+        shapes_disk(SHAPES_DISK_SEGMENTS, mesh);
+    else if (strcmp(type, "sphere") == 0)
+        return shape_sphere(node, mesh);
+    else
+        return 1;
+    return 0;
+}
+
+/* The shape's geometry in world space. */
+static int shape_geometry(loader *ld, xmlNodePtr node, const char *type, mesh_data *mesh,
+                          char **file, const char **written)
+{
+    xform to_world;
+    int flip, builtin = !is_mesh_file_type(type);
+    memset(mesh, 0, sizeof *mesh);
+    if (strcmp(type, "serialized") == 0)
+        return mitsuba_fail(node,
+                            "unsupported shape type 'serialized' (convert the mesh to PLY or OBJ)");
+    if (mitsuba_prop_transform(node, "to_world", &to_world) ||
+        mitsuba_prop_bool(node, "flip_normals", 0, &flip))
+        return -1;
+    if (!builtin && shape_read_file(ld, node, mesh, file, written))
+        return -1;
+    if (builtin) {
+        int status = shape_builtin(node, type, mesh);
+        if (status > 0)
+            return mitsuba_fail(node, "unsupported shape type '%s'", type);
+        if (status < 0)
+            return -1;
+    }
+    shapes_transform(mesh, &to_world);
+    /* A built-in shape's normal is transformed as a normal, so a mirror flips its winding. */
+    if (builtin && xform_determinant3(&to_world) < 0.0)
+        flip = !flip;
+    if (flip)
+        shapes_flip_winding(mesh);
+    return 0;
+}
+
+/* The bsdf and area emitter of a shape: element nodes (inline or referenced; NULL if none),
+ * and the id entry of a referenced bsdf. */
+typedef struct shape_parts {
+    xmlNodePtr bsdf;
+    mitsuba_id *bsdf_entry;
+    xmlNodePtr emitter;
+} shape_parts;
+
+static int shape_find_parts(loader *ld, xmlNodePtr node, shape_parts *parts)
+{
+    memset(parts, 0, sizeof *parts);
+    MITSUBA_FOR_EACH_ELEMENT(child, node)
+    {
+        xmlNodePtr target = child;
+        mitsuba_id *entry = NULL;
+        if (mitsuba_is_tag(child, "ref")) {
+            if (!(entry = mitsuba_ref_resolve(ld, child)))
+                return -1;
+            target = entry->node;
+        }
+        int is_bsdf = mitsuba_is_tag(target, "bsdf");
+        int is_emitter = mitsuba_is_tag(target, "emitter");
+        if (is_bsdf && !parts->bsdf) {
+            parts->bsdf = target;
+            parts->bsdf_entry = entry;
+        } else if (is_emitter && !parts->emitter) {
+            parts->emitter = target;
+        } else if (entry && !is_bsdf && !is_emitter) {
+            return mitsuba_fail(child, "'%s' is neither a bsdf nor an emitter", entry->id);
+        }
+    }
+    const char *emitter_type = parts->emitter ? mitsuba_attr(parts->emitter, "type") : NULL;
+    if (parts->emitter && (!emitter_type || strcmp(emitter_type, "area") != 0))
+        return mitsuba_fail(parts->emitter, "only area emitters can be attached to a shape");
+    return 0;
+}
+
+/* The shape's name: its id, else the mesh file's stem, else its type. */
+static void shape_name(xmlNodePtr node, const char *type, const char *written, char *out,
+                       size_t size)
+{
+    const char *id = mitsuba_attr(node, "id");
+    if (id && id[0]) {
+        snprintf(out, size, "%s", id);
+        return;
+    }
+    if (!written) {
+        snprintf(out, size, "%s", type);
+        return;
+    }
+    const char *base = strrchr(written, '/') ? strrchr(written, '/') + 1 : written;
+    const char *dot = strrchr(base, '.');
+    int length = dot && dot != base ? (int)(dot - base) : (int)strlen(base);
+    snprintf(out, size, "%.*s", length, base);
+}
+
+/* The material for a shape: its referenced bsdf, its inline one (already parsed), or the
+ * default. */
+static int shape_material(loader *ld, const bsdf_parsed *inline_bsdf, mitsuba_id *entry,
+                          const char *mesh_name)
+{
+    if (entry)
+        return mitsuba_bsdf_by_id(ld, entry);
+    if (!inline_bsdf)
+        return mitsuba_bsdf_default(ld);
+    char name[512];
+    snprintf(name, sizeof name, "%s/bsdf", mesh_name);
+    return mitsuba_bsdf_add(ld, inline_bsdf, name);
+}
+
+int mitsuba_load_shape(loader *ld, xmlNodePtr node)
+{
+    const char *type, *written = NULL;
+    shape_parts parts;
+    idmr_light light;
+    bsdf_parsed inline_bsdf;
+    mesh_data mesh;
+    char *file = NULL, name[256];
+    memset(&light, 0, sizeof light);
+    if (mitsuba_require_attr(node, "type", &type) || shape_find_parts(ld, node, &parts))
+        return -1;
+    /* Parse an inline bsdf (a referenced one was parsed at its declaration) and the emitter
+     * before the (possibly slow) mesh read. */
+    int has_inline_bsdf = parts.bsdf && !parts.bsdf_entry;
+    if ((has_inline_bsdf && mitsuba_parse_bsdf(ld, parts.bsdf, 0, &inline_bsdf)) ||
+        (parts.emitter && mitsuba_emitter_area(ld, parts.emitter, &light)))
+        return -1;
+    if (shape_geometry(ld, node, type, &mesh, &file, &written)) {
+        mesh_data_free(&mesh);
+        free(file);
+        return -1;
+    }
+    shape_name(node, type, written, name, sizeof name);
+    scene_mesh *added = scene_add_mesh(ld->s, name, type, file, (int)xmlGetLineNo(node),
+                                       mesh.vertex_count, mesh.positions, mesh.triangle_count,
+                                       mesh.indices, mesh.texcoords);
+    free(file);
+    int material = shape_material(ld, has_inline_bsdf ? &inline_bsdf : NULL, parts.bsdf_entry,
+                                  added->name);
+    if (material < 0)
+        return -1;
+    added->material = (uint32_t)material;
+    added->xml_file = xstrdup(mitsuba_node_file(node));
+    added->light = parts.emitter ? scene_add_light(ld->s, &light) : -1;
+    return 0;
+}

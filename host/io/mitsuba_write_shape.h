@@ -1,0 +1,14 @@
+/* mitsuba_write_shape.h — one edit of the reduced-scene writer: a <shape> element of a raw
+ * Mitsuba tree turned into a reference to its reduced, world-space PLY (mitsuba_write.h says
+ * what is removed and what is kept), indented as the element's siblings are. */
+#ifndef IDMR_MITSUBA_WRITE_SHAPE_H
+#define IDMR_MITSUBA_WRITE_SHAPE_H
+
+#include <libxml/tree.h>
+
+/* Makes `shape` type="ply" with <string name="filename" value="ply"/> (an existing filename
+ * property is overwritten, else one is added as the first child) and removes the properties
+ * that a world-space PLY no longer has. */
+void mitsuba_shape_to_ply(xmlNodePtr shape, const char *ply);
+
+#endif
