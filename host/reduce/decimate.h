@@ -26,7 +26,12 @@
  * vertices at identical positions are welded, faces are attached in order and those that fail
  * are retried until no more attach; faces that still cannot be attached keep copied vertices,
  * which are locked (they cannot be collapsed) and counted apart, so the collapsible surface
- * gets the budget that remains after them. Faces that weld into zero area are dropped. */
+ * gets the budget that remains after them. Faces that weld into zero area are dropped.
+ *
+ * Files (C++, sharing decimate_openmesh.hh): decimate.cc (decimate_mesh, decimate_measure),
+ * decimate_weld.cc (the welded rebuild), decimate_modules.hh (the three modules),
+ * decimate_collapse.cc/.hh (the collapse loop), decimate_parallel.cc (decimate_many),
+ * decimate_stock.cc (decimate_stock_quadric). */
 #ifndef IDMR_DECIMATE_H
 #define IDMR_DECIMATE_H
 
