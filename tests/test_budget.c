@@ -309,9 +309,12 @@ static void test_bad_importance(void **state)
     const struct {
         double importance;
         const char *fragment;
-    } cases[] = {{NAN, "'bunny'"}, {-1.0, "'bunny' (index 1) has importance -1"}, {INFINITY, "'bunny'"}};
+    } cases[] = {{NAN, "'bunny'"},
+                 {-1.0, "'bunny' (index 1) has importance -1"},
+                 {INFINITY, "'bunny'"}};
     for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
-        const budget_mesh meshes[2] = {{"dragon", 100, 1.0, 0}, {"bunny", 100, cases[i].importance, 0}};
+        const budget_mesh meshes[2] = {{"dragon", 100, 1.0, 0},
+                                       {"bunny", 100, cases[i].importance, 0}};
         expect_input_error(meshes, 2, 0.5, cases[i].fragment);
     }
 }

@@ -127,7 +127,8 @@ void ReductionDecimater::heap_vertex(Mesh::VertexHandle v)
     unsigned version = ++version_[v.idx()];
     Entry entry;
     Mesh::HalfedgeHandle target;
-    if (mesh_.status(v).deleted() || mesh_.status(v).locked() || !best_collapse(v, &entry, &target)) {
+    if (mesh_.status(v).deleted() || mesh_.status(v).locked() ||
+        !best_collapse(v, &entry, &target)) {
         live_[v.idx()] = false;
         return;
     }

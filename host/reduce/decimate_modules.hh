@@ -29,7 +29,10 @@ template <class MeshT> class ModImportanceT : public OpenMesh::Decimater::ModBas
     explicit ModImportanceT(MeshT &mesh) : Base(mesh, false) { mesh.add_property(importance_); }
     ~ModImportanceT() override { Base::mesh().remove_property(importance_); }
 
-    double &importance(typename MeshT::VertexHandle v) { return Base::mesh().property(importance_, v); }
+    double &importance(typename MeshT::VertexHandle v)
+    {
+        return Base::mesh().property(importance_, v);
+    }
 
     double ring_sum(typename MeshT::VertexHandle v)
     {

@@ -4,16 +4,16 @@
  * reduce_run() (reduce.c) runs the stages in order, each filling its part of the state and
  * reusing what the earlier ones left there, and stops at the first that fails:
  *
- *   options      --target in (0, 1], every --keep name a mesh of the scene       (reduce.c)
- *   outdir       OUTDIR created, empty unless forced, not the scene's own         (reduce_outdir.c)
- *   importance   the BVH and the importance pass (method importance only); per-vertex
- *                importance of every mesh: bvh, importance, vertex_importance      (reduce.c)
- *   budget       decimate inputs and the plan of Eq. 3: input, plan                (reduce.c)
- *   decimation   the planned meshes, then compensation rounds: output,
- *                compensation_rounds, vertices_after                               (reduce_decimation.c)
- *   write        meshes/NAME.ply and scene.xml: ply, meshes_written                (reduce.c)
- *   report       report.json (and the importance outputs), the closing line         (reduce.c, JSON in
- *                                                                                   reduce_report.c)
+ *   options      --target in (0, 1], every --keep name a mesh of the scene (reduce.c)
+ *   outdir       OUTDIR created, empty unless forced, not the scene's own (reduce_outdir.c)
+ *   importance   the BVH and the importance pass (method importance only), per-vertex
+ *                importance of every mesh: bvh, importance, vertex_importance (reduce.c)
+ *   budget       decimation inputs and the plan of Eq. 3: input, plan (reduce.c)
+ *   decimation   the planned meshes, then compensation rounds: output, compensation_rounds,
+ *                vertices_after (reduce_decimation.c)
+ *   write        meshes/NAME.ply and scene.xml: ply, meshes_written (reduce.c)
+ *   report       report.json (with the importance outputs) and the closing line (reduce.c; the
+ *                JSON is built in reduce_report.c)
  * Per-mesh arrays are indexed like s->meshes and hold mesh_count entries. */
 #ifndef IDMR_REDUCE_STAGES_H
 #define IDMR_REDUCE_STAGES_H
