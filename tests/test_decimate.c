@@ -167,32 +167,25 @@ static void test_grid_first_collapse(void **state)
     mesh_data_free(&g.mesh);
 }
 
-/* Two collapses: the second is W into (3,1), because T's neighbour Z was re-scored. */
-static void test_grid_second_collapse(void **state)
+/* Two collapses: X into T first; where W and Z went shows how the second was chosen. */
+static void check_two_collapses(int removed_ring_only, uint32_t w_into, uint32_t z_into)
 {
     grid_fixture g;
     decimate_output out;
-    grid_decimate(&g, 2, 0, &out);
+    grid_decimate(&g, 2, removed_ring_only, &out);
     assert_int_equal(out.collapsed_into[X], T);
-    assert_int_equal(out.collapsed_into[W], WT);
-    assert_int_equal(out.collapsed_into[Z], Z);
+    assert_int_equal(out.collapsed_into[W], w_into);
+    assert_int_equal(out.collapsed_into[Z], z_into);
     decimate_output_free(&out);
     mesh_data_free(&g.mesh);
 }
 
+/* The second collapse is W into (3,1), because T's neighbour Z was re-scored. */
+static void test_grid_second_collapse(void **state) { check_two_collapses(0, WT, Z); }
+
 /* The same with DecimaterT's re-scoring: Z keeps its stale entry (116, into T) and goes second,
- * into T (its stale target: T held 0). */
-static void test_grid_second_collapse_stale(void **state)
-{
-    grid_fixture g;
-    decimate_output out;
-    grid_decimate(&g, 2, 1, &out);
-    assert_int_equal(out.collapsed_into[X], T);
-    assert_int_equal(out.collapsed_into[Z], T);
-    assert_int_equal(out.collapsed_into[W], W);
-    decimate_output_free(&out);
-    mesh_data_free(&g.mesh);
-}
+ * into T (its stale target: T held 0); W stays. */
+static void test_grid_second_collapse_stale(void **state) { check_two_collapses(1, W, T); }
 
 /* ---- 2. heap order after collapses ---- */
 
@@ -275,43 +268,63 @@ static void test_quadric_dragon(void **state)
     model_close(&dragon);
 }
 
-/* The normal limit binds the quadric method too: the spike cannot go at 60 degrees even when
- * everything else has gone that can. */
 /* ---- 4. bad input ---- */
+
+/* Decimates the 3 x 3 grid (9 vertices; of its 8 triangles only the first `triangles` given) to
+ * `target`; returns decimate_mesh's status. */
+static int decimate_small_grid(const char *name, const double *importance, uint64_t target,
+                               uint32_t triangles, decimate_method method, decimate_output *out)
+{
+    mesh_data grid;
+    make_grid(3, 0, &grid);
+    decimate_input in = input_of(name, &grid, importance, target);
+    in.triangle_count = triangles;
+    int status = decimate_mesh(&in, method, out);
+    mesh_data_free(&grid);
+    return status;
+}
 
 /* Importance decimation without importance: an error naming the mesh, a zeroed output. */
 static void test_no_importance(void **state)
 {
-    mesh_data grid;
-    make_grid(3, 0, &grid);
-    decimate_input in = input_of("the_mesh_without_importance", &grid, NULL, 4);
     decimate_output out;
     error_clear();
-    assert_int_equal(decimate_mesh(&in, DECIMATE_IMPORTANCE, &out), -1);
+    assert_int_equal(decimate_small_grid("the_mesh_without_importance", NULL, 4, 8,
+                                         DECIMATE_IMPORTANCE, &out),
+                     -1);
     assert_non_null(strstr(error_message(), "the_mesh_without_importance"));
     assert_null(out.mesh.positions);
     decimate_output_free(&out); /* harmless on a failed, zeroed output */
-    mesh_data_free(&grid);
 }
 
-/* Vertices but no triangles: nothing to collapse, and vertices without faces are dropped. */
-static void test_no_triangles(void **state)
+/* Grids on which nothing collapses, by either method. */
+typedef struct no_collapse_case {
+    const char *name;
+    uint64_t target;
+    uint32_t triangles; /* given of the grid's 8 */
+    uint32_t vertices_after, triangles_after;
+} no_collapse_case;
+
+static const no_collapse_case no_collapse_cases[] = {
+    /* Vertices but no triangles: vertices without faces are dropped. */
+    {"no triangles", 2, 0, 0, 0},
+    /* A target above the vertex count. */
+    {"target above the vertex count", 100, 8, 9, 8},
+};
+
+static void test_no_collapse(void **state)
 {
-    mesh_data grid;
-    make_grid(3, 0, &grid);
-    double importance[9] = {0};
-    decimate_input in = input_of("no_triangles", &grid, importance, 2);
-    in.triangle_count = 0;
-    decimate_output out;
-    assert_int_equal(decimate_mesh(&in, DECIMATE_IMPORTANCE, &out), 0);
-    assert_int_equal(out.collapses, 0);
-    assert_int_equal(out.mesh.triangle_count, 0);
-    assert_int_equal(out.mesh.vertex_count, 0);
-    decimate_output_free(&out);
-    assert_int_equal(decimate_mesh(&in, DECIMATE_QUADRIC, &out), 0);
-    assert_int_equal(out.mesh.triangle_count, 0);
-    decimate_output_free(&out);
-    mesh_data_free(&grid);
+    const no_collapse_case *c = *state;
+    const double importance[9] = {1, 2, 3, 4, 5, 6, 7, 8, 9};
+    for (decimate_method method = DECIMATE_IMPORTANCE; method <= DECIMATE_QUADRIC; method++) {
+        decimate_output out;
+        assert_int_equal(
+            decimate_small_grid(c->name, importance, c->target, c->triangles, method, &out), 0);
+        assert_int_equal(out.collapses, 0);
+        assert_int_equal(out.mesh.vertex_count, c->vertices_after);
+        assert_int_equal(out.mesh.triangle_count, c->triangles_after);
+        decimate_output_free(&out);
+    }
 }
 
 /* Nothing at all. */
@@ -329,22 +342,6 @@ static void test_no_vertices(void **state)
     assert_int_equal(out.mesh.vertex_count, 0);
     assert_int_equal(out.mesh.triangle_count, 0);
     decimate_output_free(&out);
-}
-
-/* A target above the vertex count: nothing collapses. */
-static void test_target_above_vertex_count(void **state)
-{
-    mesh_data grid;
-    make_grid(3, 0, &grid);
-    double importance[9] = {1, 2, 3, 4, 5, 6, 7, 8, 9};
-    decimate_input in = input_of("over", &grid, importance, 100);
-    decimate_output out;
-    assert_int_equal(decimate_mesh(&in, DECIMATE_IMPORTANCE, &out), 0);
-    assert_int_equal(out.collapses, 0);
-    assert_int_equal(out.mesh.vertex_count, 9);
-    assert_int_equal(out.mesh.triangle_count, 8);
-    decimate_output_free(&out);
-    mesh_data_free(&grid);
 }
 
 /* ---- 5. threads ---- */
@@ -452,9 +449,10 @@ int main(void)
         cmocka_unit_test(test_history),
         cmocka_unit_test(test_quadric_dragon),
         cmocka_unit_test(test_no_importance),
-        cmocka_unit_test(test_no_triangles),
+        {"no collapse: no triangles", test_no_collapse, NULL, NULL, (void *)&no_collapse_cases[0]},
+        {"no collapse: target above the vertex count", test_no_collapse, NULL, NULL,
+         (void *)&no_collapse_cases[1]},
         cmocka_unit_test(test_no_vertices),
-        cmocka_unit_test(test_target_above_vertex_count),
         cmocka_unit_test(test_many_threads_same_output),
         cmocka_unit_test(test_many_threads_failing_mesh),
     };

@@ -328,6 +328,8 @@ static void test_quadric_each_collapse(void **state)
     mesh_data_free(&sphere);
 }
 
+/* The normal limit binds the quadric method too: the spike cannot go at 60 degrees even when
+ * everything else has gone that can. */
 static void test_quadric_spike(void **state)
 {
     mesh_data spike;
