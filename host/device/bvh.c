@@ -2,8 +2,9 @@
  *
  * Embree calls the callbacks from its worker threads and builds a pointer tree in its own
  * thread-local memory: inner nodes (build_node) with up to four children and their boxes, and
- * leaves (build_leaf) listing primitive ids. bvh_build() then walks that tree depth-first and
- * writes the flat arrays: nodes in depth-first order, each leaf as one triangle packet. */
+ * leaves (build_leaf) listing primitive ids. bvh_build() gathers the non-degenerate triangles as
+ * build primitives (build_input), runs the build (build_tree), then walks that tree depth-first
+ * and writes the flat arrays: nodes in depth-first order, each leaf as one triangle packet. */
 #include "device/bvh.h"
 
 #include <embree3/rtcore.h>
@@ -170,6 +171,7 @@ static size_t append_node(builder *b)
         b->nodes = xrealloc(b->nodes, b->node_capacity * sizeof *b->nodes);
     }
     idmr_bvh_node *node = &b->nodes[b->node_count];
+    memset(node, 0, sizeof *node); /* reserved words too: the upload is deterministic */
     for (int slot = 0; slot < IDMR_BVH_WIDTH; slot++)
         set_empty_slot(node, slot);
     return b->node_count++;
@@ -229,6 +231,150 @@ static void flatten(builder *b, const build_node *src, size_t index, int depth)
     }
 }
 
+/* ---- bvh_build() ---- */
+
+/* The build primitives: one per non-degenerate scene triangle, with room for the references
+ * that spatial splits add. vertices[] and scene_triangle[] are indexed by primID. */
+typedef struct build_input {
+    float (*vertices)[3][3];
+    uint32_t *scene_triangle;
+    struct RTCBuildPrimitive *prims;
+    size_t count, capacity;
+} build_input;
+
+/* The box of one triangle as a build primitive. */
+static void set_primitive(struct RTCBuildPrimitive *p, const float v[3][3], unsigned int id)
+{
+    p->lower_x = fminf(fminf(v[0][0], v[1][0]), v[2][0]);
+    p->lower_y = fminf(fminf(v[0][1], v[1][1]), v[2][1]);
+    p->lower_z = fminf(fminf(v[0][2], v[1][2]), v[2][2]);
+    p->upper_x = fmaxf(fmaxf(v[0][0], v[1][0]), v[2][0]);
+    p->upper_y = fmaxf(fmaxf(v[0][1], v[1][1]), v[2][1]);
+    p->upper_z = fmaxf(fmaxf(v[0][2], v[1][2]), v[2][2]);
+    p->geomID = 0;
+    p->primID = id;
+}
+
+/* Gathers the non-degenerate triangles of the scene; counts the others in *degenerate. */
+static void gather_primitives(const scene *s, build_input *in, size_t *degenerate)
+{
+    in->capacity = 2 * (size_t)s->triangle_count + 16; /* room for spatial-split references */
+    in->vertices = xmalloc((size_t)s->triangle_count * sizeof *in->vertices + 1);
+    in->scene_triangle = xmalloc((size_t)s->triangle_count * sizeof *in->scene_triangle + 1);
+    in->prims = aligned_alloc(32, in->capacity * sizeof *in->prims);
+    if (!in->prims) {
+        fprintf(stderr, "idmr: out of memory (BVH build primitives)\n");
+        exit(IDMR_EXIT_FAILURE);
+    }
+    in->count = 0;
+    for (size_t m = 0; m < s->mesh_count; m++) {
+        const scene_mesh *mesh = &s->meshes[m];
+        for (uint32_t t = 0; t < mesh->triangle_count; t++) {
+            float(*v)[3] = in->vertices[in->count];
+            for (int k = 0; k < 3; k++)
+                memcpy(v[k], &mesh->positions[3 * (size_t)mesh->indices[3 * (size_t)t + k]],
+                       sizeof v[k]);
+            if (scene_mesh_triangle_area(mesh, t) == 0.0) {
+                (*degenerate)++;
+                continue;
+            }
+            set_primitive(&in->prims[in->count], (const float(*)[3])v, (unsigned int)in->count);
+            in->scene_triangle[in->count] = mesh->first_triangle + t;
+            in->count++;
+        }
+    }
+}
+
+static void free_primitives(build_input *in)
+{
+    free(in->prims);
+    free(in->vertices);
+    free(in->scene_triangle);
+}
+
+/* rtcBuildBVH's arguments: high quality (spatial splits), our width, depth and leaf sizes, and
+ * the callbacks that build into `b`. */
+static struct RTCBuildArguments build_arguments(RTCBVH tree, build_input *in, builder *b)
+{
+    struct RTCBuildArguments args = rtcDefaultBuildArguments();
+    args.buildQuality = RTC_BUILD_QUALITY_HIGH; /* enables spatial splits */
+    args.maxBranchingFactor = IDMR_BVH_WIDTH;
+    args.maxDepth = IDMR_BVH_MAX_DEPTH;
+    /* Leaves are tested as packets of four: the SAH counts triangles in blocks of four, and a
+     * packet test costs about two box tests of a node (measured, make bench). */
+    args.sahBlockSize = IDMR_BVH_MAX_LEAF_SIZE;
+    args.minLeafSize = 1;
+    args.maxLeafSize = IDMR_BVH_MAX_LEAF_SIZE;
+    args.traversalCost = 1.0f;
+    args.intersectionCost = 2.0f;
+    args.bvh = tree;
+    args.primitives = in->prims;
+    args.primitiveCount = in->count;
+    args.primitiveArrayCapacity = in->capacity;
+    args.createNode = create_node;
+    args.setNodeChildren = set_children;
+    args.setNodeBounds = set_bounds;
+    args.createLeaf = create_leaf;
+    args.splitPrimitive = split_primitive;
+    args.userPtr = b;
+    return args;
+}
+
+/* A tiny scene whose root is one leaf: hang it under the root node, boxed by all primitives. */
+static void hang_root_leaf(builder *b, size_t root, const build_leaf *leaf, const build_input *in)
+{
+    b->nodes[root].child[0] = append_leaf(b, leaf);
+    struct RTCBounds all = {INFINITY, INFINITY, INFINITY, 0, -INFINITY, -INFINITY, -INFINITY, 0};
+    for (size_t i = 0; i < in->count; i++) {
+        all.lower_x = fminf(all.lower_x, in->prims[i].lower_x);
+        all.lower_y = fminf(all.lower_y, in->prims[i].lower_y);
+        all.lower_z = fminf(all.lower_z, in->prims[i].lower_z);
+        all.upper_x = fmaxf(all.upper_x, in->prims[i].upper_x);
+        all.upper_y = fmaxf(all.upper_y, in->prims[i].upper_y);
+        all.upper_z = fmaxf(all.upper_z, in->prims[i].upper_z);
+    }
+    set_slot_bounds(&b->nodes[root], 0, &all);
+    b->depth = 1;
+}
+
+/* Builds the tree of the gathered primitives under flat node `root` (an empty scene leaves the
+ * root's slots empty). Returns 0, or -1 with the error set. */
+static int build_tree(RTCDevice device, build_input *in, builder *b, size_t root)
+{
+    if (in->count == 0) {
+        b->depth = 1;
+        return 0;
+    }
+    RTCBVH tree = rtcNewBVH(device);
+    struct RTCBuildArguments args = build_arguments(tree, in, b);
+    error_clear();
+    void *top = rtcBuildBVH(&args);
+    int status = 0;
+    if (!top) {
+        if (!*error_message())
+            error_set(IDMR_EXIT_FAILURE, "rtcBuildBVH failed on %zu triangles", in->count);
+        status = -1;
+    } else if (*(const int *)top == BUILD_LEAF) {
+        hang_root_leaf(b, root, top, in);
+    } else {
+        flatten(b, top, root, 1);
+    }
+    rtcReleaseBVH(tree);
+    return status;
+}
+
+/* What the kernels can address and traverse. */
+static int check_limits(const builder *b)
+{
+    if (b->leaf_count > (size_t)INT32_MAX)
+        return error_set(IDMR_EXIT_INPUT, "the BVH needs %zu leaves; the kernels address %d",
+                         b->leaf_count, INT32_MAX);
+    if (b->depth > IDMR_BVH_MAX_DEPTH)
+        return error_set(IDMR_EXIT_FAILURE, "BVH depth %d exceeds the traversal stack's limit %d",
+                         b->depth, IDMR_BVH_MAX_DEPTH);
+    return 0;
+}
+
 int bvh_build(const scene *s, bvh *out)
 {
     memset(out, 0, sizeof *out);
@@ -236,106 +382,14 @@ int bvh_build(const scene *s, bvh *out)
     RTCDevice device = bvh_embree_device();
     if (!device)
         return error_set(IDMR_EXIT_FAILURE, "rtcNewDevice failed: Embree could not start");
-
-    /* Gather the non-degenerate triangles as build primitives. */
-    size_t capacity = 2 * (size_t)s->triangle_count + 16; /* room for spatial-split references */
-    float(*vertices)[3][3] = xmalloc((size_t)s->triangle_count * sizeof *vertices + 1);
-    uint32_t *scene_triangle = xmalloc((size_t)s->triangle_count * sizeof *scene_triangle + 1);
-    struct RTCBuildPrimitive *prims = aligned_alloc(32, capacity * sizeof *prims);
-    if (!prims) {
-        fprintf(stderr, "idmr: out of memory (BVH build primitives)\n");
-        exit(IDMR_EXIT_FAILURE);
-    }
-    size_t count = 0;
-    for (size_t m = 0; m < s->mesh_count; m++) {
-        const scene_mesh *mesh = &s->meshes[m];
-        for (uint32_t t = 0; t < mesh->triangle_count; t++) {
-            float(*v)[3] = vertices[count];
-            for (int k = 0; k < 3; k++)
-                memcpy(v[k], &mesh->positions[3 * (size_t)mesh->indices[3 * (size_t)t + k]],
-                       sizeof v[k]);
-            if (scene_mesh_triangle_area(mesh, t) == 0.0) {
-                out->degenerate_count++;
-                continue;
-            }
-            struct RTCBuildPrimitive *p = &prims[count];
-            p->lower_x = fminf(fminf(v[0][0], v[1][0]), v[2][0]);
-            p->lower_y = fminf(fminf(v[0][1], v[1][1]), v[2][1]);
-            p->lower_z = fminf(fminf(v[0][2], v[1][2]), v[2][2]);
-            p->upper_x = fmaxf(fmaxf(v[0][0], v[1][0]), v[2][0]);
-            p->upper_y = fmaxf(fmaxf(v[0][1], v[1][1]), v[2][1]);
-            p->upper_z = fmaxf(fmaxf(v[0][2], v[1][2]), v[2][2]);
-            p->geomID = 0;
-            p->primID = (unsigned int)count;
-            scene_triangle[count] = mesh->first_triangle + t;
-            count++;
-        }
-    }
-
-    builder b = {.vertices = (const float(*)[3][3])vertices, .scene_triangle = scene_triangle};
+    build_input in;
+    gather_primitives(s, &in, &out->degenerate_count);
+    builder b = {.vertices = (const float(*)[3][3])in.vertices, .scene_triangle = in.scene_triangle};
     size_t root = append_node(&b);
-    int status = 0;
-    if (count > 0) {
-        RTCBVH tree = rtcNewBVH(device);
-        struct RTCBuildArguments args = rtcDefaultBuildArguments();
-        args.buildQuality = RTC_BUILD_QUALITY_HIGH; /* enables spatial splits */
-        args.maxBranchingFactor = IDMR_BVH_WIDTH;
-        args.maxDepth = IDMR_BVH_MAX_DEPTH;
-        /* Leaves are tested as packets of four: the SAH counts triangles in blocks of four,
-         * and a packet test costs about two box tests of a node (measured, make bench). */
-        args.sahBlockSize = IDMR_BVH_MAX_LEAF_SIZE;
-        args.minLeafSize = 1;
-        args.maxLeafSize = IDMR_BVH_MAX_LEAF_SIZE;
-        args.traversalCost = 1.0f;
-        args.intersectionCost = 2.0f;
-        args.bvh = tree;
-        args.primitives = prims;
-        args.primitiveCount = count;
-        args.primitiveArrayCapacity = capacity;
-        args.createNode = create_node;
-        args.setNodeChildren = set_children;
-        args.setNodeBounds = set_bounds;
-        args.createLeaf = create_leaf;
-        args.splitPrimitive = split_primitive;
-        args.userPtr = &b;
-        error_clear();
-        void *top = rtcBuildBVH(&args);
-        if (!top) {
-            if (!*error_message())
-                error_set(IDMR_EXIT_FAILURE, "rtcBuildBVH failed on %zu triangles", count);
-            status = -1;
-        } else if (*(const int *)top == BUILD_LEAF) {
-            /* A tiny scene: the root is one leaf; hang it under a node. */
-            b.nodes[root].child[0] = append_leaf(&b, top);
-            struct RTCBounds all = {INFINITY, INFINITY, INFINITY, 0,
-                                    -INFINITY, -INFINITY, -INFINITY, 0};
-            for (size_t i = 0; i < count; i++) {
-                all.lower_x = fminf(all.lower_x, prims[i].lower_x);
-                all.lower_y = fminf(all.lower_y, prims[i].lower_y);
-                all.lower_z = fminf(all.lower_z, prims[i].lower_z);
-                all.upper_x = fmaxf(all.upper_x, prims[i].upper_x);
-                all.upper_y = fmaxf(all.upper_y, prims[i].upper_y);
-                all.upper_z = fmaxf(all.upper_z, prims[i].upper_z);
-            }
-            set_slot_bounds(&b.nodes[root], 0, &all);
-            b.depth = 1;
-        } else {
-            flatten(&b, top, root, 1);
-        }
-        rtcReleaseBVH(tree);
-    } else {
-        b.depth = 1;
-    }
-    free(prims);
-    free(vertices);
-    free(scene_triangle);
-    if (status == 0 && b.leaf_count > (size_t)INT32_MAX)
-        status = error_set(IDMR_EXIT_INPUT, "the BVH needs %zu leaves; the kernels address %d",
-                           b.leaf_count, INT32_MAX);
-    if (status == 0 && b.depth > IDMR_BVH_MAX_DEPTH)
-        status = error_set(IDMR_EXIT_FAILURE,
-                           "BVH depth %d exceeds the traversal stack's limit %d", b.depth,
-                           IDMR_BVH_MAX_DEPTH);
+    int status = build_tree(device, &in, &b, root);
+    free_primitives(&in);
+    if (status == 0)
+        status = check_limits(&b);
     if (status != 0) {
         free(b.nodes);
         free(b.leaves);

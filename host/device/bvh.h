@@ -1,6 +1,6 @@
 /* bvh.h — the scene's 4-wide BVH, built by Embree's rtcBuildBVH (high quality: SAH with
  * spatial splits, the SBVH of the paper) and flattened into the node and triangle arrays of
- * include/idmr/bvh.h that the kernels traverse.
+ * include/idmr/bvh_layout.h that the kernels traverse.
  *
  * Leaf packets carry the scene-global index of each triangle; scene_mesh_of_triangle() maps
  * that to (mesh, triangle in mesh). Degenerate (zero-area) triangles are left out: no ray can

@@ -1,10 +1,15 @@
 /* budget.c — decimation factors across meshes (paper Eq. 3); the semantics are in budget.h.
  *
  * Working data: the free meshes (not pinned, more than min_vertices vertices) are listed in
- * free_index[]; the first active_count entries of active[] are those still being scaled, each
- * with its weight (importance / maximum importance, or 1 for equal factors) and its real-valued
- * planned count x = λ · weight · v. A mesh leaves active[] when it is fixed at its ceiling v or
- * its floor min_vertices; settled is the sum of the targets of every mesh no longer active. */
+ * free_meshes.index[] (free_index[] in the steps); the first active_count entries of active[]
+ * are those still being scaled, each with its weight (importance / maximum importance, or 1 for
+ * equal factors) and its real-valued planned count x = λ · weight · v. A mesh leaves active[]
+ * when it is fixed at its ceiling v or its floor min_vertices; settled is the sum of the targets
+ * of every mesh no longer active.
+ *
+ * budget_distribute(): check the arguments, V_D, the free meshes, then either nothing to do,
+ * every free mesh at its floor (infeasible), or weights → solve_factors() → round_targets();
+ * finally decimate and factor per mesh. */
 #include "reduce/budget.h"
 
 #include <math.h>
@@ -156,97 +161,107 @@ static void round_targets(const budget_mesh *meshes, const size_t *free_index, s
     free(shares);
 }
 
-int budget_distribute(const budget_mesh *meshes, size_t count, double target_fraction,
-                      uint64_t min_vertices, budget_plan *plan)
+/* The free meshes (not pinned, more than min_vertices vertices): their indices, the vertices of
+ * the fixed ones (settled) and the largest free importance. */
+typedef struct free_meshes {
+    size_t *index;
+    size_t count;
+    uint64_t settled;
+    double max_importance;
+} free_meshes;
+
+/* Checks the arguments after the plan pointer; *total = Σ v. */
+static int check_meshes(const budget_mesh *meshes, size_t count, double target_fraction,
+                        uint64_t *total)
 {
-    if (!plan)
-        return error_set(IDMR_EXIT_INPUT, "budget: no plan to fill");
-    memset(plan, 0, sizeof *plan);
     if (count > 0 && !meshes)
         return error_set(IDMR_EXIT_INPUT, "budget: %zu meshes given but no mesh array", count);
     if (!(target_fraction > 0.0 && target_fraction <= 1.0))
         return error_set(IDMR_EXIT_INPUT,
                          "budget: the decimation factor D = %g is outside (0, 1]", target_fraction);
-
-    uint64_t total = 0;
+    uint64_t sum = 0;
     for (size_t i = 0; i < count; i++) {
         double importance = meshes[i].importance;
         if (!isfinite(importance) || importance < 0.0)
             return error_set(IDMR_EXIT_INPUT,
                              "budget: mesh '%s' (index %zu) has importance %g; it must be "
                              "finite and >= 0", mesh_name(&meshes[i]), i, importance);
-        if (meshes[i].vertices > UINT64_MAX - total)
+        if (meshes[i].vertices > UINT64_MAX - sum)
             return error_set(IDMR_EXIT_INPUT,
                              "budget: the vertex count overflows 64 bits at mesh '%s' (index %zu)",
                              mesh_name(&meshes[i]), i);
-        total += meshes[i].vertices;
+        sum += meshes[i].vertices;
     }
+    *total = sum;
+    return 0;
+}
 
-    /* V_D = round(D · Σ v); D <= 1, but the product of large totals may round above Σ v. */
-    uint64_t requested;
+/* V_D = round(D · Σ v); D <= 1, but the product of large totals may round above Σ v. */
+static uint64_t requested_vertices(double target_fraction, uint64_t total)
+{
     double product = floor(target_fraction * (double)total + 0.5);
     if (product >= (double)total)
-        requested = total;
-    else
-        requested = (uint64_t)product;
+        return total;
+    return (uint64_t)product;
+}
 
-    plan->target = xcalloc(count, sizeof *plan->target);
-    plan->factor = xcalloc(count, sizeof *plan->factor);
-    plan->decimate = xcalloc(count, sizeof *plan->decimate);
-    plan->total_before = total;
-    plan->total_requested = requested;
-    for (size_t i = 0; i < count; i++)
-        plan->target[i] = meshes[i].vertices;
-
-    /* The free meshes, the sum of the fixed ones and the largest free importance. */
-    size_t *free_index = xmalloc(count * sizeof *free_index);
-    size_t free_count = 0;
-    uint64_t settled = 0;
-    double max_importance = 0.0;
+static free_meshes collect_free_meshes(const budget_mesh *meshes, size_t count,
+                                       uint64_t min_vertices)
+{
+    free_meshes free_set = {xmalloc(count * sizeof *free_set.index), 0, 0, 0.0};
     for (size_t i = 0; i < count; i++) {
         if (meshes[i].pinned || meshes[i].vertices <= min_vertices) {
-            settled += meshes[i].vertices;
+            free_set.settled += meshes[i].vertices;
             continue;
         }
-        free_index[free_count++] = i;
-        if (meshes[i].importance > max_importance)
-            max_importance = meshes[i].importance;
+        free_set.index[free_set.count++] = i;
+        if (meshes[i].importance > free_set.max_importance)
+            free_set.max_importance = meshes[i].importance;
     }
-    /* Each free mesh has more than min_vertices vertices, so this cannot overflow. */
-    uint64_t floors = (uint64_t)free_count * min_vertices;
+    return free_set;
+}
 
-    if (requested == total || free_count == 0) {
-        /* Nothing to decimate: every mesh keeps its vertices. */
-    } else if (settled + floors >= requested) {
-        /* Infeasible (or exactly at the floors): every free mesh at its floor. */
-        for (size_t k = 0; k < free_count; k++)
-            plan->target[free_index[k]] = min_vertices;
-    } else {
-        double *weight = xmalloc(count * sizeof *weight);
-        double *x = xmalloc(count * sizeof *x);
-        if (max_importance > 0.0) {
-            for (size_t k = 0; k < free_count; k++) {
-                size_t i = free_index[k];
-                weight[i] = meshes[i].importance / max_importance;
-            }
-        } else {
-            for (size_t k = 0; k < free_count; k++)
-                weight[free_index[k]] = 1.0;
-            plan->uniform_fallback = 1;
-            uint64_t free_vertices = total - settled;
-            warn("the %zu meshes to decimate have zero total importance; decimating them "
-                 "uniformly (factor %.4g) instead of by importance",
-                 free_count, (double)(requested - settled) / (double)free_vertices);
+/* Each free mesh's weight: its importance over the largest, or 1 for all (with one warning)
+ * when the free meshes have no importance at all. */
+static void free_weights(const budget_mesh *meshes, const free_meshes *free_set, uint64_t total,
+                         uint64_t requested, double *weight, budget_plan *plan)
+{
+    if (free_set->max_importance > 0.0) {
+        for (size_t k = 0; k < free_set->count; k++) {
+            size_t i = free_set->index[k];
+            weight[i] = meshes[i].importance / free_set->max_importance;
         }
-        solve_factors(meshes, free_index, free_count, weight, x, requested, settled,
-                      min_vertices, plan);
-        round_targets(meshes, free_index, free_count, x, min_vertices, requested, settled,
-                      plan->target);
-        free(x);
-        free(weight);
+        return;
     }
-    free(free_index);
+    for (size_t k = 0; k < free_set->count; k++)
+        weight[free_set->index[k]] = 1.0;
+    plan->uniform_fallback = 1;
+    uint64_t free_vertices = total - free_set->settled;
+    warn("the %zu meshes to decimate have zero total importance; decimating them "
+         "uniformly (factor %.4g) instead of by importance",
+         free_set->count, (double)(requested - free_set->settled) / (double)free_vertices);
+}
 
+/* The targets of the free meshes when the budget is feasible: clamp-and-renormalise factors,
+ * then whole vertices by the largest remainder. */
+static void plan_free_meshes(const budget_mesh *meshes, size_t count, const free_meshes *free_set,
+                             uint64_t total, uint64_t requested, uint64_t min_vertices,
+                             budget_plan *plan)
+{
+    double *weight = xmalloc(count * sizeof *weight);
+    double *x = xmalloc(count * sizeof *x);
+    free_weights(meshes, free_set, total, requested, weight, plan);
+    solve_factors(meshes, free_set->index, free_set->count, weight, x, requested,
+                  free_set->settled, min_vertices, plan);
+    round_targets(meshes, free_set->index, free_set->count, x, min_vertices, requested,
+                  free_set->settled, plan->target);
+    free(x);
+    free(weight);
+}
+
+/* decimate, factor and total_planned from the targets. */
+static void finish_plan(const budget_mesh *meshes, size_t count, budget_plan *plan)
+{
     uint64_t planned = 0;
     for (size_t i = 0; i < count; i++) {
         uint64_t v = meshes[i].vertices;
@@ -255,9 +270,44 @@ int budget_distribute(const budget_mesh *meshes, size_t count, double target_fra
         plan->factor[i] = plan->decimate[i] ? (double)plan->target[i] / (double)v : 1.0;
     }
     plan->total_planned = planned;
+}
+
+int budget_distribute(const budget_mesh *meshes, size_t count, double target_fraction,
+                      uint64_t min_vertices, budget_plan *plan)
+{
+    if (!plan)
+        return error_set(IDMR_EXIT_INPUT, "budget: no plan to fill");
+    memset(plan, 0, sizeof *plan);
+    uint64_t total = 0;
+    if (check_meshes(meshes, count, target_fraction, &total))
+        return -1;
+    uint64_t requested = requested_vertices(target_fraction, total);
+    plan->target = xcalloc(count, sizeof *plan->target);
+    plan->factor = xcalloc(count, sizeof *plan->factor);
+    plan->decimate = xcalloc(count, sizeof *plan->decimate);
+    plan->total_before = total;
+    plan->total_requested = requested;
+    for (size_t i = 0; i < count; i++)
+        plan->target[i] = meshes[i].vertices;
+
+    free_meshes free_set = collect_free_meshes(meshes, count, min_vertices);
+    /* Each free mesh has more than min_vertices vertices, so this cannot overflow. */
+    uint64_t floors = (uint64_t)free_set.count * min_vertices;
+    if (requested == total || free_set.count == 0) {
+        /* Nothing to decimate: every mesh keeps its vertices. */
+    } else if (free_set.settled + floors >= requested) {
+        /* Infeasible (or exactly at the floors): every free mesh at its floor. */
+        for (size_t k = 0; k < free_set.count; k++)
+            plan->target[free_set.index[k]] = min_vertices;
+    } else {
+        plan_free_meshes(meshes, count, &free_set, total, requested, min_vertices, plan);
+    }
+    free(free_set.index);
+
+    finish_plan(meshes, count, plan);
     log_verbose("budget: %zu meshes, %zu free, %llu of %llu vertices requested, %llu planned "
-                "(%u rounds%s)", count, free_count, (unsigned long long)requested,
-                (unsigned long long)total, (unsigned long long)planned, plan->rounds,
+                "(%u rounds%s)", count, free_set.count, (unsigned long long)requested,
+                (unsigned long long)total, (unsigned long long)plan->total_planned, plan->rounds,
                 plan->uniform_fallback ? ", uniform fallback" : "");
     return 0;
 }

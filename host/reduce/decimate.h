@@ -26,7 +26,12 @@
  * vertices at identical positions are welded, faces are attached in order and those that fail
  * are retried until no more attach; faces that still cannot be attached keep copied vertices,
  * which are locked (they cannot be collapsed) and counted apart, so the collapsible surface
- * gets the budget that remains after them. Faces that weld into zero area are dropped. */
+ * gets the budget that remains after them. Faces that weld into zero area are dropped.
+ *
+ * Files (C++, sharing decimate_openmesh.hh): decimate.cc (decimate_mesh, decimate_measure),
+ * decimate_weld.cc (the welded rebuild), decimate_modules.hh (the three modules),
+ * decimate_collapse.cc/.hh (the collapse loop), decimate_parallel.cc (decimate_many),
+ * decimate_stock.cc (decimate_stock_quadric). */
 #ifndef IDMR_DECIMATE_H
 #define IDMR_DECIMATE_H
 
@@ -55,6 +60,8 @@ typedef struct decimate_input {
     int reheap_removed_ring_only; /* tests: re-score as OpenMesh's DecimaterT does */
 } decimate_input;
 
+#define DECIMATE_REMOVED 0xffffffffu /* output_index of a vertex that is not in the output */
+
 typedef struct decimate_output {
     mesh_data mesh;                  /* the decimated mesh (positions as the input's) */
     uint32_t vertices_welded;        /* after welding and copying (the mesh decimated) */
@@ -63,8 +70,14 @@ typedef struct decimate_output {
     uint32_t faces_loose;            /* faces that could not be attached at all */
     uint32_t faces_dropped;          /* faces that welded into zero area */
     uint32_t collapses;
-    uint32_t *collapsed_into; /* per welded vertex: the vertex it was collapsed into, or itself */
-    uint32_t *welded_of;      /* per input vertex: its welded vertex */
+    /* The collapse history, over the decimater's history_count vertices (the welded ones, the
+     * copies of patched and loose faces, and positions left without faces, which are removed
+     * without a collapse). welded_of maps input vertices to them. */
+    uint32_t history_count;
+    uint32_t *welded_of;      /* per input vertex: its decimater vertex */
+    uint32_t *collapsed_into; /* per decimater vertex: the vertex it was collapsed into, or itself
+                                 (a survivor, or a removed vertex without faces) */
+    uint32_t *output_index;   /* per decimater vertex: its index in `mesh`, or DECIMATE_REMOVED */
     uint64_t heap_violations;
 } decimate_output;
 

@@ -1,5 +1,5 @@
 /* reduce.h — `idmr reduce`: the importance pass, the decimation factors across meshes
- * (host/budget.h, paper Eq. 3), the decimation (host/decimate.h), and the reduced scene:
+ * (reduce/budget.h, paper Eq. 3), the decimation (reduce/decimate.h), and the reduced scene:
  *
  *   OUTDIR/scene.xml         the input XML, decimated shapes pointing to meshes/<name>.ply
  *   OUTDIR/meshes/NAME.ply   the decimated meshes (world space)
@@ -11,9 +11,14 @@
  * order of collapses within it, 3.4), "quadric" (OpenMesh's quadric decimation at the uniform
  * factor D, the view-independent baseline; no importance pass) and "importance-quadric"
  * (importance sets each mesh's budget, quadric error metrics choose the collapses: the paper
- * leaves combining the two open, 3.4; this is the combination that needs no weighting). Emitters and meshes named with
- * --keep are never decimated; meshes with at most min_vertices vertices neither. OUTDIR must not
- * exist or be empty unless force is set, and must not be the scene's own directory. */
+ * leaves combining the two open, 3.4; this is the combination that needs no weighting).
+ * Emitters and meshes named with --keep are never decimated; meshes with at most min_vertices
+ * vertices neither. OUTDIR must not exist or be empty unless force is set, and must not be the
+ * scene's own directory.
+ *
+ * Files: reduce.c (the pipeline and its option, importance, budget and writing stages),
+ * reduce_outdir.c, reduce_decimation.c (with the compensation rounds), reduce_report.c; the
+ * stages share the reduce_state of reduce_stages.h. */
 #ifndef IDMR_REDUCE_H
 #define IDMR_REDUCE_H
 

@@ -1,0 +1,81 @@
+// decimate_collapse.hh — internal to the decimation files: our collapse loop (decimate.h says
+// why it is ours), a decimater on OpenMesh's BaseDecimaterT, which runs the modules, with a heap
+// of its own.
+//
+// The heap holds one entry per vertex that has a legal collapse: its priority (the modules'
+// collapse_priority of its best collapse), the importance of that collapse's target (ties go to
+// the least important target, then to the lower vertex index) and a version. Re-scoring a vertex
+// pushes a new entry with a new version; popped entries whose version is not the vertex's latest
+// are stale and skipped. Per vertex: version_, target_ (the halfedge of its best collapse),
+// live_ (has a current entry) and stored_ (that entry, for the heap check of the tests).
+#ifndef IDMR_DECIMATE_COLLAPSE_HH
+#define IDMR_DECIMATE_COLLAPSE_HH
+
+#include <OpenMesh/Tools/Decimater/BaseDecimaterT.hh>
+
+#include <cstdint>
+#include <queue>
+#include <utility>
+#include <vector>
+
+#include "reduce/decimate_modules.hh"
+#include "reduce/decimate_openmesh.hh"
+
+namespace idmr_decimate {
+
+class ReductionDecimater : public OpenMesh::Decimater::BaseDecimaterT<Mesh> {
+  public:
+    typedef OpenMesh::Decimater::BaseDecimaterT<Mesh> Base;
+    explicit ReductionDecimater(Mesh &mesh) : Base(mesh), mesh_(mesh), importance_(nullptr) {}
+
+    // Tie-break source: the importance module, or none.
+    void set_importance(ModImportanceT<Mesh> *importance) { importance_ = importance; }
+
+    // Collapses until target_vertices are left or no legal collapse remains; returns the number
+    // of collapses. verify: after every collapse add the stale heap entries to *violations
+    // (tests); removed_ring_only: re-score as OpenMesh's DecimaterT does (tests).
+    size_t decimate_to(size_t target_vertices, bool verify, bool removed_ring_only,
+                       uint64_t *violations);
+
+  private:
+    struct Entry {
+        float priority;
+        double target_importance;
+        int vertex;
+        unsigned version;
+        bool operator>(const Entry &o) const
+        {
+            if (priority != o.priority)
+                return priority > o.priority;
+            if (target_importance != o.target_importance)
+                return target_importance > o.target_importance;
+            return vertex > o.vertex;
+        }
+    };
+
+    bool collapse_legal(const CollapseInfo &ci);
+    bool opposite_vertices(const CollapseInfo &ci, Mesh::VertexHandle *vl, Mesh::VertexHandle *vr);
+    bool rings_share_only(Mesh::VertexHandle v0, Mesh::VertexHandle v1, Mesh::VertexHandle vl,
+                          Mesh::VertexHandle vr);
+    bool best_collapse(Mesh::VertexHandle v, Entry *entry, Mesh::HalfedgeHandle *target);
+    bool least_important_collapse(Mesh::VertexHandle v, Entry *entry, Mesh::HalfedgeHandle *target);
+    void heap_vertex(Mesh::VertexHandle v);
+    size_t heap_all_vertices();
+    void reheap_after_collapse(const CollapseInfo &ci, bool removed_ring_only,
+                               const std::vector<Mesh::VertexHandle> &removed_ring);
+    uint64_t count_stale();
+
+    Mesh &mesh_;
+    ModImportanceT<Mesh> *importance_;
+    std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap_;
+    std::vector<unsigned> version_;
+    std::vector<Mesh::HalfedgeHandle> target_;
+    std::vector<bool> live_;
+    std::vector<Entry> stored_;
+    std::vector<std::pair<double, Mesh::HalfedgeHandle>> candidates_;
+    std::vector<Mesh::VertexHandle> ring_;
+};
+
+} // namespace idmr_decimate
+
+#endif

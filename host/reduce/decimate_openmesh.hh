@@ -1,0 +1,41 @@
+// decimate_openmesh.hh — internal to the decimation files (decimate*.cc; the C API is decimate.h):
+// the OpenMesh mesh type they share and the welded rebuild that turns a decimate_input into one.
+//
+// Mesh: a triangle mesh with status bits on vertices, edges and faces (deleted, locked) and
+// previous-halfedge links, as OpenMesh's decimater needs. Vertex i of the rebuilt mesh is welded
+// vertex i (decimate_output's welded_of and collapsed_into are in these indices); the patch and
+// loose-face copies follow the welded vertices.
+#ifndef IDMR_DECIMATE_OPENMESH_HH
+#define IDMR_DECIMATE_OPENMESH_HH
+
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <OpenMesh/Tools/Decimater/CollapseInfoT.hh>
+
+#include <vector>
+
+extern "C" {
+#include "reduce/decimate.h"
+}
+
+namespace idmr_decimate {
+
+struct Traits : public OpenMesh::DefaultTraits {
+    VertexAttributes(OpenMesh::Attributes::Status);
+    EdgeAttributes(OpenMesh::Attributes::Status);
+    FaceAttributes(OpenMesh::Attributes::Status);
+    HalfedgeAttributes(OpenMesh::Attributes::PrevHalfedge);
+};
+typedef OpenMesh::TriMesh_ArrayKernelT<Traits> Mesh;
+typedef OpenMesh::Decimater::CollapseInfoT<Mesh> CollapseInfo;
+
+// Builds `mesh` from `in` (decimate_weld.cc): welded vertices, faces attached with retries, the
+// rest patched or loose and locked. Fills out->welded_of and the welding counts of `out`
+// (vertices_welded, vertices_uncollapsible, faces_patched, faces_loose, faces_dropped), and
+// `importance` per mesh vertex (the largest of the input vertices welded into it). Throws what
+// OpenMesh throws.
+void build_welded_mesh(const decimate_input *in, Mesh &mesh, decimate_output *out,
+                       std::vector<double> &importance);
+
+} // namespace idmr_decimate
+
+#endif

@@ -1,0 +1,48 @@
+// decimate_parallel.cc — decimate_many() (see decimate.h): a pool of threads that take meshes,
+// largest first, from one shared counter; each mesh is decimated by decimate_mesh() on its own.
+#include <algorithm>
+#include <atomic>
+#include <cstdio>
+#include <thread>
+#include <vector>
+
+extern "C" {
+#include "reduce/decimate.h"
+#include "core/error.h"
+}
+
+extern "C" size_t decimate_many(const decimate_input *in, decimate_output *out, int *status,
+                                char (*messages)[512], size_t count, decimate_method method,
+                                unsigned int threads)
+{
+    std::vector<size_t> order(count);
+    for (size_t i = 0; i < count; i++)
+        order[i] = i;
+    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+        return in[a].triangle_count > in[b].triangle_count;
+    });
+    std::atomic<size_t> next(0), failed(0);
+    auto worker = [&]() {
+        for (;;) {
+            size_t k = next.fetch_add(1);
+            if (k >= count)
+                return;
+            size_t i = order[k];
+            status[i] = decimate_mesh(&in[i], method, &out[i]);
+            if (status[i]) {
+                failed++;
+                if (messages)
+                    std::snprintf(messages[i], sizeof messages[i], "%s", error_message());
+            }
+        }
+    };
+    if (threads < 1)
+        threads = 1;
+    std::vector<std::thread> pool;
+    for (unsigned int t = 1; t < threads && t < count; t++)
+        pool.emplace_back(worker);
+    worker();
+    for (auto &thread : pool)
+        thread.join();
+    return failed;
+}

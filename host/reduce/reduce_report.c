@@ -1,0 +1,88 @@
+/* reduce_report.c — report.json of `idmr reduce` (see reduce.h for the keys): the importance
+ * report's object (method importance) or a bare one with the scene, meshes and seconds, to which
+ * the reduction adds its options, vertex totals, stage seconds and per-mesh figures. */
+#include "reduce/reduce_stages.h"
+
+#include "passes/importance_outputs.h"
+
+/* The keys the importance report would have given: the scene and empty meshes and seconds. */
+static cJSON *report_without_importance(const scene *s)
+{
+    cJSON *root = cJSON_CreateObject();
+    cJSON_AddStringToObject(root, "scene", s->file);
+    cJSON_AddItemToObject(root, "meshes", cJSON_CreateArray());
+    cJSON_AddItemToObject(root, "seconds", cJSON_CreateObject());
+    return root;
+}
+
+static void add_totals(cJSON *root, const reduce_state *st)
+{
+    const reduce_options *o = st->options;
+    cJSON_AddNumberToObject(root, "target", o->target);
+    cJSON_AddStringToObject(root, "method", reduce_method_name(o));
+    cJSON_AddNumberToObject(root, "max_normal_angle", o->max_normal_angle);
+    cJSON_AddNumberToObject(root, "min_vertices", (double)o->min_vertices);
+    cJSON_AddNumberToObject(root, "vertices_before", (double)st->plan.total_before);
+    cJSON_AddNumberToObject(root, "vertices_requested", (double)st->plan.total_requested);
+    cJSON_AddNumberToObject(root, "vertices_planned", (double)st->plan.total_planned);
+    cJSON_AddNumberToObject(root, "vertices_after", (double)st->vertices_after);
+    cJSON_AddNumberToObject(root, "vertices_missed",
+                            (double)st->vertices_after - (double)st->plan.total_requested);
+    cJSON_AddBoolToObject(root, "uniform_fallback", st->plan.uniform_fallback);
+    cJSON_AddNumberToObject(root, "compensation_rounds", st->compensation_rounds);
+}
+
+static void add_seconds(cJSON *seconds, const reduce_state *st)
+{
+    cJSON_AddNumberToObject(seconds, "importance", st->seconds_importance);
+    cJSON_AddNumberToObject(seconds, "budget", st->seconds_budget);
+    cJSON_AddNumberToObject(seconds, "decimation", st->seconds_decimation);
+    cJSON_AddNumberToObject(seconds, "write", st->seconds_write);
+}
+
+/* The reduction's figures of mesh m, added to its entry (created when the report has none). */
+static void add_mesh(cJSON *meshes, const reduce_state *st, size_t m)
+{
+    const scene_mesh *in = &st->scene->meshes[m];
+    cJSON *mesh = cJSON_GetArrayItem(meshes, (int)m);
+    if (!mesh) {
+        mesh = cJSON_CreateObject();
+        cJSON_AddStringToObject(mesh, "name", in->name);
+        cJSON_AddNumberToObject(mesh, "vertices", in->vertex_count);
+        cJSON_AddNumberToObject(mesh, "triangles", in->triangle_count);
+        cJSON_AddItemToArray(meshes, mesh);
+    }
+    int decimated = st->plan.decimate[m];
+    const decimate_output *out = &st->output[m];
+    cJSON_AddNumberToObject(mesh, "factor", st->plan.factor[m]);
+    cJSON_AddBoolToObject(mesh, "decimated", decimated);
+    cJSON_AddNumberToObject(mesh, "vertices_before", in->vertex_count);
+    cJSON_AddNumberToObject(mesh, "vertices_target", (double)st->plan.target[m]);
+    cJSON_AddNumberToObject(mesh, "vertices_after",
+                            decimated ? out->mesh.vertex_count : in->vertex_count);
+    cJSON_AddNumberToObject(mesh, "triangles_after",
+                            decimated ? out->mesh.triangle_count : in->triangle_count);
+    if (decimated) {
+        cJSON_AddNumberToObject(mesh, "vertices_welded", out->vertices_welded);
+        cJSON_AddNumberToObject(mesh, "vertices_uncollapsible", out->vertices_uncollapsible);
+        cJSON_AddNumberToObject(mesh, "faces_patched", out->faces_patched);
+        cJSON_AddNumberToObject(mesh, "faces_loose", out->faces_loose);
+        cJSON_AddStringToObject(mesh, "file", st->ply[m]);
+    }
+    cJSON_AddBoolToObject(mesh, "pinned", reduce_mesh_pinned(st->options, in));
+}
+
+cJSON *reduce_report_json(const reduce_state *st)
+{
+    const reduce_options *o = st->options;
+    cJSON *root = o->method == DECIMATE_IMPORTANCE
+                      ? importance_report_json(st->scene, st->device, &o->importance,
+                                               &st->importance)
+                      : report_without_importance(st->scene);
+    add_totals(root, st);
+    add_seconds(cJSON_GetObjectItem(root, "seconds"), st);
+    cJSON *meshes = cJSON_GetObjectItem(root, "meshes");
+    for (size_t m = 0; m < st->scene->mesh_count; m++)
+        add_mesh(meshes, st, m);
+    return root;
+}

@@ -1,0 +1,63 @@
+/* reduce_stages.h — internal to host/reduce/reduce*.c: the state that the stages of
+ * reduce_run() share, and the stages that live in files of their own.
+ *
+ * reduce_run() (reduce.c) runs the stages in order, each filling its part of the state and
+ * reusing what the earlier ones left there, and stops at the first that fails:
+ *
+ *   options      --target in (0, 1], every --keep name a mesh of the scene (reduce.c)
+ *   outdir       OUTDIR created, empty unless forced, not the scene's own (reduce_outdir.c)
+ *   importance   the importance pass (method importance only) and per-vertex importance of
+ *                every mesh, computed once for the decimation and the importance outputs:
+ *                importance, vertex_importance (reduce.c)
+ *   budget       decimation inputs and the plan of Eq. 3: input, plan (reduce.c)
+ *   decimation   the planned meshes, then compensation rounds: output, compensation_rounds,
+ *                vertices_after (reduce_decimation.c)
+ *   write        meshes/NAME.ply and scene.xml: ply, meshes_written (reduce.c)
+ *   report       report.json (with the importance outputs) and the closing line (reduce.c; the
+ *                JSON is built in reduce_report.c)
+ * Per-mesh arrays are indexed like s->meshes and hold mesh_count entries. */
+#ifndef IDMR_REDUCE_STAGES_H
+#define IDMR_REDUCE_STAGES_H
+
+#include <cjson/cJSON.h>
+
+#include "reduce/budget.h"
+#include "reduce/reduce.h"
+
+typedef struct reduce_state {
+    device *device;
+    scene *scene;
+    const char *outdir;
+    const reduce_options *options;
+    size_t count; /* meshes in the scene */
+
+    importance_result importance;  /* importance: per scene triangle */
+    double **vertex_importance;    /* importance: per mesh, per vertex; NULL without the pass */
+    decimate_input *input;         /* budget: what each mesh is decimated from */
+    budget_plan plan;              /* budget: targets and factors; the decimation lowers targets
+                                      in compensation rounds */
+    decimate_output *output;       /* decimation: per mesh the plan decimates */
+    unsigned int compensation_rounds;
+    uint64_t vertices_after;       /* decimation: vertices of the reduced scene */
+    char **ply;                    /* write: per decimated mesh, its file relative to outdir */
+    size_t meshes_written;
+
+    double seconds_importance, seconds_budget, seconds_decimation, seconds_write;
+} reduce_state;
+
+/* Emitters and meshes named with --keep are never decimated. */
+int reduce_mesh_pinned(const reduce_options *o, const scene_mesh *mesh);
+
+/* OUTDIR: created if missing, with OUTDIR/meshes; an existing non-empty one needs force; never
+ * the scene's own directory (inputs are never written). Returns 0, or -1 with the error set. */
+int reduce_outdir_prepare(const char *outdir, const char *scene_dir, int force);
+
+/* Decimates the meshes the plan decimates, in parallel, largest first, then runs the
+ * compensation rounds. Returns 0, or -1 with the error set. */
+int reduce_decimation(reduce_state *st);
+
+/* report.json's content: the importance report's keys (method importance) or the scene name,
+ * then the reduction's options, totals, seconds and per-mesh figures. The caller deletes it. */
+cJSON *reduce_report_json(const reduce_state *st);
+
+#endif

@@ -1,0 +1,223 @@
+/* test_reduce_scenes.c — `idmr reduce` end to end through reduce_run() (host/reduce/reduce.c) on
+ * scenes the tests write: the Cornell box with more meshes to decimate, and a scene of two knots.
+ * One case a test; the helpers are in reduce_common.h. The quadric method throughout: no
+ * importance pass needed.
+ *
+ *   quadric      every decimated mesh gets the same factor (up to rounding); no importance files
+ *   compensation vertices a mesh cannot give up are taken from the others, meeting the target
+ *   file names   two mesh names that make the same PLY name get distinct files */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cjson/cJSON.h>
+#include <cmocka.h>
+
+#include "reduce_common.h"
+
+/* ---- quadric: one factor for all ---- */
+
+/* DIR/scene.xml: the shipped Cornell box, its knot by absolute path, plus `extra` shapes. */
+static void write_cornell_plus(const char *dir, const char *extra, char *scene_path, size_t size)
+{
+    size_t length;
+    char *xml = read_file(CORNELL, &length);
+    char *end = strstr(xml, "</scene>");
+    assert_non_null(end);
+    char knot[4096];
+    assert_non_null(realpath(KNOT, knot));
+    *end = 0;
+    const char *relative = "value=\"meshes/knot.ply\"";
+    char *first = strstr(xml, relative);
+    assert_non_null(first);
+    *first = 0;
+    snprintf(scene_path, size, "%s/scene.xml", dir);
+    FILE *f = fopen(scene_path, "w");
+    assert_non_null(f);
+    fprintf(f, "%svalue=\"%s\"%s%s</scene>\n", xml, knot, first + strlen(relative), extra);
+    assert_int_equal(fclose(f), 0);
+    free(xml);
+}
+
+/* The Cornell box plus a second knot (moved) and a sphere (994 vertices): three meshes to
+ * decimate. The file names the knot by its absolute path (it is written elsewhere). */
+static void write_three_mesh_scene(const char *dir, char *scene_path, size_t size)
+{
+    char knot[4096], extra[8192];
+    assert_non_null(realpath(KNOT, knot));
+    snprintf(extra, sizeof extra,
+             "    <shape type=\"ply\" id=\"knot2\">\n"
+             "        <string name=\"filename\" value=\"%s\"/>\n"
+             "        <transform name=\"to_world\">\n"
+             "            <scale value=\"0.5\"/>\n"
+             "            <translate x=\"-0.4\" y=\"0.4\" z=\"0.2\"/>\n"
+             "        </transform>\n"
+             "        <ref id=\"knot\"/>\n"
+             "    </shape>\n"
+             "    <shape type=\"sphere\" id=\"ball\">\n"
+             "        <point name=\"center\" x=\"0.5\" y=\"0.5\" z=\"-0.3\"/>\n"
+             "        <float name=\"radius\" value=\"0.2\"/>\n"
+             "        <ref id=\"white\"/>\n"
+             "    </shape>\n",
+             knot);
+    write_cornell_plus(dir, extra, scene_path, size);
+}
+
+/* Equal factors: (V_D - fixed) / free vertices for every decimated mesh, each within a vertex
+ * of it, and the output within 1 % (or one vertex) of the factor. */
+static void check_uniform_factors(const cJSON *report, const scene *s, const char **decimated,
+                                  size_t count)
+{
+    double fixed = 0, free_vertices = 0;
+    for (size_t m = 0; m < s->mesh_count; m++) {
+        int is_free = 0;
+        for (size_t k = 0; k < count; k++)
+            is_free |= strcmp(s->meshes[m].name, decimated[k]) == 0;
+        if (is_free)
+            free_vertices += s->meshes[m].vertex_count;
+        else
+            fixed += s->meshes[m].vertex_count;
+    }
+    double uniform = (number(report, "vertices_requested") - fixed) / free_vertices;
+    for (size_t k = 0; k < count; k++) {
+        const cJSON *entry = mesh_entry(report, decimated[k]);
+        double factor = number(entry, "factor"), before = number(entry, "vertices_before");
+        double after = number(entry, "vertices_after");
+        print_message("  quadric %s: factor %.5f (uniform %.5f), %g -> %g vertices\n",
+                      decimated[k], factor, uniform, before, after);
+        assert_true(is_decimated(entry));
+        assert_true(fabs(factor * before - uniform * before) <= 1.0);
+        assert_true(fabs(after - factor * before) <= fmax(1.0, 0.01 * factor * before));
+    }
+}
+
+static void test_quadric(void **state)
+{
+    char in_dir[64], scene_path[4200];
+    temp_dir(in_dir, sizeof in_dir);
+    write_three_mesh_scene(in_dir, scene_path, sizeof scene_path);
+    scene *s = load(scene_path);
+    reduce_options o;
+    small_options(&o);
+    o.method = DECIMATE_QUADRIC;
+    reduction r;
+    reduction_run(&r, s, &o);
+    assert_false(file_exists(r.dir, "importance.png"));
+    assert_false(file_exists(r.dir, "importance"));
+    const char *decimated[] = {"knot", "knot2", "ball"};
+    for (int k = 0; k < 3; k++) {
+        char file[64];
+        snprintf(file, sizeof file, "meshes/%s.ply", decimated[k]);
+        assert_true(file_exists(r.dir, file));
+    }
+    assert_method(r.report, "quadric");
+    uint64_t total = check_report_against_output(r.report, s, r.out);
+    check_uniform_factors(r.report, s, decimated, 3);
+    double requested = number(r.report, "vertices_requested");
+    assert_true(fabs((double)total - requested) <= 0.01 * requested);
+    reduction_free(&r);
+    scene_free(s);
+    remove_tree(in_dir);
+}
+
+/* DIR/confetti.obj: 200 separate triangles (no collapse is legal), 600 vertices. */
+static void write_confetti(const char *dir)
+{
+    char path[4200];
+    snprintf(path, sizeof path, "%s/confetti.obj", dir);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    for (int t = 0; t < 200; t++) {
+        float x = -0.9f + 0.09f * (float)(t % 20), y = -0.9f + 0.09f * (float)(t / 20);
+        fprintf(f, "v %g %g 0.5\nv %g %g 0.5\nv %g %g 0.5\n", x, y, x + 0.05f, y, x, y + 0.05f);
+    }
+    for (int t = 0; t < 200; t++)
+        fprintf(f, "f %d %d %d\n", 3 * t + 1, 3 * t + 2, 3 * t + 3);
+    assert_int_equal(fclose(f), 0);
+}
+
+/* The confetti beside the knot, reduced with uniform factors: the confetti keeps all 600
+ * vertices, and the compensation rounds take them from the knot, so the total still meets the
+ * target exactly. */
+static void test_compensation(void **state)
+{
+    char in_dir[64], scene_path[4200];
+    temp_dir(in_dir, sizeof in_dir);
+    write_confetti(in_dir);
+    write_cornell_plus(in_dir,
+                       "    <shape type=\"obj\" id=\"confetti\">\n"
+                       "        <string name=\"filename\" value=\"confetti.obj\"/>\n"
+                       "        <ref id=\"white\"/>\n"
+                       "    </shape>\n",
+                       scene_path, sizeof scene_path);
+    scene *s = load(scene_path);
+    reduce_options o;
+    small_options(&o);
+    o.method = DECIMATE_QUADRIC;
+    o.target = 0.2;
+    reduction r;
+    reduction_run(&r, s, &o);
+    const cJSON *confetti = mesh_entry(r.report, "confetti");
+    print_message("  confetti %g -> %g vertices; total %g for %g requested, %g compensation "
+                  "rounds\n",
+                  number(confetti, "vertices_before"), number(confetti, "vertices_after"),
+                  number(r.report, "vertices_after"), number(r.report, "vertices_requested"),
+                  number(r.report, "compensation_rounds"));
+    assert_true(number(confetti, "vertices_after") == 600);
+    assert_true(number(r.report, "compensation_rounds") >= 1);
+    assert_true(number(r.report, "vertices_after") == number(r.report, "vertices_requested"));
+    reduction_free(&r);
+    scene_free(s);
+    remove_tree(in_dir);
+}
+
+/* Two meshes whose names make the same file name ("knot x" and "knot_x") get two files. */
+static void test_file_name_collision(void **state)
+{
+    char in_dir[64], scene_path[4200], knot[4096];
+    temp_dir(in_dir, sizeof in_dir);
+    assert_non_null(realpath(KNOT, knot));
+    snprintf(scene_path, sizeof scene_path, "%s/scene.xml", in_dir);
+    FILE *f = fopen(scene_path, "w");
+    assert_non_null(f);
+    fprintf(f,
+            "<scene version=\"3.0.0\">\n"
+            "  <sensor type=\"perspective\"><transform name=\"to_world\">"
+            "<lookat origin=\"0, 0, 4\" target=\"0, 0, 0\" up=\"0, 1, 0\"/></transform></sensor>\n"
+            "  <shape type=\"ply\" id=\"knot x\">"
+            "<string name=\"filename\" value=\"%s\"/></shape>\n"
+            "  <shape type=\"ply\" id=\"knot_x\"><string name=\"filename\" value=\"%s\"/>\n"
+            "    <transform name=\"to_world\"><translate x=\"2\"/></transform></shape>\n"
+            "</scene>\n",
+            knot, knot);
+    assert_int_equal(fclose(f), 0);
+    scene *s = load(scene_path);
+    reduce_options o;
+    small_options(&o);
+    o.method = DECIMATE_QUADRIC; /* no light needed */
+    reduction r;
+    reduction_run(&r, s, &o);
+    assert_true(file_exists(r.dir, "meshes/knot_x.ply"));
+    assert_true(file_exists(r.dir, "meshes/knot_x.2.ply"));
+    assert_int_equal(r.out->mesh_count, 2);
+    /* Each kept its own geometry: the second is the one moved by x = 2. */
+    assert_true(r.out->meshes[1].positions[0] > r.out->meshes[0].positions[0] + 1.0f);
+    reduction_free(&r);
+    scene_free(s);
+    remove_tree(in_dir);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_quadric),
+        cmocka_unit_test(test_compensation),
+        cmocka_unit_test(test_file_name_collision),
+    };
+    return cmocka_run_group_tests_name("reduce_scenes", tests, group_setup, group_teardown);
+}
