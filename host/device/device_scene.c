@@ -74,104 +74,137 @@ uint64_t device_scene_geometry_bytes(const scene *s)
            (emitters ? emitters : 1) * (sizeof(float) + 12 * sizeof(float));
 }
 
+/* What the upload copies to the device, built on the host; counts are at least 1 (a buffer
+ * of zero bytes is invalid, kernels never read the unused entry). */
+typedef struct upload_arrays {
+    size_t triangles, lights, emitters;
+    float *normals;           /* 4 per triangle */
+    uint32_t *material_of;    /* per triangle */
+    idmr_light *light;        /* the scene's lights with cdf_offset filled */
+    float *light_cdf;         /* per light */
+    float *emitter_cdf;       /* per emitter triangle */
+    float *emitter_triangles; /* 12 per emitter triangle */
+} upload_arrays;
+
+/* Lights are chosen in proportion to power (uniformly if none has any): their CDF. */
+static void fill_light_cdf(const scene *s, upload_arrays *a)
+{
+    double total_power = 0, running = 0;
+    for (size_t i = 0; i < s->light_count; i++)
+        total_power += s->lights[i].power > 0 ? s->lights[i].power : 0;
+    for (size_t i = 0; i < s->light_count; i++) {
+        running += s->lights[i].power > 0 ? s->lights[i].power : 0;
+        a->light_cdf[i] = total_power > 0 ? (float)(running / total_power)
+                                          : (float)(i + 1) / (float)s->light_count;
+    }
+    if (s->light_count)
+        a->light_cdf[s->light_count - 1] = 1.0f;
+}
+
+/* Area light l's triangles from entry `at` on: v0, v1 - v0, v2 - v0, and the CDF of their
+ * areas (each light's stretch ends at 1). Returns the entry after them. */
+static size_t fill_emitter(const scene *s, idmr_light *l, size_t at, upload_arrays *a)
+{
+    l->cdf_offset = (unsigned int)at;
+    /* An area light is one mesh's triangles; its total area is l->area (scene_finalize). */
+    const scene_mesh *mesh = &s->meshes[scene_mesh_of_triangle(s, l->first_triangle)];
+    uint32_t first = (uint32_t)(l->first_triangle - mesh->first_triangle);
+    double area_running = 0;
+    for (uint32_t t = 0; t < l->triangle_count; t++, at++) {
+        const uint32_t *ix = &mesh->indices[3 * (size_t)(first + t)];
+        const float *v0 = &mesh->positions[3 * (size_t)ix[0]];
+        const float *v1 = &mesh->positions[3 * (size_t)ix[1]];
+        const float *v2 = &mesh->positions[3 * (size_t)ix[2]];
+        for (int k = 0; k < 3; k++) {
+            a->emitter_triangles[12 * at + k] = v0[k];
+            a->emitter_triangles[12 * at + 4 + k] = v1[k] - v0[k];
+            a->emitter_triangles[12 * at + 8 + k] = v2[k] - v0[k];
+        }
+        area_running += scene_mesh_triangle_area(mesh, first + t);
+        a->emitter_cdf[at] = l->area > 0 ? (float)(area_running / l->area)
+                                         : (float)(t + 1) / (float)l->triangle_count;
+    }
+    if (l->triangle_count)
+        a->emitter_cdf[at - 1] = 1.0f;
+    return at;
+}
+
+static void arrays_build(const scene *s, upload_arrays *a)
+{
+    memset(a, 0, sizeof *a);
+    a->triangles = s->triangle_count ? (size_t)s->triangle_count : 1;
+    a->lights = s->light_count ? s->light_count : 1;
+    for (size_t i = 0; i < s->light_count; i++)
+        if (s->lights[i].kind == IDMR_LIGHT_AREA)
+            a->emitters += s->lights[i].triangle_count;
+    a->emitters = a->emitters ? a->emitters : 1;
+    a->normals = xcalloc(4 * a->triangles, sizeof *a->normals);
+    a->material_of = xcalloc(a->triangles, sizeof *a->material_of);
+    triangle_data(s, a->normals, a->material_of);
+    a->light = xcalloc(a->lights, sizeof *a->light);
+    memcpy(a->light, s->lights, s->light_count * sizeof *a->light);
+    a->light_cdf = xcalloc(a->lights, sizeof *a->light_cdf);
+    fill_light_cdf(s, a);
+    a->emitter_cdf = xcalloc(a->emitters, sizeof *a->emitter_cdf);
+    a->emitter_triangles = xcalloc(12 * a->emitters, sizeof *a->emitter_triangles);
+    size_t at = 0;
+    for (size_t i = 0; i < s->light_count; i++)
+        if (a->light[i].kind == IDMR_LIGHT_AREA)
+            at = fill_emitter(s, &a->light[i], at, a);
+}
+
+static void arrays_free(upload_arrays *a)
+{
+    free(a->normals);
+    free(a->material_of);
+    free(a->light);
+    free(a->light_cdf);
+    free(a->emitter_cdf);
+    free(a->emitter_triangles);
+}
+
+static int arrays_upload(device *d, const scene *s, const upload_arrays *a, device_scene *out)
+{
+    idmr_material no_material; /* a scene without materials still binds the buffer */
+    memset(&no_material, 0, sizeof no_material);
+    size_t materials = s->material_count ? s->material_count : 1;
+    const void *material_data = s->material_count ? (const void *)s->materials : &no_material;
+    cl_mem_flags read = CL_MEM_READ_ONLY;
+    return device_buffer(d, read, 4 * sizeof(float) * a->triangles, a->normals,
+                         "triangle normals", &out->triangle_normals) ||
+                   device_buffer(d, read, sizeof(uint32_t) * a->triangles, a->material_of,
+                                 "triangle materials", &out->triangle_materials) ||
+                   device_buffer(d, read, sizeof(idmr_material) * materials, material_data,
+                                 "materials", &out->materials) ||
+                   device_buffer(d, read, sizeof(idmr_light) * a->lights, a->light, "lights",
+                                 &out->lights) ||
+                   device_buffer(d, read, sizeof(float) * a->lights, a->light_cdf, "light CDF",
+                                 &out->light_cdf) ||
+                   device_buffer(d, read, sizeof(float) * a->emitters, a->emitter_cdf,
+                                 "emitter CDF", &out->emitter_cdf) ||
+                   device_buffer(d, read, 12 * sizeof(float) * a->emitters, a->emitter_triangles,
+                                 "emitter triangles", &out->emitter_triangles)
+               ? -1
+               : 0;
+}
+
 int device_scene_upload(device *d, const scene *s, const bvh *b, device_scene *out)
 {
     memset(out, 0, sizeof *out);
-    size_t triangles = (size_t)s->triangle_count;
-    float *normals = xmalloc(4 * sizeof(float) * (triangles ? triangles : 1));
-    uint32_t *material_of = xmalloc(sizeof(uint32_t) * (triangles ? triangles : 1));
-    triangle_data(s, normals, material_of);
-
-    /* Lights: power CDF; area lights' triangles by area. */
-    size_t light_count = s->light_count ? s->light_count : 1;
-    idmr_light *lights = xcalloc(light_count, sizeof *lights);
-    memcpy(lights, s->lights, s->light_count * sizeof *lights);
-    float *light_cdf = xcalloc(light_count, sizeof *light_cdf);
-    double total_power = 0;
-    for (size_t i = 0; i < s->light_count; i++)
-        total_power += lights[i].power > 0 ? lights[i].power : 0;
-    double running = 0;
-    for (size_t i = 0; i < s->light_count; i++) {
-        running += lights[i].power > 0 ? lights[i].power : 0;
-        light_cdf[i] = total_power > 0 ? (float)(running / total_power)
-                                       : (float)(i + 1) / (float)s->light_count;
-    }
-    if (s->light_count)
-        light_cdf[s->light_count - 1] = 1.0f;
-
-    size_t emitter_count = 0;
-    for (size_t i = 0; i < s->light_count; i++)
-        if (lights[i].kind == IDMR_LIGHT_AREA)
-            emitter_count += lights[i].triangle_count;
-    float *emitter_cdf = xcalloc(emitter_count ? emitter_count : 1, sizeof *emitter_cdf);
-    float *emitter_triangles = xcalloc(12 * (emitter_count ? emitter_count : 1), sizeof(float));
-    size_t at = 0;
-    for (size_t i = 0; i < s->light_count; i++) {
-        idmr_light *l = &lights[i];
-        if (l->kind != IDMR_LIGHT_AREA)
-            continue;
-        l->cdf_offset = (unsigned int)at;
-        /* An area light is one mesh's triangles; its total area is l->area (scene_finalize). */
-        const scene_mesh *mesh = &s->meshes[scene_mesh_of_triangle(s, l->first_triangle)];
-        uint32_t first = (uint32_t)(l->first_triangle - mesh->first_triangle);
-        double area_running = 0;
-        for (uint32_t t = 0; t < l->triangle_count; t++, at++) {
-            const uint32_t *ix = &mesh->indices[3 * (size_t)(first + t)];
-            const float *v0 = &mesh->positions[3 * (size_t)ix[0]];
-            const float *v1 = &mesh->positions[3 * (size_t)ix[1]];
-            const float *v2 = &mesh->positions[3 * (size_t)ix[2]];
-            for (int k = 0; k < 3; k++) {
-                emitter_triangles[12 * at + k] = v0[k];
-                emitter_triangles[12 * at + 4 + k] = v1[k] - v0[k];
-                emitter_triangles[12 * at + 8 + k] = v2[k] - v0[k];
-            }
-            area_running += scene_mesh_triangle_area(mesh, first + t);
-            emitter_cdf[at] = l->area > 0 ? (float)(area_running / l->area)
-                                          : (float)(t + 1) / (float)l->triangle_count;
-        }
-        if (l->triangle_count)
-            emitter_cdf[at - 1] = 1.0f;
-    }
-
     for (int k = 0; k < 3; k++)
         out->center[k] = 0.5f * (s->bbox_min[k] + s->bbox_max[k]);
     out->radius = (float)(0.5 * scene_diagonal(s));
     out->ray_epsilon = device_scene_ray_epsilon(s);
     out->light_count = (unsigned int)s->light_count;
-
-    idmr_material no_material; /* a scene without materials still binds the buffer */
-    memset(&no_material, 0, sizeof no_material);
-    int status =
-        upload_bvh(d, b, &out->nodes, &out->leaves) ||
-        device_buffer(d, CL_MEM_READ_ONLY, 4 * sizeof(float) * (triangles ? triangles : 1), normals,
-                      "triangle normals", &out->triangle_normals) ||
-        device_buffer(d, CL_MEM_READ_ONLY, sizeof(uint32_t) * (triangles ? triangles : 1),
-                      material_of, "triangle materials", &out->triangle_materials) ||
-        device_buffer(d, CL_MEM_READ_ONLY,
-                      sizeof(idmr_material) * (s->material_count ? s->material_count : 1),
-                      s->material_count ? (void *)s->materials : (void *)&no_material,
-                      "materials", &out->materials) ||
-        device_buffer(d, CL_MEM_READ_ONLY, light_count * sizeof *lights, lights, "lights",
-                      &out->lights) ||
-        device_buffer(d, CL_MEM_READ_ONLY, light_count * sizeof *light_cdf, light_cdf,
-                      "light CDF", &out->light_cdf) ||
-        device_buffer(d, CL_MEM_READ_ONLY, (emitter_count ? emitter_count : 1) * sizeof(float),
-                      emitter_cdf, "emitter CDF", &out->emitter_cdf) ||
-        device_buffer(d, CL_MEM_READ_ONLY, 12 * sizeof(float) * (emitter_count ? emitter_count : 1),
-                      emitter_triangles, "emitter triangles", &out->emitter_triangles);
     out->bvh_bytes = bvh_device_bytes(b);
     out->bytes = out->bvh_bytes + device_scene_geometry_bytes(s);
-    free(normals);
-    free(material_of);
-    free(lights);
-    free(light_cdf);
-    free(emitter_cdf);
-    free(emitter_triangles);
-    if (status) {
+    upload_arrays arrays;
+    arrays_build(s, &arrays);
+    int status = upload_bvh(d, b, &out->nodes, &out->leaves) || arrays_upload(d, s, &arrays, out);
+    arrays_free(&arrays);
+    if (status)
         device_scene_release(out);
-        return -1;
-    }
-    return 0;
+    return status ? -1 : 0;
 }
 
 /* The buffers in SCENE_BUFFERS order (kernels/lib/scene.h). */
