@@ -16,6 +16,7 @@
 
 #include "device/bvh.h"
 #include "device/device.h"
+#include "device/program.h"
 #include "core/error.h"
 #include "passes/importance.h"
 #include "io/mitsuba.h"

@@ -13,6 +13,7 @@
 #include <cmocka.h>
 
 #include "device/device.h"
+#include "device/program.h"
 #include "core/error.h"
 #include "idmr/bvh_layout.h"
 #include "idmr/camera.h"

@@ -17,6 +17,7 @@
 
 #include "device/bvh.h"
 #include "device/device.h"
+#include "device/program.h"
 #include "core/error.h"
 #include "idmr/ray.h"
 #include "io/mesh_io.h"

@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "device/device.h"
+#include "device/program.h"
 #include "passes/kernel_variants.h"
 
 /* Builds every variant; 0, or -1 with the error set (the failing variant's build log). */

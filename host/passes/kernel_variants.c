@@ -1,4 +1,5 @@
 /* kernel_variants.c — the list of kernel program variants (see kernel_variants.h). */
+#include "device/program.h"
 #include "passes/kernel_variants.h"
 
 #include <stdio.h>

@@ -1,6 +1,7 @@
 /* sppm.c — the SPPM core under both passes (see sppm.h): upload, program, the core's buffers,
  * per-iteration parameters, the radius schedule, the iteration loop, progress, timings and
  * snapshots. A pass adds its work through the hooks of its sppm_pass. */
+#include "device/program.h"
 #include "passes/sppm.h"
 
 #include <math.h>
