@@ -56,6 +56,8 @@ static _Thread_local int last_build_cached;
 
 int device_last_build_cached(void) { return last_build_cached; }
 
+#define FNV1A_START 14695981039346656037ull
+
 static uint64_t fnv1a(uint64_t hash, const void *bytes, size_t size)
 {
     const unsigned char *p = bytes;
@@ -115,7 +117,7 @@ uint64_t device_program_key(const device *d, const char *file, const char *optio
     char version[256] = "", driver[256] = "";
     clGetPlatformInfo(d->info.platform, CL_PLATFORM_VERSION, sizeof version - 1, version, NULL);
     clGetDeviceInfo(d->info.id, CL_DRIVER_VERSION, sizeof driver - 1, driver, NULL);
-    uint64_t hash = 14695981039346656037ull;
+    uint64_t hash = FNV1A_START;
     const char *parts[] = {d->info.name, version, driver, file, options};
     for (size_t i = 0; i < sizeof parts / sizeof *parts; i++)
         hash = fnv1a(hash, parts[i], strlen(parts[i]) + 1);
@@ -155,10 +157,48 @@ static const char *cache_directory(char *out, size_t size)
     return out;
 }
 
+/* A cache file: this header, then the binary. The binary's size and hash are checked before it
+ * is handed to the OpenCL runtime, which does not survive a truncated or damaged binary. */
+#define CACHE_MAGIC "IDMRPRG1"
+typedef struct cache_header {
+    char magic[8];
+    uint64_t size;
+    uint64_t hash; /* FNV-1a of the binary */
+} cache_header;
+
+/* The binary of cache file `path`, or NULL when there is none or it does not check out (a
+ * damaged file is warned about; the caller rebuilds and replaces it). */
+static unsigned char *read_cached_binary(const char *path, size_t *size)
+{
+    size_t length;
+    unsigned char *file = (unsigned char *)read_text_file(path, &length);
+    if (!file)
+        return NULL;
+    cache_header header;
+    if (length < sizeof header || memcmp(file, CACHE_MAGIC, sizeof header.magic) != 0) {
+        log_verbose("program cache %s: not a cache file of this version", path);
+        free(file);
+        return NULL;
+    }
+    memcpy(&header, file, sizeof header);
+    const unsigned char *binary = file + sizeof header;
+    if (header.size != length - sizeof header ||
+        fnv1a(FNV1A_START, binary, (size_t)header.size) != header.hash) {
+        warn("program cache file %s is damaged (its size or checksum does not match its "
+             "header); rebuilding it",
+             path);
+        free(file);
+        return NULL;
+    }
+    memmove(file, binary, (size_t)header.size);
+    *size = (size_t)header.size;
+    return file;
+}
+
 static cl_program load_cached(device *d, const char *path, const char *options)
 {
     size_t size;
-    unsigned char *binary = (unsigned char *)read_text_file(path, &size);
+    unsigned char *binary = read_cached_binary(path, &size);
     if (!binary)
         return NULL;
     cl_int status, err;
@@ -185,13 +225,21 @@ static void store_cached(cl_program program, const char *path)
             CL_SUCCESS ||
         size == 0)
         return;
-    unsigned char *binary = xmalloc(size);
-    unsigned char *binaries[] = {binary};
-    if (clGetProgramInfo(program, CL_PROGRAM_BINARIES, sizeof binaries, binaries, NULL) ==
-            CL_SUCCESS &&
-        files_write_atomic(path, binary, size) != 0)
+    cache_header header;
+    unsigned char *file = xmalloc(sizeof header + size);
+    unsigned char *binaries[] = {file + sizeof header};
+    if (clGetProgramInfo(program, CL_PROGRAM_BINARIES, sizeof binaries, binaries, NULL) !=
+        CL_SUCCESS) {
+        free(file);
+        return;
+    }
+    memcpy(header.magic, CACHE_MAGIC, sizeof header.magic);
+    header.size = size;
+    header.hash = fnv1a(FNV1A_START, binaries[0], size);
+    memcpy(file, &header, sizeof header);
+    if (files_write_atomic(path, file, sizeof header + size) != 0)
         log_verbose("program cache: %s", error_message());
-    free(binary);
+    free(file);
 }
 
 int device_build_program(device *d, const char *file, const char *options, cl_program *program)
