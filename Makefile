@@ -68,9 +68,16 @@ $(BUILD)/host/%.cc.o: host/%.cc | deps
 	@mkdir -p $(dir $@)
 	$(CXX) $(CPPFLAGS) $(CXXFLAGS) -c -o $@ $<
 
-$(BUILD)/tests/%: tests/%.c $(BUILD)/libidmr.a | deps
+# tests/device_test.c, the device-test driver, is linked into every test and bench program.
+TEST_DRIVER := $(BUILD)/tests/device_test.o
+
+$(TEST_DRIVER): tests/device_test.c | deps
 	@mkdir -p $(dir $@)
-	$(CC) $(CPPFLAGS) -Itests $(CFLAGS) $(LDFLAGS) -o $@ $< $(BUILD)/libidmr.a -lcmocka $(LDLIBS)
+	$(CC) $(CPPFLAGS) -Itests $(CFLAGS) -c -o $@ $<
+
+$(BUILD)/tests/%: tests/%.c $(TEST_DRIVER) $(BUILD)/libidmr.a | deps
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) -Itests $(CFLAGS) $(LDFLAGS) -o $@ $< $(TEST_DRIVER) $(BUILD)/libidmr.a -lcmocka $(LDLIBS)
 
 # The decimation benchmark compares with meshoptimizer (a reference, not a dependency of idmr).
 $(BUILD)/tests/bench_decimation: tests/bench_decimation.c $(BUILD)/libidmr.a | deps
