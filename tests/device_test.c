@@ -11,6 +11,8 @@
 
 #include "core/error.h"
 
+const char device_test_sweep[] = "work-group sweep";
+
 static device current;
 static int has_current;
 static size_t sweep_sizes[DEVICE_TEST_MAX_SIZES];
@@ -119,7 +121,37 @@ static int fail_group(const char *suite, const char *what, const char *why)
 
 /* ---- one device ---- */
 
-static int run_on_device(const char *suite, const device_test *tests, size_t count,
+static int is_sweep(const struct CMUnitTest *test)
+{
+    return test->initial_state == (const void *)device_test_sweep;
+}
+
+/* The device's group: every test once, each sweep once per size, named for the device. */
+static struct CMUnitTest *expand(const struct CMUnitTest *tests, size_t count, const char *label,
+                                 size_t *cases)
+{
+    *cases = 0;
+    for (size_t i = 0; i < count; i++)
+        *cases += is_sweep(&tests[i]) ? sweep_count : 1;
+    struct CMUnitTest *group = xcalloc(*cases, sizeof *group);
+    size_t c = 0;
+    for (size_t i = 0; i < count; i++)
+        for (size_t j = 0; j < (is_sweep(&tests[i]) ? sweep_count : 1); j++, c++) {
+            char name[640];
+            group[c] = tests[i];
+            if (is_sweep(&tests[i])) {
+                snprintf(name, sizeof name, "%s(local=%zu) on %s", tests[i].name,
+                         sweep_sizes[j], label);
+                group[c].initial_state = &sweep_sizes[j];
+            } else {
+                snprintf(name, sizeof name, "%s on %s", tests[i].name, label);
+            }
+            group[c].name = xstrdup(name);
+        }
+    return group;
+}
+
+static int run_on_device(const char *suite, const struct CMUnitTest *tests, size_t count,
                          CMFixtureFunction setup, CMFixtureFunction teardown,
                          const device_info *info)
 {
@@ -142,27 +174,8 @@ static int run_on_device(const char *suite, const device_test *tests, size_t cou
     sweep_count = device_test_local_sizes(max, sweep_sizes);
     has_current = 1;
 
-    size_t cases = 0;
-    for (size_t i = 0; i < count; i++)
-        cases += tests[i].sweep ? sweep_count : 1;
-    struct CMUnitTest *group = xcalloc(cases, sizeof *group);
-    char **names = xcalloc(cases, sizeof *names);
-    size_t c = 0;
-    for (size_t i = 0; i < count; i++)
-        for (size_t j = 0; j < (tests[i].sweep ? sweep_count : 1); j++, c++) {
-            char name[640];
-            if (tests[i].sweep)
-                snprintf(name, sizeof name, "%s(local=%zu) on %s", tests[i].name, sweep_sizes[j],
-                         label);
-            else
-                snprintf(name, sizeof name, "%s on %s", tests[i].name, label);
-            names[c] = xstrdup(name);
-            group[c].name = names[c];
-            group[c].test_func = tests[i].function;
-            group[c].setup_func = tests[i].setup;
-            group[c].teardown_func = tests[i].teardown;
-            group[c].initial_state = tests[i].sweep ? &sweep_sizes[j] : NULL;
-        }
+    size_t cases;
+    struct CMUnitTest *group = expand(tests, count, label, &cases);
 
     char group_name[400], sizes[64] = "";
     snprintf(group_name, sizeof group_name, "%s on %s", suite, label);
@@ -173,9 +186,8 @@ static int run_on_device(const char *suite, const device_test *tests, size_t cou
            current.info.platform_name, max, sizes);
     int failed = _cmocka_run_group_tests(group_name, group, cases, setup, teardown);
 
-    for (c = 0; c < cases; c++)
-        free(names[c]);
-    free(names);
+    for (size_t c = 0; c < cases; c++)
+        free((char *)group[c].name);
     free(group);
     has_current = 0;
     sweep_count = 0;
@@ -183,7 +195,7 @@ static int run_on_device(const char *suite, const device_test *tests, size_t cou
     return failed > 0 ? failed : failed < 0 ? 1 : 0;
 }
 
-int device_test_run(const char *suite, const device_test *tests, size_t count,
+int device_test_run(const char *suite, const struct CMUnitTest *tests, size_t count,
                     CMFixtureFunction setup, CMFixtureFunction teardown)
 {
     device_info *list;
@@ -208,4 +220,15 @@ int device_test_run(const char *suite, const device_test *tests, size_t count,
     free(indices);
     free(list);
     return failed;
+}
+
+int device_test_main(const char *suite, const struct CMUnitTest *host_tests, size_t host_count,
+                     const struct CMUnitTest *tests, size_t count, CMFixtureFunction setup,
+                     CMFixtureFunction teardown)
+{
+    char host_suite[256];
+    snprintf(host_suite, sizeof host_suite, "%s (host)", suite);
+    int failed = _cmocka_run_group_tests(host_suite, host_tests, host_count, NULL, NULL);
+    failed += device_test_run(suite, tests, count, setup, teardown);
+    return failed != 0;
 }

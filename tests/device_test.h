@@ -14,14 +14,18 @@
  * (<name>)": a failure line names device and case. Tests reach the device through
  * device_test_device(). Per-device state (a built program, a cached run) is made again for each
  * device: build it in the group setup or on first use, and free it in the group teardown.
+ * Before each group a line "[ DEVICE   ] <suite>: device <index> (<name>), ..." names the
+ * device, its largest work-group and the sweep's sizes; after the last, "[ DEVICES  ] <suite>
+ * ran on N of M device(s): ..." lists the devices tested.
  *
- * Work-group sizes: a test listed with DEVICE_TEST_SWEEP runs once per size of
+ * Work-group sizes: a test listed with DEVICE_TEST_SWEEP(f) runs once per size of
  * device_test_local_sizes() — 0 (the runtime chooses), 1, 7 and 64, each capped at the device's
- * CL_DEVICE_MAX_WORK_GROUP_SIZE, without repeats — as the case "<test>(local=<size>)", which
- * reads its size with device_test_local_size(state).
+ * CL_DEVICE_MAX_WORK_GROUP_SIZE, without repeats — as the case "f(local=<size>)", which reads
+ * its size with device_test_local_size(state). Other entries are cmocka's own (cmocka_unit_test,
+ * cmocka_unit_test_setup_teardown, a named prestate entry) and run once per device as they are.
  *
- *     static const device_test tests[] = {
- *         DEVICE_TEST(test_camera_pass_matches_embree),
+ *     const struct CMUnitTest tests[] = {
+ *         cmocka_unit_test(test_camera_pass_matches_embree),
  *         DEVICE_TEST_SWEEP(test_same_sums_for_any_local_size),
  *     };
  *     return DEVICE_TEST_RUN("importance", tests, group_setup, group_teardown) != 0;
@@ -40,24 +44,27 @@
 
 #include "device/device.h"
 
-typedef struct device_test {
-    const char *name;
-    CMUnitTestFunction function;
-    CMFixtureFunction setup, teardown; /* around the test, as in cmocka; may be NULL */
-    int sweep;                         /* 1: once per work-group size */
-} device_test;
+/* The initial state that marks an entry of a test list as a work-group sweep. */
+extern const char device_test_sweep[];
+#define DEVICE_TEST_SWEEP(f) {#f, f, NULL, NULL, (void *)device_test_sweep}
 
-#define DEVICE_TEST(f) {#f, f, NULL, NULL, 0}
-#define DEVICE_TEST_SWEEP(f) {#f, f, NULL, NULL, 1}
-#define DEVICE_TEST_SETUP_TEARDOWN(f, setup, teardown) {#f, f, setup, teardown, 0}
-
-/* Runs `count` tests on each selected device (see above), with `setup` and `teardown` (either
- * may be NULL) around each device's group. Returns the number of failed tests, counting a
- * device that could not be tested, or no device at all, as one failed test. */
-int device_test_run(const char *suite, const device_test *tests, size_t count,
+/* Runs the `count` tests on each selected device (see above), with `setup` and `teardown`
+ * (either may be NULL) around each device's group. Returns the number of failed tests,
+ * counting a device that could not be tested, or no device at all, as one failed test. */
+int device_test_run(const char *suite, const struct CMUnitTest *tests, size_t count,
                     CMFixtureFunction setup, CMFixtureFunction teardown);
 #define DEVICE_TEST_RUN(suite, tests, setup, teardown)                                        \
     device_test_run(suite, tests, sizeof(tests) / sizeof((tests)[0]), setup, teardown)
+
+/* main() of a program with host tests too: the `host_count` host tests once, as the cmocka
+ * group "<suite> (host)", then the device tests as device_test_run(). Returns the exit
+ * status: 0 when every test passed, else 1. */
+int device_test_main(const char *suite, const struct CMUnitTest *host_tests, size_t host_count,
+                     const struct CMUnitTest *tests, size_t count, CMFixtureFunction setup,
+                     CMFixtureFunction teardown);
+#define DEVICE_TEST_MAIN(suite, host_tests, tests, setup, teardown)                           \
+    device_test_main(suite, host_tests, sizeof(host_tests) / sizeof((host_tests)[0]), tests,   \
+                     sizeof(tests) / sizeof((tests)[0]), setup, teardown)
 
 /* The device of the running group (NULL outside device_test_run()). */
 device *device_test_device(void);

@@ -216,7 +216,7 @@ static inline double imp_mesh_total(const scene *s, size_t m, const double *per_
     return sum;
 }
 
-/* ---- runs kept for the tests of one device ---- */
+/* ---- cases: a scene and a small run of the pass, made once per device ---- */
 
 /* The importance tests' small run: `iterations` of `photons` paths, seed 7. */
 static inline void imp_small_options(importance_options *o, unsigned int iterations,
@@ -226,24 +226,33 @@ static inline void imp_small_options(importance_options *o, unsigned int iterati
     o->sppm.seed = 7;
 }
 
-/* One run of the importance pass, with its snapshot, made on first use by the tests of one
- * device (several small tests check one formula each on the same run) and freed by the group
- * teardown with imp_run_free(). */
-typedef struct imp_run {
+/* A scene and the run of the pass on it, with its snapshot. The first fields say what to run:
+ *     static imp_case head_on = {.make = head_on_scene, .iterations = 1, .photons = 20000};
+ * imp_run() makes the run on first use by the tests of one device — several small tests each
+ * check one formula on it — and imp_teardown(), the group teardown, frees every case run. */
+typedef struct imp_case {
+    scene *(*make)(void);             /* builds or loads the scene */
+    unsigned int iterations, photons; /* imp_small_options() */
+    float resolution;                 /* of the hit-point image; 0: the film's */
+    double tolerance;                 /* the early stop; 0: none */
     scene *s;
     importance_options options;
     importance_snapshot snapshot;
     importance_result r;
     int ready;
-} imp_run;
+} imp_case;
 
-static inline void imp_run_free(imp_run *run)
+/* A test of a case: the cmocka entry of test f with case c as its state, named "f(c)". */
+#define IMP_CASE_TEST(f, c) {#f "(" #c ")", f, NULL, NULL, &(c)}
+
+static inline void imp_case_free(imp_case *c)
 {
-    importance_result_free(&run->r);
-    importance_snapshot_free(&run->snapshot);
-    if (run->s)
-        scene_free(run->s);
-    memset(run, 0, sizeof *run);
+    importance_result_free(&c->r);
+    importance_snapshot_free(&c->snapshot);
+    if (c->s)
+        scene_free(c->s);
+    c->s = NULL;
+    c->ready = 0;
 }
 
 /* Every sum is finite and >= 0 (checked once per run). */
@@ -256,20 +265,48 @@ static inline void imp_expect_all_finite(const scene *s, const importance_result
                      s->file, t, r->camera[t], r->light[t]);
 }
 
-/* The run of the scene that make() builds with options o (a snapshot is added), made once. */
-static inline const imp_run *imp_run_once(imp_run *run, scene *(*make)(void),
-                                          const importance_options *o)
+/* The cases run on this device, for imp_teardown(). */
+static imp_case *imp_cases_run[32];
+static size_t imp_cases_run_count;
+
+/* Case c, run (once). */
+static inline const imp_case *imp_run(imp_case *c)
 {
-    if (run->ready)
-        return run;
-    imp_run_free(run);
-    run->s = make();
-    run->options = *o;
-    run->options.snapshot = &run->snapshot;
-    test_run_importance(run->s, NULL, &run->options, &run->r);
-    imp_expect_all_finite(run->s, &run->r);
-    run->ready = 1;
-    return run;
+    if (c->ready)
+        return c;
+    imp_case_free(c); /* what an earlier, failed run left */
+    size_t i = 0;
+    while (i < imp_cases_run_count && imp_cases_run[i] != c)
+        i++;
+    if (i == sizeof imp_cases_run / sizeof *imp_cases_run)
+        fail_msg("imp_run: more than %zu cases", i);
+    if (i == imp_cases_run_count)
+        imp_cases_run[imp_cases_run_count++] = c;
+    c->s = c->make();
+    imp_small_options(&c->options, c->iterations, c->photons);
+    if (c->resolution > 0)
+        c->options.sppm.resolution = c->resolution;
+    c->options.tolerance = c->tolerance;
+    c->options.snapshot = &c->snapshot;
+    test_run_importance(c->s, NULL, &c->options, &c->r);
+    imp_expect_all_finite(c->s, &c->r);
+    c->ready = 1;
+    return c;
+}
+
+/* Group teardown: frees every case run on the device. */
+static inline int imp_teardown(void **state)
+{
+    for (size_t i = 0; i < imp_cases_run_count; i++)
+        imp_case_free(imp_cases_run[i]);
+    imp_cases_run_count = 0;
+    return 0;
+}
+
+/* The case of an IMP_CASE_TEST, run. */
+static inline const imp_case *imp_run_state(void **state)
+{
+    return imp_run(*state);
 }
 
 /* ---- scenes shared by several test programs ---- */

@@ -255,13 +255,11 @@ int main(void)
         cmocka_unit_test(test_bad_device_lists),
         cmocka_unit_test(test_sweep_sizes_capped_at_the_device),
     };
-    static const device_test tests[] = {
-        DEVICE_TEST(test_failed_build_reports_log_and_options),
-        DEVICE_TEST(test_missing_kernel_file_is_named),
-        DEVICE_TEST(test_oversized_buffer_is_refused_with_sizes),
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_failed_build_reports_log_and_options),
+        cmocka_unit_test(test_missing_kernel_file_is_named),
+        cmocka_unit_test(test_oversized_buffer_is_refused_with_sizes),
         DEVICE_TEST_SWEEP(test_run_covers_the_range_once),
     };
-    int failed = cmocka_run_group_tests_name("device (host)", host_tests, NULL, NULL);
-    failed += DEVICE_TEST_RUN("device", tests, kernels_setup, kernels_teardown);
-    return failed != 0;
+    return DEVICE_TEST_MAIN("device", host_tests, tests, kernels_setup, kernels_teardown);
 }

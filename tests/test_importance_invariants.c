@@ -27,30 +27,30 @@ static scene *white_wall_scene(void)
     return imp_hidden_wall_scene(0.9f);
 }
 
-static imp_run black_wall_run, white_wall_run;
+static imp_case black_wall = {.make = black_wall_scene, .iterations = 2, .photons = 50000};
+static imp_case white_wall = {.make = white_wall_scene, .iterations = 2, .photons = 50000};
 
-static const imp_run *hidden_wall(int white)
+/* Mesh `name` of case c gets camera importance > 0 (camera = 1) or exactly 0 (camera = 0),
+ * and light importance likewise. */
+static void expect_mesh_importance(imp_case *c, const char *name, int camera, int light)
 {
-    importance_options o;
-    imp_small_options(&o, 2, 50000);
-    return white ? imp_run_once(&white_wall_run, white_wall_scene, &o)
-                 : imp_run_once(&black_wall_run, black_wall_scene, &o);
-}
-
-/* Σ over mesh `name` of the camera (camera = 1) or light importance. */
-static double mesh_total(const imp_run *run, const char *name, int camera)
-{
+    const imp_case *run = imp_run(c);
     int m = imp_mesh_index(run->s, name);
     assert_true(m >= 0);
-    return imp_mesh_total(run->s, (size_t)m, camera ? run->r.camera : run->r.light);
+    double camera_sum = imp_mesh_total(run->s, (size_t)m, run->r.camera);
+    double light_sum = imp_mesh_total(run->s, (size_t)m, run->r.light);
+    print_message("  %s: camera importance %.4g, light importance %.4g\n", name, camera_sum,
+                  light_sum);
+    assert_true(camera ? camera_sum > 0 : camera_sum == 0.0);
+    assert_true(light ? light_sum > 0 : light_sum == 0.0);
 }
 
 /* The light does reach the wall (more than 1000 photon vertices on it), and the camera sees
- * the floor only: every hit point on it, the floor's camera importance > 0. */
+ * the floor only: every hit point on it, the floor seen and lit. */
 static void test_hidden_wall_is_lit_and_unseen(void **state)
 {
     for (int white = 0; white < 2; white++) {
-        const imp_run *run = hidden_wall(white);
+        const imp_case *run = imp_run(white ? &white_wall : &black_wall);
         const importance_snapshot *snap = &run->snapshot;
         size_t on_wall = 0;
         for (size_t p = 0; p < snap->core.params.path_count; p++)
@@ -62,23 +62,18 @@ static void test_hidden_wall_is_lit_and_unseen(void **state)
         print_message("  wall albedo %.1f: %zu photon vertices on it\n", white ? 0.9 : 0.0,
                       on_wall);
         assert_true(on_wall > 1000);
-        assert_true(mesh_total(run, "floor", 1) > 0);
+        expect_mesh_importance(white ? &white_wall : &black_wall, "floor", 1, 1);
     }
 }
 
 static void test_black_hidden_wall_gets_nothing(void **state)
 {
-    const imp_run *run = hidden_wall(0);
-    assert_true(mesh_total(run, "wall", 1) == 0.0);
-    assert_true(mesh_total(run, "wall", 0) == 0.0);
+    expect_mesh_importance(&black_wall, "wall", 0, 0);
 }
 
 static void test_white_hidden_wall_gets_light_importance_only(void **state)
 {
-    const imp_run *run = hidden_wall(1);
-    print_message("  wall: light importance %.6g\n", mesh_total(run, "wall", 0));
-    assert_true(mesh_total(run, "wall", 1) == 0.0);
-    assert_true(mesh_total(run, "wall", 0) > 0.0);
+    expect_mesh_importance(&white_wall, "wall", 0, 1);
 }
 
 /* ---- a mesh inside a closed box ---- */
@@ -89,42 +84,26 @@ static void test_white_hidden_wall_gets_light_importance_only(void **state)
 static scene *enclosed_scene(void)
 {
     scene *s = scene_create("enclosed.xml");
-    uint32_t white = imp_diffuse(s, "white", 0.8f, 0), black = imp_diffuse(s, "black", 0, 0);
-    const float fc[3] = {0, -1.01f, 0}, fu[3] = {0, 0, 4}, fv[3] = {4, 0, 0};
-    imp_add_quad(s, "floor", white, fc, fu, fv);
-    const float lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
-    imp_add_box(s, "box", black, lo, hi);
-    const float qc[3] = {0, 0, 0}, qu[3] = {0, 0, 0.5f}, qv[3] = {0.5f, 0, 0};
-    imp_add_quad(s, "inside", white, qc, qu, qv);
-    const float light[3] = {0.5f, 3, 1.5f}, eye[3] = {0, 2, 5}, target[3] = {0, 0, 0},
-                up[3] = {0, 1, 0};
-    imp_point_light(s, light, 1.0f);
-    imp_look_at(s, eye, target, up, 64, 48, 0.6f);
+    uint32_t white = imp_diffuse(s, "white", 0.8f, 0);
+    imp_add_quad(s, "floor", white, V3(0, -1.01f, 0), V3(0, 0, 4), V3(4, 0, 0));
+    imp_add_box(s, "box", imp_diffuse(s, "black", 0, 0), V3(-1, -1, -1), V3(1, 1, 1));
+    imp_add_quad(s, "inside", white, V3(0, 0, 0), V3(0, 0, 0.5f), V3(0.5f, 0, 0));
+    imp_point_light(s, V3(0.5f, 3, 1.5f), 1.0f);
+    imp_look_at(s, V3(0, 2, 5), V3(0, 0, 0), V3(0, 1, 0), 64, 48, 0.6f);
     return test_finalize_scene(s);
 }
 
-static imp_run enclosed_run;
-
-static const imp_run *enclosed(void)
-{
-    importance_options o;
-    imp_small_options(&o, 2, 50000);
-    return imp_run_once(&enclosed_run, enclosed_scene, &o);
-}
+static imp_case enclosed = {.make = enclosed_scene, .iterations = 2, .photons = 50000};
 
 static void test_enclosed_mesh_gets_nothing(void **state)
 {
-    const imp_run *run = enclosed();
-    assert_true(mesh_total(run, "inside", 1) == 0.0);
-    assert_true(mesh_total(run, "inside", 0) == 0.0);
+    expect_mesh_importance(&enclosed, "inside", 0, 0);
 }
 
 /* The box around it is seen and lit (so the zeros above are not those of an empty run). */
 static void test_enclosing_box_is_seen_and_lit(void **state)
 {
-    const imp_run *run = enclosed();
-    assert_true(mesh_total(run, "box", 1) > 0);
-    assert_true(mesh_total(run, "box", 0) > 0);
+    expect_mesh_importance(&enclosed, "box", 1, 1);
 }
 
 /* ---- degenerate triangles ---- */
@@ -149,29 +128,19 @@ static scene *degenerate_scene(void)
     uint32_t *indices = malloc(sizeof ix);
     memcpy(positions, p, sizeof p);
     memcpy(indices, ix, sizeof ix);
-    scene_mesh *m = scene_add_mesh(s, "floor", "ply", NULL, 0, 9, positions, 6, indices, NULL);
-    m->material = white;
-    const float light[3] = {0, 2, 0.5f}, eye[3] = {0, 2, 3}, target[3] = {0, 0, 0},
-                up[3] = {0, 1, 0};
-    imp_point_light(s, light, 1.0f);
-    imp_look_at(s, eye, target, up, 48, 48, 0.6f);
+    scene_add_mesh(s, "floor", "ply", NULL, 0, 9, positions, 6, indices, NULL)->material = white;
+    imp_point_light(s, V3(0, 2, 0.5f), 1.0f);
+    imp_look_at(s, V3(0, 2, 3), V3(0, 0, 0), V3(0, 1, 0), 48, 48, 0.6f);
     return test_finalize_scene(s);
 }
 
-static imp_run degenerate_run;
-
-static const imp_run *degenerate(void)
-{
-    importance_options o;
-    imp_small_options(&o, 2, 50000);
-    return imp_run_once(&degenerate_run, degenerate_scene, &o);
-}
+static imp_case degenerate = {.make = degenerate_scene, .iterations = 2, .photons = 50000};
 
 /* The traversal never returns a zero-area triangle: their sums are exactly 0, and
  * importance_triangle() is 0 (no division by a zero area). */
 static void test_degenerate_triangles_get_zero(void **state)
 {
-    const imp_run *run = degenerate();
+    const imp_case *run = imp_run(&degenerate);
     const int degenerate_triangles[] = {1, 2, 4, 5};
     for (int i = 0; i < 4; i++) {
         int t = degenerate_triangles[i];
@@ -184,7 +153,7 @@ static void test_degenerate_triangles_get_zero(void **state)
 /* T0 and T3 are seen and lit: I = (camera + light) / (iterations · area) = (c + l) / (2 · 2). */
 static void test_degenerate_neighbours_importance(void **state)
 {
-    const imp_run *run = degenerate();
+    const imp_case *run = imp_run(&degenerate);
     for (int t = 0; t < 4; t += 3) {
         assert_true(run->r.camera[t] > 0 && run->r.light[t] > 0);
         double it = importance_triangle(&run->r, run->s, 1.0f, t);
@@ -198,7 +167,7 @@ static void test_degenerate_neighbours_importance(void **state)
  * area), so its importance is T0's. */
 static void test_degenerate_vertex_importance(void **state)
 {
-    const imp_run *run = degenerate();
+    const imp_case *run = imp_run(&degenerate);
     double vertex[9];
     importance_mesh_vertices(&run->r, run->s, 0, 1.0f, vertex);
     for (int v = 0; v < 9; v++) {
@@ -367,21 +336,15 @@ static scene *straight_cornell_large(void)
     return straight_cornell(1e4f);
 }
 
-static imp_run scaled_run[3];
-
-/* Run i (0: unscaled, 1: 1e-3, 2: 1e4): 2 iterations of 20k paths at 64 x 64 hit points. */
-static const imp_run *scaled(int i)
-{
-    scene *(*const make[3])(void) = {straight_cornell_unscaled, straight_cornell_small,
-                                     straight_cornell_large};
-    importance_options o;
-    imp_small_options(&o, 2, 20000);
-    o.sppm.resolution = 0.25f;
-    return imp_run_once(&scaled_run[i], make[i], &o);
-}
+/* Unscaled, by 1e-3 and by 1e4: 2 iterations of 20k paths at 64 x 64 hit points. */
+static imp_case scaled[3] = {
+    {.make = straight_cornell_unscaled, .iterations = 2, .photons = 20000, .resolution = 0.25f},
+    {.make = straight_cornell_small, .iterations = 2, .photons = 20000, .resolution = 0.25f},
+    {.make = straight_cornell_large, .iterations = 2, .photons = 20000, .resolution = 0.25f},
+};
 
 /* Each mesh's share of the total importance (camera = 0) or camera importance (camera = 1). */
-static void mesh_shares(const imp_run *run, int camera, double *share)
+static void mesh_shares(const imp_case *run, int camera, double *share)
 {
     double total = 0;
     for (size_t m = 0; m < run->s->mesh_count; m++) {
@@ -401,7 +364,7 @@ static void mesh_shares(const imp_run *run, int camera, double *share)
 static void expect_same_shares(int i, int camera, double relative, double absolute)
 {
     double base[16], now[16], worst = 0;
-    const imp_run *reference = scaled(0), *run = scaled(i);
+    const imp_case *reference = imp_run(&scaled[0]), *run = imp_run(&scaled[i]);
     assert_true(run->s->mesh_count <= 16);
     assert_int_equal(run->s->mesh_count, reference->s->mesh_count);
     mesh_shares(reference, camera, base);
@@ -436,37 +399,33 @@ static void test_large_scale_keeps_importance_shares(void **state)
 
 static int group_teardown(void **state)
 {
-    imp_run *runs[] = {&black_wall_run, &white_wall_run, &enclosed_run, &degenerate_run,
-                       &scaled_run[0], &scaled_run[1], &scaled_run[2]};
-    for (size_t i = 0; i < sizeof runs / sizeof *runs; i++)
-        imp_run_free(runs[i]);
     importance_result_free(&cornell_base);
     if (cornell) {
         bvh_free(&cornell_bvh);
         scene_free(cornell);
         cornell = NULL;
     }
-    return 0;
+    return imp_teardown(state);
 }
 
 int main(void)
 {
-    static const device_test tests[] = {
-        DEVICE_TEST(test_hidden_wall_is_lit_and_unseen),
-        DEVICE_TEST(test_black_hidden_wall_gets_nothing),
-        DEVICE_TEST(test_white_hidden_wall_gets_light_importance_only),
-        DEVICE_TEST(test_enclosed_mesh_gets_nothing),
-        DEVICE_TEST(test_enclosing_box_is_seen_and_lit),
-        DEVICE_TEST(test_degenerate_triangles_get_zero),
-        DEVICE_TEST(test_degenerate_neighbours_importance),
-        DEVICE_TEST(test_degenerate_vertex_importance),
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_hidden_wall_is_lit_and_unseen),
+        cmocka_unit_test(test_black_hidden_wall_gets_nothing),
+        cmocka_unit_test(test_white_hidden_wall_gets_light_importance_only),
+        cmocka_unit_test(test_enclosed_mesh_gets_nothing),
+        cmocka_unit_test(test_enclosing_box_is_seen_and_lit),
+        cmocka_unit_test(test_degenerate_triangles_get_zero),
+        cmocka_unit_test(test_degenerate_neighbours_importance),
+        cmocka_unit_test(test_degenerate_vertex_importance),
         DEVICE_TEST_SWEEP(test_same_sums_for_any_local_size),
-        DEVICE_TEST(test_same_sums_without_int64_atomics),
-        DEVICE_TEST(test_other_seed_other_sums),
-        DEVICE_TEST(test_small_scale_keeps_camera_shares),
-        DEVICE_TEST(test_small_scale_keeps_importance_shares),
-        DEVICE_TEST(test_large_scale_keeps_camera_shares),
-        DEVICE_TEST(test_large_scale_keeps_importance_shares),
+        cmocka_unit_test(test_same_sums_without_int64_atomics),
+        cmocka_unit_test(test_other_seed_other_sums),
+        cmocka_unit_test(test_small_scale_keeps_camera_shares),
+        cmocka_unit_test(test_small_scale_keeps_importance_shares),
+        cmocka_unit_test(test_large_scale_keeps_camera_shares),
+        cmocka_unit_test(test_large_scale_keeps_importance_shares),
     };
     return DEVICE_TEST_RUN("importance invariants", tests, NULL, group_teardown) != 0;
 }

@@ -26,29 +26,18 @@ static scene *glass_of_water_scene(void)
     return s;
 }
 
-static imp_run cornell_run, glass_of_water_run;
+/* 256 x 256 film -> 64 x 64 hit points; 1280 x 720 -> 64 x 36. */
+static imp_case cornell = {
+    .make = cornell_scene, .iterations = 1, .photons = 20000, .resolution = 0.25f};
+static imp_case glass_of_water = {
+    .make = glass_of_water_scene, .iterations = 1, .photons = 20000, .resolution = 0.05f};
 
-static const imp_run *cornell(void)
-{
-    importance_options o;
-    imp_small_options(&o, 1, 20000);
-    o.sppm.resolution = 0.25f; /* 256 x 256 film -> 64 x 64 hit points */
-    return imp_run_once(&cornell_run, cornell_scene, &o);
-}
-
-static const imp_run *glass_of_water(void)
-{
-    importance_options o;
-    imp_small_options(&o, 1, 20000);
-    o.sppm.resolution = 0.05f;
-    return imp_run_once(&glass_of_water_run, glass_of_water_scene, &o);
-}
-
-/* ---- formulas ---- */
+/* ---- formulas, each a test of a case (IMP_CASE_TEST) ---- */
 
 /* Valid hit points, more than half of the pixels. */
-static void expect_most_pixels_valid(const importance_snapshot *snap)
+static void test_most_pixels_hold_hit_points(void **state)
 {
+    const importance_snapshot *snap = &imp_run_state(state)->snapshot;
     unsigned int pixels = snap->core.params.width * snap->core.params.height, valid = 0;
     for (unsigned int i = 0; i < pixels; i++)
         valid += snap->core.hit_points[i].valid != 0;
@@ -56,60 +45,72 @@ static void expect_most_pixels_valid(const importance_snapshot *snap)
     assert_true(valid > pixels / 2);
 }
 
-/* Every stored vertex's gather count equals the brute-force count over all valid hit points
- * with the kernel's float test (|hp - v|² < r², hp normal · vertex normal > 1e-3); empty slots
- * hold 0. A disagreement is allowed only for a hit point within 1e-5 relative of the radius
- * (the device's dot() may round differently); there may be at most a handful. */
-static void expect_gather_counts(const importance_snapshot *snap)
+/* The valid hit points of a snapshot into a new array; *count gets how many. */
+static idmr_hit_point *valid_hit_points(const importance_snapshot *snap, unsigned int *count)
 {
-    const idmr_sppm_params *pp = &snap->core.params;
-    unsigned int pixels = pp->width * pp->height, valid_count = 0;
+    unsigned int pixels = snap->core.params.width * snap->core.params.height;
     idmr_hit_point *valid = malloc(pixels * sizeof *valid);
+    *count = 0;
     for (unsigned int i = 0; i < pixels; i++)
         if (snap->core.hit_points[i].valid)
-            valid[valid_count++] = snap->core.hit_points[i];
-    float r = pp->radius, r2 = r * r;
+            valid[(*count)++] = snap->core.hit_points[i];
+    return valid;
+}
+
+/* The hit points that gather vertex v by the kernel's float test (kernels/lib/hit_point_grid.h:
+ * |hp - v|² < r², hp normal · vertex normal > 1e-3); *near gets those within 1e-5 relative of
+ * the radius, which the device's dot() may round to the other side. */
+static uint32_t brute_force_gathers(const idmr_hit_point *valid, unsigned int count,
+                                    const idmr_photon_vertex *v, float r2, uint32_t *near)
+{
+    uint32_t gathers = 0;
+    *near = 0;
+    for (unsigned int i = 0; i < count; i++) {
+        const idmr_hit_point *hp = &valid[i];
+        float dx = hp->position[0] - v->position[0];
+        float dy = hp->position[1] - v->position[1];
+        float dz = hp->position[2] - v->position[2];
+        float d2 = dx * dx + dy * dy + dz * dz;
+        float side = hp->normal[0] * v->normal[0] + hp->normal[1] * v->normal[1] +
+                     hp->normal[2] * v->normal[2];
+        if (!(side > 1e-3f))
+            continue;
+        gathers += d2 < r2;
+        *near += fabsf(d2 - r2) <= 1e-5f * r2;
+    }
+    return gathers;
+}
+
+/* Every stored vertex's gather count equals the brute-force count over all valid hit points;
+ * empty slots hold 0. A disagreement is allowed only by hit points at the radius
+ * (brute_force_gathers); there may be at most a handful. */
+static void test_gather_counts_match_brute_force(void **state)
+{
+    const importance_snapshot *snap = &imp_run_state(state)->snapshot;
+    const idmr_sppm_params *pp = &snap->core.params;
+    unsigned int valid_count;
+    idmr_hit_point *valid = valid_hit_points(snap, &valid_count);
     size_t vertices = 0, mismatches = 0, boundary_disagreements = 0, nonzero = 0, empty_errors = 0;
-    uint64_t total = 0;
-    for (uint32_t path = 0; path < pp->path_count; path++)
-        for (uint32_t j = 0; j < IDMR_PATH_VERTICES; j++) {
-            size_t slot = (size_t)path * IDMR_PATH_VERTICES + j;
-            if (j >= snap->core.path_length[path]) {
-                empty_errors += snap->gathered[slot] != 0;
-                continue;
-            }
-            const idmr_photon_vertex *v = &snap->vertices[slot];
-            uint32_t count = 0, near = 0;
-            for (unsigned int i = 0; i < valid_count; i++) {
-                const idmr_hit_point *hp = &valid[i];
-                float dx = hp->position[0] - v->position[0];
-                float dy = hp->position[1] - v->position[1];
-                float dz = hp->position[2] - v->position[2];
-                float d2 = dx * dx + dy * dy + dz * dz;
-                float side = hp->normal[0] * v->normal[0] + hp->normal[1] * v->normal[1] +
-                             hp->normal[2] * v->normal[2];
-                if (!(side > 1e-3f)) /* the kernel's side test (kernels/lib/hit_point_grid.h) */
-                    continue;
-                count += d2 < r2;
-                near += fabsf(d2 - r2) <= 1e-5f * r2;
-            }
-            uint32_t on_device = snap->gathered[slot];
-            vertices++;
-            total += count;
-            nonzero += count > 0;
-            if (on_device == count)
-                continue;
-            uint32_t difference = on_device > count ? on_device - count : count - on_device;
-            if (difference <= near)
-                boundary_disagreements++;
-            else if (mismatches++ < 5)
-                print_message("  path %u vertex %u: device %u, brute force %u\n", path, j,
-                              on_device, count);
+    for (size_t slot = 0; slot < (size_t)pp->path_count * IDMR_PATH_VERTICES; slot++) {
+        uint32_t on_device = snap->gathered[slot], near;
+        if (slot % IDMR_PATH_VERTICES >= snap->core.path_length[slot / IDMR_PATH_VERTICES]) {
+            empty_errors += on_device != 0;
+            continue;
         }
-    print_message("  %u hit points, radius %.5g, %zu vertices, %zu gathering (%llu gathers); "
-                  "%zu mismatches, %zu disagreements at the radius\n",
-                  valid_count, r, vertices, nonzero, (unsigned long long)total, mismatches,
-                  boundary_disagreements);
+        uint32_t count = brute_force_gathers(valid, valid_count, &snap->vertices[slot],
+                                             pp->radius * pp->radius, &near);
+        vertices++;
+        nonzero += count > 0;
+        if (on_device == count)
+            continue;
+        if ((on_device > count ? on_device - count : count - on_device) <= near)
+            boundary_disagreements++;
+        else if (mismatches++ < 5)
+            print_message("  slot %zu: device %u, brute force %u\n", slot, on_device, count);
+    }
+    print_message("  %u hit points, radius %.5g, %zu vertices, %zu gathering; %zu mismatches, "
+                  "%zu disagreements at the radius\n",
+                  valid_count, pp->radius, vertices, nonzero, mismatches, boundary_disagreements);
     free(valid);
     assert_int_equal(empty_errors, 0);
     assert_true(nonzero > vertices / 100); /* gathering is exercised */
@@ -120,8 +121,9 @@ static void expect_gather_counts(const importance_snapshot *snap)
 /* Path p at p·8 .. p·8 + len - 1, len <= 8; each vertex on a triangle with area, on its plane
  * (within 1e-4 of the scene diagonal) with that triangle's normal (either side), weight in
  * [0, 1]; the result counts the stored vertices. */
-static void expect_path_layout(const imp_run *run)
+static void test_path_layout(void **state)
 {
+    const imp_case *run = imp_run_state(state);
     const scene *s = run->s;
     const importance_snapshot *snap = &run->snapshot;
     double diagonal = scene_diagonal(s);
@@ -152,8 +154,9 @@ static void expect_path_layout(const imp_run *run)
 /* Light importance recomputed from the snapshot: each path walked from its last vertex with
  * the running sum s of gather counts; vertex j adds round(weight_j · 2^20) · s (integers) to
  * its triangle. Must equal the device's accumulators bit for bit. */
-static void expect_path_sums_exact(const imp_run *run)
+static void test_path_sums_exact(void **state)
 {
+    const imp_case *run = imp_run_state(state);
     const importance_snapshot *snap = &run->snapshot;
     size_t triangles = (size_t)run->s->triangle_count;
     uint64_t *expected = calloc(triangles, sizeof *expected);
@@ -183,100 +186,49 @@ static void expect_path_sums_exact(const imp_run *run)
 }
 
 /* One iteration: the result's sums are the accumulators. */
-static void expect_result_is_the_accumulators(const imp_run *run)
+static void test_result_is_the_accumulators(void **state)
 {
+    const imp_case *run = imp_run_state(state);
     for (size_t t = 0; t < run->r.triangle_count; t++) {
         assert_true(run->r.light[t] == (double)run->snapshot.light_fixed[t] * IMP_FIXED_UNIT);
         assert_true(run->r.camera[t] == (double)run->snapshot.camera_fixed[t] * IMP_FIXED_UNIT);
     }
 }
 
-/* ---- the Cornell box ---- */
-
-static void test_cornell_most_pixels_hold_hit_points(void **state)
-{
-    const imp_run *run = cornell();
-    assert_int_equal(run->snapshot.core.params.width, 64);
-    assert_int_equal(run->snapshot.core.params.height, 64);
-    expect_most_pixels_valid(&run->snapshot);
-}
-
 /* The radius of the first iteration: 5 x scene diagonal / (width + height). */
-static void test_cornell_first_radius(void **state)
+static void test_first_radius(void **state)
 {
-    const imp_run *run = cornell();
-    float radius = run->snapshot.core.params.radius;
-    assert_float_equal(radius, 5.0 * scene_diagonal(run->s) / (64 + 64), 1e-5 * radius);
+    const imp_case *run = imp_run_state(state);
+    const idmr_sppm_params *pp = &run->snapshot.core.params;
+    assert_float_equal(pp->radius, 5.0 * scene_diagonal(run->s) / (pp->width + pp->height),
+                       1e-5 * pp->radius);
 }
 
-static void test_cornell_gather_counts_match_brute_force(void **state)
+/* The hit-point images: the films scaled by the cases' resolution. */
+static void test_hit_point_images_are_scaled(void **state)
 {
-    expect_gather_counts(&cornell()->snapshot);
-}
-
-static void test_cornell_path_layout(void **state)
-{
-    expect_path_layout(cornell());
-}
-
-static void test_cornell_path_sums_exact(void **state)
-{
-    expect_path_sums_exact(cornell());
-}
-
-static void test_cornell_result_is_the_accumulators(void **state)
-{
-    expect_result_is_the_accumulators(cornell());
-}
-
-/* ---- the glass of water ---- */
-
-static void test_glass_of_water_most_pixels_hold_hit_points(void **state)
-{
-    expect_most_pixels_valid(&glass_of_water()->snapshot);
-}
-
-static void test_glass_of_water_gather_counts_match_brute_force(void **state)
-{
-    expect_gather_counts(&glass_of_water()->snapshot);
-}
-
-static void test_glass_of_water_path_layout(void **state)
-{
-    expect_path_layout(glass_of_water());
-}
-
-static void test_glass_of_water_path_sums_exact(void **state)
-{
-    expect_path_sums_exact(glass_of_water());
-}
-
-static void test_glass_of_water_result_is_the_accumulators(void **state)
-{
-    expect_result_is_the_accumulators(glass_of_water());
-}
-
-static int group_teardown(void **state)
-{
-    imp_run_free(&cornell_run);
-    imp_run_free(&glass_of_water_run);
-    return 0;
+    const idmr_sppm_params *box = &imp_run(&cornell)->snapshot.core.params;
+    const idmr_sppm_params *glass = &imp_run(&glass_of_water)->snapshot.core.params;
+    assert_true(box->width == 64 && box->height == 64);
+    assert_true(glass->width == 64 && glass->height == 36);
 }
 
 int main(void)
 {
-    static const device_test tests[] = {
-        DEVICE_TEST(test_cornell_most_pixels_hold_hit_points),
-        DEVICE_TEST(test_cornell_first_radius),
-        DEVICE_TEST(test_cornell_gather_counts_match_brute_force),
-        DEVICE_TEST(test_cornell_path_layout),
-        DEVICE_TEST(test_cornell_path_sums_exact),
-        DEVICE_TEST(test_cornell_result_is_the_accumulators),
-        DEVICE_TEST(test_glass_of_water_most_pixels_hold_hit_points),
-        DEVICE_TEST(test_glass_of_water_gather_counts_match_brute_force),
-        DEVICE_TEST(test_glass_of_water_path_layout),
-        DEVICE_TEST(test_glass_of_water_path_sums_exact),
-        DEVICE_TEST(test_glass_of_water_result_is_the_accumulators),
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_hit_point_images_are_scaled),
+        IMP_CASE_TEST(test_most_pixels_hold_hit_points, cornell),
+        IMP_CASE_TEST(test_first_radius, cornell),
+        IMP_CASE_TEST(test_gather_counts_match_brute_force, cornell),
+        IMP_CASE_TEST(test_path_layout, cornell),
+        IMP_CASE_TEST(test_path_sums_exact, cornell),
+        IMP_CASE_TEST(test_result_is_the_accumulators, cornell),
+        IMP_CASE_TEST(test_most_pixels_hold_hit_points, glass_of_water),
+        IMP_CASE_TEST(test_first_radius, glass_of_water),
+        IMP_CASE_TEST(test_gather_counts_match_brute_force, glass_of_water),
+        IMP_CASE_TEST(test_path_layout, glass_of_water),
+        IMP_CASE_TEST(test_path_sums_exact, glass_of_water),
+        IMP_CASE_TEST(test_result_is_the_accumulators, glass_of_water),
     };
-    return DEVICE_TEST_RUN("importance paths", tests, NULL, group_teardown) != 0;
+    return DEVICE_TEST_RUN("importance paths", tests, NULL, imp_teardown) != 0;
 }

@@ -32,30 +32,20 @@ static void expect_binomial(const char *what, size_t hits, size_t trials, double
 static scene *point_light_scene(void)
 {
     scene *s = scene_create("point-emission.xml");
-    uint32_t white = imp_diffuse(s, "white", 0.5f, 0);
-    const float c[3] = {0, 0, 0}, u[3] = {0, 0, 1.5f}, v[3] = {1, 0, 0}; /* normal +y */
-    imp_add_quad(s, "rectangle", white, c, u, v);
-    const float light[3] = {0, (float)POINT_HEIGHT, 0}, eye[3] = {0, 3, 3},
-                target[3] = {0, 0, 0}, up[3] = {0, 1, 0};
-    imp_point_light(s, light, 1.0f);
-    imp_look_at(s, eye, target, up, 32, 32, 0.8f);
+    imp_add_quad(s, "rectangle", imp_diffuse(s, "white", 0.5f, 0), V3(0, 0, 0), V3(0, 0, 1.5f),
+                 V3(1, 0, 0)); /* normal +y */
+    imp_point_light(s, V3(0, (float)POINT_HEIGHT, 0), 1.0f);
+    imp_look_at(s, V3(0, 3, 3), V3(0, 0, 0), V3(0, 1, 0), 32, 32, 0.8f);
     return test_finalize_scene(s);
 }
 
-static imp_run point_light_run;
-
-static const imp_run *point_light(void)
-{
-    importance_options o;
-    imp_small_options(&o, 1, 200000);
-    return imp_run_once(&point_light_run, point_light_scene, &o);
-}
+static imp_case point_light = {.make = point_light_scene, .iterations = 1, .photons = 200000};
 
 /* A path has a first vertex iff its isotropic direction falls in the rectangle's solid angle
  * Ω = 4 asin(sin α sin β), tan α = a/h, tan β = b/h for half sides a = 1, b = 1.5. */
 static void test_point_light_reaches_the_solid_angle(void **state)
 {
-    const imp_run *run = point_light();
+    const imp_case *run = imp_run(&point_light);
     size_t n = run->snapshot.core.params.path_count, first = 0;
     for (size_t p = 0; p < n; p++)
         first += run->snapshot.core.path_length[p] > 0;
@@ -67,7 +57,7 @@ static void test_point_light_reaches_the_solid_angle(void **state)
  * ray with the normal +y). */
 static void test_point_light_first_vertex_weight(void **state)
 {
-    const imp_run *run = point_light();
+    const imp_case *run = imp_run(&point_light);
     double worst = 0;
     for (size_t p = 0; p < run->snapshot.core.params.path_count; p++) {
         if (run->snapshot.core.path_length[p] == 0)
@@ -86,7 +76,7 @@ static void test_point_light_first_vertex_weight(void **state)
 /* Isotropic emission: each quadrant of the rectangle gets a quarter of the first vertices. */
 static void test_point_light_is_isotropic(void **state)
 {
-    const imp_run *run = point_light();
+    const imp_case *run = imp_run(&point_light);
     size_t first = 0, quadrant[4] = {0, 0, 0, 0};
     for (size_t p = 0; p < run->snapshot.core.params.path_count; p++) {
         if (run->snapshot.core.path_length[p] == 0)
@@ -107,27 +97,19 @@ static void test_point_light_is_isotropic(void **state)
 static scene *area_light_scene(void)
 {
     scene *s = scene_create("area-emission.xml");
-    uint32_t white = imp_diffuse(s, "white", 0.5f, 0), black = imp_diffuse(s, "black", 0, 0);
-    const float fc[3] = {0, 0, 0}, fu[3] = {0, 0, 100}, fv[3] = {100, 0, 0};
-    imp_add_quad(s, "floor", white, fc, fu, fv); /* normal +y; triangles 0, 1 */
-    const float lc[3] = {0, 1, 0}, lu[3] = {0.05f, 0, 0}, lv[3] = {0, 0, 0.05f};
-    imp_area_light(s, imp_add_quad(s, "light", black, lc, lu, lv), 10.0f); /* normal -y */
-    const float eye[3] = {0, 3, 3}, target[3] = {0, 0, 0}, up[3] = {0, 1, 0};
-    imp_look_at(s, eye, target, up, 32, 32, 0.8f);
+    imp_add_quad(s, "floor", imp_diffuse(s, "white", 0.5f, 0), V3(0, 0, 0), V3(0, 0, 100),
+                 V3(100, 0, 0)); /* normal +y; triangles 0, 1 */
+    scene_mesh *light = imp_add_quad(s, "light", imp_diffuse(s, "black", 0, 0), V3(0, 1, 0),
+                                     V3(0.05f, 0, 0), V3(0, 0, 0.05f)); /* normal -y */
+    imp_area_light(s, light, 10.0f);
+    imp_look_at(s, V3(0, 3, 3), V3(0, 0, 0), V3(0, 1, 0), 32, 32, 0.8f);
     return test_finalize_scene(s);
 }
 
-static imp_run area_light_run;
-
-static const imp_run *area_light(void)
-{
-    importance_options o;
-    imp_small_options(&o, 1, 100000);
-    return imp_run_once(&area_light_run, area_light_scene, &o);
-}
+static imp_case area_light = {.make = area_light_scene, .iterations = 1, .photons = 100000};
 
 /* The cosines of the first vertices into cosines[] (may be NULL); returns how many. */
-static size_t area_light_cosines(const imp_run *run, double *cosines)
+static size_t area_light_cosines(const imp_case *run, double *cosines)
 {
     size_t first = 0;
     for (size_t p = 0; p < run->snapshot.core.params.path_count; p++)
@@ -145,7 +127,7 @@ static size_t area_light_cosines(const imp_run *run, double *cosines)
  * store nothing. */
 static void test_area_light_emits_from_its_front(void **state)
 {
-    const imp_run *run = area_light();
+    const imp_case *run = imp_run(&area_light);
     size_t n = run->snapshot.core.params.path_count;
     for (size_t p = 0; p < n; p++)
         if (run->snapshot.core.path_length[p] > 0) {
@@ -159,7 +141,7 @@ static void test_area_light_emits_from_its_front(void **state)
 /* Mean cos θ = 2/3, within 5 σ (variance 1/2 - 4/9). */
 static void test_area_light_mean_cosine(void **state)
 {
-    const imp_run *run = area_light();
+    const imp_case *run = imp_run(&area_light);
     double *cosines = malloc(run->snapshot.core.params.path_count * sizeof *cosines), sum = 0;
     size_t first = area_light_cosines(run, cosines);
     for (size_t i = 0; i < first; i++)
@@ -173,7 +155,7 @@ static void test_area_light_mean_cosine(void **state)
 /* P(cos θ in [a, b)) = b² - a² for four quarters of [0, 1]. */
 static void test_area_light_cosine_distribution(void **state)
 {
-    const imp_run *run = area_light();
+    const imp_case *run = imp_run(&area_light);
     double *cosines = malloc(run->snapshot.core.params.path_count * sizeof *cosines);
     size_t first = area_light_cosines(run, cosines), bins[4] = {0, 0, 0, 0};
     for (size_t i = 0; i < first; i++)
@@ -199,13 +181,10 @@ static scene *planes_scene(unsigned int ceiling_flags)
                               -1, 0};
     uint32_t floor_material = scene_add_material(s, "coloured", "diffuse", &coloured);
     uint32_t ceiling_material = imp_diffuse(s, "white", 0.8f, ceiling_flags);
-    const float fc[3] = {0, 0, 0}, cc[3] = {0, 1, 0}, u[3] = {0, 0, 100}, v[3] = {100, 0, 0};
-    imp_add_quad(s, "floor", floor_material, fc, u, v);
-    imp_add_quad(s, "ceiling", ceiling_material, cc, u, v);
-    const float light[3] = {0, 0.5f, 0}, eye[3] = {0, 0.5f, 5}, target[3] = {0, 0, 0},
-                up[3] = {0, 1, 0};
-    imp_point_light(s, light, 1.0f);
-    imp_look_at(s, eye, target, up, 32, 32, 0.8f);
+    imp_add_quad(s, "floor", floor_material, V3(0, 0, 0), V3(0, 0, 100), V3(100, 0, 0));
+    imp_add_quad(s, "ceiling", ceiling_material, V3(0, 1, 0), V3(0, 0, 100), V3(100, 0, 0));
+    imp_point_light(s, V3(0, 0.5f, 0), 1.0f);
+    imp_look_at(s, V3(0, 0.5f, 5), V3(0, 0, 0), V3(0, 1, 0), 32, 32, 0.8f);
     return test_finalize_scene(s);
 }
 
@@ -219,63 +198,51 @@ static scene *two_sided_scene(void)
     return planes_scene(IDMR_MATERIAL_TWOSIDED);
 }
 
-static imp_run one_sided_run, two_sided_run;
+static imp_case one_sided = {.make = one_sided_scene, .iterations = 1, .photons = 100000};
+static imp_case two_sided = {.make = two_sided_scene, .iterations = 1, .photons = 100000};
 
-static const imp_run *planes(int two_sided)
+/* Of more than 10000 paths whose first vertex lies on the ceiling (1) or the floor (0) of case
+ * c, the fraction `expected` goes on; returns how many went on. */
+static size_t expect_going_on(imp_case *c, int ceiling, double expected, const char *what)
 {
-    importance_options o;
-    imp_small_options(&o, 1, 100000);
-    return two_sided ? imp_run_once(&two_sided_run, two_sided_scene, &o)
-                     : imp_run_once(&one_sided_run, one_sided_scene, &o);
-}
-
-/* Of the paths whose first vertex is on the ceiling (1) or the floor (0), how many go on. */
-static void count_going_on(const imp_run *run, int ceiling, size_t *first, size_t *going_on)
-{
-    *first = *going_on = 0;
+    const imp_case *run = imp_run(c);
+    size_t first = 0, going_on = 0;
     for (size_t p = 0; p < run->snapshot.core.params.path_count; p++) {
         uint32_t length = run->snapshot.core.path_length[p];
         const idmr_photon_vertex *vx = &run->snapshot.vertices[p * IDMR_PATH_VERTICES];
         if (length == 0 || (vx->triangle >= 2) != ceiling)
             continue;
-        (*first)++;
-        *going_on += length > 1;
+        first++;
+        going_on += length > 1;
     }
+    assert_true(first > 10000);
+    expect_binomial(what, going_on, first, expected);
+    return going_on;
 }
 
 /* On the floor, Russian roulette survives with the largest channel, 0.6. */
 static void test_roulette_survives_with_the_largest_channel(void **state)
 {
-    size_t first, going_on;
-    count_going_on(planes(0), 0, &first, &going_on);
-    assert_true(first > 10000);
-    expect_binomial("floor paths going on (survival = max channel 0.6)", going_on, first, 0.6);
+    expect_going_on(&one_sided, 0, 0.6, "floor paths going on (survival = max channel 0.6)");
 }
 
 /* The back of a one-sided ceiling absorbs: no path goes on. */
 static void test_one_sided_back_absorbs(void **state)
 {
-    size_t first, going_on;
-    count_going_on(planes(0), 1, &first, &going_on);
-    assert_true(first > 10000);
-    expect_binomial("one-sided ceiling's back going on", going_on, first, 0.0);
-    assert_int_equal(going_on, 0);
+    assert_int_equal(expect_going_on(&one_sided, 1, 0.0, "one-sided ceiling's back going on"), 0);
 }
 
 /* The back of a two-sided ceiling reflects its albedo, 0.8. */
 static void test_two_sided_back_reflects_its_albedo(void **state)
 {
-    size_t first, going_on;
-    count_going_on(planes(1), 1, &first, &going_on);
-    assert_true(first > 10000);
-    expect_binomial("two-sided ceiling's back going on (albedo 0.8)", going_on, first, 0.8);
+    expect_going_on(&two_sided, 1, 0.8, "two-sided ceiling's back going on (albedo 0.8)");
 }
 
 /* The ceiling's vertices carry the normal of the side the photon arrived from (down). */
 static void test_back_vertices_face_the_photon(void **state)
 {
-    for (int two_sided = 0; two_sided < 2; two_sided++) {
-        const imp_run *run = planes(two_sided);
+    for (int i = 0; i < 2; i++) {
+        const imp_case *run = imp_run(i ? &two_sided : &one_sided);
         for (size_t p = 0; p < run->snapshot.core.params.path_count; p++) {
             const idmr_photon_vertex *vx = &run->snapshot.vertices[p * IDMR_PATH_VERTICES];
             if (run->snapshot.core.path_length[p] > 0 && vx->triangle >= 2)
@@ -292,31 +259,20 @@ static void test_back_vertices_face_the_photon(void **state)
 static scene *glass_scene(void)
 {
     scene *s = scene_create("glass.xml");
-    uint32_t white = imp_diffuse(s, "white", 0.8f, 0), glass = imp_glass(s, "glass");
-    const float fc[3] = {0, 0, 0}, fu[3] = {0, 0, 0.3f}, fv[3] = {0.3f, 0, 0};
-    imp_add_quad(s, "floor", white, fc, fu, fv); /* triangles 0, 1 */
-    const float sc[3] = {0, 1, 0};
-    imp_add_sphere(s, "sphere", glass, sc, 0.5f);
-    const float light[3] = {0, 3, 0}, eye[3] = {1.5f, 0.8f, 0}, target[3] = {0, 0, 0},
-                up[3] = {0, 1, 0};
-    imp_point_light(s, light, 1.0f);
-    imp_look_at(s, eye, target, up, 64, 48, 0.5f);
+    imp_add_quad(s, "floor", imp_diffuse(s, "white", 0.8f, 0), V3(0, 0, 0), V3(0, 0, 0.3f),
+                 V3(0.3f, 0, 0)); /* triangles 0, 1 */
+    imp_add_sphere(s, "sphere", imp_glass(s, "glass"), V3(0, 1, 0), 0.5f);
+    imp_point_light(s, V3(0, 3, 0), 1.0f);
+    imp_look_at(s, V3(1.5f, 0.8f, 0), V3(0, 0, 0), V3(0, 1, 0), 64, 48, 0.5f);
     return test_finalize_scene(s);
 }
 
-static imp_run glass_run;
-
-static const imp_run *glass(void)
-{
-    importance_options o;
-    imp_small_options(&o, 2, 100000);
-    return imp_run_once(&glass_run, glass_scene, &o);
-}
+static imp_case glass = {.make = glass_scene, .iterations = 2, .photons = 100000};
 
 /* Photon vertices on the tile: as a path's first vertex (direct), or after the glass. */
 static void count_tile_vertices(size_t *direct, size_t *through_glass)
 {
-    const imp_run *run = glass();
+    const imp_case *run = imp_run(&glass);
     *direct = *through_glass = 0;
     for (size_t p = 0; p < run->snapshot.core.params.path_count; p++)
         for (uint32_t j = 0; j < run->snapshot.core.path_length[p]; j++)
@@ -340,7 +296,7 @@ static void test_caustic_lights_the_tile(void **state)
 {
     size_t direct, through_glass;
     count_tile_vertices(&direct, &through_glass);
-    const imp_run *run = glass();
+    const imp_case *run = imp_run(&glass);
     double importance, camera, light;
     importance_mesh_sums(&run->r, run->s, (size_t)imp_mesh_index(run->s, "floor"), 1.0f,
                          &importance, &camera, &light);
@@ -356,7 +312,7 @@ static void test_caustic_lights_the_tile(void **state)
  * importance_mesh_sums with γ = 0 is their light importance, > 0. */
 static void test_glass_gets_light_importance(void **state)
 {
-    const imp_run *run = glass();
+    const imp_case *run = imp_run(&glass);
     double importance, camera, light;
     importance_mesh_sums(&run->r, run->s, (size_t)imp_mesh_index(run->s, "sphere"), 0.0f,
                          &importance, &camera, &light);
@@ -364,31 +320,22 @@ static void test_glass_gets_light_importance(void **state)
     assert_true(importance > 0 && importance == light);
 }
 
-static int group_teardown(void **state)
-{
-    imp_run *runs[] = {&point_light_run, &area_light_run, &one_sided_run, &two_sided_run,
-                       &glass_run};
-    for (size_t i = 0; i < sizeof runs / sizeof *runs; i++)
-        imp_run_free(runs[i]);
-    return 0;
-}
-
 int main(void)
 {
-    static const device_test tests[] = {
-        DEVICE_TEST(test_point_light_reaches_the_solid_angle),
-        DEVICE_TEST(test_point_light_first_vertex_weight),
-        DEVICE_TEST(test_point_light_is_isotropic),
-        DEVICE_TEST(test_area_light_emits_from_its_front),
-        DEVICE_TEST(test_area_light_mean_cosine),
-        DEVICE_TEST(test_area_light_cosine_distribution),
-        DEVICE_TEST(test_roulette_survives_with_the_largest_channel),
-        DEVICE_TEST(test_one_sided_back_absorbs),
-        DEVICE_TEST(test_two_sided_back_reflects_its_albedo),
-        DEVICE_TEST(test_back_vertices_face_the_photon),
-        DEVICE_TEST(test_no_direct_photon_in_the_shadow),
-        DEVICE_TEST(test_caustic_lights_the_tile),
-        DEVICE_TEST(test_glass_gets_light_importance),
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_point_light_reaches_the_solid_angle),
+        cmocka_unit_test(test_point_light_first_vertex_weight),
+        cmocka_unit_test(test_point_light_is_isotropic),
+        cmocka_unit_test(test_area_light_emits_from_its_front),
+        cmocka_unit_test(test_area_light_mean_cosine),
+        cmocka_unit_test(test_area_light_cosine_distribution),
+        cmocka_unit_test(test_roulette_survives_with_the_largest_channel),
+        cmocka_unit_test(test_one_sided_back_absorbs),
+        cmocka_unit_test(test_two_sided_back_reflects_its_albedo),
+        cmocka_unit_test(test_back_vertices_face_the_photon),
+        cmocka_unit_test(test_no_direct_photon_in_the_shadow),
+        cmocka_unit_test(test_caustic_lights_the_tile),
+        cmocka_unit_test(test_glass_gets_light_importance),
     };
-    return DEVICE_TEST_RUN("importance photons", tests, NULL, group_teardown) != 0;
+    return DEVICE_TEST_RUN("importance photons", tests, NULL, imp_teardown) != 0;
 }

@@ -603,26 +603,6 @@ static void test_same_image_for_any_local_size(void **state)
     assert_true(same);
 }
 
-/* render_run() refuses scene s (freed here): IDMR_EXIT_INPUT, with `message` in the error. */
-static void expect_refused(scene *s, const char *message)
-{
-    test_finalize_scene(s);
-    bvh b;
-    test_build_bvh(s, &b);
-    render_options o;
-    render_options_default(&o);
-    render_result r;
-    error_clear();
-    int status = render_run(device_test_device(), s, &b, &o, &r);
-    print_message("  %s\n", error_message());
-    render_result_free(&r);
-    bvh_free(&b);
-    scene_free(s);
-    assert_int_equal(status, -1);
-    assert_int_equal(error_code(), IDMR_EXIT_INPUT);
-    assert_non_null(strstr(error_message(), message));
-}
-
 /* A 2 x 2 plane, nothing else. */
 static scene *bare_plane(const char *file)
 {
@@ -636,14 +616,14 @@ static void test_missing_light_is_an_input_error(void **state)
 {
     scene *s = bare_plane("no-light.xml");
     imp_look_at(s, V3(0, 0, 2), V3(0, 0, 0), V3(0, 1, 0), 8, 8, 0.5f);
-    expect_refused(s, "no-light.xml");
+    test_expect_refused(s, 1, "no-light.xml");
 }
 
 static void test_missing_camera_is_an_input_error(void **state)
 {
     scene *s = bare_plane("no-camera.xml");
     imp_point_light(s, V3(0, 0, 1), 1.0f);
-    expect_refused(s, "no sensor");
+    test_expect_refused(s, 1, "no sensor");
 }
 
 static int group_teardown(void **state)
@@ -655,24 +635,24 @@ static int group_teardown(void **state)
 
 int main(void)
 {
-    static const device_test tests[] = {
-        DEVICE_TEST(test_point_light_on_plane_radiance),
-        DEVICE_TEST(test_point_light_on_plane_converges),
-        DEVICE_TEST(test_point_light_power),
-        DEVICE_TEST(test_area_light_power),
-        DEVICE_TEST(test_spot_light_power),
-        DEVICE_TEST(test_directional_light_power),
-        DEVICE_TEST(test_environment_light_power),
-        DEVICE_TEST(test_furnace_at_unit_radius),
-        DEVICE_TEST(test_furnace_at_radius_1e_3),
-        DEVICE_TEST(test_furnace_at_radius_1e4),
-        DEVICE_TEST(test_glass_ball_caustic),
-        DEVICE_TEST(test_glossy_plane_under_point_light),
-        DEVICE_TEST(test_metal_scattering_keeps_the_albedo),
-        DEVICE_TEST(test_plastic_scattering_keeps_the_albedo),
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_point_light_on_plane_radiance),
+        cmocka_unit_test(test_point_light_on_plane_converges),
+        cmocka_unit_test(test_point_light_power),
+        cmocka_unit_test(test_area_light_power),
+        cmocka_unit_test(test_spot_light_power),
+        cmocka_unit_test(test_directional_light_power),
+        cmocka_unit_test(test_environment_light_power),
+        cmocka_unit_test(test_furnace_at_unit_radius),
+        cmocka_unit_test(test_furnace_at_radius_1e_3),
+        cmocka_unit_test(test_furnace_at_radius_1e4),
+        cmocka_unit_test(test_glass_ball_caustic),
+        cmocka_unit_test(test_glossy_plane_under_point_light),
+        cmocka_unit_test(test_metal_scattering_keeps_the_albedo),
+        cmocka_unit_test(test_plastic_scattering_keeps_the_albedo),
         DEVICE_TEST_SWEEP(test_same_image_for_any_local_size),
-        DEVICE_TEST(test_missing_light_is_an_input_error),
-        DEVICE_TEST(test_missing_camera_is_an_input_error),
+        cmocka_unit_test(test_missing_light_is_an_input_error),
+        cmocka_unit_test(test_missing_camera_is_an_input_error),
     };
     return DEVICE_TEST_RUN("render", tests, NULL, group_teardown) != 0;
 }

@@ -279,20 +279,20 @@ static int group_teardown(void **state)
 
 int main(void)
 {
-    static const device_test tests[] = {
-        DEVICE_TEST(test_cornell_options),
-        DEVICE_TEST(test_glass_of_water_options),
-        DEVICE_TEST(test_generic_importance_equals_specialised_on_cornell),
-        DEVICE_TEST(test_generic_render_equals_specialised_on_cornell),
-        DEVICE_TEST(test_generic_importance_equals_specialised_on_glass),
-        DEVICE_TEST(test_generic_render_equals_specialised_on_glass),
-        DEVICE_TEST(test_gamma_zero_leaves_camera_importance_out),
-        DEVICE_TEST(test_gamma_zero_keeps_light_importance),
-        DEVICE_TEST_SETUP_TEARDOWN(test_second_build_comes_from_the_cache, cache_setup,
-                                   cache_teardown),
-        DEVICE_TEST_SETUP_TEARDOWN(test_changed_source_is_built_again, cache_setup,
-                                   cache_teardown),
-        DEVICE_TEST_SETUP_TEARDOWN(test_other_options_other_key, cache_setup, cache_teardown),
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_cornell_options),
+        cmocka_unit_test(test_glass_of_water_options),
+        cmocka_unit_test(test_generic_importance_equals_specialised_on_cornell),
+        cmocka_unit_test(test_generic_render_equals_specialised_on_cornell),
+        cmocka_unit_test(test_generic_importance_equals_specialised_on_glass),
+        cmocka_unit_test(test_generic_render_equals_specialised_on_glass),
+        cmocka_unit_test(test_gamma_zero_leaves_camera_importance_out),
+        cmocka_unit_test(test_gamma_zero_keeps_light_importance),
+        cmocka_unit_test_setup_teardown(test_second_build_comes_from_the_cache, cache_setup,
+                                        cache_teardown),
+        cmocka_unit_test_setup_teardown(test_changed_source_is_built_again, cache_setup,
+                                        cache_teardown),
+        cmocka_unit_test_setup_teardown(test_other_options_other_key, cache_setup, cache_teardown),
     };
     return DEVICE_TEST_RUN("specialise", tests, NULL, group_teardown) != 0;
 }

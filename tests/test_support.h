@@ -63,17 +63,23 @@ static inline void test_render_options(render_options *o, unsigned int iteration
     o->sppm.photons = photons;
 }
 
-/* Runs the importance pass / the renderer on the device under test, on BVH b, or on one built
- * here when b is NULL. */
+/* b, or when b is NULL a BVH of s built into *own (free *own with bvh_free() either way). */
+static inline const bvh *test_bvh_of(const scene *s, const bvh *b, bvh *own)
+{
+    memset(own, 0, sizeof *own);
+    if (!b)
+        test_build_bvh(s, own);
+    return b ? b : own;
+}
+
+/* Runs the importance pass / the renderer on the device under test, on BVH b (NULL: one built
+ * here). */
 static inline void test_run_importance(const scene *s, const bvh *b, const importance_options *o,
                                        importance_result *r)
 {
     bvh own;
-    if (!b)
-        test_build_bvh(s, &own);
-    int status = importance_run(device_test_device(), s, b ? b : &own, o, r);
-    if (!b)
-        bvh_free(&own);
+    int status = importance_run(device_test_device(), s, test_bvh_of(s, b, &own), o, r);
+    bvh_free(&own);
     if (status)
         fail_msg("importance_run: %s", error_message());
 }
@@ -82,13 +88,39 @@ static inline void test_run_render(const scene *s, const bvh *b, const render_op
                                    render_result *r)
 {
     bvh own;
-    if (!b)
-        test_build_bvh(s, &own);
-    int status = render_run(device_test_device(), s, b ? b : &own, o, r);
-    if (!b)
-        bvh_free(&own);
+    int status = render_run(device_test_device(), s, test_bvh_of(s, b, &own), o, r);
+    bvh_free(&own);
     if (status)
         fail_msg("render_run: %s", error_message());
+}
+
+/* The importance pass (render = 0) or the renderer (one iteration of 1000 paths, should it
+ * run) refuses scene s (finalized and freed here) as bad input: IDMR_EXIT_INPUT, with
+ * `message` in the error. */
+static inline void test_expect_refused(scene *s, int render, const char *message)
+{
+    test_finalize_scene(s);
+    bvh b;
+    test_build_bvh(s, &b);
+    importance_options io;
+    render_options ro;
+    test_importance_options(&io, 1, 1000);
+    test_render_options(&ro, 1, 1000);
+    importance_result ir;
+    render_result rr;
+    error_clear();
+    int status = render ? render_run(device_test_device(), s, &b, &ro, &rr)
+                        : importance_run(device_test_device(), s, &b, &io, &ir);
+    print_message("  %s\n", error_message());
+    if (render)
+        render_result_free(&rr);
+    else
+        importance_result_free(&ir);
+    bvh_free(&b);
+    scene_free(s);
+    assert_int_equal(status, -1);
+    assert_int_equal(error_code(), IDMR_EXIT_INPUT);
+    assert_non_null(strstr(error_message(), message));
 }
 
 /* A new directory from a mkdtemp() template such as "/tmp/idmr-test-XXXXXX" (filled in). */
