@@ -7,7 +7,9 @@
  * and a look-at pinhole camera (trace_look_at: right = forward × up, up = right × forward).
  * Host references: the camera pass's jittered direction (the same rng stream and the shared
  * formula of idmr/camera.h, through trace_common.h) and per-triangle unit normals computed as
- * host/device/device_scene.c does (double cross product, cast to float). */
+ * host/device/device_scene.c does (double cross product, cast to float). Cases (imp_case): a
+ * scene and one small run of the importance pass on it, made once per device and shared by
+ * the small tests that each check one formula on it. */
 #ifndef IDMR_TESTS_IMPORTANCE_COMMON_H
 #define IDMR_TESTS_IMPORTANCE_COMMON_H
 
