@@ -16,7 +16,9 @@
  * (tests/device_test.h), with the trace program built once per device. */
 #include "importance_common.h"
 
+/* Per device: the trace program, and the living room once loaded. */
 static trace_device tdev;
+static scene *living_room;
 
 static int group_setup(void **state)
 {
@@ -29,6 +31,9 @@ static int group_setup(void **state)
 
 static int group_teardown(void **state)
 {
+    if (living_room)
+        scene_free(living_room);
+    living_room = NULL;
     trace_device_close(&tdev);
     return 0;
 }
@@ -184,8 +189,6 @@ static void test_dragon_camera(void **state)
 }
 
 /* The living room (its Mitsuba scene), loaded once per device. */
-static scene *living_room;
-
 static const scene *load_living_room(void)
 {
     if (!living_room)
@@ -440,14 +443,6 @@ static void test_bvh_covers_every_triangle(void **state)
     scene_free(s);
 }
 
-static int device_group_teardown(void **state)
-{
-    if (living_room)
-        scene_free(living_room);
-    living_room = NULL;
-    return group_teardown(state);
-}
-
 int main(void)
 {
     const struct CMUnitTest host_tests[] = {
@@ -469,5 +464,5 @@ int main(void)
         cmocka_unit_test(test_living_room_camera),
         DEVICE_TEST_SWEEP(test_same_hits_for_any_local_size),
     };
-    return DEVICE_TEST_MAIN("traversal", host_tests, tests, group_setup, device_group_teardown);
+    return DEVICE_TEST_MAIN("traversal", host_tests, tests, group_setup, group_teardown);
 }
