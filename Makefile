@@ -114,9 +114,17 @@ $(BUILD)/kernels.stamp: $(BUILD)/idmr $(KERNEL_SOURCES)
 
 # ---- tests and benchmarks ----
 
-$(BUILD)/tests/%: tests/%.c $(BUILD)/libidmr.a $(FLAGS)
+# tests/device_test.c, the device-test driver, is linked into every test and bench program.
+TEST_DRIVER := $(BUILD)/tests/device_test.o
+
+$(TEST_DRIVER): tests/device_test.c $(FLAGS)
 	@mkdir -p $(dir $@)
-	$(CC) $(CPPFLAGS) -Itests $(CFLAGS) $(LDFLAGS) -o $@ $< $(BUILD)/libidmr.a $(TEST_LIBS) $(LDLIBS)
+	$(CC) $(CPPFLAGS) -Itests $(CFLAGS) -c -o $@ $<
+
+$(BUILD)/tests/%: tests/%.c $(TEST_DRIVER) $(BUILD)/libidmr.a $(FLAGS)
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) -Itests $(CFLAGS) $(LDFLAGS) -o $@ $< $(TEST_DRIVER) $(BUILD)/libidmr.a \
+	    $(TEST_LIBS) $(LDLIBS)
 
 # The decimation benchmark compares with meshoptimizer (a reference, not a dependency of idmr;
 # it has no pkg-config file).

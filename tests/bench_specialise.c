@@ -29,34 +29,34 @@
 enum pass { PASS_IMPORTANCE, PASS_RENDER };
 static const char *const pass_names[] = {"importance", "render"};
 
+static void die(void)
+{
+    fprintf(stderr, "bench_specialise: %s\n", error_message());
+    exit(1);
+}
+
+/* Seconds per iteration of `iterations` iterations of the pass with its default photons. */
 static double per_iteration(device *d, const scene *s, const bvh *b, enum pass pass, int generic,
                             unsigned int iterations)
 {
-    if (pass == PASS_RENDER) {
-        render_options o;
-        render_options_default(&o);
-        o.sppm.iterations = iterations;
-        o.sppm.generic = generic;
-        render_result r;
-        if (render_run(d, s, b, &o, &r)) {
-            fprintf(stderr, "bench_specialise: %s\n", error_message());
-            exit(1);
-        }
-        double seconds = r.sppm.seconds.total / r.sppm.iterations;
-        render_result_free(&r);
-        return seconds;
-    }
-    importance_options o;
-    importance_options_default(&o);
-    o.sppm.iterations = iterations;
-    o.sppm.generic = generic;
-    importance_result r;
-    if (importance_run(d, s, b, &o, &r)) {
-        fprintf(stderr, "bench_specialise: %s\n", error_message());
-        exit(1);
-    }
-    double seconds = r.sppm.seconds.total / r.sppm.iterations;
-    importance_result_free(&r);
+    render_options render;
+    importance_options importance;
+    render_options_default(&render);
+    importance_options_default(&importance);
+    render.sppm.iterations = importance.sppm.iterations = iterations;
+    render.sppm.generic = importance.sppm.generic = generic;
+    render_result rr;
+    importance_result ir;
+    int status = pass == PASS_RENDER ? render_run(d, s, b, &render, &rr)
+                                     : importance_run(d, s, b, &importance, &ir);
+    if (status)
+        die();
+    const sppm_summary *summary = pass == PASS_RENDER ? &rr.sppm : &ir.sppm;
+    double seconds = summary->seconds.total / summary->iterations;
+    if (pass == PASS_RENDER)
+        render_result_free(&rr);
+    else
+        importance_result_free(&ir);
     return seconds;
 }
 
@@ -66,10 +66,8 @@ static void bench_scene(device *d, const char *name, const char *path)
     scene *s = mitsuba_load(path);
     warn_silence(0);
     bvh b;
-    if (!s || bvh_build(s, &b)) {
-        fprintf(stderr, "bench_specialise: %s\n", error_message());
-        exit(1);
-    }
+    if (!s || bvh_build(s, &b))
+        die();
     for (enum pass pass = PASS_IMPORTANCE; pass <= PASS_RENDER; pass++) {
         double best[2] = {1e30, 1e30};
         for (int generic = 0; generic < 2; generic++)
@@ -99,10 +97,8 @@ static void bench_build(device *d)
                                          "-D IDMR_CAMERA_IMPORTANCE=1");
     cl_program program;
     double t0 = monotonic_seconds();
-    if (device_build_program(d, "sppm.cl", options, &program)) {
-        fprintf(stderr, "bench_specialise: %s\n", error_message());
-        exit(1);
-    }
+    if (device_build_program(d, "sppm.cl", options, &program))
+        die();
     double cold = monotonic_seconds() - t0;
     clReleaseProgram(program);
     t0 = monotonic_seconds();
@@ -112,8 +108,8 @@ static void bench_build(device *d)
     }
     double cached = monotonic_seconds() - t0;
     clReleaseProgram(program);
-    printf("program-build: kernel=sppm.cl pass=importance cold=%.2f cached=%.3f speedup=%.0f\n", cold, cached,
-           cold / cached);
+    printf("program-build: kernel=sppm.cl pass=importance cold=%.2f cached=%.3f speedup=%.0f\n",
+           cold, cached, cold / cached);
     free(options);
     char command[256];
     snprintf(command, sizeof command, "rm -rf %s", cache);
@@ -128,10 +124,8 @@ int main(int argc, char **argv)
      * compile while the iterations below keep PoCL's cache for its lazy work-group compiles. */
     if (argc > 1 && strcmp(argv[1], "build") == 0) {
         device d;
-        if (device_open(&d, -1)) {
-            fprintf(stderr, "bench_specialise: %s\n", error_message());
-            return 1;
-        }
+        if (device_open(&d, -1))
+            die();
         bench_build(&d);
         device_close(&d);
         return 0;
@@ -142,10 +136,8 @@ int main(int argc, char **argv)
     if (system(command) != 0)
         fprintf(stderr, "bench_specialise: the build measurement failed\n");
     device d;
-    if (device_open(&d, -1)) {
-        fprintf(stderr, "bench_specialise: %s\n", error_message());
-        return 1;
-    }
+    if (device_open(&d, -1))
+        die();
     bench_scene(&d, "cornell", "data/cornell/scene.xml");
     bench_scene(&d, "glass-of-water", "../shared/data/scenes/glass-of-water/scene-without-mesh000.xml");
     device_close(&d);

@@ -69,9 +69,10 @@ int main(void)
         fprintf(stderr, "bench_traversal: %s\n", error_message());
         return 1;
     }
+    device d;
     trace_device t;
     trace_geometry g;
-    if (trace_device_open(&t) || trace_geometry_upload(&t, s, &g)) {
+    if (device_open(&d, -1) || trace_device_open(&t, &d) || trace_geometry_upload(&t, s, &g)) {
         fprintf(stderr, "bench_traversal: %s\n", error_message());
         return 1;
     }
@@ -82,7 +83,7 @@ int main(void)
     printf("traversal: scene=%s triangles=%llu bvh_nodes=%zu bvh_leaves=%zu bvh_refs=%zu "
            "device=\"%s\"\n",
            path, (unsigned long long)s->triangle_count, g.tree.node_count, g.tree.leaf_count,
-           g.tree.reference_count, t.dev.info.name);
+           g.tree.reference_count, d.info.name);
 
     size_t count = 1u << 20;
     idmr_ray *rays = malloc(count * sizeof *rays);
@@ -97,6 +98,7 @@ int main(void)
     rtcReleaseScene(es);
     trace_geometry_release(&g);
     trace_device_close(&t);
+    device_close(&d);
     scene_free(s);
     return 0;
 }

@@ -1,12 +1,15 @@
 /* importance_common.h — scenes built in code and host references for the importance pass and
- * renderer tests (tests/test_importance.c, tests/test_render.c). Header-only (static functions): each program includes it once.
+ * renderer tests (tests/test_importance_*.c, tests/test_render.c). Header-only (static inline
+ * functions).
  *
  * Scenes: quads (two triangles, wound so that the normal is u × v), boxes and UV spheres
- * (host/shapes.h), diffuse / glossy / mirror / dielectric materials, point and area lights,
- * and a look-at pinhole camera (right = forward × up, up = right × forward, as
- * trace_overview_camera). Host references: the camera pass's jittered direction (the same rng
- * stream and float formula as camera_direction in kernels/scene.h) and per-triangle unit
- * normals computed as host/device_scene.c does (double cross product, cast to float). */
+ * (host/io/shapes.h), diffuse / glossy / mirror / dielectric materials, point and area lights,
+ * and a look-at pinhole camera (trace_look_at: right = forward × up, up = right × forward).
+ * Host references: the camera pass's jittered direction (the same rng stream and the shared
+ * formula of idmr/camera.h, through trace_common.h) and per-triangle unit normals computed as
+ * host/device/device_scene.c does (double cross product, cast to float). Cases (imp_case): a
+ * scene and one small run of the importance pass on it, made once per device and shared by
+ * the small tests that each check one formula on it. */
 #ifndef IDMR_TESTS_IMPORTANCE_COMMON_H
 #define IDMR_TESTS_IMPORTANCE_COMMON_H
 
@@ -25,21 +28,16 @@
 #include "io/mesh_io.h"
 #include "core/scene.h"
 #include "io/shapes.h"
+#include "test_support.h"
+#include "trace_common.h"
 
-/* ---- small vector helpers (float[3]) ---- */
+/* One unit of the fixed-point accumulators (kernels/lib/fixed_point.h), in weight. */
+#define IMP_FIXED_UNIT (1.0 / 1048576.0)
 
-static inline void imp_cross(const float a[3], const float b[3], float out[3])
-{
-    float c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-    memcpy(out, c, sizeof c);
-}
+/* ---- small vector helpers ---- */
 
-static inline void imp_normalize(float v[3])
-{
-    float n = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    for (int k = 0; k < 3; k++)
-        v[k] /= n;
-}
+/* A float[3] literal: imp_point_light(s, V3(0, 2, 0), 1.0f). */
+#define V3(x, y, z) ((const float[3]){(x), (y), (z)})
 
 static inline double imp_dot(const float a[3], const float b[3])
 {
@@ -149,43 +147,24 @@ static inline void imp_area_light(scene *s, scene_mesh *m, float radiance)
 
 /* ---- camera ---- */
 
-/* A pinhole at `origin` looking at `target`; tan_half_y follows from the aspect ratio. */
+/* The scene's camera: a pinhole at `origin` looking at `target` (trace_look_at). */
 static inline void imp_look_at(scene *s, const float origin[3], const float target[3],
                                const float up_hint[3], unsigned int width, unsigned int height,
                                float tan_half_x)
 {
-    idmr_camera *c = &s->camera;
-    memset(c, 0, sizeof *c);
-    memcpy(c->origin, origin, sizeof c->origin);
-    for (int k = 0; k < 3; k++)
-        c->forward[k] = target[k] - origin[k];
-    imp_normalize(c->forward);
-    imp_cross(c->forward, up_hint, c->right);
-    imp_normalize(c->right);
-    imp_cross(c->right, c->forward, c->up);
-    imp_normalize(c->up);
-    c->width = width;
-    c->height = height;
-    c->tan_half_x = tan_half_x;
-    c->tan_half_y = tan_half_x * (float)height / (float)width;
+    s->camera = trace_look_at(origin, target, up_hint, width, height, tan_half_x);
     s->has_camera = 1;
 }
 
-/* The camera pass's ray direction for pixel `pixel` of a width x height hit-point image, from
- * the same rng stream (x jitter, then y jitter) and the shared formula idmr_camera_direction()
- * (include/idmr/camera.h), as camera_ray() in kernels/lib/paths.h takes them. */
+/* The importance pass's camera ray direction (unit) for pixel `pixel` of a width x height
+ * hit-point image: the stream IDMR_STREAM_IMPORTANCE_CAMERA, as camera_ray() in
+ * kernels/lib/paths.h draws it. */
 static inline void imp_camera_direction(const idmr_camera *c, unsigned int width,
                                         unsigned int height, unsigned int seed,
                                         unsigned int iteration, unsigned int pixel, float d[3])
 {
-    idmr_rng rng = idmr_rng_init(seed, iteration, IDMR_STREAM_IMPORTANCE_CAMERA, pixel);
-    idmr_camera film = *c;
-    film.width = width;
-    film.height = height;
-    float film_x = (float)(pixel % width) + idmr_rng_float(&rng);
-    float film_y = (float)(pixel / width) + idmr_rng_float(&rng);
-    idmr_camera_direction(&film, film_x, film_y, d);
-    imp_normalize(d);
+    trace_jittered_direction(c, width, height, seed, iteration, IDMR_STREAM_IMPORTANCE_CAMERA,
+                             pixel, d);
 }
 
 /* ---- per-triangle geometry ---- */
@@ -217,17 +196,8 @@ static inline double imp_plane_distance(const scene *s, uint64_t t, const float 
     const float *a = &m->positions[3 * (size_t)m->indices[3 * (size_t)(t - m->first_triangle)]];
     float n[3];
     imp_triangle_normal(s, t, n);
-    return ((double)p[0] - a[0]) * n[0] + ((double)p[1] - a[1]) * n[1] + ((double)p[2] - a[2]) * n[2];
-}
-
-static inline double imp_scene_diagonal(const scene *s)
-{
-    double d2 = 0;
-    for (int k = 0; k < 3; k++) {
-        double e = (double)s->bbox_max[k] - s->bbox_min[k];
-        d2 += e * e;
-    }
-    return sqrt(d2);
+    return ((double)p[0] - a[0]) * n[0] + ((double)p[1] - a[1]) * n[1] +
+           ((double)p[2] - a[2]) * n[2];
 }
 
 /* Index of mesh `name` in s, or -1. */
@@ -246,6 +216,118 @@ static inline double imp_mesh_total(const scene *s, size_t m, const double *per_
     for (uint32_t t = 0; t < s->meshes[m].triangle_count; t++)
         sum += per_triangle[(size_t)s->meshes[m].first_triangle + t];
     return sum;
+}
+
+/* ---- cases: a scene and a small run of the pass, made once per device ---- */
+
+/* The importance tests' small run: `iterations` of `photons` paths, seed 7. */
+static inline void imp_small_options(importance_options *o, unsigned int iterations,
+                                     unsigned int photons)
+{
+    test_importance_options(o, iterations, photons);
+    o->sppm.seed = 7;
+}
+
+/* A scene and the run of the pass on it, with its snapshot. The first fields say what to run:
+ *     static imp_case head_on = {.make = head_on_scene, .iterations = 1, .photons = 20000};
+ * imp_run() makes the run on first use by the tests of one device — several small tests each
+ * check one formula on it — and imp_teardown(), the group teardown, frees every case run. */
+typedef struct imp_case {
+    scene *(*make)(void);             /* builds or loads the scene */
+    unsigned int iterations, photons; /* imp_small_options() */
+    float resolution;                 /* of the hit-point image; 0: the film's */
+    double tolerance;                 /* the early stop; 0: none */
+    scene *s;
+    importance_options options;
+    importance_snapshot snapshot;
+    importance_result r;
+    int ready;
+} imp_case;
+
+/* A test of a case: the cmocka entry of test f with case c as its state, named "f(c)". */
+#define IMP_CASE_TEST(f, c) {#f "(" #c ")", f, NULL, NULL, &(c)}
+
+static inline void imp_case_free(imp_case *c)
+{
+    importance_result_free(&c->r);
+    importance_snapshot_free(&c->snapshot);
+    if (c->s)
+        scene_free(c->s);
+    c->s = NULL;
+    c->ready = 0;
+}
+
+/* Every sum is finite and >= 0 (checked once per run). */
+static inline void imp_expect_all_finite(const scene *s, const importance_result *r)
+{
+    for (size_t t = 0; t < r->triangle_count; t++)
+        if (!(isfinite(r->camera[t]) && r->camera[t] >= 0 && isfinite(r->light[t]) &&
+              r->light[t] >= 0))
+            fail_msg("%s: triangle %zu has camera importance %g, light importance %g",
+                     s->file, t, r->camera[t], r->light[t]);
+}
+
+/* The cases run on this device, for imp_teardown(). */
+static imp_case *imp_cases_run[32];
+static size_t imp_cases_run_count;
+
+/* Case c, run (once). */
+static inline const imp_case *imp_run(imp_case *c)
+{
+    if (c->ready)
+        return c;
+    imp_case_free(c); /* what an earlier, failed run left */
+    size_t i = 0;
+    while (i < imp_cases_run_count && imp_cases_run[i] != c)
+        i++;
+    if (i == sizeof imp_cases_run / sizeof *imp_cases_run)
+        fail_msg("imp_run: more than %zu cases", i);
+    if (i == imp_cases_run_count)
+        imp_cases_run[imp_cases_run_count++] = c;
+    c->s = c->make();
+    imp_small_options(&c->options, c->iterations, c->photons);
+    if (c->resolution > 0)
+        c->options.sppm.resolution = c->resolution;
+    c->options.tolerance = c->tolerance;
+    c->options.snapshot = &c->snapshot;
+    test_run_importance(c->s, NULL, &c->options, &c->r);
+    imp_expect_all_finite(c->s, &c->r);
+    c->ready = 1;
+    return c;
+}
+
+/* Group teardown: frees every case run on the device. */
+static inline int imp_teardown(void **state)
+{
+    for (size_t i = 0; i < imp_cases_run_count; i++)
+        imp_case_free(imp_cases_run[i]);
+    imp_cases_run_count = 0;
+    return 0;
+}
+
+/* The case of an IMP_CASE_TEST, run. */
+static inline const imp_case *imp_run_state(void **state)
+{
+    return imp_run(*state);
+}
+
+/* ---- scenes shared by several test programs ---- */
+
+/* A floor seen by the camera, a point light over it, and a wall behind the camera (z = 6,
+ * facing the light and the floor, outside the camera's cone) of albedo `wall_albedo`. */
+static inline scene *imp_hidden_wall_scene(float wall_albedo)
+{
+    scene *s = scene_create("hidden-wall.xml");
+    uint32_t white = imp_diffuse(s, "white", 0.8f, 0);
+    uint32_t wall = imp_diffuse(s, "wall", wall_albedo, 0);
+    const float fc[3] = {0, 0, 0}, fu[3] = {0, 0, 2}, fv[3] = {2, 0, 0};
+    imp_add_quad(s, "floor", white, fc, fu, fv); /* normal +y */
+    const float wc[3] = {0, 1.5f, 6}, wu[3] = {0, 1.5f, 0}, wv[3] = {2, 0, 0};
+    imp_add_quad(s, "wall", wall, wc, wu, wv); /* normal -z */
+    const float light[3] = {0, 2, 0}, eye[3] = {0, 3, 4}, target[3] = {0, 0, 0}, up[3] = {0, 1, 0};
+    imp_point_light(s, light, 1.0f);
+    imp_look_at(s, eye, target, up, 64, 48, 0.5f);
+    return test_finalize_scene(s);
 }
 
 #endif

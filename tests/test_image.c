@@ -1,32 +1,18 @@
-/* test_image.c — the OpenImageIO bridge (host/image.cc): writing PNG, writing and reading back EXR,
- * and image comparison against hand-computed RMSE, PSNR and relative MSE; plus `idmr compare`
- * from the command line. */
+/* test_image.c — the OpenImageIO bridge (host/io/image.cc): writing PNG, writing and reading
+ * back EXR, and image comparison against hand-computed RMSE, PSNR and relative MSE; plus
+ * `idmr compare` from the command line. */
 #include <math.h>
-#include <setjmp.h>
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
 #include <sys/wait.h>
-#include <unistd.h>
 
-#include <cmocka.h>
-
-#include "core/error.h"
 #include "io/image.h"
 #include "io/image_compare.h"
+#include "test_support.h"
 
 static char dir[] = "/tmp/idmr-test-image-XXXXXX";
 
 static int group_setup(void **state) { return mkdtemp(dir) ? 0 : -1; }
 
-static int group_teardown(void **state)
-{
-    char command[128];
-    snprintf(command, sizeof command, "rm -rf %s", dir);
-    return system(command) == 0 ? 0 : -1;
-}
+static int group_teardown(void **state) { return test_remove_directory(dir); }
 
 static const char *path_of(const char *name)
 {
@@ -47,6 +33,13 @@ static float *flat(int w, int h, float r, float g, float b)
         rgb[3 * i + 2] = b;
     }
     return rgb;
+}
+
+/* Writes two w x h EXR images, a at pa and b at pb. */
+static void write_pair(const char *pa, const float *a, const char *pb, const float *b, int w, int h)
+{
+    assert_int_equal(image_write_rgb_float(pa, w, h, a), 0);
+    assert_int_equal(image_write_rgb_float(pb, w, h, b), 0);
 }
 
 /* EXR keeps linear values (half floats: 0.5 and 0.25 exactly). */
@@ -74,8 +67,7 @@ static void test_compare_against_formulas(void **state)
 {
     float *a = flat(16, 8, 0.5f, 0.5f, 0.5f), *b = flat(16, 8, 0.25f, 0.25f, 0.25f);
     const char *pa = path_of("a.exr"), *pb = path_of("b.exr"), *diff = path_of("diff.png");
-    assert_int_equal(image_write_rgb_float(pa, 16, 8, a), 0);
-    assert_int_equal(image_write_rgb_float(pb, 16, 8, b), 0);
+    write_pair(pa, a, pb, b, 16, 8);
     image_comparison r;
     assert_int_equal(image_compare(pa, pb, diff, 0, &r), 0);
     assert_float_equal(r.rmse, 0.25, 1e-9);
@@ -89,10 +81,9 @@ static void test_compare_against_formulas(void **state)
     assert_true(r.rmse == 0.0 && isinf(r.psnr) && r.relative_mse == 0.0);
     /* One pixel off by 1 in one channel of 16 x 8 x 3 values: RMSE sqrt(1 / 384). */
     a[0] = 1.5f;
-    assert_int_equal(image_write_rgb_float(pa, 16, 8, a), 0);
     memcpy(b, a, 3 * sizeof(float) * 128);
     b[0] = 0.5f;
-    assert_int_equal(image_write_rgb_float(pb, 16, 8, b), 0);
+    write_pair(pa, a, pb, b, 16, 8);
     assert_int_equal(image_compare(pa, pb, NULL, 0, &r), 0);
     assert_float_equal(r.rmse, sqrt(1.0 / 384.0), 1e-9);
     free(a);
@@ -120,8 +111,7 @@ static void test_compare_command(void **state)
 {
     float *a = flat(4, 4, 0.5f, 0.5f, 0.5f), *b = flat(4, 4, 0.25f, 0.25f, 0.25f);
     const char *pa = path_of("cli-a.exr"), *pb = path_of("cli-b.exr");
-    assert_int_equal(image_write_rgb_float(pa, 4, 4, a), 0);
-    assert_int_equal(image_write_rgb_float(pb, 4, 4, b), 0);
+    write_pair(pa, a, pb, b, 4, 4);
     char command[1024];
     snprintf(command, sizeof command, "bin/idmr compare %s %s --json", pa, pb);
     FILE *p = popen(command, "r");

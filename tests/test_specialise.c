@@ -1,233 +1,298 @@
 /* test_specialise.c — kernels built for the scene's features (issue: "simulate only the effects a
- * scene calls for"): the options a scene gets, specialised and generic programs giving
- * bit-identical importance and bit-identical renders, γ = 0 leaving camera importance out without touching light
- * importance, and the program cache (a second build comes from it, a changed kernel source does
- * not). */
-#include <setjmp.h>
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-#include <unistd.h>
+ * scene calls for"): the options a scene gets; specialised and generic programs giving
+ * bit-identical importance and bit-identical renders; γ = 0 leaving camera importance out
+ * without touching light importance; and the program cache (a second build comes from it, a
+ * changed kernel source or other options do not). Every test runs on every device
+ * (tests/device_test.h); the scenes are the shipped Cornell box (diffuse, one area light) and
+ * the glass of water from ../shared/data (dielectric, glossy). */
+#include "test_support.h"
 
-#include <cmocka.h>
+/* The scenes with their BVHs, loaded once per device and program. */
+static struct loaded {
+    const char *path;
+    scene *s;
+    bvh b;
+} loaded[2];
 
-#include "device/bvh.h"
-#include "device/device.h"
-#include "device/program.h"
-#include "core/error.h"
-#include "passes/importance.h"
-#include "io/mitsuba.h"
-#include "passes/render.h"
-
-static device dev;
-
-static int group_setup(void **state)
+static const struct loaded *load(const char *path)
 {
-    if (device_open(&dev, -1)) {
-        fprintf(stderr, "test_specialise: %s\n", error_message());
-        return -1;
+    int i = strcmp(path, CORNELL_SCENE) == 0 ? 0 : 1;
+    if (!loaded[i].s) {
+        scene *s = test_load_scene(path);
+        test_build_bvh(s, &loaded[i].b);
+        loaded[i].s = s;
+        loaded[i].path = path;
     }
-    return 0;
+    assert_string_equal(loaded[i].path, path);
+    return &loaded[i];
 }
 
-static int group_teardown(void **state)
-{
-    device_close(&dev);
-    return 0;
-}
+/* ---- the options a scene gets ---- */
 
-static scene *load(const char *path)
+/* Feature bits: diffuse 0x1, glossy 0x2, dielectric 0x8, area 0x20. */
+static void expect_features(const char *path, unsigned int features, const char *define)
 {
-    warn_silence(1);
-    scene *s = mitsuba_load(path);
-    warn_silence(0);
-    if (!s)
-        fail_msg("%s", error_message());
-    return s;
-}
-
-/* The shipped Cornell box: diffuse and an area light only; the glass of water: dielectric. */
-static void test_options_follow_the_scene(void **state)
-{
-    scene *box = load("data/cornell/scene.xml");
-    scene *glass = load("../shared/data/scenes/glass-of-water/scene-without-mesh000.xml");
-    assert_int_equal(box->features, IDMR_FEATURE_DIFFUSE | IDMR_FEATURE_AREA);
-    char *options = device_build_options(&dev, box->features, NULL);
-    assert_non_null(strstr(options, "-D IDMR_FEATURES=0x21u"));
-    assert_false(box->features & (IDMR_FEATURE_DIELECTRIC | IDMR_FEATURE_SPOT));
+    unsigned int found = load(path)->s->features;
+    char *options = device_build_options(device_test_device(), found, NULL);
+    int has_define = strstr(options, define) != NULL;
+    print_message("  %s: features 0x%x, options %s\n", path, found, options);
     free(options);
-    /* diffuse (0x1), glossy (0x2), dielectric (0x8), area (0x20) */
-    assert_int_equal(glass->features, IDMR_FEATURE_DIFFUSE | IDMR_FEATURE_GLOSSY |
-                                          IDMR_FEATURE_DIELECTRIC | IDMR_FEATURE_AREA);
-    options = device_build_options(&dev, glass->features, NULL);
-    assert_non_null(strstr(options, "-D IDMR_FEATURES=0x2bu"));
-    free(options);
-    scene_free(box);
-    scene_free(glass);
+    assert_int_equal(found, features);
+    assert_true(has_define);
 }
 
-static void run_pass(const scene *s, const bvh *b, int generic, float gamma,
-                     importance_result *r)
+static void test_cornell_options(void **state)
+{
+    expect_features(CORNELL_SCENE, IDMR_FEATURE_DIFFUSE | IDMR_FEATURE_AREA,
+                    "-D IDMR_FEATURES=0x21u");
+}
+
+static void test_glass_of_water_options(void **state)
+{
+    expect_features(GLASS_OF_WATER_SCENE,
+                    IDMR_FEATURE_DIFFUSE | IDMR_FEATURE_GLOSSY | IDMR_FEATURE_DIELECTRIC |
+                        IDMR_FEATURE_AREA,
+                    "-D IDMR_FEATURES=0x2bu");
+}
+
+/* ---- generic and specialised programs ---- */
+
+/* Two iterations of 20k paths at a quarter of the film, specialised or generic. */
+static void small_sppm(sppm_options *o, int generic)
+{
+    o->iterations = 2;
+    o->photons = 20000;
+    o->resolution = 0.25f;
+    o->generic = generic;
+}
+
+static void run_importance(const scene *s, const bvh *b, int generic, float gamma,
+                           importance_result *r)
 {
     importance_options o;
     importance_options_default(&o);
-    o.sppm.iterations = 2;
-    o.sppm.photons = 20000;
-    o.sppm.resolution = 0.25f;
-    o.sppm.generic = generic;
+    small_sppm(&o.sppm, generic);
     o.gamma = gamma;
-    if (importance_run(&dev, s, b, &o, r))
-        fail_msg("%s", error_message());
+    test_run_importance(s, b, &o, r);
 }
 
-static void expect_identical(const char *path)
+static void run_render(const scene *s, const bvh *b, int generic, render_result *r)
 {
-    scene *s = load(path);
-    bvh b;
-    assert_int_equal(bvh_build(s, &b), 0);
+    render_options o;
+    render_options_default(&o);
+    small_sppm(&o.sppm, generic);
+    test_run_render(s, b, &o, r);
+}
+
+/* The generic program was built with every feature, the specialised one not. */
+static void expect_programs(const sppm_summary *specialised, const sppm_summary *generic)
+{
+    assert_non_null(strstr(generic->build_options, "IDMR_FEATURES=0x3ffu"));
+    assert_null(strstr(specialised->build_options, "IDMR_FEATURES=0x3ffu"));
+}
+
+/* The same seed gives the same per-triangle sums, to the bit, with either program. */
+static void expect_identical_importance(const char *path)
+{
+    const struct loaded *l = load(path);
     importance_result specialised, generic;
-    run_pass(s, &b, 0, 1.0f, &specialised);
-    run_pass(s, &b, 1, 1.0f, &generic);
-    assert_non_null(strstr(generic.sppm.build_options, "IDMR_FEATURES=0x3ffu"));
-    assert_null(strstr(specialised.sppm.build_options, "IDMR_FEATURES=0x3ffu"));
+    run_importance(l->s, &l->b, 0, 1.0f, &specialised);
+    run_importance(l->s, &l->b, 1, 1.0f, &generic);
+    expect_programs(&specialised.sppm, &generic.sppm);
     size_t n = specialised.triangle_count;
     double total = 0;
     for (size_t t = 0; t < n; t++)
         total += specialised.camera[t] + specialised.light[t];
+    print_message("  %s: %zu triangles, total %.6g\n", path, n, total);
     assert_true(total > 0);
     assert_memory_equal(specialised.camera, generic.camera, n * sizeof(double));
     assert_memory_equal(specialised.light, generic.light, n * sizeof(double));
-    print_message("  %s: %zu triangles, identical sums (total %.6g)\n", path, n, total);
     importance_result_free(&specialised);
     importance_result_free(&generic);
-    bvh_free(&b);
-    scene_free(s);
-}
-
-static void render_scene(const scene *s, const bvh *b, int generic, render_result *r)
-{
-    render_options o;
-    render_options_default(&o);
-    o.sppm.iterations = 2;
-    o.sppm.photons = 20000;
-    o.sppm.resolution = 0.25f;
-    o.sppm.generic = generic;
-    if (render_run(&dev, s, b, &o, r))
-        fail_msg("%s", error_message());
 }
 
 /* The same seed renders the same image, to the bit, with either program. */
 static void expect_identical_render(const char *path)
 {
-    scene *s = load(path);
-    bvh b;
-    assert_int_equal(bvh_build(s, &b), 0);
+    const struct loaded *l = load(path);
     render_result specialised, generic;
-    render_scene(s, &b, 0, &specialised);
-    render_scene(s, &b, 1, &generic);
-    assert_non_null(strstr(generic.sppm.build_options, "IDMR_FEATURES=0x3ffu"));
-    assert_null(strstr(specialised.sppm.build_options, "IDMR_FEATURES=0x3ffu"));
+    run_render(l->s, &l->b, 0, &specialised);
+    run_render(l->s, &l->b, 1, &generic);
+    expect_programs(&specialised.sppm, &generic.sppm);
     size_t values = (size_t)specialised.sppm.width * specialised.sppm.height * 3;
     double total = 0;
     for (size_t i = 0; i < values; i++)
         total += specialised.image[i];
+    print_message("  %s: %ux%u, mean %.6g\n", path, specialised.sppm.width,
+                  specialised.sppm.height, total / values);
     assert_true(total > 0);
     assert_memory_equal(specialised.image, generic.image, values * sizeof(float));
-    print_message("  %s: %ux%u, identical images (mean %.6g)\n", path, specialised.sppm.width,
-                  specialised.sppm.height, total / values);
     render_result_free(&specialised);
     render_result_free(&generic);
-    bvh_free(&b);
-    scene_free(s);
 }
 
-static void test_generic_equals_specialised_diffuse(void **state)
+static void test_generic_importance_equals_specialised_on_cornell(void **state)
 {
-    expect_identical("data/cornell/scene.xml");
-    expect_identical_render("data/cornell/scene.xml");
+    expect_identical_importance(CORNELL_SCENE);
 }
 
-static void test_generic_equals_specialised_glass(void **state)
+static void test_generic_render_equals_specialised_on_cornell(void **state)
 {
-    expect_identical("../shared/data/scenes/glass-of-water/scene-without-mesh000.xml");
-    expect_identical_render("../shared/data/scenes/glass-of-water/scene-without-mesh000.xml");
+    expect_identical_render(CORNELL_SCENE);
 }
 
-/* γ = 0 compiles the camera atomics out: camera importance is all zero, light importance is the
- * same as with γ = 1 (the camera pass draws the same random numbers either way). */
-static void test_gamma_zero_skips_camera_importance(void **state)
+static void test_generic_importance_equals_specialised_on_glass(void **state)
 {
-    scene *s = load("data/cornell/scene.xml");
-    bvh b;
-    assert_int_equal(bvh_build(s, &b), 0);
-    importance_result with, without;
-    run_pass(s, &b, 0, 1.0f, &with);
-    run_pass(s, &b, 0, 0.0f, &without);
-    assert_non_null(strstr(without.sppm.build_options, "-D IDMR_CAMERA_IMPORTANCE=0"));
-    double camera = 0, camera_with = 0;
-    for (size_t t = 0; t < without.triangle_count; t++) {
-        camera += without.camera[t];
-        camera_with += with.camera[t];
-    }
-    assert_true(camera == 0.0);
-    assert_true(camera_with > 0.0); /* γ = 1 does accumulate it */
-    assert_memory_equal(with.light, without.light, with.triangle_count * sizeof(double));
-    importance_result_free(&with);
-    importance_result_free(&without);
-    bvh_free(&b);
-    scene_free(s);
+    expect_identical_importance(GLASS_OF_WATER_SCENE);
 }
 
-/* A second build is served from the cache; a kernel source changed by one comment is not. */
-static void test_program_cache(void **state)
+static void test_generic_render_equals_specialised_on_glass(void **state)
 {
-    char root[] = "/tmp/idmr-cache-root-XXXXXX", cache[] = "/tmp/idmr-cache-XXXXXX";
-    assert_non_null(mkdtemp(root));
-    assert_non_null(mkdtemp(cache));
-    char command[1024];
+    expect_identical_render(GLASS_OF_WATER_SCENE);
+}
+
+/* ---- γ = 0 ---- */
+
+/* The Cornell box with γ = 1 and γ = 0, once per device. */
+static importance_result with_gamma, without_gamma;
+
+static void run_both_gammas(void)
+{
+    if (without_gamma.light)
+        return;
+    const struct loaded *cornell = load(CORNELL_SCENE);
+    run_importance(cornell->s, &cornell->b, 0, 1.0f, &with_gamma);
+    run_importance(cornell->s, &cornell->b, 0, 0.0f, &without_gamma);
+}
+
+static double camera_total(const importance_result *r)
+{
+    double sum = 0;
+    for (size_t t = 0; t < r->triangle_count; t++)
+        sum += r->camera[t];
+    return sum;
+}
+
+/* γ = 0 compiles the camera atomics out: camera importance is all zero (γ = 1 does accumulate
+ * it). */
+static void test_gamma_zero_leaves_camera_importance_out(void **state)
+{
+    run_both_gammas();
+    assert_non_null(strstr(without_gamma.sppm.build_options, "-D IDMR_CAMERA_IMPORTANCE=0"));
+    assert_true(camera_total(&without_gamma) == 0.0);
+    assert_true(camera_total(&with_gamma) > 0.0);
+}
+
+/* Light importance is the same as with γ = 1 (the camera pass draws the same random numbers
+ * either way). */
+static void test_gamma_zero_keeps_light_importance(void **state)
+{
+    run_both_gammas();
+    assert_memory_equal(with_gamma.light, without_gamma.light,
+                        with_gamma.triangle_count * sizeof(double));
+}
+
+/* ---- the program cache ---- */
+
+/* A copy of kernels/ and include/ as IDMR_ROOT and an empty IDMR_CACHE_DIR, and the options of
+ * the Cornell box, for one test. */
+static char root[64], cache[64];
+static char *options;
+
+static int cache_setup(void **state)
+{
+    snprintf(root, sizeof root, "/tmp/idmr-cache-root-XXXXXX");
+    snprintf(cache, sizeof cache, "/tmp/idmr-cache-XXXXXX");
+    if (!mkdtemp(root) || !mkdtemp(cache))
+        return -1;
+    char command[256];
     snprintf(command, sizeof command, "cp -r kernels include %s/", root);
-    assert_int_equal(system(command), 0);
+    if (system(command) != 0)
+        return -1;
     setenv("IDMR_ROOT", root, 1);
     setenv("IDMR_CACHE_DIR", cache, 1);
-    char *options = device_build_options(&dev, IDMR_FEATURE_DIFFUSE | IDMR_FEATURE_AREA, NULL);
-    cl_program program;
-    uint64_t before = device_program_key(&dev, "trace.cl", options);
-    assert_int_equal(device_build_program(&dev, "trace.cl", options, &program), 0);
-    assert_false(device_last_build_cached());
-    clReleaseProgram(program);
-    assert_int_equal(device_build_program(&dev, "trace.cl", options, &program), 0);
-    assert_true(device_last_build_cached());
-    clReleaseProgram(program);
+    options = device_build_options(device_test_device(), IDMR_FEATURE_DIFFUSE | IDMR_FEATURE_AREA,
+                                   NULL);
+    return 0;
+}
 
-    snprintf(command, sizeof command, "echo '/* changed */' >> %s/kernels/traverse.h", root);
-    assert_int_equal(system(command), 0);
-    assert_true(device_program_key(&dev, "trace.cl", options) != before);
-    assert_int_equal(device_build_program(&dev, "trace.cl", options, &program), 0);
-    assert_false(device_last_build_cached());
-    clReleaseProgram(program);
-
-    /* Other options, other program. */
-    char *other = device_build_options(&dev, IDMR_FEATURE_DIFFUSE | IDMR_FEATURE_POINT, NULL);
-    assert_true(device_program_key(&dev, "trace.cl", other) !=
-                device_program_key(&dev, "trace.cl", options));
-    free(other);
+static int cache_teardown(void **state)
+{
     free(options);
+    options = NULL;
     unsetenv("IDMR_ROOT");
     unsetenv("IDMR_CACHE_DIR");
-    snprintf(command, sizeof command, "rm -rf %s %s", root, cache);
+    return test_remove_directory(root) || test_remove_directory(cache) ? -1 : 0;
+}
+
+/* Builds trace.cl with `build_options`; returns whether it came from the cache. */
+static int build_trace(const char *build_options)
+{
+    cl_program program;
+    if (device_build_program(device_test_device(), "trace.cl", build_options, &program))
+        fail_msg("%s", error_message());
+    clReleaseProgram(program);
+    return device_last_build_cached();
+}
+
+static void test_second_build_comes_from_the_cache(void **state)
+{
+    assert_false(build_trace(options));
+    assert_true(build_trace(options));
+}
+
+/* A header that trace.cl includes (kernels/lib/traverse.h), changed by one comment: another
+ * key, and a build that does not come from the cache. */
+static void test_changed_source_is_built_again(void **state)
+{
+    device *d = device_test_device();
+    assert_false(build_trace(options));
+    uint64_t before = device_program_key(d, "trace.cl", options);
+    char command[256];
+    snprintf(command, sizeof command, "echo '/* changed */' >> %s/kernels/lib/traverse.h", root);
     assert_int_equal(system(command), 0);
+    assert_true(device_program_key(d, "trace.cl", options) != before);
+    assert_false(build_trace(options));
+}
+
+static void test_other_options_other_key(void **state)
+{
+    device *d = device_test_device();
+    char *other = device_build_options(d, IDMR_FEATURE_DIFFUSE | IDMR_FEATURE_POINT, NULL);
+    uint64_t key = device_program_key(d, "trace.cl", other);
+    free(other);
+    assert_true(key != device_program_key(d, "trace.cl", options));
+}
+
+static int group_teardown(void **state)
+{
+    importance_result_free(&with_gamma);
+    importance_result_free(&without_gamma);
+    for (int i = 0; i < 2; i++)
+        if (loaded[i].s) {
+            bvh_free(&loaded[i].b);
+            scene_free(loaded[i].s);
+            loaded[i].s = NULL;
+        }
+    return 0;
 }
 
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_options_follow_the_scene),
-        cmocka_unit_test(test_generic_equals_specialised_diffuse),
-        cmocka_unit_test(test_generic_equals_specialised_glass),
-        cmocka_unit_test(test_gamma_zero_skips_camera_importance),
-        cmocka_unit_test(test_program_cache),
+        cmocka_unit_test(test_cornell_options),
+        cmocka_unit_test(test_glass_of_water_options),
+        cmocka_unit_test(test_generic_importance_equals_specialised_on_cornell),
+        cmocka_unit_test(test_generic_render_equals_specialised_on_cornell),
+        cmocka_unit_test(test_generic_importance_equals_specialised_on_glass),
+        cmocka_unit_test(test_generic_render_equals_specialised_on_glass),
+        cmocka_unit_test(test_gamma_zero_leaves_camera_importance_out),
+        cmocka_unit_test(test_gamma_zero_keeps_light_importance),
+        cmocka_unit_test_setup_teardown(test_second_build_comes_from_the_cache, cache_setup,
+                                        cache_teardown),
+        cmocka_unit_test_setup_teardown(test_changed_source_is_built_again, cache_setup,
+                                        cache_teardown),
+        cmocka_unit_test_setup_teardown(test_other_options_other_key, cache_setup, cache_teardown),
     };
-    return cmocka_run_group_tests_name("specialise", tests, group_setup, group_teardown);
+    return DEVICE_TEST_RUN("specialise", tests, NULL, group_teardown) != 0;
 }

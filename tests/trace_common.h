@@ -1,8 +1,10 @@
-/* trace_common.h — shared by the traversal test and benchmark (and used by test_importance and
- * bench_decimation for the Embree reference and timing): scenes from
- * single mesh files, ray sets (incoherent and camera), the OpenCL trace kernels, and Embree's
- * rtcIntersect1/rtcOccluded1 as the reference. Header-only (static functions): each program
- * includes it once. */
+/* trace_common.h — rays, cameras and the Embree reference, shared by the traversal test and
+ * benchmark, the importance tests (camera rays, Embree) and bench_decimation (timing): scenes
+ * from single mesh files; ray sets (incoherent, and camera rays through the project's one
+ * camera formula, idmr/camera.h) drawn from the project's one generator (idmr/rng.h, stream
+ * IDMR_STREAM_TEST); the OpenCL trace kernels on a device the caller opened; Embree's
+ * rtcIntersect1/rtcOccluded1 as the reference. Header-only (static inline functions); no
+ * cmocka, so that the benchmarks can use it. */
 #ifndef IDMR_TESTS_TRACE_COMMON_H
 #define IDMR_TESTS_TRACE_COMMON_H
 
@@ -19,7 +21,9 @@
 #include "device/device.h"
 #include "device/program.h"
 #include "core/error.h"
+#include "idmr/camera.h"
 #include "idmr/ray.h"
+#include "idmr/rng.h"
 #include "io/mesh_io.h"
 #include "core/scene.h"
 
@@ -30,16 +34,6 @@ static inline double trace_seconds(void)
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-/* splitmix64: a reproducible stream of uniform floats in [0, 1). */
-static inline float trace_random(uint64_t *state)
-{
-    uint64_t z = (*state += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    z ^= z >> 31;
-    return (float)(z >> 40) * (1.0f / 16777216.0f);
 }
 
 /* A scene holding one mesh file (one diffuse material), or NULL with the error set. */
@@ -89,7 +83,8 @@ static inline RTCScene trace_embree_scene(const scene *s)
     return es;
 }
 
-static inline void trace_set_ray(idmr_ray *r, const float o[3], const float d[3], float tmin, float tmax)
+static inline void trace_set_ray(idmr_ray *r, const float o[3], const float d[3], float tmin,
+                                 float tmax)
 {
     memcpy(r->origin, o, sizeof r->origin);
     memcpy(r->direction, d, sizeof r->direction);
@@ -98,18 +93,19 @@ static inline void trace_set_ray(idmr_ray *r, const float o[3], const float d[3]
 }
 
 /* Incoherent rays: origins uniform in the (slightly grown) scene box, directions uniform on
- * the sphere. */
-static inline void trace_random_rays(const scene *s, idmr_ray *rays, size_t count, uint64_t seed)
+ * the sphere; ray i draws from the stream (seed, 0, IDMR_STREAM_TEST, i) of idmr/rng.h. */
+static inline void trace_random_rays(const scene *s, idmr_ray *rays, size_t count,
+                                     unsigned int seed)
 {
-    uint64_t state = seed;
     for (size_t i = 0; i < count; i++) {
+        idmr_rng rng = idmr_rng_init(seed, 0, IDMR_STREAM_TEST, (unsigned int)i);
         float o[3], d[3];
         for (int k = 0; k < 3; k++) {
             float extent = s->bbox_max[k] - s->bbox_min[k];
-            o[k] = s->bbox_min[k] - 0.05f * extent + 1.1f * extent * trace_random(&state);
+            o[k] = s->bbox_min[k] - 0.05f * extent + 1.1f * extent * idmr_rng_float(&rng);
         }
-        float z = 1.0f - 2.0f * trace_random(&state);
-        float phi = 6.2831853f * trace_random(&state);
+        float z = 1.0f - 2.0f * idmr_rng_float(&rng);
+        float phi = 6.2831853f * idmr_rng_float(&rng);
         float r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
         d[0] = r * cosf(phi);
         d[1] = r * sinf(phi);
@@ -118,85 +114,107 @@ static inline void trace_random_rays(const scene *s, idmr_ray *rays, size_t coun
     }
 }
 
-/* Camera rays of a width x height image, row by row, one jittered ray per pixel. */
-static inline void trace_camera_rays(const idmr_camera *c, idmr_ray *rays, unsigned width,
-                              unsigned height, uint64_t seed)
+/* ---- cameras: the project's one camera-ray formula (idmr/camera.h) ---- */
+
+static inline void trace_normalize(float v[3])
 {
-    uint64_t state = seed;
-    for (unsigned y = 0; y < height; y++)
-        for (unsigned x = 0; x < width; x++) {
-            float sx = (2.0f * (x + trace_random(&state)) / width - 1.0f) * c->tan_half_x;
-            float sy = (1.0f - 2.0f * (y + trace_random(&state)) / height) * c->tan_half_y;
-            float d[3];
-            for (int k = 0; k < 3; k++)
-                d[k] = c->forward[k] + sx * c->right[k] + sy * c->up[k];
-            float n = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-            for (int k = 0; k < 3; k++)
-                d[k] /= n;
-            trace_set_ray(&rays[(size_t)y * width + x], c->origin, d, 0.0f, INFINITY);
-        }
+    float n = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    for (int k = 0; k < 3; k++)
+        v[k] /= n;
 }
 
-/* A camera outside the scene box looking at its centre from direction (1, 0.6, 1.6). */
-static inline idmr_camera trace_overview_camera(const scene *s, unsigned width, unsigned height)
+static inline void trace_cross(const float a[3], const float b[3], float out[3])
+{
+    float c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    memcpy(out, c, sizeof c);
+}
+
+/* A pinhole at `origin` looking at `target`: right = forward × up_hint, up = right × forward
+ * (all unit); tan_half_y follows from the aspect ratio. */
+static inline idmr_camera trace_look_at(const float origin[3], const float target[3],
+                                        const float up_hint[3], unsigned int width,
+                                        unsigned int height, float tan_half_x)
 {
     idmr_camera c;
     memset(&c, 0, sizeof c);
-    float center[3], diag = 0;
-    for (int k = 0; k < 3; k++) {
-        center[k] = 0.5f * (s->bbox_min[k] + s->bbox_max[k]);
-        float e = s->bbox_max[k] - s->bbox_min[k];
-        diag += e * e;
-    }
-    diag = sqrtf(diag);
-    float away[3] = {1.0f, 0.6f, 1.6f};
-    float n = sqrtf(away[0] * away[0] + away[1] * away[1] + away[2] * away[2]);
-    for (int k = 0; k < 3; k++) {
-        c.origin[k] = center[k] + 1.2f * diag * away[k] / n;
-        c.forward[k] = -away[k] / n;
-    }
-    float up[3] = {0, 1, 0};
-    /* right = forward x up, up = right x forward */
-    c.right[0] = c.forward[1] * up[2] - c.forward[2] * up[1];
-    c.right[1] = c.forward[2] * up[0] - c.forward[0] * up[2];
-    c.right[2] = c.forward[0] * up[1] - c.forward[1] * up[0];
-    n = sqrtf(c.right[0] * c.right[0] + c.right[1] * c.right[1] + c.right[2] * c.right[2]);
+    memcpy(c.origin, origin, sizeof c.origin);
     for (int k = 0; k < 3; k++)
-        c.right[k] /= n;
-    c.up[0] = c.right[1] * c.forward[2] - c.right[2] * c.forward[1];
-    c.up[1] = c.right[2] * c.forward[0] - c.right[0] * c.forward[2];
-    c.up[2] = c.right[0] * c.forward[1] - c.right[1] * c.forward[0];
+        c.forward[k] = target[k] - origin[k];
+    trace_normalize(c.forward);
+    trace_cross(c.forward, up_hint, c.right);
+    trace_normalize(c.right);
+    trace_cross(c.right, c.forward, c.up);
+    trace_normalize(c.up);
     c.width = width;
     c.height = height;
-    c.tan_half_x = 0.45f;
-    c.tan_half_y = 0.45f * height / width;
+    c.tan_half_x = tan_half_x;
+    c.tan_half_y = tan_half_x * (float)height / (float)width;
     return c;
+}
+
+/* The unit direction of the ray through film position (film_x, film_y) of a width x height
+ * image of camera c: idmr_camera_direction() on c with its film size replaced. The centre of
+ * pixel (x, y) is (x + 0.5, y + 0.5). */
+static inline void trace_film_direction(const idmr_camera *c, unsigned int width,
+                                        unsigned int height, float film_x, float film_y,
+                                        float d[3])
+{
+    idmr_camera film = *c;
+    film.width = width;
+    film.height = height;
+    idmr_camera_direction(&film, film_x, film_y, d);
+    trace_normalize(d);
+}
+
+/* The jittered ray of pixel `pixel` (row by row) of that image as the kernels' camera paths
+ * draw it: x jitter, then y jitter, from the stream (seed, iteration, stream, pixel). */
+static inline void trace_jittered_direction(const idmr_camera *c, unsigned int width,
+                                            unsigned int height, unsigned int seed,
+                                            unsigned int iteration, unsigned int stream,
+                                            unsigned int pixel, float d[3])
+{
+    idmr_rng rng = idmr_rng_init(seed, iteration, stream, pixel);
+    float film_x = (float)(pixel % width) + idmr_rng_float(&rng);
+    float film_y = (float)(pixel / width) + idmr_rng_float(&rng);
+    trace_film_direction(c, width, height, film_x, film_y, d);
+}
+
+/* Camera rays of a width x height image, row by row, one jittered ray per pixel (stream
+ * IDMR_STREAM_TEST). */
+static inline void trace_camera_rays(const idmr_camera *c, idmr_ray *rays, unsigned int width,
+                                     unsigned int height, unsigned int seed)
+{
+    for (unsigned int p = 0; p < width * height; p++) {
+        float d[3];
+        trace_jittered_direction(c, width, height, seed, 0, IDMR_STREAM_TEST, p, d);
+        trace_set_ray(&rays[p], c->origin, d, 0.0f, INFINITY);
+    }
+}
+
+/* A camera outside the scene box looking at its centre from direction (1, 0.6, 1.6). */
+static inline idmr_camera trace_overview_camera(const scene *s, unsigned int width,
+                                                unsigned int height)
+{
+    float center[3], away[3] = {1.0f, 0.6f, 1.6f}, origin[3];
+    const float up[3] = {0, 1, 0};
+    trace_normalize(away);
+    float diagonal = (float)scene_diagonal(s);
+    for (int k = 0; k < 3; k++) {
+        center[k] = 0.5f * (s->bbox_min[k] + s->bbox_max[k]);
+        origin[k] = center[k] + 1.2f * diagonal * away[k];
+    }
+    return trace_look_at(origin, center, up, width, height, 0.45f);
 }
 
 /* ---- OpenCL side ---- */
 
+/* The trace kernels (kernels/trace.cl) built on a device that the caller opened. */
 typedef struct trace_device {
-    device dev;
+    device *dev;
     cl_program program;
     cl_kernel closest;
     cl_kernel any;
 } trace_device;
-
-static inline int trace_device_open(trace_device *t)
-{
-    memset(t, 0, sizeof *t);
-    if (device_open(&t->dev, -1))
-        return -1;
-    char *options = device_build_options(&t->dev, 0, NULL);
-    int status = device_build_program(&t->dev, "trace.cl", options, &t->program);
-    free(options);
-    if (status)
-        return -1;
-    if (device_create_kernel(t->program, "trace_closest", &t->closest) ||
-        device_create_kernel(t->program, "trace_any", &t->any))
-        return -1;
-    return 0;
-}
 
 static inline void trace_device_close(trace_device *t)
 {
@@ -206,7 +224,24 @@ static inline void trace_device_close(trace_device *t)
         clReleaseKernel(t->any);
     if (t->program)
         clReleaseProgram(t->program);
-    device_close(&t->dev);
+    memset(t, 0, sizeof *t);
+}
+
+/* Builds the trace program on d (from idmr's program cache after the first build). Returns 0,
+ * or -1 with the error set and nothing left to release. */
+static inline int trace_device_open(trace_device *t, device *d)
+{
+    memset(t, 0, sizeof *t);
+    t->dev = d;
+    char *options = device_build_options(d, 0, NULL);
+    int status = device_build_program(d, "trace.cl", options, &t->program);
+    free(options);
+    if (status || device_create_kernel(t->program, "trace_closest", &t->closest) ||
+        device_create_kernel(t->program, "trace_any", &t->any)) {
+        trace_device_close(t);
+        return -1;
+    }
+    return 0;
 }
 
 /* The BVH of one scene, uploaded. */
@@ -221,9 +256,9 @@ static inline int trace_geometry_upload(trace_device *t, const scene *s, trace_g
     memset(g, 0, sizeof *g);
     if (bvh_build(s, &g->tree))
         return -1;
-    if (device_buffer(&t->dev, CL_MEM_READ_ONLY, g->tree.node_count * sizeof(idmr_bvh_node),
+    if (device_buffer(t->dev, CL_MEM_READ_ONLY, g->tree.node_count * sizeof(idmr_bvh_node),
                       g->tree.nodes, "BVH nodes", &g->nodes) ||
-        device_buffer(&t->dev, CL_MEM_READ_ONLY, g->tree.leaf_count * sizeof(idmr_triangle4),
+        device_buffer(t->dev, CL_MEM_READ_ONLY, g->tree.leaf_count * sizeof(idmr_triangle4),
                       g->tree.leaves, "BVH leaves", &g->leaves))
         return -1;
     return 0;
@@ -240,13 +275,14 @@ static inline void trace_geometry_release(trace_geometry *g)
 
 /* Traces `count` rays with the closest (any = 0) or any-hit kernel; *seconds gets the kernel
  * time (upload and download excluded) when not NULL. */
-static inline int trace_device_run(trace_device *t, const trace_geometry *g, const idmr_ray *rays,
-                            idmr_hit *hits, size_t count, int any, size_t local, double *seconds)
+static inline int trace_device_run(trace_device *t, const trace_geometry *g,
+                                   const idmr_ray *rays, idmr_hit *hits, size_t count, int any,
+                                   size_t local, double *seconds)
 {
     cl_mem ray_buffer, hit_buffer;
-    if (device_buffer(&t->dev, CL_MEM_READ_ONLY, count * sizeof *rays, rays, "rays", &ray_buffer))
+    if (device_buffer(t->dev, CL_MEM_READ_ONLY, count * sizeof *rays, rays, "rays", &ray_buffer))
         return -1;
-    if (device_buffer(&t->dev, CL_MEM_WRITE_ONLY, count * sizeof *hits, NULL, "hits", &hit_buffer)) {
+    if (device_buffer(t->dev, CL_MEM_WRITE_ONLY, count * sizeof *hits, NULL, "hits", &hit_buffer)) {
         clReleaseMemObject(ray_buffer);
         return -1;
     }
@@ -257,11 +293,11 @@ static inline int trace_device_run(trace_device *t, const trace_geometry *g, con
                                  DEVICE_ARG(n), DEVICE_ARG(g->nodes), DEVICE_ARG(g->leaves));
     double start = trace_seconds();
     if (!status)
-        status = device_run(&t->dev, k, name, count, local);
+        status = device_run(t->dev, k, name, count, local);
     if (seconds)
         *seconds = trace_seconds() - start;
     if (!status)
-        status = device_read(&t->dev, hit_buffer, count * sizeof *hits, hits, "hits");
+        status = device_read(t->dev, hit_buffer, count * sizeof *hits, hits, "hits");
     clReleaseMemObject(ray_buffer);
     clReleaseMemObject(hit_buffer);
     return status;
@@ -269,34 +305,9 @@ static inline int trace_device_run(trace_device *t, const trace_geometry *g, con
 
 /* ---- Embree reference ---- */
 
-static inline void trace_embree_closest(RTCScene es, const idmr_ray *ray, idmr_hit *hit)
+/* Embree's form of a ray. */
+static inline struct RTCRay trace_embree_ray(const idmr_ray *ray)
 {
-    struct RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    struct RTCRayHit rh;
-    rh.ray.org_x = ray->origin[0];
-    rh.ray.org_y = ray->origin[1];
-    rh.ray.org_z = ray->origin[2];
-    rh.ray.dir_x = ray->direction[0];
-    rh.ray.dir_y = ray->direction[1];
-    rh.ray.dir_z = ray->direction[2];
-    rh.ray.tnear = ray->tmin;
-    rh.ray.tfar = ray->tmax;
-    rh.ray.mask = 0xffffffffu;
-    rh.ray.flags = 0;
-    rh.ray.time = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(es, &context, &rh);
-    hit->t = rh.ray.tfar;
-    hit->u = rh.hit.u;
-    hit->v = rh.hit.v;
-    hit->triangle = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? IDMR_NO_HIT : rh.hit.primID;
-}
-
-static inline int trace_embree_occluded(RTCScene es, const idmr_ray *ray)
-{
-    struct RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
     struct RTCRay r;
     r.org_x = ray->origin[0];
     r.org_y = ray->origin[1];
@@ -309,6 +320,29 @@ static inline int trace_embree_occluded(RTCScene es, const idmr_ray *ray)
     r.mask = 0xffffffffu;
     r.flags = 0;
     r.time = 0;
+    r.id = 0;
+    return r;
+}
+
+static inline void trace_embree_closest(RTCScene es, const idmr_ray *ray, idmr_hit *hit)
+{
+    struct RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    struct RTCRayHit rh;
+    rh.ray = trace_embree_ray(ray);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(es, &context, &rh);
+    hit->t = rh.ray.tfar;
+    hit->u = rh.hit.u;
+    hit->v = rh.hit.v;
+    hit->triangle = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? IDMR_NO_HIT : rh.hit.primID;
+}
+
+static inline int trace_embree_occluded(RTCScene es, const idmr_ray *ray)
+{
+    struct RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    struct RTCRay r = trace_embree_ray(ray);
     rtcOccluded1(es, &context, &r);
     return r.tfar < 0.0f; /* Embree sets tfar to -inf when occluded */
 }
@@ -329,8 +363,8 @@ static inline void *trace_embree_worker(void *arg)
 }
 
 /* rtcIntersect1 over all rays on `threads` threads (contiguous chunks); returns seconds. */
-static inline double trace_embree_batch(RTCScene es, const idmr_ray *rays, idmr_hit *hits, size_t count,
-                                 int threads)
+static inline double trace_embree_batch(RTCScene es, const idmr_ray *rays, idmr_hit *hits,
+                                        size_t count, int threads)
 {
     pthread_t tid[64];
     trace_embree_job jobs[64];
@@ -338,7 +372,8 @@ static inline double trace_embree_batch(RTCScene es, const idmr_ray *rays, idmr_
         threads = 64;
     double start = trace_seconds();
     for (int i = 0; i < threads; i++) {
-        jobs[i] = (trace_embree_job){es, rays, hits, count * i / threads, count * (i + 1) / threads};
+        jobs[i] = (trace_embree_job){es, rays, hits, count * i / threads,
+                                     count * (i + 1) / threads};
         pthread_create(&tid[i], NULL, trace_embree_worker, &jobs[i]);
     }
     for (int i = 0; i < threads; i++)

@@ -1,0 +1,112 @@
+/* test_importance_driver.c — the importance pass's iteration driver (host/passes/importance.c
+ * on the SPPM core, host/passes/sppm.c): the convergence measure Δ, the early stop, the radius
+ * schedule and the input errors, on the hidden-wall scene of importance_common.h (white wall).
+ *
+ *   Δ_n = Σ (I_n - I_{n-1})² / Σ I_n² over triangles with area, I_n the per-area importance
+ *         after n iterations; Δ_1 = 1
+ *   stop  with a tolerance, at the first iteration that ends 3 calm ones in a row (Δ < tol)
+ *   radii r_{n+1}² = r_n² (n + α) / (n + 1) from r_1 = 5 × diagonal / (width + height) */
+#include "importance_common.h"
+
+static scene *white_wall_scene(void)
+{
+    return imp_hidden_wall_scene(0.9f);
+}
+
+/* The same seed, 1 and 2 iterations (the first iteration is the same in both), and up to 60
+ * iterations with tolerance 1e-3. */
+static imp_case one = {.make = white_wall_scene, .iterations = 1, .photons = 20000};
+static imp_case two = {.make = white_wall_scene, .iterations = 2, .photons = 20000};
+static imp_case stopping = {
+    .make = white_wall_scene, .iterations = 60, .photons = 20000, .tolerance = 1e-3};
+
+static void test_first_delta_is_one(void **state)
+{
+    assert_true(imp_run(&one)->r.convergence[0] == 1.0);
+    assert_true(imp_run(&two)->r.convergence[0] == 1.0);
+    assert_true(imp_run(&stopping)->r.convergence[0] == 1.0);
+}
+
+/* Δ_2 recomputed on the host from the 1- and 2-iteration runs. */
+static void test_second_delta_matches_the_host(void **state)
+{
+    const imp_case *first = imp_run(&one), *second = imp_run(&two);
+    double change = 0, magnitude = 0;
+    for (size_t t = 0; t < second->s->triangle_count; t++) {
+        double area = scene_triangle_area(second->s, t);
+        double now = (second->r.camera[t] + second->r.light[t]) / (2 * area);
+        double before = (first->r.camera[t] + first->r.light[t]) / area;
+        change += (now - before) * (now - before);
+        magnitude += now * now;
+    }
+    print_message("  Δ_2 host %.6e, device run %.6e\n", change / magnitude,
+                  second->r.convergence[1]);
+    assert_float_equal(second->r.convergence[1], change / magnitude, 1e-9 * change / magnitude);
+}
+
+/* The run stops before its 60 iterations, at the first iteration that ends 3 calm ones. */
+static void test_stops_after_three_calm_iterations(void **state)
+{
+    const imp_case *run = imp_run(&stopping);
+    int calm = 0, stop = 0;
+    for (unsigned int n = 0; n < run->r.sppm.iterations; n++) {
+        assert_true(isfinite(run->r.convergence[n]) && run->r.convergence[n] >= 0);
+        calm = run->r.convergence[n] < run->options.tolerance ? calm + 1 : 0;
+        if (calm == 3 && !stop)
+            stop = (int)n + 1;
+    }
+    print_message("  tolerance %.0e: stopped after %u of %u iterations; last Δ %.3g\n",
+                  run->options.tolerance, run->r.sppm.iterations, run->options.sppm.iterations,
+                  run->r.convergence[run->r.sppm.iterations - 1]);
+    assert_true(run->r.sppm.iterations < run->options.sppm.iterations);
+    assert_int_equal(stop, (int)run->r.sppm.iterations);
+}
+
+static void test_radius_schedule(void **state)
+{
+    const imp_case *run = imp_run(&stopping);
+    const sppm_summary *summary = &run->r.sppm;
+    double r1 = 5.0 * scene_diagonal(run->s) / (summary->width + summary->height), r2 = r1 * r1;
+    assert_true(summary->iterations > 1);
+    for (unsigned int n = 0; n < summary->iterations; n++) {
+        assert_float_equal(summary->radius[n], sqrt(r2), 1e-6 * sqrt(r2));
+        r2 *= (n + 1 + run->options.sppm.alpha) / (n + 2.0);
+    }
+}
+
+/* A quad with either a point light or a camera, not both: importance_run() refuses it, and the
+ * message names the scene file. */
+static void expect_refused(const char *file, int with_light)
+{
+    scene *s = scene_create(file);
+    imp_add_quad(s, "quad", imp_diffuse(s, "white", 0.8f, 0), V3(0, 0, 0), V3(1, 0, 0),
+                 V3(0, 1, 0));
+    if (with_light)
+        imp_point_light(s, V3(0, 0, 2), 1.0f);
+    else
+        imp_look_at(s, V3(0, 0, 3), V3(0, 0, 0), V3(0, 1, 0), 16, 16, 0.5f);
+    test_expect_refused(s, 0, file);
+}
+
+static void test_missing_camera_is_an_input_error(void **state)
+{
+    expect_refused("tests/no-camera-scene.xml", 1);
+}
+
+static void test_missing_light_is_an_input_error(void **state)
+{
+    expect_refused("tests/no-light-scene.xml", 0);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_first_delta_is_one),
+        cmocka_unit_test(test_second_delta_matches_the_host),
+        cmocka_unit_test(test_stops_after_three_calm_iterations),
+        cmocka_unit_test(test_radius_schedule),
+        cmocka_unit_test(test_missing_camera_is_an_input_error),
+        cmocka_unit_test(test_missing_light_is_an_input_error),
+    };
+    return DEVICE_TEST_RUN("importance driver", tests, NULL, imp_teardown) != 0;
+}
