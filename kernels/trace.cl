@@ -3,31 +3,37 @@
  * transport kernels call traverse_closest()/traverse_any() from traverse.h directly. */
 #include "lib/traverse.h"
 
+/* Ray i (of ray_count) as origin (xyz) with tmin (w) and direction (xyz) with tmax (w); false
+ * past the last ray. */
+inline bool load_ray(global const idmr_ray *rays, uint ray_count, uint i, float4 *o, float4 *d)
+{
+    if (i >= ray_count)
+        return false;
+    *o = vload4(0, rays[i].origin);
+    *d = vload4(0, rays[i].direction);
+    return true;
+}
+
+/* The hit record of an any-hit query: triangle 1 when occluded, t = tmax. */
+inline idmr_hit occlusion_hit(bool occluded, float tmax)
+{
+    idmr_hit hit = {tmax, 0.0f, 0.0f, occluded ? 1u : IDMR_NO_HIT};
+    return hit;
+}
+
 kernel void trace_closest(global const idmr_ray *rays, global idmr_hit *hits, uint ray_count,
                           global const idmr_bvh_node *nodes, global const idmr_triangle4 *leaves)
 {
-    uint i = get_global_id(0);
-    if (i >= ray_count)
-        return;
-    global const idmr_ray *ray = rays + i;
-    float4 o = vload4(0, ray->origin);
-    float4 d = vload4(0, ray->direction);
-    hits[i] = traverse_closest(nodes, leaves, o.xyz, d.xyz, o.w, d.w);
+    float4 o, d;
+    if (load_ray(rays, ray_count, get_global_id(0), &o, &d))
+        hits[get_global_id(0)] = traverse_closest(nodes, leaves, o.xyz, d.xyz, o.w, d.w);
 }
 
 kernel void trace_any(global const idmr_ray *rays, global idmr_hit *hits, uint ray_count,
                       global const idmr_bvh_node *nodes, global const idmr_triangle4 *leaves)
 {
-    uint i = get_global_id(0);
-    if (i >= ray_count)
-        return;
-    global const idmr_ray *ray = rays + i;
-    float4 o = vload4(0, ray->origin);
-    float4 d = vload4(0, ray->direction);
-    idmr_hit hit;
-    hit.t = d.w;
-    hit.u = 0.0f;
-    hit.v = 0.0f;
-    hit.triangle = traverse_any(nodes, leaves, o.xyz, d.xyz, o.w, d.w) ? 1u : IDMR_NO_HIT;
-    hits[i] = hit;
+    float4 o, d;
+    if (load_ray(rays, ray_count, get_global_id(0), &o, &d))
+        hits[get_global_id(0)] =
+            occlusion_hit(traverse_any(nodes, leaves, o.xyz, d.xyz, o.w, d.w), d.w);
 }

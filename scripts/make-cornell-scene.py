@@ -71,6 +71,21 @@ def write_binary_ply(path, vertices, triangles):
     os.replace(temporary, path)
 
 
+def rectangle(name, steps, bsdf):
+    """A wall: Mitsuba's rectangle moved by the transform `steps` (one element each)."""
+    transform = "".join("            %s\n" % step for step in steps)
+    return ('    <shape type="rectangle" id="%s">\n        <transform name="to_world">\n%s'
+            '        </transform>\n        <ref id="%s"/>\n    </shape>\n' % (name, transform, bsdf))
+
+
+WALLS = "".join(rectangle(*wall) for wall in (
+    ("floor", ('<rotate x="1" angle="-90"/>', '<translate y="-1"/>'), "white"),
+    ("ceiling", ('<rotate x="1" angle="90"/>', '<translate y="1"/>'), "white"),
+    ("back", ('<translate z="-1"/>',), "white"),
+    ("red_wall", ('<rotate y="1" angle="90"/>', '<translate x="-1"/>'), "red"),
+    ("green_wall", ('<rotate y="1" angle="-90"/>', '<translate x="1"/>'), "green"),
+))
+
 SCENE = """<?xml version="1.0" encoding="utf-8"?>
 <!-- idmr's Cornell box (written by scripts/make-cornell-scene.py; the project's own geometry).
      Box [-1,1]^3, camera on +z. Mitsuba 3 dialect. -->
@@ -102,41 +117,7 @@ SCENE = """<?xml version="1.0" encoding="utf-8"?>
         <rgb name="reflectance" value="0.8, 0.6, 0.3"/>
     </bsdf>
 
-    <shape type="rectangle" id="floor">
-        <transform name="to_world">
-            <rotate x="1" angle="-90"/>
-            <translate y="-1"/>
-        </transform>
-        <ref id="white"/>
-    </shape>
-    <shape type="rectangle" id="ceiling">
-        <transform name="to_world">
-            <rotate x="1" angle="90"/>
-            <translate y="1"/>
-        </transform>
-        <ref id="white"/>
-    </shape>
-    <shape type="rectangle" id="back">
-        <transform name="to_world">
-            <translate z="-1"/>
-        </transform>
-        <ref id="white"/>
-    </shape>
-    <shape type="rectangle" id="red_wall">
-        <transform name="to_world">
-            <rotate y="1" angle="90"/>
-            <translate x="-1"/>
-        </transform>
-        <ref id="red"/>
-    </shape>
-    <shape type="rectangle" id="green_wall">
-        <transform name="to_world">
-            <rotate y="1" angle="-90"/>
-            <translate x="1"/>
-        </transform>
-        <ref id="green"/>
-    </shape>
-    <shape type="rectangle" id="light">
+%(walls)s    <shape type="rectangle" id="light">
         <transform name="to_world">
             <scale x="0.25" y="0.25"/>
             <rotate x="1" angle="90"/>
@@ -181,7 +162,7 @@ def main():
     write_binary_ply(os.path.join(args.outdir, "meshes", "knot.ply"), vertices, triangles)
     scene_path = os.path.join(args.outdir, "scene.xml")
     with open(scene_path + ".tmp", "w") as f:
-        f.write(SCENE)
+        f.write(SCENE % {"walls": WALLS})
     os.replace(scene_path + ".tmp", scene_path)
     print(f"wrote {scene_path}: knot {len(vertices)} vertices, {len(triangles)} triangles")
 

@@ -21,6 +21,7 @@
 #include "core/error.h"
 #include "core/scene.h"
 #include "io/mitsuba.h"
+#include "test_support.h"
 
 #ifndef IDMR_ROOT
 #define IDMR_ROOT "."
@@ -103,26 +104,6 @@ static inline char *read_all(const char *path, size_t *size)
 
 /* ---- scenes ---- */
 
-/* Loads a scene with warnings silenced; fails the test if it does not load. */
-static inline scene *load_or_fail(const char *path)
-{
-    error_clear();
-    warn_silence(1);
-    scene *s = mitsuba_load(path);
-    warn_silence(0);
-    if (!s)
-        fail_msg("loading %s failed: %s", path, error_message());
-    return s;
-}
-
-static inline const scene_mesh *find_mesh(const scene *s, const char *name)
-{
-    for (size_t i = 0; i < s->mesh_count; i++)
-        if (strcmp(s->meshes[i].name, name) == 0)
-            return &s->meshes[i];
-    fail_msg("no mesh '%s' in %s", name, s->file);
-    return NULL;
-}
 
 static inline void mesh_bbox(const scene_mesh *m, float lo[3], float hi[3])
 {

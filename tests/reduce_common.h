@@ -22,6 +22,7 @@
 #include "core/error.h"
 #include "io/mitsuba.h"
 #include "reduce/reduce.h"
+#include "test_support.h"
 
 #ifndef IDMR_ROOT
 #define IDMR_ROOT "."
@@ -30,22 +31,6 @@
 #define CORNELL CORNELL_DIR "/scene.xml"
 #define KNOT CORNELL_DIR "/meshes/knot.ply"
 
-static device dev;
-
-static inline int group_setup(void **state)
-{
-    if (device_open(&dev, -1)) {
-        fprintf(stderr, "reduce tests: %s\n", error_message());
-        return -1;
-    }
-    return 0;
-}
-
-static inline int group_teardown(void **state)
-{
-    device_close(&dev);
-    return 0;
-}
 
 static inline void small_options(reduce_options *o)
 {
@@ -137,22 +122,6 @@ static inline const cJSON *mesh_entry(const cJSON *report, const char *name)
     return NULL;
 }
 
-static inline scene *load(const char *path)
-{
-    scene *s = mitsuba_load(path);
-    if (!s)
-        fail_msg("loading %s: %s", path, error_message());
-    return s;
-}
-
-static inline const scene_mesh *find_mesh(const scene *s, const char *name)
-{
-    for (size_t m = 0; m < s->mesh_count; m++)
-        if (strcmp(s->meshes[m].name, name) == 0)
-            return &s->meshes[m];
-    fail_msg("scene %s: no mesh '%s'", s->file, name);
-    return NULL;
-}
 
 /* The same mesh in both scenes: same counts, same world-space positions and triangles. */
 static inline void assert_same_mesh(const scene_mesh *a, const scene_mesh *b)
@@ -179,7 +148,7 @@ static inline uint64_t check_report_against_output(const cJSON *report, const sc
     assert_int_equal(out->mesh_count, in->mesh_count);
     for (size_t m = 0; m < in->mesh_count; m++) {
         const cJSON *entry = mesh_entry(report, in->meshes[m].name);
-        const scene_mesh *reduced = find_mesh(out, in->meshes[m].name);
+        const scene_mesh *reduced = test_find_mesh(out, in->meshes[m].name);
         double before = number(entry, "vertices_before"), after = number(entry, "vertices_after");
         double factor = number(entry, "factor");
         assert_true(factor > 0 && factor <= 1);
@@ -199,7 +168,7 @@ static inline uint64_t check_report_against_output(const cJSON *report, const sc
 /* reduce_run() must succeed. */
 static inline void reduce_ok(scene *s, const char *dir, const reduce_options *o)
 {
-    if (reduce_run(&dev, s, dir, o))
+    if (reduce_run(device_test_device(), s, dir, o))
         fail_msg("reduce --method %s: %s", reduce_method_name(o), error_message());
 }
 
@@ -208,7 +177,7 @@ static inline void expect_input_error(scene *s, const char *dir, const reduce_op
                                       const char *fragment)
 {
     error_clear();
-    assert_int_equal(reduce_run(&dev, s, dir, o), -1);
+    assert_int_equal(reduce_run(device_test_device(), s, dir, o), -1);
     assert_int_equal(error_code(), IDMR_EXIT_INPUT);
     assert_non_null(strstr(error_message(), fragment));
 }
@@ -227,7 +196,7 @@ static inline void reduction_run(reduction *r, scene *s, const reduce_options *o
     r->report = read_report(r->dir);
     char path[4200];
     snprintf(path, sizeof path, "%s/scene.xml", r->dir);
-    r->out = load(path);
+    r->out = test_load_scene(path);
 }
 
 static inline void reduction_free(reduction *r)

@@ -9,8 +9,7 @@
  *   common seeds        A1 and B1 share their noise: the noise cancels exactly
  *   standard error      over many independent repetitions, the spread of the estimate agrees
  *                       with the reported standard error (within 30 %)
- *   files               the same through EXR files; NaN and size mismatches are errors naming
- *                       the file */
+ * The same through files and `idmr compare --paired` is in test_image.c. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -19,13 +18,9 @@
 
 #include <math.h>
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
-#include "core/error.h"
 #include "idmr/rng.h"
-#include "io/image.h"
 #include "io/image_compare.h"
 
 #define WIDTH 128
@@ -83,12 +78,18 @@ static image_paired_error paired(const four_renders *r)
 static float truth_a[VALUES], truth_b[VALUES];
 static four_renders renders;
 
-static void test_known_bias_is_recovered(void **state)
+/* truth_a converged, truth_b the same plus `bias` everywhere. */
+static void shifted_truths(double bias)
 {
-    const double bias = 0.02, sigma = 0.1;
     converged(truth_a);
     for (int i = 0; i < VALUES; i++)
         truth_b[i] = truth_a[i] + (float)bias;
+}
+
+static void test_known_bias_is_recovered(void **state)
+{
+    const double bias = 0.02, sigma = 0.1;
+    shifted_truths(bias);
     render_pairs(truth_a, truth_b, sigma, 0, 0, &renders);
     image_paired_error e = paired(&renders);
     printf("  bias %.3f under noise %.2f: reduction_rmse %.5f ± %.5f, noisy rmse %.4f\n", bias,
@@ -131,9 +132,7 @@ static void test_changed_region_gives_its_share(void **state)
 static void test_common_seeds_cancel_noise(void **state)
 {
     const double bias = 0.01;
-    converged(truth_a);
-    for (int i = 0; i < VALUES; i++)
-        truth_b[i] = truth_a[i] + (float)bias;
+    shifted_truths(bias);
     render_pairs(truth_a, truth_b, 0.2, 3, 1, &renders);
     image_paired_error e = paired(&renders);
     assert_float_equal(e.rmse, bias, 1e-5);
@@ -166,93 +165,6 @@ static void test_standard_error_matches_the_spread(void **state)
     assert_true(reported > 0.7 * spread && reported < 1.3 * spread);
 }
 
-/* ---- files ---- */
-
-static char directory[] = "/tmp/idmr-test-compare-XXXXXX";
-
-static const char *path_of(const char *name)
-{
-    static char paths[8][256];
-    static int next;
-    char *path = paths[next++ % 8];
-    snprintf(path, 256, "%s/%s", directory, name);
-    return path;
-}
-
-static void write_or_fail(const char *path, int width, int height, const float *rgb)
-{
-    if (image_write_rgb_float(path, width, height, rgb))
-        fail_msg("%s", error_message());
-}
-
-static void test_paired_files(void **state)
-{
-    const double bias = 0.02;
-    converged(truth_a);
-    for (int i = 0; i < VALUES; i++)
-        truth_b[i] = truth_a[i] + (float)bias;
-    render_pairs(truth_a, truth_b, 0.05, 5, 0, &renders);
-    const char *names[4] = {"a1.exr", "a2.exr", "b1.exr", "b2.exr"};
-    const float *images[4] = {renders.a1, renders.a2, renders.b1, renders.b2};
-    for (int i = 0; i < 4; i++)
-        write_or_fail(path_of(names[i]), WIDTH, HEIGHT, images[i]);
-    image_paired_error e;
-    assert_int_equal(image_compare_paired(path_of("a1.exr"), path_of("a2.exr"),
-                                          path_of("b1.exr"), path_of("b2.exr"), 0, &e),
-                     0);
-    assert_int_equal(e.width, WIDTH);
-    /* EXR stores half floats: the estimate still holds within its error. */
-    assert_true(fabs(e.rmse - bias) < 3 * e.rmse_standard_error + 1e-3);
-}
-
-static void test_nan_is_an_error_naming_the_file(void **state)
-{
-    converged(truth_a);
-    truth_a[3 * (5 * WIDTH + 7) + 1] = NAN;
-    truth_a[3 * (9 * WIDTH + 2)] = INFINITY;
-    write_or_fail(path_of("nan.exr"), WIDTH, HEIGHT, truth_a);
-    converged(truth_b);
-    write_or_fail(path_of("clean.exr"), WIDTH, HEIGHT, truth_b);
-    image_comparison c;
-    assert_int_equal(image_compare(path_of("nan.exr"), path_of("clean.exr"), NULL, 0, &c), -1);
-    assert_int_equal(error_code(), IDMR_EXIT_INPUT);
-    assert_non_null(strstr(error_message(), "nan.exr"));
-    assert_non_null(strstr(error_message(), "2 values"));
-    assert_non_null(strstr(error_message(), "pixel (7, 5)"));
-    image_paired_error e;
-    assert_int_equal(image_compare_paired(path_of("clean.exr"), path_of("clean.exr"),
-                                          path_of("nan.exr"), path_of("clean.exr"), 0, &e),
-                     -1);
-    assert_non_null(strstr(error_message(), "nan.exr"));
-}
-
-static void test_size_mismatch_names_both_files(void **state)
-{
-    converged(truth_a);
-    write_or_fail(path_of("small.exr"), WIDTH / 2, HEIGHT, truth_a);
-    write_or_fail(path_of("large.exr"), WIDTH, HEIGHT, truth_a);
-    image_paired_error e;
-    assert_int_equal(image_compare_paired(path_of("large.exr"), path_of("large.exr"),
-                                          path_of("small.exr"), path_of("large.exr"), 0, &e),
-                     -1);
-    assert_non_null(strstr(error_message(), "small.exr"));
-    assert_non_null(strstr(error_message(), "large.exr"));
-}
-
-static int files_setup(void **state)
-{
-    return mkdtemp(directory) ? 0 : -1;
-}
-
-static int files_teardown(void **state)
-{
-    const char *names[] = {"a1.exr", "a2.exr", "b1.exr", "b2.exr", "nan.exr",
-                           "clean.exr", "small.exr", "large.exr"};
-    for (size_t i = 0; i < sizeof names / sizeof *names; i++)
-        unlink(path_of(names[i]));
-    return rmdir(directory);
-}
-
 int main(void)
 {
     const struct CMUnitTest estimator[] = {
@@ -262,12 +174,5 @@ int main(void)
         cmocka_unit_test(test_common_seeds_cancel_noise),
         cmocka_unit_test(test_standard_error_matches_the_spread),
     };
-    const struct CMUnitTest files[] = {
-        cmocka_unit_test(test_paired_files),
-        cmocka_unit_test(test_nan_is_an_error_naming_the_file),
-        cmocka_unit_test(test_size_mismatch_names_both_files),
-    };
-    int failed = cmocka_run_group_tests_name("paired estimator", estimator, NULL, NULL);
-    failed += cmocka_run_group_tests_name("image files", files, files_setup, files_teardown);
-    return failed;
+    return cmocka_run_group_tests_name("paired estimator", estimator, NULL, NULL);
 }

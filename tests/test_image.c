@@ -1,6 +1,8 @@
 /* test_image.c — the OpenImageIO bridge (host/io/image.cc): writing PNG, writing and reading
- * back EXR, and image comparison against hand-computed RMSE, PSNR and relative MSE; plus
- * `idmr compare` from the command line. */
+ * back EXR, and image comparison (host/io/image_compare.c) against hand-computed RMSE, PSNR and
+ * relative MSE, the paired reduction error through files, images with NaN or infinite values
+ * refused; plus `idmr compare` and `idmr compare --paired` from the command line. (The paired
+ * estimator's statistics are tested in test_compare.c.) */
 #include <math.h>
 #include <sys/wait.h>
 
@@ -128,6 +130,97 @@ static void test_compare_command(void **state)
     free(b);
 }
 
+/* Runs `command`; its stdout into out (size bytes); returns the exit status. */
+static int run_command(const char *command, char *out, size_t size)
+{
+    FILE *p = popen(command, "r");
+    size_t n = fread(out, 1, size - 1, p);
+    out[n] = '\0';
+    int status = pclose(p);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+/* Four renders whose noise cancels exactly (the same noise in A1 and B1, in A2 and B2), B a
+ * constant 0.125 above A: the paired error is 0.125, half floats store it exactly. */
+static void write_paired_renders(void)
+{
+    float *a = flat(16, 16, 0.5f, 0.5f, 0.5f), *b = flat(16, 16, 0.625f, 0.625f, 0.625f);
+    const char *names[2][2] = {{"a1.exr", "b1.exr"}, {"a2.exr", "b2.exr"}};
+    for (int seed = 0; seed < 2; seed++) {
+        float *noisy_a = flat(16, 16, 0, 0, 0), *noisy_b = flat(16, 16, 0, 0, 0);
+        for (int i = 0; i < 3 * 256; i++) {
+            float noise = (float)((i * 7 + seed * 3) % 5) * 0.0625f;
+            noisy_a[i] = a[i] + noise;
+            noisy_b[i] = b[i] + noise;
+        }
+        write_pair(path_of(names[seed][0]), noisy_a, path_of(names[seed][1]), noisy_b, 16, 16);
+        free(noisy_a);
+        free(noisy_b);
+    }
+    free(a);
+    free(b);
+}
+
+static void test_paired_through_files(void **state)
+{
+    write_paired_renders();
+    image_paired_error e;
+    assert_int_equal(image_compare_paired(path_of("a1.exr"), path_of("a2.exr"), path_of("b1.exr"),
+                                          path_of("b2.exr"), 4, &e),
+                     0);
+    assert_int_equal(e.width, 16);
+    assert_int_equal(e.tiles, 16);
+    assert_float_equal(e.rmse, 0.125, 1e-7);
+    assert_float_equal(e.mse_standard_error, 0, 1e-12);
+    char command[2048], out[4096];
+    snprintf(command, sizeof command, "bin/idmr compare --paired %s %s %s %s --json",
+             path_of("a1.exr"), path_of("a2.exr"), path_of("b1.exr"), path_of("b2.exr"));
+    assert_int_equal(run_command(command, out, sizeof out), 0);
+    assert_non_null(strstr(out, "\"reduction_rmse\":\t0.125"));
+    snprintf(command, sizeof command, "bin/idmr compare --paired %s %s %s 2>/dev/null",
+             path_of("a1.exr"), path_of("a2.exr"), path_of("b1.exr"));
+    assert_int_equal(run_command(command, out, sizeof out), 2);
+}
+
+static void test_paired_size_mismatch_names_both_files(void **state)
+{
+    float *small = flat(4, 5, 0.5f, 0.5f, 0.5f), *large = flat(16, 16, 0.5f, 0.5f, 0.5f);
+    write_pair(path_of("small.exr"), small, path_of("large.exr"), large, 16, 16);
+    assert_int_equal(image_write_rgb_float(path_of("small.exr"), 4, 5, small), 0);
+    image_paired_error e;
+    assert_int_equal(image_compare_paired(path_of("large.exr"), path_of("large.exr"),
+                                          path_of("small.exr"), path_of("large.exr"), 0, &e),
+                     -1);
+    assert_int_equal(error_code(), IDMR_EXIT_INPUT);
+    assert_non_null(strstr(error_message(), "small.exr"));
+    assert_non_null(strstr(error_message(), "large.exr"));
+    free(small);
+    free(large);
+}
+
+/* NaN and infinity make a comparison meaningless: an error naming the file, the count and the
+ * first pixel, not "psnr inf" and "max_error 0". */
+static void test_non_finite_images_are_refused(void **state)
+{
+    float *bad = flat(8, 8, 0.5f, 0.5f, 0.5f), *good = flat(8, 8, 0.5f, 0.5f, 0.5f);
+    bad[3 * (5 * 8 + 7) + 1] = NAN;
+    bad[3 * (6 * 8 + 2)] = INFINITY;
+    write_pair(path_of("nan.exr"), bad, path_of("clean.exr"), good, 8, 8);
+    image_comparison c;
+    assert_int_equal(image_compare(path_of("nan.exr"), path_of("clean.exr"), NULL, 0, &c), -1);
+    assert_int_equal(error_code(), IDMR_EXIT_INPUT);
+    assert_non_null(strstr(error_message(), "nan.exr"));
+    assert_non_null(strstr(error_message(), "2 values"));
+    assert_non_null(strstr(error_message(), "pixel (7, 5)"));
+    image_paired_error e;
+    assert_int_equal(image_compare_paired(path_of("clean.exr"), path_of("clean.exr"),
+                                          path_of("nan.exr"), path_of("clean.exr"), 0, &e),
+                     -1);
+    assert_non_null(strstr(error_message(), "nan.exr"));
+    free(bad);
+    free(good);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -135,6 +228,9 @@ int main(void)
         cmocka_unit_test(test_compare_against_formulas),
         cmocka_unit_test(test_compare_size_mismatch),
         cmocka_unit_test(test_compare_command),
+        cmocka_unit_test(test_paired_through_files),
+        cmocka_unit_test(test_paired_size_mismatch_names_both_files),
+        cmocka_unit_test(test_non_finite_images_are_refused),
     };
     return cmocka_run_group_tests_name("image", tests, group_setup, group_teardown);
 }

@@ -58,7 +58,7 @@ static const char *write_scene(const char *version, const char *body)
 /* Loads the scene `body` (see write_scene); fails the test if it does not load. */
 static scene *load_scene(const char *version, const char *body)
 {
-    return load_or_fail(write_scene(version, body));
+    return test_load_scene(write_scene(version, body));
 }
 
 /* Runs mitsuba_load with stderr captured; *log gets what was printed (malloc'd). */
@@ -1018,7 +1018,7 @@ static size_t count_lights(const scene *s, unsigned int kind)
 static void test_real_cbox(void **state)
 {
     require_shared_data();
-    scene *s = load_or_fail(SCENES "/cbox-mitsuba/cbox.xml");
+    scene *s = test_load_scene(SCENES "/cbox-mitsuba/cbox.xml");
     assert_int_equal(s->mesh_count, 8);
     assert_int_equal(s->light_count, 1);
     assert_int_equal(count_lights(s, IDMR_LIGHT_AREA), 1);
@@ -1048,7 +1048,7 @@ static void test_real_cbox(void **state)
 static void test_real_glass_of_water_without_mesh000(void **state)
 {
     require_shared_data();
-    scene *s = load_or_fail(SCENES "/glass-of-water/scene-without-mesh000.xml");
+    scene *s = test_load_scene(SCENES "/glass-of-water/scene-without-mesh000.xml");
     assert_int_equal(s->mesh_count, 16);
     assert_int_equal(s->light_count, 1);
     assert_true(s->features & IDMR_FEATURE_DIELECTRIC);

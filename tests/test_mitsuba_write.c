@@ -240,13 +240,13 @@ static void reduce_and_check(reduction *r, const char *scene_file, const char *c
     mitsuba_replacement replacements[8];
     char ply[8][256];
     assert_true(count <= 8);
-    r->input = load_or_fail(scene_file);
+    r->input = test_load_scene(scene_file);
     for (size_t i = 0; i < count; i++)
-        replace_mesh(find_mesh(r->input, names[i]), &replacements[i], ply[i], sizeof ply[i]);
+        replace_mesh(test_find_mesh(r->input, names[i]), &replacements[i], ply[i], sizeof ply[i]);
     error_clear();
     if (mitsuba_write_reduced(scene_file, out_dir, replacements, count))
         fail_msg("mitsuba_write_reduced failed: %s", error_message());
-    r->output = load_or_fail(path_in(out_dir, "scene.xml"));
+    r->output = test_load_scene(path_in(out_dir, "scene.xml"));
     r->text = read_output("scene.xml");
     assert_int_equal(r->output->mesh_count, r->input->mesh_count);
     assert_int_equal(r->output->vertex_count, r->input->vertex_count);
@@ -257,7 +257,7 @@ static void reduce_and_check(reduction *r, const char *scene_file, const char *c
     }
     for (size_t m = 0; m < r->input->mesh_count; m++) {
         const scene_mesh *a = &r->input->meshes[m];
-        check_output_mesh(a, find_mesh(r->output, a->name), is_named(a->name, names, count));
+        check_output_mesh(a, test_find_mesh(r->output, a->name), is_named(a->name, names, count));
     }
 }
 
@@ -378,8 +378,8 @@ static void test_v3_in_scene_meshes_replaced(void **state)
 {
     reduction r;
     reduce_scene3_in_scene(&r);
-    assert_float_equal(r.output->lights[find_mesh(r.output, "lamp")->light].area,
-                       r.input->lights[find_mesh(r.input, "lamp")->light].area, 1e-5f);
+    assert_float_equal(r.output->lights[test_find_mesh(r.output, "lamp")->light].area,
+                       r.input->lights[test_find_mesh(r.input, "lamp")->light].area, 1e-5f);
     reduction_finish(&r);
 }
 
@@ -390,7 +390,7 @@ static void test_v3_in_scene_texture_and_defaults_apply(void **state)
     reduce_scene3_in_scene(&r);
     assert_int_equal(r.output->texture_count, 1);
     assert_same_file(r.input->textures[0].file, r.output->textures[0].file);
-    assert_true(r.output->materials[find_mesh(r.output, "quad")->material].texture >= 0);
+    assert_true(r.output->materials[test_find_mesh(r.output, "quad")->material].texture >= 0);
     assert_int_equal(r.output->camera.width, 32);
     reduction_finish(&r);
 }
@@ -638,7 +638,7 @@ static void test_v05_scene_reloads(void **state)
     reduction r;
     reduce_scene05(&r);
     assert_int_equal(r.output->texture_count, 1);
-    assert_true(r.output->materials[find_mesh(r.output, "other")->material].texture >= 0);
+    assert_true(r.output->materials[test_find_mesh(r.output, "other")->material].texture >= 0);
     assert_int_equal(r.output->light_count, 1);
     assert_float_equal(r.output->lights[0].area, r.input->lights[0].area, 1e-5f);
     assert_true(r.output->has_camera);
@@ -735,8 +735,8 @@ static void test_error_shape_replaced_twice(void **state)
     write_scene3();
     snapshot_files(&inputs, in_dir, scene3_files, ARRAY_COUNT(scene3_files));
     const char *scene_file = path_in(in_dir, "scene.xml");
-    scene *s = load_or_fail(scene_file);
-    const scene_mesh *quad = find_mesh(s, "quad");
+    scene *s = test_load_scene(scene_file);
+    const scene_mesh *quad = test_find_mesh(s, "quad");
     mitsuba_replacement twice[2] = {{quad->xml_file, quad->xml_line, "meshes/a.ply"},
                                     {quad->xml_file, quad->xml_line, "meshes/b.ply"}};
     assert_write_fails(scene_file, twice, 2, "scene.xml:", "replaced twice");
@@ -833,7 +833,7 @@ static void test_real_glass_of_water(void **state)
     require_shared_data();
     reduction r = {0};
     snapshot_files(&r.inputs, SCENES "/glass-of-water", xml, ARRAY_COUNT(xml));
-    scene *first = load_or_fail(file);
+    scene *first = test_load_scene(file);
     char chosen[256];
     snprintf(chosen, sizeof chosen, "%s", first->meshes[0].name);
     scene_free(first);

@@ -118,7 +118,7 @@ static void test_importance_cornell(void **state)
     file_state xml, knot;
     remember(CORNELL, &xml);
     remember(KNOT, &knot);
-    scene *s = load(CORNELL);
+    scene *s = test_load_scene(CORNELL);
     reduce_options o;
     small_options(&o);
     reduction r;
@@ -128,9 +128,9 @@ static void test_importance_cornell(void **state)
     const cJSON *knot_entry = mesh_entry(r.report, "knot");
     assert_true(is_decimated(knot_entry));
     assert_true(number(knot_entry, "factor") < 0.2);
-    check_in_place(find_mesh(s, "knot"), find_mesh(r.out, "knot"));
+    check_in_place(test_find_mesh(s, "knot"), test_find_mesh(r.out, "knot"));
     /* The emitter is untouched and pinned. */
-    assert_same_mesh(find_mesh(s, "light"), find_mesh(r.out, "light"));
+    assert_same_mesh(test_find_mesh(s, "light"), test_find_mesh(r.out, "light"));
     assert_true(cJSON_IsTrue(
         cJSON_GetObjectItemCaseSensitive(mesh_entry(r.report, "light"), "pinned")));
     reduction_free(&r);
@@ -149,7 +149,7 @@ static void test_outdir_not_empty(void **state)
     temp_dir(dir, sizeof dir);
     snprintf(path, sizeof path, "%s/something.txt", dir);
     write_file(path, "keep me\n", 8);
-    scene *s = load(CORNELL);
+    scene *s = test_load_scene(CORNELL);
     reduce_options o;
     small_options(&o);
     o.method = DECIMATE_QUADRIC;
@@ -192,7 +192,7 @@ static void test_outdir_scene_own_directory(void **state)
     copy_cornell(copy, sizeof copy);
     snprintf(xml_path, sizeof xml_path, "%s/scene.xml", copy);
     snprintf(knot_path, sizeof knot_path, "%s/meshes/knot.ply", copy);
-    scene *s = load(xml_path);
+    scene *s = test_load_scene(xml_path);
     file_state xml, knot;
     remember(xml_path, &xml);
     remember(knot_path, &knot);
@@ -223,7 +223,7 @@ static void expect_refused(const reduce_options *o, const char *fragment)
 {
     char dir[64];
     temp_dir(dir, sizeof dir);
-    scene *s = load(CORNELL);
+    scene *s = test_load_scene(CORNELL);
     expect_input_error(s, dir, o, fragment);
     assert_false(file_exists(dir, "scene.xml"));
     assert_false(file_exists(dir, "meshes"));
@@ -235,13 +235,13 @@ static void expect_refused(const reduce_options *o, const char *fragment)
  * no PLY written. The caller checks the report further and frees r and *s. */
 static void reduce_nothing(const reduce_options *o, scene **s, reduction *r)
 {
-    *s = load(CORNELL);
+    *s = test_load_scene(CORNELL);
     reduction_run(r, *s, o);
     assert_int_equal(check_report_against_output(r->report, *s, r->out), (*s)->vertex_count);
     assert_int_equal((uint64_t)number(r->report, "vertices_before"), (*s)->vertex_count);
     assert_false(file_exists(r->dir, "meshes/knot.ply"));
     for (size_t m = 0; m < (*s)->mesh_count; m++)
-        assert_same_mesh(&(*s)->meshes[m], find_mesh(r->out, (*s)->meshes[m].name));
+        assert_same_mesh(&(*s)->meshes[m], test_find_mesh(r->out, (*s)->meshes[m].name));
 }
 
 /* Keeping the knot leaves nothing to decimate; the knot is pinned. */
@@ -310,5 +310,5 @@ int main(void)
         cmocka_unit_test(test_target_out_of_range),
         cmocka_unit_test(test_target_one),
     };
-    return cmocka_run_group_tests_name("reduce", tests, group_setup, group_teardown);
+    return DEVICE_TEST_RUN("reduce", tests, NULL, NULL) != 0;
 }

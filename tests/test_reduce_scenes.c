@@ -101,7 +101,7 @@ static void test_quadric(void **state)
     char in_dir[64], scene_path[4200];
     temp_dir(in_dir, sizeof in_dir);
     write_three_mesh_scene(in_dir, scene_path, sizeof scene_path);
-    scene *s = load(scene_path);
+    scene *s = test_load_scene(scene_path);
     reduce_options o;
     small_options(&o);
     o.method = DECIMATE_QUADRIC;
@@ -155,7 +155,7 @@ static void test_compensation(void **state)
                        "        <ref id=\"white\"/>\n"
                        "    </shape>\n",
                        scene_path, sizeof scene_path);
-    scene *s = load(scene_path);
+    scene *s = test_load_scene(scene_path);
     reduce_options o;
     small_options(&o);
     o.method = DECIMATE_QUADRIC;
@@ -196,7 +196,7 @@ static void test_file_name_collision(void **state)
             "</scene>\n",
             knot, knot);
     assert_int_equal(fclose(f), 0);
-    scene *s = load(scene_path);
+    scene *s = test_load_scene(scene_path);
     reduce_options o;
     small_options(&o);
     o.method = DECIMATE_QUADRIC; /* no light needed */
@@ -219,5 +219,5 @@ int main(void)
         cmocka_unit_test(test_compensation),
         cmocka_unit_test(test_file_name_collision),
     };
-    return cmocka_run_group_tests_name("reduce_scenes", tests, group_setup, group_teardown);
+    return DEVICE_TEST_RUN("reduce_scenes", tests, NULL, NULL) != 0;
 }

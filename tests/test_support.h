@@ -22,15 +22,26 @@
 #define CORNELL_SCENE "data/cornell/scene.xml"
 #define GLASS_OF_WATER_SCENE "../shared/data/scenes/glass-of-water/scene-without-mesh000.xml"
 
-/* A Mitsuba scene (its warnings silenced). */
+/* A Mitsuba scene (its warnings silenced); fails the test if it does not load. */
 static inline scene *test_load_scene(const char *path)
 {
+    error_clear();
     warn_silence(1);
     scene *s = mitsuba_load(path);
     warn_silence(0);
     if (!s)
         fail_msg("loading %s failed: %s", path, error_message());
     return s;
+}
+
+/* The mesh named `name`; fails the test if the scene has none. */
+static inline const scene_mesh *test_find_mesh(const scene *s, const char *name)
+{
+    for (size_t m = 0; m < s->mesh_count; m++)
+        if (strcmp(s->meshes[m].name, name) == 0)
+            return &s->meshes[m];
+    fail_msg("scene %s: no mesh '%s'", s->file, name);
+    return NULL;
 }
 
 /* scene_finalize() on a scene built in code; returns s. */

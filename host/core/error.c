@@ -48,15 +48,21 @@ void error_clear(void)
     error_exit_code = IDMR_EXIT_FAILURE;
 }
 
+/* One line on stderr: prefix, the formatted message, a newline. */
+static void print_line(const char *prefix, const char *fmt, va_list args)
+{
+    fputs(prefix, stderr);
+    vfprintf(stderr, fmt, args);
+    fputc('\n', stderr);
+}
+
 void warn(const char *fmt, ...)
 {
     if (warnings_silenced)
         return;
     va_list args;
     va_start(args, fmt);
-    fputs("idmr: warning: ", stderr);
-    vfprintf(stderr, fmt, args);
-    fputc('\n', stderr);
+    print_line("idmr: warning: ", fmt, args);
     va_end(args);
 }
 
@@ -90,8 +96,6 @@ void log_verbose(const char *fmt, ...)
         return;
     va_list args;
     va_start(args, fmt);
-    fputs("idmr: ", stderr);
-    vfprintf(stderr, fmt, args);
-    fputc('\n', stderr);
+    print_line("idmr: ", fmt, args);
     va_end(args);
 }

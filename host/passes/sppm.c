@@ -284,13 +284,8 @@ int sppm_run(device *d, const scene *s, const bvh *b, const sppm_options *o, spp
     memset(summary, 0, sizeof *summary);
     if (check_inputs(d, s, o, pass, summary))
         return -1;
-    sppm core;
-    memset(&core, 0, sizeof core);
-    core.dev = d;
-    core.scene = s;
-    core.options = o;
-    core.summary = summary;
-    core.pixels = summary->width * summary->height;
+    sppm core = {.dev = d, .scene = s, .options = o, .summary = summary,
+                 .pixels = summary->width * summary->height};
     int status = device_scene_upload(d, s, b, &core.uploaded);
     if (!status) {
         summary->bvh_bytes = core.uploaded.bvh_bytes;

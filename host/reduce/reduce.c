@@ -226,13 +226,8 @@ static void state_free(reduce_state *st)
 
 int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
 {
-    reduce_state st;
-    memset(&st, 0, sizeof st);
-    st.device = d;
-    st.scene = s;
-    st.outdir = outdir;
-    st.options = o;
-    st.count = s->mesh_count;
+    reduce_state st = {.device = d, .scene = s, .outdir = outdir, .options = o,
+                       .count = s->mesh_count};
     int status = check_options(&st) || reduce_outdir_prepare(outdir, s->dir, o->force) ||
                  run_importance(&st) || plan_budget(&st) || reduce_decimation(&st) ||
                  write_reduced_scene(&st) || write_report(&st);
