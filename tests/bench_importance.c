@@ -1,5 +1,5 @@
 /* bench_importance.c — `make bench`: one importance iteration against the same camera and
- * photon work without the importance bookkeeping (IDMR_BOOKKEEPING=0: no Eq. 2 atomics in the
+ * photon work without accumulating importance (IDMR_ACCUMULATE_IMPORTANCE=0: no Eq. 2 atomics in the
  * camera pass, no reverse path walk), on the DRAGON CORNELL BOX (bench_common.h).
  *
  *   importance-iteration: seconds=<s> plain=<s> ratio=<importance/plain> photons=<n> ...
@@ -20,13 +20,13 @@
 #define ITERATIONS 3
 #define ROUNDS 2
 
-static double seconds_per_iteration(device *d, const scene *s, const bvh *b, int bookkeeping,
+static double seconds_per_iteration(device *d, const scene *s, const bvh *b, int accumulate_importance,
                                     unsigned int iterations, importance_result *r)
 {
     importance_options o;
     importance_options_default(&o);
     o.sppm.iterations = iterations;
-    o.bookkeeping = bookkeeping;
+    o.accumulate_importance = accumulate_importance;
     if (importance_run(d, s, b, &o, r)) {
         fprintf(stderr, "bench_importance: %s\n", error_message());
         exit(1);

@@ -93,7 +93,7 @@ static void bench_build(device *d)
         return;
     setenv("IDMR_CACHE_DIR", cache, 1);
     char *options = device_build_options(d, IDMR_FEATURE_DIFFUSE | IDMR_FEATURE_AREA,
-                                         "-D IDMR_SPPM_PASS=1 -D IDMR_BOOKKEEPING=1 "
+                                         "-D IDMR_SPPM_PASS=1 -D IDMR_ACCUMULATE_IMPORTANCE=1 "
                                          "-D IDMR_CAMERA_IMPORTANCE=1");
     cl_program program;
     double t0 = monotonic_seconds();

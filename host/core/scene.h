@@ -6,7 +6,7 @@
  * scene-globally: mesh m's triangle t is scene triangle meshes[m].first_triangle + t; the
  * importance buffers, the BVH and area lights all use that numbering.
  *
- * Building: scene_create(), then scene_add_*() from a loader (host/mitsuba.c), then
+ * Building: scene_create(), then scene_add_*() from a loader (host/io/mitsuba*.c), then
  * scene_finalize(), which numbers the triangles, fills the area lights' triangle ranges,
  * areas and powers, the bounding box and the feature bits. */
 #ifndef IDMR_SCENE_H

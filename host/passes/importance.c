@@ -20,13 +20,13 @@ void importance_options_default(importance_options *o)
     sppm_options_default(&o->sppm, 100);
     o->gamma = 1.0f;
     o->tolerance = 0.0;
-    o->bookkeeping = 1;
+    o->accumulate_importance = 1;
 }
 
-void importance_defines(int bookkeeping, int camera_importance, char *out, size_t size)
+void importance_defines(int accumulate_importance, int camera_importance, char *out, size_t size)
 {
-    snprintf(out, size, "-D IDMR_BOOKKEEPING=%d -D IDMR_CAMERA_IMPORTANCE=%d", bookkeeping ? 1 : 0,
-             camera_importance ? 1 : 0);
+    snprintf(out, size, "-D IDMR_ACCUMULATE_IMPORTANCE=%d -D IDMR_CAMERA_IMPORTANCE=%d",
+             accumulate_importance ? 1 : 0, camera_importance ? 1 : 0);
 }
 
 /* The pass's part while the core runs. */
@@ -69,7 +69,7 @@ static int prepare(sppm *core, void *state)
                : 0;
 }
 
-/* gather_count, then (with bookkeeping) the reverse path walk. */
+/* gather_count, then (when importance accumulates) the reverse path walk. */
 static int gather(sppm *core, void *state)
 {
     importance_pass *p = state;
@@ -81,7 +81,7 @@ static int gather(sppm *core, void *state)
                         DEVICE_ARG(core->grid.grid_points), DEVICE_ARG(p->gathered)) ||
         device_run(core->dev, p->gather, "gather_count", slots, local))
         return -1;
-    if (!p->options->bookkeeping)
+    if (!p->options->accumulate_importance)
         return 0;
     double start = monotonic_seconds();
     if (DEVICE_SET_ARGS(p->path, "path_importance", DEVICE_ARG(core->params),
@@ -246,7 +246,7 @@ int importance_run(device *d, const scene *s, const bvh *b, const importance_opt
     state.options = o;
     state.result = r;
     char defines[96];
-    importance_defines(o->bookkeeping, o->gamma > 0, defines, sizeof defines);
+    importance_defines(o->accumulate_importance, o->gamma > 0, defines, sizeof defines);
     sppm_pass pass = {"importance", IDMR_SPPM_IMPORTANCE, defines, sizeof(idmr_photon_vertex),
                       &state, prepare, gather, collect, o->snapshot ? snapshot : NULL, finish,
                       release};

@@ -49,7 +49,7 @@ typedef struct importance_options {
     sppm_options sppm;       /* iterations default to 100 */
     float gamma;             /* hit point importance factor γ (default 1) */
     double tolerance;        /* stop once Δ stays below it; 0: run all iterations */
-    int bookkeeping;         /* 1; 0 compiles the importance accumulation out (benchmark) */
+    int accumulate_importance; /* 1; 0 compiles the importance accumulation out (benchmark) */
     importance_snapshot *snapshot; /* when not NULL, receives the last iteration's buffers */
 } importance_options;
 
@@ -67,8 +67,10 @@ typedef struct importance_result {
 
 void importance_options_default(importance_options *o);
 
-/* The importance pass's own build defines (IDMR_BOOKKEEPING, IDMR_CAMERA_IMPORTANCE) into out. */
-void importance_defines(int bookkeeping, int camera_importance, char *out, size_t size);
+/* The importance pass's own build defines (IDMR_ACCUMULATE_IMPORTANCE, IDMR_CAMERA_IMPORTANCE)
+ * into out. */
+void importance_defines(int accumulate_importance, int camera_importance, char *out,
+                        size_t size);
 
 /* Runs the pass. The scene needs a camera and at least one light. Returns 0, or -1 with the
  * error set. `r` is freed with importance_result_free() either way. */

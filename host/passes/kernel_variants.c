@@ -13,19 +13,19 @@
 
 #define MAX_VARIANTS 64
 
-static void add_sppm(const device *d, int pass, unsigned int features, int bookkeeping,
+static void add_sppm(const device *d, int pass, unsigned int features, int accumulates,
                      int camera_importance, kernel_variant *list, size_t *count)
 {
     kernel_variant *v = &list[(*count)++];
     char defines[96] = "";
     if (pass == IDMR_SPPM_IMPORTANCE)
-        importance_defines(bookkeeping, camera_importance, defines, sizeof defines);
+        importance_defines(accumulates, camera_importance, defines, sizeof defines);
     v->file = "sppm.cl";
     v->options = sppm_build_options(d, features, pass, pass == IDMR_SPPM_IMPORTANCE ? defines
                                                                                       : NULL);
     snprintf(v->label, sizeof v->label, "sppm.cl %s features=0x%03x%s%s%s",
              pass == IDMR_SPPM_IMPORTANCE ? "importance" : "render", features,
-             bookkeeping ? "" : " no-bookkeeping", camera_importance ? "" : " no-camera-importance",
+             accumulates ? "" : " no-accumulation", camera_importance ? "" : " no-camera-importance",
              d->info.int64_atomics ? "" : " 32-bit-atomics");
 }
 

@@ -4,7 +4,7 @@
  *
  * The variants cover every branch of the #if's in kernels/: for each pass of kernels/sppm.cl,
  * every feature on (the generic program), every feature but one (each bit's #else side), and a
- * minimal scene (diffuse surfaces, an area light); the importance pass also without bookkeeping
+ * minimal scene (diffuse surfaces, an area light); the importance pass also without accumulating
  * and without camera importance; both passes with 32-bit atomics in place of 64-bit ones; and
  * kernels/trace.cl. */
 #ifndef IDMR_KERNEL_VARIANTS_H

@@ -5,7 +5,7 @@
  *
  * With IDMR_INT64_ATOMICS (cl_khr_int64_base_atomics) a word is one ulong; without it, two
  * uints (low word first) added with 32-bit atomics and an explicit carry. Both give the same
- * integers (tests/test_importance.c checks this). */
+ * integers (tests/test_importance_paths.c checks this). */
 #ifndef IDMR_KERNEL_FIXED_POINT_H
 #define IDMR_KERNEL_FIXED_POINT_H
 

@@ -6,7 +6,7 @@
  *                 chooses reflection or refraction) to the first non-specular surface, where it
  *                 leaves a hit point; at most IDMR_CAMERA_DEPTH surface interactions.
  *     importance  adds the Eq. 2 weight 1 - |n·d| of every surface it hits to that triangle's
- *                 camera importance (unless IDMR_CAMERA_IMPORTANCE or IDMR_BOOKKEEPING is 0)
+ *                 camera importance (unless IDMR_CAMERA_IMPORTANCE or IDMR_ACCUMULATE_IMPORTANCE is 0)
  *     render      carries the specular throughput (a mirror's colour), adds the emission it
  *                 sees (an area light's front, the environment once it leaves the scene) and
  *                 ends at the back of a one-sided surface (black, no hit point)
@@ -35,8 +35,8 @@
 #ifndef IDMR_SPPM_PASS
 #error "paths.h is for the SPPM kernels: IDMR_SPPM_PASS must be defined"
 #endif
-#ifndef IDMR_BOOKKEEPING
-#define IDMR_BOOKKEEPING 1 /* 0: the importance accumulation compiled out (make bench) */
+#ifndef IDMR_ACCUMULATE_IMPORTANCE
+#define IDMR_ACCUMULATE_IMPORTANCE 1 /* 0: the importance accumulation compiled out (make bench) */
 #endif
 #ifndef IDMR_CAMERA_IMPORTANCE
 #define IDMR_CAMERA_IMPORTANCE 1 /* 0 when γ = 0: camera importance would be multiplied by 0 */
@@ -101,7 +101,7 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
         float3 n = scene->triangle_normals[hit.triangle].xyz;
         float3 p = origin + hit.t * d;
         global const idmr_material *m = triangle_material(scene, hit.triangle);
-#if PASS_IMPORTANCE && IDMR_BOOKKEEPING && IDMR_CAMERA_IMPORTANCE
+#if PASS_IMPORTANCE && IDMR_ACCUMULATE_IMPORTANCE && IDMR_CAMERA_IMPORTANCE
         fixed_add(camera_importance, hit.triangle,
                   weight_units(idmr_eq2_weight(n.x, n.y, n.z, d.x, d.y, d.z)));
 #endif
