@@ -139,7 +139,7 @@ test: bin/idmr kernels $(TEST_PROGRAMS)
 bench: bin/idmr $(BENCH_PROGRAMS)
 	@set -e; for b in $(BENCH_PROGRAMS); do $$b; done
 
-demo: bin/idmr
+demo: bin/idmr kernels
 	@scripts/demo.sh
 
 clean:
