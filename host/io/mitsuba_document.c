@@ -14,11 +14,6 @@
 #include "io/mitsuba_loader.h"
 #include "io/mitsuba_paths.h"
 
-char *mitsuba_resolve_path(const loader *ld, xmlNodePtr node, const char *written)
-{
-    return mitsuba_resolve(mitsuba_node_file(node), ld->s->dir, written, NULL);
-}
-
 /* ---------------------------------------------------------------------------------------- */
 /* Documents: reading, <default> parameters, name normalisation                             */
 

@@ -29,6 +29,7 @@
 
 #include "core/scene.h"
 #include "io/mitsuba_params.h"
+#include "io/mitsuba_paths.h"
 #include "io/mitsuba_xml.h"
 #include "io/xform.h"
 
@@ -106,7 +107,10 @@ int mitsuba_prop_transform(xmlNodePtr plugin, const char *name, xform *out);
 
 /* `written` resolved against the directory of the file that names it (the file of `node`),
  * then the scene's; malloc'd. */
-char *mitsuba_resolve_path(const loader *ld, xmlNodePtr node, const char *written);
+static inline char *mitsuba_resolve_path(const loader *ld, xmlNodePtr node, const char *written)
+{
+    return mitsuba_resolve(mitsuba_node_file(node), ld->s->dir, written, NULL);
+}
 
 /* The id table (mitsuba_ids.c). Registers node under its id attribute (none: nothing to do). */
 int mitsuba_id_register(loader *ld, xmlNodePtr node);
