@@ -9,8 +9,6 @@
 #include <string.h>
 
 #include "core/error.h"
-#include "io/image.h"
-#include "io/spectrum.h"
 
 scene *scene_create(const char *file)
 {
@@ -117,14 +115,17 @@ int scene_add_light(scene *s, const idmr_light *light)
     return (int)s->light_count++;
 }
 
-int scene_add_texture(scene *s, const char *file)
+int scene_find_texture(const scene *s, const char *file)
 {
     for (size_t i = 0; i < s->texture_count; i++)
         if (strcmp(s->textures[i].file, file) == 0)
             return (int)i;
-    scene_texture t = {0};
-    if (image_read_rgb(file, &t.width, &t.height, &t.rgb) != 0)
-        return -1;
+    return -1;
+}
+
+int scene_add_texture(scene *s, const char *file, int width, int height, float *rgb)
+{
+    scene_texture t = {.width = width, .height = height, .rgb = rgb};
     double sum[3] = {0, 0, 0};
     size_t pixels = (size_t)t.width * (size_t)t.height;
     for (size_t p = 0; p < pixels; p++)
@@ -168,6 +169,12 @@ double scene_diagonal(const scene *s)
     return sqrt(d2);
 }
 
+/* Rec. 709 / sRGB luminance of a linear RGB triple: lights are chosen by luminous power. */
+static double luminance(const float rgb[3])
+{
+    return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
+}
+
 /* Area lights: triangle range and area from their mesh; power by kind. A spot's power uses the
  * solid angle of its cutoff cone; a directional light's, the scene's bounding disc. */
 static void finalize_lights(scene *s)
@@ -187,7 +194,7 @@ static void finalize_lights(scene *s)
     double radius = 0.5 * scene_diagonal(s);
     for (size_t i = 0; i < s->light_count; i++) {
         idmr_light *l = &s->lights[i];
-        double y = spectrum_luminance(l->emission);
+        double y = luminance(l->emission);
         switch (l->kind) {
         case IDMR_LIGHT_AREA: {
             /* Two-sided materials still emit from the front side only (Mitsuba's area light). */

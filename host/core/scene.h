@@ -101,9 +101,12 @@ uint32_t scene_add_material(scene *s, const char *name, const char *bsdf_type,
  * triangle range, area and power are filled by scene_finalize(). */
 int scene_add_light(scene *s, const idmr_light *light);
 
-/* Reads an image through OpenImageIO (host/image.h) and adds it, or returns the index of the
- * same file added before. Returns -1 with the error set if the image cannot be read. */
-int scene_add_texture(scene *s, const char *file);
+/* The index of the texture read from `file`, or -1 when none was added. */
+int scene_find_texture(const scene *s, const char *file);
+
+/* Adds the texture read from `file` (linear RGB, width × height, top row first) and takes
+ * ownership of rgb (malloc'd); its mean is computed here. Returns its index. */
+int scene_add_texture(scene *s, const char *file, int width, int height, float *rgb);
 
 /* Numbers triangles, completes area lights, computes bbox and feature bits. Returns 0, or -1
  * with the error set (for example a scene with more than 2^32 - 1 triangles). */

@@ -11,6 +11,8 @@
 #include <string.h>
 #include <strings.h>
 
+#include "io/image.h"
+
 /* Wrappers (twosided, mask, ...) nest at most this deep. */
 #define MITSUBA_MAX_NESTING 16
 
@@ -268,6 +270,20 @@ int mitsuba_parse_bsdf(loader *ld, xmlNodePtr node, int depth, bsdf_parsed *out)
     return mitsuba_fail(node, "unsupported bsdf type '%s'", type);
 }
 
+/* The scene's texture of image file `path`, read (through OpenImageIO) and added on first use.
+ * Returns its index, or -1 with the error set if the image cannot be read. */
+static int read_texture(scene *s, const char *path)
+{
+    int texture = scene_find_texture(s, path);
+    if (texture >= 0)
+        return texture;
+    int width, height;
+    float *rgb;
+    if (image_read_rgb(path, &width, &height, &rgb))
+        return -1;
+    return scene_add_texture(s, path, width, height, rgb);
+}
+
 int mitsuba_bsdf_add(loader *ld, const bsdf_parsed *parsed, const char *name)
 {
     idmr_material material = parsed->material;
@@ -277,7 +293,7 @@ int mitsuba_bsdf_add(loader *ld, const bsdf_parsed *parsed, const char *name)
         if (mitsuba_prop_string(parsed->texture, "filename", NULL, &written))
             return -1;
         char *path = mitsuba_resolve_path(ld, filename, written);
-        int texture = scene_add_texture(ld->s, path);
+        int texture = read_texture(ld->s, path);
         free(path);
         if (texture < 0)
             return mitsuba_fail_prefix(parsed->texture);

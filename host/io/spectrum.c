@@ -94,8 +94,3 @@ float spectrum_linear_to_srgb(float linear)
         return linear > 0 ? 12.92f * linear : 0.0f;
     return 1.055f * powf(linear, 1.0f / 2.4f) - 0.055f;
 }
-
-float spectrum_luminance(const float rgb[3])
-{
-    return 0.2126f * rgb[0] + 0.7152f * rgb[1] + 0.0722f * rgb[2];
-}

@@ -32,7 +32,4 @@ float spectrum_srgb_to_linear(float encoded);
  * above 1 stay above 1, for the caller to clamp). */
 float spectrum_linear_to_srgb(float linear);
 
-/* Rec. 709 / sRGB luminance of a linear RGB triple. */
-float spectrum_luminance(const float rgb[3]);
-
 #endif
