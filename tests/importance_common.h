@@ -167,6 +167,36 @@ static inline void imp_camera_direction(const idmr_camera *c, unsigned int width
                              pixel, d);
 }
 
+/* ---- the gather radius ---- */
+
+static inline int imp_compare_doubles(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* The first gather radius the SPPM core should choose from these hit points (host/passes/
+ * sppm.h): 2.5 pixel footprints at their median distance from the camera, a pixel spanning
+ * 2 tan_half_x / width. Written out here independently of sppm.c. */
+static inline double imp_expected_first_radius(const scene *s, const idmr_hit_point *hit_points,
+                                               size_t count, unsigned int width)
+{
+    double *distance = malloc((count ? count : 1) * sizeof *distance);
+    size_t valid = 0;
+    for (size_t i = 0; i < count; i++)
+        if (hit_points[i].valid) {
+            double d2 = 0;
+            for (int k = 0; k < 3; k++)
+                d2 += pow((double)hit_points[i].position[k] - s->camera.origin[k], 2);
+            distance[valid++] = sqrt(d2);
+        }
+    assert_true(valid > 0);
+    qsort(distance, valid, sizeof *distance, imp_compare_doubles);
+    double radius = 2.5 * distance[valid / 2] * 2.0 * s->camera.tan_half_x / width;
+    free(distance);
+    return radius;
+}
+
 /* ---- per-triangle geometry ---- */
 
 /* Unit winding normal of scene triangle t as the kernels get it (0 for degenerate ones). */

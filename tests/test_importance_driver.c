@@ -5,7 +5,9 @@
  *   Δ_n = Σ (I_n - I_{n-1})² / Σ I_n² over triangles with area, I_n the per-area importance
  *         after n iterations; Δ_1 = 1
  *   stop  with a tolerance, at the first iteration that ends 3 calm ones in a row (Δ < tol)
- *   radii r_{n+1}² = r_n² (n + α) / (n + 1) from r_1 = 5 × diagonal / (width + height) */
+ *   radii r_{n+1}² = r_n² (n + α) / (n + 1) from r_1 = 2.5 pixel footprints at the median hit
+ *         point distance, also on a close-up of a large floor, where the old scene-diagonal
+ *         rule would have gathered over a sixth of the image */
 #include "importance_common.h"
 
 static scene *white_wall_scene(void)
@@ -66,12 +68,53 @@ static void test_radius_schedule(void **state)
 {
     const imp_case *run = imp_run(&stopping);
     const sppm_summary *summary = &run->r.sppm;
-    double r1 = 5.0 * scene_diagonal(run->s) / (summary->width + summary->height), r2 = r1 * r1;
+    double r2 = summary->radius[0] * summary->radius[0];
     assert_true(summary->iterations > 1);
     for (unsigned int n = 0; n < summary->iterations; n++) {
         assert_float_equal(summary->radius[n], sqrt(r2), 1e-6 * sqrt(r2));
         r2 *= (n + 1 + run->options.sppm.alpha) / (n + 2.0);
     }
+}
+
+/* A 20 x 20 floor seen from 1 unit above, straight down, 90 degrees wide: the camera sees a
+ * patch 2 units across, a tenth of the floor, lit by a point light above. */
+static scene *close_up_scene(void)
+{
+    scene *s = scene_create("close-up floor");
+    const float centre[3] = {0, 0, 0}, u[3] = {10, 0, 0}, v[3] = {0, 0, -10};
+    imp_add_quad(s, "floor", imp_diffuse(s, "grey", 0.5f, 0), centre, u, v);
+    const float light[3] = {0, 5, 0}, eye[3] = {0, 1, 0}, up[3] = {0, 0, -1};
+    imp_point_light(s, light, 20.0f);
+    imp_look_at(s, eye, centre, up, 64, 64, 1.0f);
+    return test_finalize_scene(s);
+}
+
+static imp_case close_up = {.make = close_up_scene, .iterations = 1, .photons = 20000};
+
+/* On the close-up every pixel sees the floor at distance 1 / cos θ: the first radius is 2.5 times
+ * the median of that times the pixel angle 2 / 64, computed from the pixel centres (the jitter
+ * moves the median by well under 1 %), and far below the scene-diagonal rule's. */
+static void test_close_up_radius_follows_the_view(void **state)
+{
+    const imp_case *run = imp_run(&close_up);
+    const idmr_camera *c = &run->s->camera;
+    double distance[64 * 64];
+    for (int y = 0; y < 64; y++)
+        for (int x = 0; x < 64; x++) {
+            float d[3];
+            idmr_camera_direction(c, x + 0.5f, y + 0.5f, d);
+            double length = sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]);
+            distance[y * 64 + x] = length / -d[1]; /* height 1 over the floor, looking down */
+        }
+    qsort(distance, 64 * 64, sizeof *distance, imp_compare_doubles);
+    double expected = 2.5 * distance[64 * 64 / 2] * 2.0 / 64;
+    double diagonal_rule = 5.0 * scene_diagonal(run->s) / (64 + 64);
+    double r1 = run->r.sppm.radius[0];
+    print_message("  close-up: first radius %.5f, expected %.5f; the diagonal rule's %.4f\n", r1,
+                  expected, diagonal_rule);
+    assert_int_equal(run->r.sppm.hit_points, 64 * 64);
+    assert_float_equal(r1, expected, 0.01 * expected);
+    assert_true(r1 < diagonal_rule / 10);
 }
 
 /* A quad with either a point light or a camera, not both: importance_run() refuses it, and the
@@ -105,6 +148,7 @@ int main(void)
         cmocka_unit_test(test_second_delta_matches_the_host),
         cmocka_unit_test(test_stops_after_three_calm_iterations),
         cmocka_unit_test(test_radius_schedule),
+        cmocka_unit_test(test_close_up_radius_follows_the_view),
         cmocka_unit_test(test_missing_camera_is_an_input_error),
         cmocka_unit_test(test_missing_light_is_an_input_error),
     };

@@ -195,13 +195,16 @@ static void test_result_is_the_accumulators(void **state)
     }
 }
 
-/* The radius of the first iteration: 5 x scene diagonal / (width + height). */
+/* The radius of the first (here the only) iteration: 2.5 pixel footprints at the median
+ * distance of its hit points. */
 static void test_first_radius(void **state)
 {
     const imp_case *run = imp_run_state(state);
     const idmr_sppm_params *pp = &run->snapshot.core.params;
-    assert_float_equal(pp->radius, 5.0 * scene_diagonal(run->s) / (pp->width + pp->height),
-                       1e-5 * pp->radius);
+    assert_int_equal(pp->iteration, 0);
+    double expected = imp_expected_first_radius(run->s, run->snapshot.core.hit_points,
+                                                (size_t)pp->width * pp->height, pp->width);
+    assert_float_equal(pp->radius, expected, 1e-5 * expected);
 }
 
 /* The hit-point images: the films scaled by the cases' resolution. */

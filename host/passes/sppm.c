@@ -14,6 +14,9 @@
 
 #define MAX_PIXELS (1u << 26)
 
+/* The initial gather radius in pixel footprints (sppm.h). */
+#define SPPM_RADIUS_FOOTPRINTS 2.5
+
 /* Kernel arguments bound by the core: camera_paths (params, camera, scene buffers, hit points)
  * and photon_paths (params, scene buffers, path lengths, records). */
 #define CAMERA_CORE_ARGUMENTS (2 + DEVICE_SCENE_BUFFERS + 1)
@@ -32,11 +35,35 @@ unsigned int sppm_default_photons(const device *d)
     return strcmp(d->info.kind, "gpu") == 0 ? 1000000u : 500000u;
 }
 
-double sppm_initial_radius2(const scene *s, unsigned int width, unsigned int height)
+static int compare_floats(const void *a, const void *b)
 {
-    double radius = 5.0 * scene_diagonal(s) / ((double)width + height);
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+double sppm_initial_radius2(const scene *s, unsigned int width, const idmr_hit_point *hit_points,
+                            size_t count)
+{
+    float *distance = xmalloc((count ? count : 1) * sizeof *distance);
+    size_t valid = 0;
+    for (size_t i = 0; i < count; i++) {
+        if (!hit_points[i].valid)
+            continue;
+        double d2 = 0;
+        for (int k = 0; k < 3; k++) {
+            double delta = (double)hit_points[i].position[k] - s->camera.origin[k];
+            d2 += delta * delta;
+        }
+        if (isfinite(d2) && d2 > 0)
+            distance[valid++] = (float)sqrt(d2);
+    }
+    double pixel_angle = 2.0 * s->camera.tan_half_x / width;
+    qsort(distance, valid, sizeof *distance, compare_floats);
+    double radius = valid ? SPPM_RADIUS_FOOTPRINTS * distance[valid / 2] * pixel_angle
+                          : 5.0 * scene_diagonal(s) / width; /* the camera sees nothing */
+    free(distance);
     double radius2 = radius * radius;
-    return radius2 > 0 ? radius2 : 1e-12; /* a scene of one point: nothing to gather anyway */
+    return radius2 > 0 && isfinite(radius2) ? radius2 : 1e-12;
 }
 
 double sppm_next_radius2(double radius2, unsigned int n, float alpha)
@@ -174,9 +201,35 @@ static void params_begin(sppm *core)
     params->ray_epsilon = core->uploaded.ray_epsilon;
 }
 
+/* What the first iteration's paths decide, read back once: the initial gather radius² (from
+ * the hit points, sppm_initial_radius2) and, for the reports, the valid hit points and stored
+ * records (they change little between iterations). */
+static int first_iteration(sppm *core, double *radius2)
+{
+    size_t paths = core->params.path_count;
+    idmr_hit_point *hit_points = xmalloc(core->pixels * sizeof *hit_points);
+    uint32_t *lengths = xmalloc(paths * sizeof *lengths);
+    int status = device_read(core->dev, core->hit_points, core->pixels * sizeof *hit_points,
+                             hit_points, "hit points") ||
+                 device_read(core->dev, core->path_length, paths * sizeof *lengths, lengths,
+                             "photon path lengths");
+    for (size_t i = 0; i < core->pixels && !status; i++)
+        core->summary->hit_points += hit_points[i].valid;
+    for (size_t i = 0; i < paths && !status; i++)
+        core->summary->photon_records += lengths[i];
+    if (!status)
+        *radius2 =
+            sppm_initial_radius2(core->scene, core->params.width, hit_points, core->pixels);
+    free(hit_points);
+    free(lengths);
+    return status ? -1 : 0;
+}
+
 /* Camera paths, photon paths, grid and the pass's gather, each stage timed (the queue is
- * drained between stages). */
-static int iterate(sppm *core, sppm_pass *pass)
+ * drained between stages). After the first iteration's paths, `first` reads back what the
+ * first iteration decides (the initial radius, the report's counts); then the grid is placed
+ * for radius² *radius2. */
+static int iterate(sppm *core, sppm_pass *pass, unsigned int n, double *radius2)
 {
     sppm_seconds *seconds = &core->summary->seconds;
     size_t local = core->options->local_size;
@@ -188,6 +241,10 @@ static int iterate(sppm *core, sppm_pass *pass)
     if (DEVICE_SET_ARG(core->photon_paths, "photon_paths", 0, core->params) ||
         device_run(core->dev, core->photon_paths, "photon_paths", core->params.path_count, local))
         return -1;
+    if (n == 0 && first_iteration(core, radius2))
+        return -1;
+    hit_point_grid_place(&core->grid, core->scene, *radius2, &core->params);
+    core->summary->radius[n] = core->params.radius;
     double t2 = monotonic_seconds();
     if (hit_point_grid_build(core->dev, &core->grid, &core->params, core->hit_points, local))
         return -1;
@@ -220,45 +277,22 @@ static int take_snapshot(sppm *core, size_t record_bytes, sppm_snapshot *out)
                : 0;
 }
 
-/* The first iteration's valid hit points and stored records, for the reports (read back once:
- * they change little between iterations). */
-static int count_first_iteration(sppm *core)
-{
-    size_t paths = core->params.path_count;
-    idmr_hit_point *hit_points = xmalloc(core->pixels * sizeof *hit_points);
-    uint32_t *lengths = xmalloc(paths * sizeof *lengths);
-    int status = device_read(core->dev, core->hit_points, core->pixels * sizeof *hit_points,
-                             hit_points, "hit points") ||
-                 device_read(core->dev, core->path_length, paths * sizeof *lengths, lengths,
-                             "photon path lengths");
-    for (size_t i = 0; i < core->pixels && !status; i++)
-        core->summary->hit_points += hit_points[i].valid;
-    for (size_t i = 0; i < paths && !status; i++)
-        core->summary->photon_records += lengths[i];
-    free(hit_points);
-    free(lengths);
-    return status ? -1 : 0;
-}
-
 /* The iterations, until one of the stop rules (sppm.h) ends them. */
 static int run_iterations(sppm *core, sppm_pass *pass, sppm_snapshot *snapshot)
 {
     const sppm_options *o = core->options;
     sppm_summary *summary = core->summary;
     summary->radius = xcalloc(o->iterations, sizeof *summary->radius);
-    double radius2 = sppm_initial_radius2(core->scene, summary->width, summary->height);
+    double radius2 = 0; /* set after the first iteration's camera paths */
     progress bar;
     progress_begin(&bar, pass->name, o->iterations, o->progress);
     double start = monotonic_seconds();
     int status = 0, stop = 0;
     for (unsigned int n = 0; n < o->iterations && !status && !stop; n++) {
         core->params.iteration = n;
-        hit_point_grid_place(&core->grid, core->scene, radius2, &core->params);
-        summary->radius[n] = core->params.radius;
-        status = iterate(core, pass) ||
+        status = iterate(core, pass, n, &radius2) ||
                  (snapshot && (take_snapshot(core, pass->photon_record_bytes, snapshot) ||
-                               (pass->snapshot && pass->snapshot(core, pass->state)))) ||
-                 (n == 0 && count_first_iteration(core));
+                               (pass->snapshot && pass->snapshot(core, pass->state))));
         if (status)
             break;
         char detail[64] = "";

@@ -12,10 +12,14 @@
  *
  * One iteration: camera_paths → photon_paths → grid → pass->gather → pass->collect.
  *
- * Gather radius: r_1 = 5 × |scene box diagonal| / (width + height) of the hit-point image, and
+ * Gather radius: what the camera sees sets it, not the scene's extent. r_1 is 2.5 pixel
+ * footprints at the median distance of the first iteration's hit points from the camera
+ * (distance × the angle a pixel of the hit-point image spans, 2 tan(fov_x / 2) / width), so a
+ * close-up of a large scene gathers over a few pixels, not over a tenth of the image; a camera
+ * that sees nothing falls back to 5 × |scene box diagonal| / width. Then
  * r_{n+1}² = r_n² (n + α) / (n + 1): one global radius per iteration, so that every iteration
  * is an independent estimate at its own radius (Knaus and Zwicker's probabilistic formulation
- * of progressive photon mapping).
+ * of progressive photon mapping). Both passes use it.
  *
  * Stops: after options.iterations, after the iteration in which options.time_limit seconds pass
  * (when > 0), or when the pass's collect hook says so. */
@@ -58,9 +62,11 @@ unsigned int sppm_default_photons(const device *d);
 char *sppm_build_options(const device *d, unsigned int features, int pass,
                          const char *pass_defines);
 
-/* r_1² for a scene and hit-point image (a tiny positive value for a scene of one point), and
- * r_{n+1}² from r_n² after iteration n (counted from 0). */
-double sppm_initial_radius2(const scene *s, unsigned int width, unsigned int height);
+/* r_1² (above) from the `count` hit points of the first iteration, for a hit-point image
+ * `width` pixels wide (a tiny positive value when nothing has extent), and r_{n+1}² from r_n²
+ * after iteration n (counted from 0). */
+double sppm_initial_radius2(const scene *s, unsigned int width, const idmr_hit_point *hit_points,
+                            size_t count);
 double sppm_next_radius2(double radius2, unsigned int n, float alpha);
 
 typedef struct sppm_seconds {
