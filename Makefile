@@ -14,8 +14,6 @@
 config ?= release
 BUILD := build/$(config)
 
-CC ?= cc
-CXX ?= c++
 WARNINGS := -Wall -Wextra -Wshadow -Wno-unused-parameter
 PKG_MODULES := libxml-2.0 libcjson OpenCL openmesh OpenImageIO
 TEST_PKG_MODULES := cmocka
@@ -52,24 +50,26 @@ all: bin/idmr kernels
 # ---- dependencies and the flags they give ----
 
 FLAGS := $(BUILD)/flags.mk
-ifeq ($(filter clean,$(MAKECMDGOALS)),)
+ifneq ($(MAKECMDGOALS),clean)
 -include $(FLAGS)
 endif
-DEPS_FOUND := $(shell pkg-config --exists $(PKG_MODULES) $(TEST_PKG_MODULES) 2>/dev/null && \
-                      test -f $(EMBREE_HEADER) && echo yes)
-ifneq ($(DEPS_FOUND),yes)
+DEPS_CHECK := pkg-config --exists $(PKG_MODULES) $(TEST_PKG_MODULES) && test -f $(EMBREE_HEADER)
+ifneq ($(shell $(DEPS_CHECK) 2>/dev/null && echo yes),yes)
 $(FLAGS): FORCE
 endif
 
+# After the installer, what is still missing stops the build with a message (no empty flags).
 $(FLAGS): Makefile scripts/install-deps.sh
 	@scripts/install-deps.sh
+	@$(DEPS_CHECK) || { echo "make: after scripts/install-deps.sh, pkg-config still does not find" \
+	    "all of $(PKG_MODULES) $(TEST_PKG_MODULES), or $(EMBREE_HEADER) is missing" >&2; exit 1; }
 	@mkdir -p $(dir $@)
-	@{ echo "# written by make from pkg-config: $(PKG_MODULES) $(TEST_PKG_MODULES)"; \
-	   echo "PKG_CFLAGS := $$(pkg-config --cflags $(PKG_MODULES))"; \
-	   echo "PKG_LIBS := $$(pkg-config --libs $(PKG_MODULES)) -lembree3"; \
-	   echo "TEST_LIBS := $$(pkg-config --libs $(TEST_PKG_MODULES))"; } > $@.tmp || \
-	 { rm -f $@.tmp; echo "make: pkg-config could not find $(PKG_MODULES) $(TEST_PKG_MODULES)" >&2; exit 1; }
-	@mv -f $@.tmp $@
+	@set -e; cflags=$$(pkg-config --cflags $(PKG_MODULES)); libs=$$(pkg-config --libs $(PKG_MODULES)); \
+	 test_libs=$$(pkg-config --libs $(TEST_PKG_MODULES)); \
+	 { echo "# written by make from pkg-config: $(PKG_MODULES) $(TEST_PKG_MODULES)"; \
+	   echo "PKG_CFLAGS := $$cflags"; echo "PKG_LIBS := $$libs -lembree3"; \
+	   echo "TEST_LIBS := $$test_libs"; } > $@.tmp
+	@cmp -s $@.tmp $@ && rm -f $@.tmp || mv -f $@.tmp $@
 
 # Installs the Debian packages when one is missing (nothing to do otherwise).
 deps:
@@ -109,8 +109,9 @@ $(BUILD)/host/%.cc.o: host/%.cc $(FLAGS)
 KERNEL_SOURCES := $(wildcard kernels/*.cl kernels/lib/*.h include/idmr/*.h)
 kernels: $(BUILD)/kernels.stamp
 $(BUILD)/kernels.stamp: $(BUILD)/idmr $(KERNEL_SOURCES)
-	@$(BUILD)/idmr kernels --quiet
-	@touch $@
+	@status=0; $(BUILD)/idmr kernels --quiet || status=$$?; \
+	 if [ $$status -eq 2 ]; then echo "make: no OpenCL device: the kernels were not compiled" >&2; \
+	 elif [ $$status -ne 0 ]; then exit $$status; else touch $@; fi
 
 # ---- tests and benchmarks ----
 

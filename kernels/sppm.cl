@@ -5,7 +5,7 @@
  *                     records (importance: camera importance; render: throughput and emission)
  *   photon_paths      one photon path per work-item into its slot of records (lib/paths.h)
  *   grid_count, scan_chunks, scan_chunk_sums, scan_apply, grid_scatter
- *                     the hash grid over the hit points (lib/hit_point_grid.h)
+ *                     the hash grid over the hit points by counting sort (lib/hit_point_grid.h)
  * importance pass (paper 3.2, 3.3, 4.1; host/passes/importance.c):
  *   gather_count      per photon vertex: the hit points that gather it
  *   path_importance   per path, from its last vertex back: running sum s of gather counts;
@@ -22,22 +22,13 @@
 #include "lib/paths.h"
 
 kernel void camera_paths(idmr_sppm_params params, idmr_camera camera, SCENE_BUFFERS,
-                         global idmr_hit_point *hit_points,
-#if PASS_IMPORTANCE
-                         volatile global fixed_word *camera_importance)
-#else
-                         global idmr_render_hit *render_hits)
-#endif
+                         global idmr_hit_point *hit_points, camera_records records)
 {
     uint pixel = get_global_id(0);
     if (pixel >= params.width * params.height)
         return;
     scene_view scene = SCENE_VIEW();
-#if PASS_IMPORTANCE
-    camera_path(&scene, &params, camera, pixel, hit_points, camera_importance, NULL);
-#else
-    camera_path(&scene, &params, camera, pixel, hit_points, NULL, render_hits);
-#endif
+    camera_path(&scene, &params, camera, pixel, hit_points, records);
 }
 
 kernel void photon_paths(idmr_sppm_params params, SCENE_BUFFERS, global uint *path_length,
@@ -49,6 +40,58 @@ kernel void photon_paths(idmr_sppm_params params, SCENE_BUFFERS, global uint *pa
     scene_view scene = SCENE_VIEW();
     path_length[path] =
         photon_path(&scene, &params, path, records + (size_t)path * IDMR_PATH_VERTICES);
+}
+
+kernel void grid_count(idmr_sppm_params params, global const idmr_hit_point *hit_points,
+                       volatile global uint *cell_counts)
+{
+    uint i = get_global_id(0);
+    if (i < params.width * params.height && hit_points[i].valid)
+        atomic_inc(cell_counts + grid_bucket(hit_points + i, &params));
+}
+
+/* cell_start = prefix sums of the cell counts in three steps: the sum of each chunk of
+ * IDMR_SCAN_CHUNK cells, an exclusive scan of those sums, then each chunk scanned from its
+ * offset (cell_start[cell_count] = all hit points; cell_cursor a copy, for grid_scatter). */
+kernel void scan_chunks(global const uint *cell_counts, uint cell_count, global uint *chunk_sums)
+{
+    uint begin, end, sum = 0;
+    if (!scan_chunk_cells(get_global_id(0), cell_count, &begin, &end))
+        return;
+    for (uint i = begin; i < end; i++)
+        sum += cell_counts[i];
+    chunk_sums[get_global_id(0)] = sum;
+}
+
+kernel void scan_chunk_sums(global uint *chunk_sums, uint chunk_count)
+{
+    if (get_global_id(0) == 0)
+        exclusive_scan(chunk_sums, chunk_count);
+}
+
+kernel void scan_apply(global const uint *cell_counts, uint cell_count,
+                       global const uint *chunk_offsets, global uint *cell_start,
+                       global uint *cell_cursor)
+{
+    uint begin, end;
+    if (!scan_chunk_cells(get_global_id(0), cell_count, &begin, &end))
+        return;
+    uint running = chunk_offsets[get_global_id(0)];
+    for (uint i = begin; i < end; i++) {
+        cell_start[i] = running;
+        cell_cursor[i] = running;
+        running += cell_counts[i];
+    }
+    if (end == cell_count)
+        cell_start[cell_count] = running;
+}
+
+kernel void grid_scatter(idmr_sppm_params params, global const idmr_hit_point *hit_points,
+                         volatile global uint *cell_cursor, global uint *grid_points)
+{
+    uint i = get_global_id(0);
+    if (i < params.width * params.height && hit_points[i].valid)
+        grid_points[atomic_inc(cell_cursor + grid_bucket(hit_points + i, &params))] = i;
 }
 
 #if PASS_IMPORTANCE

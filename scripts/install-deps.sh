@@ -1,13 +1,21 @@
 #!/bin/sh
-# install-deps.sh — installs the Debian packages idmr builds, tests and plots with, when any is
-# missing. Idempotent: with everything present it only asks dpkg and exits 0.
-# Needs root (or sudo) only when something has to be installed.
+# install-deps.sh — installs what idmr builds, tests, evaluates and plots with, when something is
+# missing. Idempotent: with everything present it only asks dpkg (and pip) and exits 0.
+#
+#   scripts/install-deps.sh            the Debian packages (needs root or sudo only when one is
+#                                      missing)
+#   scripts/install-deps.sh --python   also the Python tools of the evaluation, into .venv/ in
+#                                      the repository (Mitsuba 3, the second renderer; NVIDIA's
+#                                      FLIP evaluator), at the versions pinned below
 set -eu
+cd "$(dirname "$0")/.."
 
 PACKAGES="build-essential pkg-config pocl-opencl-icd ocl-icd-opencl-dev opencl-headers clinfo
 libembree-dev libopenmesh-dev libopenimageio-dev libxml2-dev libcjson-dev libcmocka-dev
 libmeshoptimizer-dev
-python3-matplotlib python3-numpy"
+python3-matplotlib python3-numpy python3-venv"
+
+PYTHON_PACKAGES="mitsuba==3.9.1 drjit==1.5.0 flip-evaluator==1.7 numpy==2.4.6"
 
 missing=""
 for p in $PACKAGES; do
@@ -15,19 +23,32 @@ for p in $PACKAGES; do
         missing="$missing $p"
     fi
 done
-[ -z "$missing" ] && exit 0
 
-echo "install-deps: installing:$missing" >&2
-SUDO=""
-if [ "$(id -u)" != 0 ]; then
-    if command -v sudo >/dev/null 2>&1; then
-        SUDO="sudo"
-    else
-        echo "install-deps: need root to install:$missing" >&2
-        exit 1
+if [ -n "$missing" ]; then
+    echo "install-deps: installing:$missing" >&2
+    SUDO=""
+    if [ "$(id -u)" != 0 ]; then
+        if command -v sudo >/dev/null 2>&1; then
+            SUDO="sudo"
+        else
+            echo "install-deps: need root to install:$missing" >&2
+            exit 1
+        fi
+    fi
+    export DEBIAN_FRONTEND=noninteractive
+    $SUDO apt-get update -qq
+    # shellcheck disable=SC2086
+    $SUDO apt-get install -y -qq $missing >&2
+fi
+
+if [ "${1:-}" = "--python" ]; then
+    # The venv records what it was made with; a different pin list makes it again.
+    if [ ! -x .venv/bin/python ] || [ "$(cat .venv/idmr-packages 2>/dev/null)" != "$PYTHON_PACKAGES" ]; then
+        echo "install-deps: installing into .venv: $PYTHON_PACKAGES" >&2
+        rm -rf .venv
+        /usr/bin/python3 -m venv .venv
+        # shellcheck disable=SC2086
+        .venv/bin/pip install -q $PYTHON_PACKAGES >&2
+        echo "$PYTHON_PACKAGES" > .venv/idmr-packages
     fi
 fi
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -qq
-# shellcheck disable=SC2086
-$SUDO apt-get install -y -qq $missing >&2

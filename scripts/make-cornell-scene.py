@@ -113,7 +113,7 @@ SCENE = """<?xml version="1.0" encoding="utf-8"?>
     <bsdf type="diffuse" id="green">
         <rgb name="reflectance" value="0.14, 0.45, 0.091"/>
     </bsdf>
-    <bsdf type="diffuse" id="knot">
+    <bsdf type="diffuse" id="orange">
         <rgb name="reflectance" value="0.8, 0.6, 0.3"/>
     </bsdf>
 
@@ -145,7 +145,7 @@ SCENE = """<?xml version="1.0" encoding="utf-8"?>
             <rotate x="1" angle="-70"/>
             <translate x="0.35" y="-0.5" z="0.25"/>
         </transform>
-        <ref id="knot"/>
+        <ref id="orange"/>
     </shape>
 </scene>
 """

@@ -64,7 +64,7 @@ int main(void)
                 st[0] = r.sppm.seconds.camera / r.sppm.iterations;
                 st[1] = r.sppm.seconds.photon / r.sppm.iterations;
                 st[2] = r.sppm.seconds.grid / r.sppm.iterations;
-                st[3] = r.sppm.seconds.gather / r.sppm.iterations;
+                st[3] = (r.sppm.seconds.gather - r.path_seconds) / r.sppm.iterations;
                 st[4] = r.path_seconds / r.sppm.iterations;
             }
             importance_result_free(&r);

@@ -7,6 +7,7 @@
  *   no change           B = A: the estimated MSE is 0 within 3 standard errors
  *   a changed region    β on a quarter of the image: MSE = β² / 4
  *   common seeds        A1 and B1 share their noise: the noise cancels exactly
+ *   small images        a 16 x 16 image is cut into 4 x 4 tiles, not one
  *   standard error      over many independent repetitions, the spread of the estimate agrees
  *                       with the reported standard error (within 30 %)
  * The same through files and `idmr compare --paired` is in test_image.c. */
@@ -110,6 +111,19 @@ static void test_no_change_gives_zero(void **state)
            e.rmse);
     assert_true(fabs(e.mse) < 3 * e.mse_standard_error);
     assert_true(e.rmse < 0.01); /* against a noise of 0.1 */
+    /* Within its noise the RMSE's error stays bounded (no 1 / rmse blow-up near zero). */
+    assert_true(e.rmse_standard_error <= sqrt(e.mse_standard_error) + 1e-12);
+}
+
+/* An image of one default tile still gets a spread to estimate from: at least 4 x 4 tiles. */
+static void test_small_image_has_tiles(void **state)
+{
+    shifted_truths(0.05);
+    render_pairs(truth_a, truth_b, 0.05, 4, 0, &renders);
+    image_paired_error e;
+    image_paired_error_of(renders.a1, renders.a2, renders.b1, renders.b2, 16, 16, 16, &e);
+    assert_int_equal(e.tiles, 16);
+    assert_true(e.mse_standard_error > 0);
 }
 
 static void test_changed_region_gives_its_share(void **state)
@@ -172,6 +186,7 @@ int main(void)
         cmocka_unit_test(test_no_change_gives_zero),
         cmocka_unit_test(test_changed_region_gives_its_share),
         cmocka_unit_test(test_common_seeds_cancel_noise),
+        cmocka_unit_test(test_small_image_has_tiles),
         cmocka_unit_test(test_standard_error_matches_the_spread),
     };
     return cmocka_run_group_tests_name("paired estimator", estimator, NULL, NULL);

@@ -44,11 +44,14 @@ static void write_pair(const char *pa, const float *a, const char *pb, const flo
     assert_int_equal(image_write_rgb_float(pb, w, h, b), 0);
 }
 
-/* EXR keeps linear values (half floats: 0.5 and 0.25 exactly). */
+/* EXR keeps linear values exactly, 32-bit floats: a third, and a light's 1e6 (far above the
+ * 65504 where half floats end in inf, which compare would then refuse). */
 static void test_exr_round_trip(void **state)
 {
     float *rgb = flat(8, 4, 0.5f, 0.25f, 2.0f);
     rgb[3 * 5] = 7.0f;
+    rgb[3 * 6 + 1] = 1.0f / 3.0f;
+    rgb[3 * 7 + 2] = 1.0e6f;
     const char *path = path_of("round.exr");
     assert_int_equal(image_write_rgb_float(path, 8, 4, rgb), 0);
     int w, h, c;
@@ -141,7 +144,7 @@ static int run_command(const char *command, char *out, size_t size)
 }
 
 /* Four renders whose noise cancels exactly (the same noise in A1 and B1, in A2 and B2), B a
- * constant 0.125 above A: the paired error is 0.125, half floats store it exactly. */
+ * constant 0.125 above A: the paired error is 0.125 exactly. */
 static void write_paired_renders(void)
 {
     float *a = flat(16, 16, 0.5f, 0.5f, 0.5f), *b = flat(16, 16, 0.625f, 0.625f, 0.625f);

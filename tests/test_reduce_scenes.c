@@ -57,7 +57,7 @@ static void write_three_mesh_scene(const char *dir, char *scene_path, size_t siz
              "            <scale value=\"0.5\"/>\n"
              "            <translate x=\"-0.4\" y=\"0.4\" z=\"0.2\"/>\n"
              "        </transform>\n"
-             "        <ref id=\"knot\"/>\n"
+             "        <ref id=\"orange\"/>\n"
              "    </shape>\n"
              "    <shape type=\"sphere\" id=\"ball\">\n"
              "        <point name=\"center\" x=\"0.5\" y=\"0.5\" z=\"-0.3\"/>\n"

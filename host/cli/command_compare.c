@@ -94,7 +94,7 @@ int command_compare(int argc, char **argv)
     const char *diff = NULL;
     double diff_max = 0;
     unsigned int tile = IMAGE_PAIRED_TILE;
-    int json = 0, paired = 0, c;
+    int json = 0, paired = 0, tile_given = 0, c;
     while ((c = getopt_long(argc, argv, "", options, NULL)) != -1) {
         if (c == 'd') {
             diff = optarg;
@@ -104,6 +104,7 @@ int command_compare(int argc, char **argv)
         } else if (c == 't') {
             if (parse_unsigned("--tile", optarg, 1, 4096, &tile))
                 return fail();
+            tile_given = 1;
         } else if (c == 'j') {
             json = 1;
         } else if (c == 'p') {
@@ -115,10 +116,13 @@ int command_compare(int argc, char **argv)
     if (paired) {
         if (optind != argc - 4)
             return usage_error("compare --paired: expected four images, A1 A2 B1 B2");
-        if (diff)
-            return usage_error("compare --paired: --diff is for a comparison of two images");
+        if (diff || diff_max > 0)
+            return usage_error("compare --paired: --diff and --diff-max are for a comparison of "
+                               "two images");
         return compare_paired(argv + optind, (int)tile, json);
     }
+    if (tile_given)
+        return usage_error("compare: --tile is for --paired");
     if (optind != argc - 2)
         return usage_error("compare: expected two images, A and the reference B");
     return compare_pair(argv + optind, diff, diff_max, json);

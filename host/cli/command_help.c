@@ -51,6 +51,8 @@ void command_help(FILE *out)
           "SPPM options (the photon-mapping core of importance, reduce and render):\n"
           "      --iterations N        iterations (default 100; render: 64)\n"
           "      --time-limit S        stop after the iteration in which S seconds pass\n"
+          "      --radius R            first gather radius (default: 2.5 pixel footprints at the\n"
+          "                            median distance of what the camera sees)\n"
           "      --photons P           photon paths per iteration (default 1,000,000 on a GPU,\n"
           "                            500,000 on a CPU)\n"
           "      --alpha A             SPPM radius reduction (default 0.7)\n"

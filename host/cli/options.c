@@ -85,6 +85,8 @@ enum option_parse parse_sppm_option(int c, sppm_options *o, int *device_index)
         return option_result(parse_unsigned("--seed", optarg, 0, 0xffffffffu, &o->seed));
     case OPT_TIME_LIMIT:
         return option_result(parse_double("--time-limit", optarg, 0, 1e9, &o->time_limit));
+    case OPT_RADIUS:
+        return option_result(parse_double("--radius", optarg, 1e-30, 1e30, &o->radius));
     case OPT_DEVICE:
         if (parse_unsigned("--device", optarg, 0, 1000, &whole))
             return OPTION_BAD_VALUE;

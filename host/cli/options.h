@@ -34,6 +34,7 @@ enum option_id {
     OPT_FORCE,
     OPT_THREADS,
     OPT_TIME_LIMIT,
+    OPT_RADIUS,
     OPT_EXPOSURE,
 };
 
@@ -46,6 +47,7 @@ enum option_id {
         {"resolution", required_argument, NULL, OPT_RESOLUTION},                            \
         {"seed", required_argument, NULL, OPT_SEED},                                        \
         {"time-limit", required_argument, NULL, OPT_TIME_LIMIT},                            \
+        {"radius", required_argument, NULL, OPT_RADIUS},                                    \
         {"device", required_argument, NULL, OPT_DEVICE},                                    \
         {"quiet", no_argument, NULL, OPT_QUIET},                                            \
         {"local-size", required_argument, NULL, OPT_LOCAL_SIZE},                            \

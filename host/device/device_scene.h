@@ -1,7 +1,7 @@
 /* device_scene.h — a scene's data on the OpenCL device, as the light transport kernels read it
  * (kernels/lib/scene.h, kernels/lib/traverse.h), in the order kernels take them (SCENE_BUFFERS):
  *
- *   nodes, leaves            the BVH (idmr/bvh.h)
+ *   nodes, leaves            the BVH (idmr/bvh_layout.h)
  *   triangle_normals         float4 per scene triangle: unit winding normal, w = area
  *   triangle_materials       uint per scene triangle
  *   materials, lights        idmr_material[], idmr_light[] (lights with cdf_offset filled)

@@ -111,10 +111,8 @@ static int write_image(const char *path, int width, int height, OIIO::TypeDesc f
 
 extern "C" int image_write_rgb_float(const char *path, int width, int height, const float *rgb)
 {
-    std::string target(path);
-    bool exr = target.size() >= 4 && target.compare(target.size() - 4, 4, ".exr") == 0;
-    return write_image(path, width, height, exr ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT,
-                       OIIO::TypeDesc::FLOAT, rgb);
+    // 32-bit floats: half floats end at 65504, and a bright light's pixels would become inf.
+    return write_image(path, width, height, OIIO::TypeDesc::FLOAT, OIIO::TypeDesc::FLOAT, rgb);
 }
 
 extern "C" int image_info(const char *path, int *width, int *height, int *channels)

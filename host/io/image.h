@@ -18,7 +18,7 @@ int image_read_rgb(const char *path, int *width, int *height, float **rgb);
  * and rename. Returns 0, or -1 with the error set naming the file. */
 int image_write_rgb8(const char *path, int width, int height, const unsigned char *rgb);
 
-/* Writes linear float RGB (3 floats per pixel, top row first) as OpenEXR (half floats) or any
+/* Writes linear float RGB (3 floats per pixel, top row first) as OpenEXR (32-bit floats) or any
  * format OpenImageIO picks by the extension, through a temporary file and rename. */
 int image_write_rgb_float(const char *path, int width, int height, const float *rgb);
 

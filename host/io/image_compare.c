@@ -138,6 +138,9 @@ void image_paired_error_of(const float *a1, const float *a2, const float *b1, co
     out->height = height;
     if (tile <= 0)
         tile = IMAGE_PAIRED_TILE;
+    int smaller_side = width < height ? width : height;
+    if (tile > smaller_side / 4) /* at least 4 x 4 tiles, or the spread has nothing to go on */
+        tile = smaller_side / 4 > 0 ? smaller_side / 4 : 1;
     double values = 3.0 * (double)width * (double)height;
     if (!(values > 0))
         return;
@@ -169,8 +172,8 @@ void image_paired_error_of(const float *a1, const float *a2, const float *b1, co
         variance *= (double)tiles / (double)(tiles - 1);
     out->mse_standard_error = sqrt(variance);
     out->rmse = out->mse > 0 ? sqrt(out->mse) : 0.0;
-    out->rmse_standard_error = out->rmse > 0 ? out->mse_standard_error / (2.0 * out->rmse)
-                                             : sqrt(out->mse_standard_error);
+    double high = out->mse + out->mse_standard_error, low = out->mse - out->mse_standard_error;
+    out->rmse_standard_error = 0.5 * (sqrt(high > 0 ? high : 0) - sqrt(low > 0 ? low : 0));
     out->noisy_rmse = sqrt(noisy_sum / values);
     free(tile_sum);
     free(tile_values);

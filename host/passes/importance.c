@@ -44,10 +44,9 @@ typedef struct importance_pass {
 static int prepare(sppm *core, void *state)
 {
     importance_pass *p = state;
-    size_t slots = (size_t)core->params.path_count * IDMR_PATH_VERTICES;
-    p->words = core->scene->triangle_count ? (size_t)core->scene->triangle_count : 1;
+        p->words = core->scene->triangle_count ? (size_t)core->scene->triangle_count : 1;
     const device_buffer_request buffers[] = {
-        {&p->gathered, slots * sizeof(cl_uint), "gather counts"},
+        {&p->gathered, core->slots * sizeof(cl_uint), "gather counts"},
         {&p->camera_importance, p->words * sizeof(cl_ulong), "camera importance"},
         {&p->light_importance, p->words * sizeof(cl_ulong), "light importance"},
     };
@@ -63,7 +62,7 @@ static int prepare(sppm *core, void *state)
                                 "camera importance") ||
                    device_clear(core->dev, p->light_importance, p->words * sizeof(cl_ulong),
                                 "light importance") ||
-                   DEVICE_SET_ARG(core->camera_paths, "camera_paths", sppm_first_pass_argument(),
+                   DEVICE_SET_ARG(core->camera_paths, "camera_paths", core->camera_pass_argument,
                                   p->camera_importance)
                ? -1
                : 0;
@@ -74,12 +73,11 @@ static int gather(sppm *core, void *state)
 {
     importance_pass *p = state;
     size_t local = core->options->local_size;
-    size_t slots = (size_t)core->params.path_count * IDMR_PATH_VERTICES;
-    if (DEVICE_SET_ARGS(p->gather, "gather_count", DEVICE_ARG(core->params),
+        if (DEVICE_SET_ARGS(p->gather, "gather_count", DEVICE_ARG(core->params),
                         DEVICE_ARG(core->photon_records), DEVICE_ARG(core->path_length),
                         DEVICE_ARG(core->hit_points), DEVICE_ARG(core->grid.cell_start),
                         DEVICE_ARG(core->grid.grid_points), DEVICE_ARG(p->gathered)) ||
-        device_run(core->dev, p->gather, "gather_count", slots, local))
+        device_run(core->dev, p->gather, "gather_count", core->slots, local))
         return -1;
     if (!p->options->accumulate_importance)
         return 0;
@@ -114,11 +112,10 @@ static int add_accumulator(sppm *core, importance_pass *p, cl_mem words, const c
 /* Hit points found by the first iteration's photon vertices, for the report. */
 static int count_gathered(sppm *core, importance_pass *p)
 {
-    size_t slots = (size_t)core->params.path_count * IDMR_PATH_VERTICES;
-    uint32_t *gathered = xmalloc(slots * sizeof *gathered);
-    int status = device_read(core->dev, p->gathered, slots * sizeof *gathered, gathered,
+    uint32_t *gathered = xmalloc(core->slots * sizeof *gathered);
+    int status = device_read(core->dev, p->gathered, core->slots * sizeof *gathered, gathered,
                              "gather counts");
-    for (size_t i = 0; i < slots && !status; i++)
+    for (size_t i = 0; i < core->slots && !status; i++)
         p->result->gathered += gathered[i];
     free(gathered);
     return status;
@@ -167,15 +164,13 @@ static int snapshot(sppm *core, void *state)
 {
     importance_pass *p = state;
     importance_snapshot *out = p->options->snapshot;
-    size_t slots = (size_t)core->params.path_count * IDMR_PATH_VERTICES;
-    free(out->gathered);
+        free(out->gathered);
     free(out->camera_fixed);
     free(out->light_fixed);
-    out->vertices = out->core.photon_records;
-    out->gathered = xmalloc(slots * sizeof *out->gathered);
+    out->gathered = xmalloc(core->slots * sizeof *out->gathered);
     out->camera_fixed = xmalloc(p->words * sizeof *out->camera_fixed);
     out->light_fixed = xmalloc(p->words * sizeof *out->light_fixed);
-    return device_read(core->dev, p->gathered, slots * sizeof *out->gathered, out->gathered,
+    return device_read(core->dev, p->gathered, core->slots * sizeof *out->gathered, out->gathered,
                        "gather counts") ||
                    device_read(core->dev, p->camera_importance, p->words * sizeof(cl_ulong),
                                out->camera_fixed, "camera importance") ||
@@ -247,10 +242,22 @@ int importance_run(device *d, const scene *s, const bvh *b, const importance_opt
     state.result = r;
     char defines[96];
     importance_defines(o->accumulate_importance, o->gamma > 0, defines, sizeof defines);
-    sppm_pass pass = {"importance", IDMR_SPPM_IMPORTANCE, defines, sizeof(idmr_photon_vertex),
-                      &state, prepare, gather, collect, o->snapshot ? snapshot : NULL, finish,
-                      release};
-    return sppm_run(d, s, b, &o->sppm, &pass, &r->sppm, o->snapshot ? &o->snapshot->core : NULL);
+    sppm_pass pass = {.name = "importance",
+                      .pass = IDMR_SPPM_IMPORTANCE,
+                      .defines = defines,
+                      .photon_record_bytes = sizeof(idmr_photon_vertex),
+                      .state = &state,
+                      .prepare = prepare,
+                      .gather = gather,
+                      .collect = collect,
+                      .snapshot = o->snapshot ? snapshot : NULL,
+                      .finish = finish,
+                      .release = release};
+    int status =
+        sppm_run(d, s, b, &o->sppm, &pass, &r->sppm, o->snapshot ? &o->snapshot->core : NULL);
+    if (o->snapshot)
+        o->snapshot->vertices = o->snapshot->core.photon_records;
+    return status;
 }
 
 void importance_result_free(importance_result *r)

@@ -16,6 +16,10 @@
 static void add_sppm(const device *d, int pass, unsigned int features, int accumulates,
                      int camera_importance, kernel_variant *list, size_t *count)
 {
+    if (*count == MAX_VARIANTS) {
+        fprintf(stderr, "idmr: kernel_variants: more than %d variants\n", MAX_VARIANTS);
+        abort(); /* the list is fixed in this file: a programming error */
+    }
     kernel_variant *v = &list[(*count)++];
     char defines[96] = "";
     if (pass == IDMR_SPPM_IMPORTANCE)

@@ -15,7 +15,7 @@
 #include "device/device.h"
 
 typedef struct kernel_variant {
-    char label[96];   /* e.g. "sppm.cl render features=0x3ffu" */
+    char label[96];   /* e.g. "sppm.cl render features=0x3ff" */
     const char *file; /* under kernels/ */
     char *options;    /* build options, malloc'd */
 } kernel_variant;

@@ -81,7 +81,7 @@ static int prepare(sppm *core, void *state)
                                   &core->summary->buffer_bytes) ||
                    device_clear(core->dev, p->pixel_radiance, pixels * 3 * sizeof(cl_ulong),
                                 "pixel radiance") ||
-                   DEVICE_SET_ARG(core->camera_paths, "camera_paths", sppm_first_pass_argument(),
+                   DEVICE_SET_ARG(core->camera_paths, "camera_paths", core->camera_pass_argument,
                                   p->render_hits)
                ? -1
                : 0;
@@ -90,14 +90,13 @@ static int prepare(sppm *core, void *state)
 static int gather(sppm *core, void *state)
 {
     render_pass *p = state;
-    size_t slots = (size_t)core->params.path_count * IDMR_PATH_VERTICES;
-    return DEVICE_SET_ARGS(p->gather, "render_gather", DEVICE_ARG(core->params),
+        return DEVICE_SET_ARGS(p->gather, "render_gather", DEVICE_ARG(core->params),
                            DEVICE_ARG(core->photon_records), DEVICE_ARG(core->path_length),
                            DEVICE_ARG(core->hit_points), DEVICE_ARG(p->render_hits),
                            DEVICE_ARG(core->uploaded.materials),
                            DEVICE_ARG(core->grid.cell_start), DEVICE_ARG(core->grid.grid_points),
                            DEVICE_ARG(p->pixel_radiance)) ||
-                   device_run(core->dev, p->gather, "render_gather", slots,
+                   device_run(core->dev, p->gather, "render_gather", core->slots,
                               core->options->local_size)
                ? -1
                : 0;
@@ -170,8 +169,15 @@ int render_run(device *d, const scene *s, const bvh *b, const render_options *o,
     memset(&state, 0, sizeof state);
     state.options = o;
     state.result = r;
-    sppm_pass pass = {"render", IDMR_SPPM_RENDER, NULL, sizeof(idmr_render_photon), &state,
-                      prepare, gather, collect, NULL, finish, release};
+    sppm_pass pass = {.name = "render",
+                      .pass = IDMR_SPPM_RENDER,
+                      .photon_record_bytes = sizeof(idmr_render_photon),
+                      .state = &state,
+                      .prepare = prepare,
+                      .gather = gather,
+                      .collect = collect,
+                      .finish = finish,
+                      .release = release};
     int status =
         sppm_run(d, s, b, &o->sppm, &pass, &r->sppm, o->snapshot ? &o->snapshot->core : NULL);
     if (o->snapshot)

@@ -64,7 +64,7 @@ int render_run(device *d, const scene *s, const bvh *b, const render_options *o,
                render_result *r);
 void render_result_free(render_result *r);
 
-/* Writes the image as EXR (linear, half float) at `exr_path` and as PNG (sRGB, values × 2^ev
+/* Writes the image as EXR (linear, 32-bit float) at `exr_path` and as PNG (sRGB, values × 2^ev
  * clamped to [0, 1]) at `png_path`; either may be NULL. Both atomically. */
 int render_write_images(const render_result *r, const char *exr_path, const char *png_path,
                         double ev);

@@ -17,10 +17,6 @@
 /* The initial gather radius in pixel footprints (sppm.h). */
 #define SPPM_RADIUS_FOOTPRINTS 2.5
 
-/* Kernel arguments bound by the core: camera_paths (params, camera, scene buffers, hit points)
- * and photon_paths (params, scene buffers, path lengths, records). */
-#define CAMERA_CORE_ARGUMENTS (2 + DEVICE_SCENE_BUFFERS + 1)
-
 void sppm_options_default(sppm_options *o, unsigned int iterations)
 {
     memset(o, 0, sizeof *o);
@@ -71,8 +67,6 @@ double sppm_next_radius2(double radius2, unsigned int n, float alpha)
     return radius2 * (n + 1 + alpha) / (n + 2.0);
 }
 
-unsigned int sppm_first_pass_argument(void) { return CAMERA_CORE_ARGUMENTS; }
-
 void sppm_summary_free(sppm_summary *summary)
 {
     free(summary->radius);
@@ -102,8 +96,9 @@ static int check_inputs(const device *d, const scene *s, const sppm_options *o,
                          s->file);
     if (o->iterations == 0)
         return error_set(IDMR_EXIT_INPUT, "%s: at least one iteration is needed", pass->name);
-    if (!(o->resolution > 0) || !(o->alpha > 0 && o->alpha <= 1))
-        return error_set(IDMR_EXIT_INPUT, "%s: resolution must be > 0 and alpha in (0, 1]",
+    if (!(o->resolution > 0) || !(o->alpha > 0 && o->alpha <= 1) || !(o->radius >= 0))
+        return error_set(IDMR_EXIT_INPUT,
+                         "%s: resolution must be > 0, alpha in (0, 1] and radius >= 0",
                          pass->name);
     double w = fmax(1.0, floor(s->camera.width * o->resolution + 0.5));
     double h = fmax(1.0, floor(s->camera.height * o->resolution + 0.5));
@@ -142,32 +137,37 @@ static int build_program(sppm *core, const sppm_pass *pass)
     return 0;
 }
 
-/* The core's buffers, and the arguments of camera_paths and photon_paths that do not change. */
+/* The core's buffers, and the arguments of camera_paths (params, camera, the scene's buffers,
+ * hit points, then the pass's records) and photon_paths (params, the scene's buffers, path
+ * lengths, records) that do not change, bound in order. */
 static int allocate(sppm *core, const sppm_pass *pass)
 {
     sppm_summary *summary = core->summary;
-    size_t slots = (size_t)summary->photons * IDMR_PATH_VERTICES;
+    core->slots = (size_t)summary->photons * IDMR_PATH_VERTICES;
     if (hit_point_grid_create(core->dev, core->program, core->pixels, &core->grid))
         return -1;
     const device_buffer_request buffers[] = {
         {&core->hit_points, core->pixels * sizeof(idmr_hit_point), "hit points"},
         {&core->path_length, summary->photons * sizeof(cl_uint), "photon path lengths"},
-        {&core->photon_records, slots * pass->photon_record_bytes, "photon paths"},
+        {&core->photon_records, core->slots * pass->photon_record_bytes, "photon paths"},
     };
     summary->buffer_bytes = core->grid.bytes;
     if (device_buffers(core->dev, buffers, sizeof buffers / sizeof *buffers,
                        &summary->buffer_bytes))
         return -1;
     idmr_camera camera = core->scene->camera;
+    cl_uint scene_first = 2, after_scene = scene_first + DEVICE_SCENE_BUFFERS;
+    core->camera_pass_argument = after_scene + 1;
     return DEVICE_SET_ARG(core->camera_paths, "camera_paths", 1, camera) ||
-                   device_scene_set_args(&core->uploaded, core->camera_paths, "camera_paths", 2) ||
-                   DEVICE_SET_ARG(core->camera_paths, "camera_paths", CAMERA_CORE_ARGUMENTS - 1,
+                   device_scene_set_args(&core->uploaded, core->camera_paths, "camera_paths",
+                                         scene_first) ||
+                   DEVICE_SET_ARG(core->camera_paths, "camera_paths", after_scene,
                                   core->hit_points) ||
-                   device_scene_set_args(&core->uploaded, core->photon_paths, "photon_paths", 1) ||
-                   DEVICE_SET_ARG(core->photon_paths, "photon_paths", 1 + DEVICE_SCENE_BUFFERS,
-                                  core->path_length) ||
-                   DEVICE_SET_ARG(core->photon_paths, "photon_paths", 2 + DEVICE_SCENE_BUFFERS,
-                                  core->photon_records)
+                   device_scene_set_args(&core->uploaded, core->photon_paths, "photon_paths",
+                                         1) ||
+                   DEVICE_SET_ARGS_FROM(core->photon_paths, "photon_paths",
+                                        1 + DEVICE_SCENE_BUFFERS, DEVICE_ARG(core->path_length),
+                                        DEVICE_ARG(core->photon_records))
                ? -1
                : 0;
 }
@@ -217,18 +217,20 @@ static int first_iteration(sppm *core, double *radius2)
         core->summary->hit_points += hit_points[i].valid;
     for (size_t i = 0; i < paths && !status; i++)
         core->summary->photon_records += lengths[i];
+    double pinned = core->options->radius;
     if (!status)
-        *radius2 =
-            sppm_initial_radius2(core->scene, core->params.width, hit_points, core->pixels);
+        *radius2 = pinned > 0 ? pinned * pinned
+                              : sppm_initial_radius2(core->scene, core->params.width, hit_points,
+                                                     core->pixels);
     free(hit_points);
     free(lengths);
     return status ? -1 : 0;
 }
 
 /* Camera paths, photon paths, grid and the pass's gather, each stage timed (the queue is
- * drained between stages). After the first iteration's paths, `first` reads back what the
- * first iteration decides (the initial radius, the report's counts); then the grid is placed
- * for radius² *radius2. */
+ * drained between stages). After the first iteration's paths, first_iteration() reads back what
+ * they decide (the initial radius, the report's counts; not timed as a stage); then the grid is
+ * placed for radius² *radius2. */
 static int iterate(sppm *core, sppm_pass *pass, unsigned int n, double *radius2)
 {
     sppm_seconds *seconds = &core->summary->seconds;
@@ -241,11 +243,12 @@ static int iterate(sppm *core, sppm_pass *pass, unsigned int n, double *radius2)
     if (DEVICE_SET_ARG(core->photon_paths, "photon_paths", 0, core->params) ||
         device_run(core->dev, core->photon_paths, "photon_paths", core->params.path_count, local))
         return -1;
+    double t2 = monotonic_seconds();
     if (n == 0 && first_iteration(core, radius2))
         return -1;
     hit_point_grid_place(&core->grid, core->scene, *radius2, &core->params);
     core->summary->radius[n] = core->params.radius;
-    double t2 = monotonic_seconds();
+    double t2_placed = monotonic_seconds();
     if (hit_point_grid_build(core->dev, &core->grid, &core->params, core->hit_points, local))
         return -1;
     double t3 = monotonic_seconds();
@@ -254,7 +257,7 @@ static int iterate(sppm *core, sppm_pass *pass, unsigned int n, double *radius2)
     double t4 = monotonic_seconds();
     seconds->camera += t1 - t0;
     seconds->photon += t2 - t1;
-    seconds->grid += t3 - t2;
+    seconds->grid += t3 - t2_placed;
     seconds->gather += t4 - t3;
     return 0;
 }
@@ -263,7 +266,7 @@ static int take_snapshot(sppm *core, size_t record_bytes, sppm_snapshot *out)
 {
     sppm_snapshot_free(out);
     out->params = core->params;
-    size_t paths = core->params.path_count, slots = paths * IDMR_PATH_VERTICES;
+    size_t paths = core->params.path_count, slots = core->slots;
     out->hit_points = xmalloc(core->pixels * sizeof *out->hit_points);
     out->photon_records = xmalloc(slots * record_bytes);
     out->path_length = xmalloc(paths * sizeof *out->path_length);
@@ -316,8 +319,10 @@ int sppm_run(device *d, const scene *s, const bvh *b, const sppm_options *o, spp
              sppm_summary *summary, sppm_snapshot *snapshot)
 {
     memset(summary, 0, sizeof *summary);
-    if (check_inputs(d, s, o, pass, summary))
+    if (check_inputs(d, s, o, pass, summary)) {
+        pass->release(pass->state);
         return -1;
+    }
     sppm core = {.dev = d, .scene = s, .options = o, .summary = summary,
                  .pixels = summary->width * summary->height};
     int status = device_scene_upload(d, s, b, &core.uploaded);

@@ -16,7 +16,9 @@
  * footprints at the median distance of the first iteration's hit points from the camera
  * (distance × the angle a pixel of the hit-point image spans, 2 tan(fov_x / 2) / width), so a
  * close-up of a large scene gathers over a few pixels, not over a tenth of the image; a camera
- * that sees nothing falls back to 5 × |scene box diagonal| / width. Then
+ * that sees nothing falls back to 5 × |scene box diagonal| / width. options.radius > 0 sets r_1
+ * instead (renders to be compared with each other take one radius, so a different geometry or
+ * seed cannot change their bias). Then
  * r_{n+1}² = r_n² (n + α) / (n + 1): one global radius per iteration, so that every iteration
  * is an independent estimate at its own radius (Knaus and Zwicker's probabilistic formulation
  * of progressive photon mapping). Both passes use it.
@@ -42,6 +44,7 @@ typedef struct sppm_options {
     unsigned int seed;       /* default 1 */
     float alpha;             /* radius reduction α of the SPPM schedule (default 0.7) */
     float resolution;        /* scale of the scene's film for the hit-point image (default 1) */
+    double radius;           /* first gather radius; 0: from what the camera sees (below) */
     double time_limit;       /* seconds; > 0 stops after the iteration in which they pass */
     size_t local_size;       /* work-group size; 0 lets the runtime choose */
     int generic;             /* build the all-features program instead of the scene's */
@@ -113,6 +116,8 @@ typedef struct sppm {
     cl_mem hit_points, path_length, photon_records;
     hit_point_grid grid;
     unsigned int pixels;
+    size_t slots;                   /* photon record slots: paths × IDMR_PATH_VERTICES */
+    unsigned int camera_pass_argument; /* camera_paths' first argument after the core's */
     idmr_sppm_params params; /* this iteration's */
     sppm_summary *summary;
 } sppm;
@@ -125,8 +130,8 @@ typedef struct sppm_pass {
     size_t photon_record_bytes;  /* one record of the photon slots */
     void *state;                 /* the pass's own data, handed to every hook */
     /* Once the program is built and the core's buffers exist: creates the pass's kernels and
-     * buffers (adding their bytes to core->summary->buffer_bytes), binds camera_paths'
-     * arguments after the core's (sppm_first_pass_argument), and may set constant params. */
+     * buffers (adding their bytes to core->summary->buffer_bytes), binds camera_paths' records
+     * (argument core->camera_pass_argument), and may set constant params. */
     int (*prepare)(sppm *core, void *state);
     /* Every iteration, once the grid is built: the pass's gather kernels. */
     int (*gather)(sppm *core, void *state);
@@ -139,13 +144,10 @@ typedef struct sppm_pass {
     int (*snapshot)(sppm *core, void *state);
     /* After the last iteration, before the core is released (may be NULL). */
     int (*finish)(sppm *core, void *state);
-    /* Releases what prepare created (always called). */
+    /* Releases what prepare created; always called, once (also when a run fails before
+     * prepare: the state is then as the pass made it). */
     void (*release)(void *state);
 } sppm_pass;
-
-/* The index of camera_paths' first argument after the core's (params, camera, the scene's
- * buffers, hit points): where a pass binds its camera records. */
-unsigned int sppm_first_pass_argument(void);
 
 /* Runs `pass` on scene `s` (which needs a camera and a light) with BVH `b`: validates the
  * options, uploads, builds, iterates, and releases everything. `summary` is filled (free it

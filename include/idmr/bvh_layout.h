@@ -1,6 +1,6 @@
-/* idmr/bvh.h — the flat 4-wide BVH and the triangle packets that the kernels traverse.
+/* idmr/bvh_layout.h — the flat 4-wide BVH and the triangle packets that the kernels traverse.
  *
- * Built on the host by Embree's rtcBuildBVH (host/bvh.c) and uploaded as two arrays:
+ * Built on the host by Embree's rtcBuildBVH (host/device/bvh.c) and uploaded as two arrays:
  *
  *   idmr_bvh_node     nodes[]    node 0 is the root; 128 bytes each.
  *   idmr_triangle4    leaves[]   one packet of up to four triangles per leaf; 160 bytes each.
@@ -20,8 +20,8 @@
  * leaf's size are zero triangles (never hit) with triangle index IDMR_BVH_NO_TRIANGLE. With
  * spatial splits one scene triangle may sit in several leaves; every lane carries the
  * scene-global triangle index it came from (see scene_mesh.first_triangle). */
-#ifndef IDMR_BVH_H
-#define IDMR_BVH_H
+#ifndef IDMR_BVH_LAYOUT_H
+#define IDMR_BVH_LAYOUT_H
 
 #include "idmr/layout.h"
 

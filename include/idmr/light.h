@@ -12,7 +12,7 @@
  * `emission` holds radiance, intensity or irradiance by kind; `power` is the total emitted
  * power (luminance-weighted), used to choose lights in proportion to power. An area light's
  * triangles are chosen by area through its stretch of the emitter CDF, which starts at
- * entry cdf_offset (filled by the importance pass). */
+ * entry cdf_offset (filled by the scene upload, host/device/device_scene.c). */
 #ifndef IDMR_LIGHT_H
 #define IDMR_LIGHT_H
 

@@ -1,6 +1,8 @@
 /* hit_point_grid.h — the hash grid over one iteration's hit points, shared by both passes of the
- * SPPM core (kernels/sppm.cl): a counting sort of hit point indices by the hashed cell of their
- * position, and the one test of which hit points a photon reaches.
+ * SPPM core: a counting sort of hit point indices by the hashed cell of their position (the
+ * kernels grid_count, scan_chunks, scan_chunk_sums, scan_apply and grid_scatter in
+ * kernels/sppm.cl are built from these functions), and the one test of which hit points a photon
+ * reaches.
  *
  *   grid_count       hit points per bucket (cell_counts, cleared by the host)
  *   scan_chunks, scan_chunk_sums, scan_apply
@@ -14,9 +16,10 @@
 
 #include "idmr/sppm_layout.h"
 
+/* The cell of point p (saturated: a point far outside the grid cannot overflow an int). */
 inline int3 grid_cell(float3 p, const idmr_sppm_params *params)
 {
-    return convert_int3_rtn((p - vload3(0, params->grid_origin)) / params->cell_size);
+    return convert_int3_sat_rtn((p - vload3(0, params->grid_origin)) / params->cell_size);
 }
 
 inline uint grid_hash(int3 c, uint cell_count)
@@ -25,72 +28,29 @@ inline uint grid_hash(int3 c, uint cell_count)
            (cell_count - 1u);
 }
 
-kernel void grid_count(idmr_sppm_params params, global const idmr_hit_point *hit_points,
-                       volatile global uint *cell_counts)
+/* The bucket of hit point hp (valid ones only are sorted into the grid). */
+inline uint grid_bucket(global const idmr_hit_point *hp, const idmr_sppm_params *params)
 {
-    uint i = get_global_id(0);
-    if (i >= params.width * params.height || !hit_points[i].valid)
-        return;
-    uint h = grid_hash(grid_cell(vload3(0, hit_points[i].position), &params), params.cell_count);
-    atomic_inc(cell_counts + h);
+    return grid_hash(grid_cell(vload3(0, hp->position), params), params->cell_count);
 }
 
-/* Prefix sums in three steps: sums of chunks of IDMR_SCAN_CHUNK cells, an exclusive scan of
- * those sums (one work-item: there are few), then each chunk scanned from its offset. */
-kernel void scan_chunks(global const uint *cell_counts, uint cell_count, global uint *chunk_sums)
+/* The cells of prefix-sum chunk `chunk`: [*begin, *end) of cell_count; false past the last. */
+inline bool scan_chunk_cells(uint chunk, uint cell_count, uint *begin, uint *end)
 {
-    uint chunk = get_global_id(0);
-    uint begin = chunk * IDMR_SCAN_CHUNK;
-    if (begin >= cell_count)
-        return;
-    uint end = min(begin + IDMR_SCAN_CHUNK, cell_count);
-    uint sum = 0;
-    for (uint i = begin; i < end; i++)
-        sum += cell_counts[i];
-    chunk_sums[chunk] = sum;
+    *begin = chunk * IDMR_SCAN_CHUNK;
+    *end = min(*begin + IDMR_SCAN_CHUNK, cell_count);
+    return *begin < cell_count;
 }
 
-kernel void scan_chunk_sums(global uint *chunk_sums, uint chunk_count)
+/* The exclusive prefix sum of values[0 .. count) in place (one work-item: chunks are few). */
+inline void exclusive_scan(global uint *values, uint count)
 {
-    if (get_global_id(0) != 0)
-        return;
     uint running = 0;
-    for (uint i = 0; i < chunk_count; i++) {
-        uint value = chunk_sums[i];
-        chunk_sums[i] = running;
+    for (uint i = 0; i < count; i++) {
+        uint value = values[i];
+        values[i] = running;
         running += value;
     }
-}
-
-/* cell_start[i] = hit points in cells before i; cell_start[cell_count] = all of them.
- * cell_cursor starts as a copy, for grid_scatter. */
-kernel void scan_apply(global const uint *cell_counts, uint cell_count,
-                       global const uint *chunk_offsets, global uint *cell_start,
-                       global uint *cell_cursor)
-{
-    uint chunk = get_global_id(0);
-    uint begin = chunk * IDMR_SCAN_CHUNK;
-    if (begin >= cell_count)
-        return;
-    uint end = min(begin + IDMR_SCAN_CHUNK, cell_count);
-    uint running = chunk_offsets[chunk];
-    for (uint i = begin; i < end; i++) {
-        cell_start[i] = running;
-        cell_cursor[i] = running;
-        running += cell_counts[i];
-    }
-    if (end == cell_count)
-        cell_start[cell_count] = running;
-}
-
-kernel void grid_scatter(idmr_sppm_params params, global const idmr_hit_point *hit_points,
-                         volatile global uint *cell_cursor, global uint *grid_points)
-{
-    uint i = get_global_id(0);
-    if (i >= params.width * params.height || !hit_points[i].valid)
-        return;
-    uint h = grid_hash(grid_cell(vload3(0, hit_points[i].position), &params), params.cell_count);
-    grid_points[atomic_inc(cell_cursor + h)] = i;
 }
 
 /* The distinct buckets of the cells that the ball of radius params->radius around p touches,

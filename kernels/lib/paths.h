@@ -42,13 +42,17 @@
 #define IDMR_CAMERA_IMPORTANCE 1 /* 0 when γ = 0: camera importance would be multiplied by 0 */
 #endif
 
+/* What a pass's paths record into: camera_records, the camera paths' buffer (importance: camera
+ * importance per triangle; render: one record per pixel), and photon_record, a photon slot. */
 #if PASS_IMPORTANCE
 #define CAMERA_STREAM IDMR_STREAM_IMPORTANCE_CAMERA
 #define PHOTON_STREAM IDMR_STREAM_IMPORTANCE_PHOTON
+typedef volatile global fixed_word *camera_records;
 typedef idmr_photon_vertex photon_record;
 #else
 #define CAMERA_STREAM IDMR_STREAM_RENDER_CAMERA
 #define PHOTON_STREAM IDMR_STREAM_RENDER_PHOTON
+typedef global idmr_render_hit *camera_records;
 typedef idmr_render_photon photon_record;
 #endif
 
@@ -73,18 +77,15 @@ inline float3 camera_ray(idmr_camera camera, const idmr_sppm_params *params, uin
     return normalize(vload3(0, d));
 }
 
-/* Traces pixel `pixel`'s camera path and writes its hit point (and, rendering, its record). */
+/* Traces pixel `pixel`'s camera path and writes its hit point and what the pass records. */
 inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
                         idmr_camera camera, uint pixel, global idmr_hit_point *hit_points,
-                        volatile global fixed_word *camera_importance,
-                        global idmr_render_hit *render_hits)
+                        camera_records records)
 {
     idmr_rng rng = idmr_rng_init(params->seed, params->iteration, CAMERA_STREAM, pixel);
     float3 origin = vload3(0, camera.origin);
     float3 d = camera_ray(camera, params, pixel, &rng);
-    idmr_hit_point hp;
-    hp.valid = 0u;
-    hp.pixel = pixel;
+    idmr_hit_point hp = {{0.0f, 0.0f, 0.0f}, pixel, {0.0f, 0.0f, 0.0f}, 0u}; /* none yet */
 #if PASS_RENDER
     float3 throughput = (float3)(1.0f), radiance = (float3)(0.0f);
     idmr_render_hit rh = {{0.0f, 0.0f, 0.0f}, 0u, {0.0f, 0.0f, 0.0f}, 0.0f,
@@ -102,7 +103,7 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
         float3 p = origin + hit.t * d;
         global const idmr_material *m = triangle_material(scene, hit.triangle);
 #if PASS_IMPORTANCE && IDMR_ACCUMULATE_IMPORTANCE && IDMR_CAMERA_IMPORTANCE
-        fixed_add(camera_importance, hit.triangle,
+        fixed_add(records, hit.triangle,
                   weight_units(idmr_eq2_weight(n.x, n.y, n.z, d.x, d.y, d.z)));
 #endif
 #if PASS_RENDER
@@ -134,7 +135,7 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
     hit_points[pixel] = hp;
 #if PASS_RENDER
     vstore3(radiance, 0, rh.emitted);
-    render_hits[pixel] = rh;
+    records[pixel] = rh;
 #endif
 }
 

@@ -9,7 +9,7 @@
  * a box face are not culled by rounding. Self-intersection of secondary rays is the caller's
  * business: start them with tmin > 0 or an offset origin.
  *
- * Traversal works on references (idmr/bvh.h: >= 0 a node, < 0 a leaf). At a node the hit
+ * Traversal works on references (idmr/bvh_layout.h: >= 0 a node, < 0 a leaf). At a node the hit
  * children are taken in slot order with a bit scan; one hit is followed at once, two are
  * ordered by entry distance (the far one pushed), three or four go through a sorting network
  * and all but the nearest are pushed. A popped reference that starts beyond the current hit
