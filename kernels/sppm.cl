@@ -10,6 +10,8 @@
  *   gather_count      per photon vertex: the hit points that gather it
  *   path_importance   per path, from its last vertex back: running sum s of gather counts;
  *                     vertex j adds weight_j × s to its triangle's light importance
+ *   shadow_rays       per hit point, one shadow ray: its occluder gets shadow importance
+ *                     (lib/shadows.h; built with IDMR_SHADOW_IMPORTANCE=1)
  *   pixel_centre_hits the triangle seen through each pixel centre (the importance image)
  * render pass (host/passes/render.c):
  *   render_gather     per stored photon: every hit point that gathers it gets
@@ -20,6 +22,11 @@
 #pragma OPENCL FP_CONTRACT OFF
 #include "lib/hit_point_grid.h"
 #include "lib/paths.h"
+#include "lib/shadows.h"
+
+#ifndef IDMR_SHADOW_IMPORTANCE
+#define IDMR_SHADOW_IMPORTANCE 0 /* 1: the importance pass casts shadow rays */
+#endif
 
 kernel void camera_paths(idmr_sppm_params params, idmr_camera camera, SCENE_BUFFERS,
                          global idmr_hit_point *hit_points, camera_records records)
@@ -133,6 +140,26 @@ kernel void path_importance(idmr_sppm_params params, global const idmr_photon_ve
                       weight_units(vertices[base + j].weight) * running);
     }
 }
+
+#if IDMR_SHADOW_IMPORTANCE
+kernel void shadow_rays(idmr_sppm_params params, idmr_camera camera, SCENE_BUFFERS,
+                        global const idmr_hit_point *hit_points,
+                        volatile global fixed_word *shadow_importance)
+{
+    uint pixel = get_global_id(0);
+    if (pixel >= params.width * params.height || !hit_points[pixel].valid)
+        return;
+    scene_view scene = SCENE_VIEW();
+    idmr_rng rng =
+        idmr_rng_init(params.seed, params.iteration, IDMR_STREAM_IMPORTANCE_SHADOW, pixel);
+    camera.width = params.width;
+    uint occluder;
+    float weight =
+        shadow_occluder_weight(&scene, &params, &camera, hit_points + pixel, &rng, &occluder);
+    if (weight > 0.0f)
+        fixed_add(shadow_importance, occluder, weight_units(weight));
+}
+#endif
 
 kernel void pixel_centre_hits(idmr_sppm_params params, idmr_camera camera, SCENE_BUFFERS,
                               global uint *triangles)

@@ -267,6 +267,7 @@ typedef struct imp_case {
     unsigned int iterations, photons; /* imp_small_options() */
     float resolution;                 /* of the hit-point image; 0: the film's */
     double tolerance;                 /* the early stop; 0: none */
+    int without_shadows;              /* shadow weight 0: no shadow rays */
     scene *s;
     importance_options options;
     importance_snapshot snapshot;
@@ -292,9 +293,18 @@ static inline void imp_expect_all_finite(const scene *s, const importance_result
 {
     for (size_t t = 0; t < r->triangle_count; t++)
         if (!(isfinite(r->camera[t]) && r->camera[t] >= 0 && isfinite(r->light[t]) &&
-              r->light[t] >= 0))
-            fail_msg("%s: triangle %zu has camera importance %g, light importance %g",
-                     s->file, t, r->camera[t], r->light[t]);
+              r->light[t] >= 0 && isfinite(r->shadow[t]) && r->shadow[t] >= 0))
+            fail_msg("%s: triangle %zu has camera importance %g, light importance %g, shadow "
+                     "importance %g", s->file, t, r->camera[t], r->light[t], r->shadow[t]);
+}
+
+/* A(T) of triangle t by the formula of passes/importance.h, from the raw sums. */
+static inline double imp_expected_amount(const importance_result *r, double gamma, double sigma,
+                                         size_t t)
+{
+    double pixels = (double)r->sppm.width * r->sppm.height, photons = r->sppm.photons;
+    return 1e6 * (gamma * r->camera[t] / pixels + r->light[t] / photons +
+                  sigma * r->shadow[t] / pixels) / r->sppm.iterations;
 }
 
 /* The cases run on this device, for imp_teardown(). */
@@ -319,6 +329,8 @@ static inline const imp_case *imp_run(imp_case *c)
     if (c->resolution > 0)
         c->options.sppm.resolution = c->resolution;
     c->options.tolerance = c->tolerance;
+    if (c->without_shadows)
+        c->options.shadow_weight = 0.0f;
     c->options.snapshot = &c->snapshot;
     test_run_importance(c->s, NULL, &c->options, &c->r);
     imp_expect_all_finite(c->s, &c->r);

@@ -169,7 +169,7 @@ static inline uint64_t check_report_against_output(const cJSON *report, const sc
 static inline void reduce_ok(scene *s, const char *dir, const reduce_options *o)
 {
     if (reduce_run(device_test_device(), s, dir, o))
-        fail_msg("reduce --method %s: %s", reduce_method_name(o), error_message());
+        fail_msg("reduce --method %s: %s", reduce_method_name(o->method), error_message());
 }
 
 /* reduce_run() must fail with an input error whose message holds `fragment`. */

@@ -7,7 +7,8 @@
  *   stop  with a tolerance, at the first iteration that ends 3 calm ones in a row (Δ < tol)
  *   radii r_{n+1}² = r_n² (n + α) / (n + 1) from r_1 = 2.5 pixel footprints at the median hit
  *         point distance, also on a close-up of a large floor, where the old scene-diagonal
- *         rule would have gathered over a sixth of the image */
+ *         rule would have gathered over a sixth of the image
+ *   γ     means the same at two hit-point resolutions (the meshes' shares agree within 10 %) */
 #include "importance_common.h"
 
 static scene *white_wall_scene(void)
@@ -33,11 +34,11 @@ static void test_first_delta_is_one(void **state)
 static void test_second_delta_matches_the_host(void **state)
 {
     const imp_case *first = imp_run(&one), *second = imp_run(&two);
+    importance_weights w = importance_weights_of(&second->options);
     double change = 0, magnitude = 0;
     for (size_t t = 0; t < second->s->triangle_count; t++) {
-        double area = scene_triangle_area(second->s, t);
-        double now = (second->r.camera[t] + second->r.light[t]) / (2 * area);
-        double before = (first->r.camera[t] + first->r.light[t]) / area;
+        double now = importance_triangle(&second->r, second->s, &w, t);
+        double before = importance_triangle(&first->r, first->s, &w, t);
         change += (now - before) * (now - before);
         magnitude += now * now;
     }
@@ -117,6 +118,40 @@ static void test_close_up_radius_follows_the_view(void **state)
     assert_true(r1 < diagonal_rule / 10);
 }
 
+/* The shipped Cornell box at two hit-point resolutions, 16 x 16 and 32 x 32 pixels per 256, with
+ * the same photons: camera and shadow importance are taken per pixel and light importance per
+ * photon path, so γ means the same at both and the meshes' shares of the importance agree. */
+static scene *cornell_box(void) { return test_load_scene(CORNELL_SCENE); }
+static imp_case coarse = {.make = cornell_box, .iterations = 8, .photons = 40000, .resolution = 0.125f};
+static imp_case fine = {.make = cornell_box, .iterations = 8, .photons = 40000, .resolution = 0.25f};
+
+static void test_gamma_means_the_same_at_any_resolution(void **state)
+{
+    const imp_case *a = imp_run(&coarse), *b = imp_run(&fine);
+    importance_weights w = importance_weights_of(&a->options);
+    double total_a = 0, total_b = 0, share_a[16], share_b[16];
+    size_t meshes = a->s->mesh_count;
+    assert_true(meshes <= 16);
+    for (size_t m = 0; m < meshes; m++) {
+        share_a[m] = importance_mesh_sums(&a->r, a->s, m, &w).amount;
+        share_b[m] = importance_mesh_sums(&b->r, b->s, m, &w).amount;
+        total_a += share_a[m];
+        total_b += share_b[m];
+    }
+    assert_true(a->r.sppm.width * 2 == b->r.sppm.width);
+    for (size_t m = 0; m < meshes; m++) {
+        share_a[m] /= total_a;
+        share_b[m] /= total_b;
+        print_message("  %-10s share %.4f at %ux%u, %.4f at %ux%u\n", a->s->meshes[m].name,
+                      share_a[m], a->r.sppm.width, a->r.sppm.height, share_b[m],
+                      b->r.sppm.width, b->r.sppm.height);
+        if (share_b[m] > 0.05)
+            assert_float_equal(share_a[m], share_b[m], 0.1 * share_b[m]);
+    }
+    /* The totals too: the same γ gives the same importance per sample. */
+    assert_float_equal(total_a, total_b, 0.1 * total_b);
+}
+
 /* A quad with either a point light or a camera, not both: importance_run() refuses it, and the
  * message names the scene file. */
 static void expect_refused(const char *file, int with_light)
@@ -149,6 +184,7 @@ int main(void)
         cmocka_unit_test(test_stops_after_three_calm_iterations),
         cmocka_unit_test(test_radius_schedule),
         cmocka_unit_test(test_close_up_radius_follows_the_view),
+        cmocka_unit_test(test_gamma_means_the_same_at_any_resolution),
         cmocka_unit_test(test_missing_camera_is_an_input_error),
         cmocka_unit_test(test_missing_light_is_an_input_error),
     };

@@ -12,6 +12,9 @@
  * Each scene runs once per device; each test checks one formula on its runs. */
 #include "importance_common.h"
 
+/* γ and σ for the host's importance formulas: their defaults. */
+static const importance_weights weights = {1.0f, 1.0f};
+
 /* ---- a wall the camera cannot see ---- */
 
 /* imp_hidden_wall_scene(): the wall behind the camera faces the light and the floor. Black,
@@ -146,19 +149,20 @@ static void test_degenerate_triangles_get_zero(void **state)
         int t = degenerate_triangles[i];
         assert_true(scene_triangle_area(run->s, t) == 0.0);
         assert_true(run->r.camera[t] == 0.0 && run->r.light[t] == 0.0);
-        assert_true(importance_triangle(&run->r, run->s, 1.0f, t) == 0.0);
+        assert_true(importance_triangle(&run->r, run->s, &weights, t) == 0.0);
     }
 }
 
-/* T0 and T3 are seen and lit: I = (camera + light) / (iterations · area) = (c + l) / (2 · 2). */
+/* T0 and T3 are seen and lit: I = A / area, A by importance.h's formula, area 2. */
 static void test_degenerate_neighbours_importance(void **state)
 {
     const imp_case *run = imp_run(&degenerate);
     for (int t = 0; t < 4; t += 3) {
         assert_true(run->r.camera[t] > 0 && run->r.light[t] > 0);
-        double it = importance_triangle(&run->r, run->s, 1.0f, t);
+        double it = importance_triangle(&run->r, run->s, &weights, t);
         assert_true(isfinite(it) && it > 0);
-        assert_float_equal(it, (run->r.camera[t] + run->r.light[t]) / (2 * 2.0), 1e-12 * it);
+        double expected = imp_expected_amount(&run->r, weights.gamma, weights.shadow, t) / 2.0;
+        assert_float_equal(it, expected, 1e-12 * it);
     }
 }
 
@@ -169,7 +173,7 @@ static void test_degenerate_vertex_importance(void **state)
 {
     const imp_case *run = imp_run(&degenerate);
     double vertex[9];
-    importance_mesh_vertices(&run->r, run->s, 0, 1.0f, vertex);
+    importance_mesh_vertices(&run->r, run->s, 0, &weights, vertex);
     for (int v = 0; v < 9; v++) {
         assert_true(isfinite(vertex[v]));
         if (v < 4)
@@ -177,7 +181,8 @@ static void test_degenerate_vertex_importance(void **state)
         else
             assert_true(vertex[v] == 0.0);
     }
-    assert_float_equal(vertex[1], importance_triangle(&run->r, run->s, 1.0f, 0), 1e-12 * vertex[1]);
+    assert_float_equal(vertex[1], importance_triangle(&run->r, run->s, &weights, 0),
+                       1e-12 * vertex[1]);
 }
 
 /* ---- determinism ---- */
@@ -318,9 +323,8 @@ static void mesh_shares(const imp_case *run, int camera, double *share)
 {
     double total = 0;
     for (size_t m = 0; m < run->s->mesh_count; m++) {
-        double importance, camera_sum, light;
-        importance_mesh_sums(&run->r, run->s, m, 1.0f, &importance, &camera_sum, &light);
-        share[m] = camera ? camera_sum : importance;
+        importance_sums sums = importance_mesh_sums(&run->r, run->s, m, &weights);
+        share[m] = camera ? sums.camera : sums.amount;
         assert_true(isfinite(share[m]));
         total += share[m];
     }

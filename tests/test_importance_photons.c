@@ -297,27 +297,28 @@ static void test_caustic_lights_the_tile(void **state)
     size_t direct, through_glass;
     count_tile_vertices(&direct, &through_glass);
     const imp_case *run = imp_run(&glass);
-    double importance, camera, light;
-    importance_mesh_sums(&run->r, run->s, (size_t)imp_mesh_index(run->s, "floor"), 1.0f,
-                         &importance, &camera, &light);
+    const importance_weights defaults = {1.0f, 1.0f};
+    importance_sums floor = importance_mesh_sums(
+        &run->r, run->s, (size_t)imp_mesh_index(run->s, "floor"), &defaults);
     print_message("  %zu photon vertices on the tile through the glass; camera %.4g, light "
                   "%.4g\n",
-                  through_glass, camera, light);
+                  through_glass, floor.camera, floor.light);
     assert_true(through_glass > 50);
-    assert_true(camera > 0);
-    assert_true(light > 0);
+    assert_true(floor.camera > 0);
+    assert_true(floor.light > 0);
 }
 
 /* The sphere's triangles — on the paths, but never holding a hit point — get light importance:
- * importance_mesh_sums with γ = 0 is their light importance, > 0. */
+ * importance_mesh_sums with γ = σ = 0 is their light importance, > 0. */
 static void test_glass_gets_light_importance(void **state)
 {
     const imp_case *run = imp_run(&glass);
-    double importance, camera, light;
-    importance_mesh_sums(&run->r, run->s, (size_t)imp_mesh_index(run->s, "sphere"), 0.0f,
-                         &importance, &camera, &light);
-    print_message("  sphere: γ = 0 sum %.4g, light %.4g, camera %.4g\n", importance, light, camera);
-    assert_true(importance > 0 && importance == light);
+    const importance_weights light_only = {0.0f, 0.0f};
+    importance_sums sphere = importance_mesh_sums(
+        &run->r, run->s, (size_t)imp_mesh_index(run->s, "sphere"), &light_only);
+    print_message("  sphere: γ = σ = 0 sum %.4g, light %.4g, camera %.4g\n", sphere.amount,
+                  sphere.light, sphere.camera);
+    assert_true(sphere.amount > 0 && sphere.amount == sphere.light);
 }
 
 int main(void)

@@ -152,7 +152,7 @@ static void test_outdir_not_empty(void **state)
     scene *s = test_load_scene(CORNELL);
     reduce_options o;
     small_options(&o);
-    o.method = DECIMATE_QUADRIC;
+    o.method = REDUCE_QUADRIC;
     expect_input_error(s, dir, &o, "--force");
     assert_false(file_exists(dir, "scene.xml"));
     assert_false(file_exists(dir, "meshes"));
@@ -198,7 +198,7 @@ static void test_outdir_scene_own_directory(void **state)
     remember(knot_path, &knot);
     reduce_options o;
     small_options(&o);
-    o.method = DECIMATE_QUADRIC;
+    o.method = REDUCE_QUADRIC;
     const char *spellings[] = {"%s", "%s/", "%s/meshes/..", "%s/./."};
     for (size_t i = 0; i < sizeof spellings / sizeof *spellings; i++) {
         char outdir[4200];
@@ -291,7 +291,7 @@ static void test_target_one(void **state)
     reduce_options o;
     small_options(&o);
     o.target = 1;
-    o.method = DECIMATE_QUADRIC;
+    o.method = REDUCE_QUADRIC;
     scene *s;
     reduction r;
     reduce_nothing(&o, &s, &r);

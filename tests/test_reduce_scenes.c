@@ -104,7 +104,7 @@ static void test_quadric(void **state)
     scene *s = test_load_scene(scene_path);
     reduce_options o;
     small_options(&o);
-    o.method = DECIMATE_QUADRIC;
+    o.method = REDUCE_QUADRIC;
     reduction r;
     reduction_run(&r, s, &o);
     assert_false(file_exists(r.dir, "importance.png"));
@@ -158,7 +158,7 @@ static void test_compensation(void **state)
     scene *s = test_load_scene(scene_path);
     reduce_options o;
     small_options(&o);
-    o.method = DECIMATE_QUADRIC;
+    o.method = REDUCE_QUADRIC;
     o.target = 0.2;
     reduction r;
     reduction_run(&r, s, &o);
@@ -199,7 +199,7 @@ static void test_file_name_collision(void **state)
     scene *s = test_load_scene(scene_path);
     reduce_options o;
     small_options(&o);
-    o.method = DECIMATE_QUADRIC; /* no light needed */
+    o.method = REDUCE_QUADRIC; /* no light needed */
     reduction r;
     reduction_run(&r, s, &o);
     assert_true(file_exists(r.dir, "meshes/knot_x.ply"));

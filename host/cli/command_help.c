@@ -19,6 +19,8 @@ void command_help(FILE *out)
           "                            and importance/<mesh>.ply; takes the SPPM options\n"
           "      --tolerance E         stop once the change per iteration stays below E\n"
           "      --gamma G             weight of camera paths against light paths (default 1)\n"
+          "      --shadow-weight W     weight of the triangles that cast the shadows the camera\n"
+          "                            sees (default 1; 0: no shadow rays)\n"
           "  reduce SCENE --target D -o OUTDIR\n"
           "                            the reduced scene: OUTDIR/scene.xml and meshes/*.ply with\n"
           "                            about D of all vertices; takes the options of importance\n"

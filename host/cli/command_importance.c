@@ -31,7 +31,8 @@ static int run_pass(device *d, const scene *s, const bvh *b, void *context)
     if (importance_run(d, s, b, &job->options, &job->result))
         return -1;
     cJSON *report = importance_report_json(s, d, &job->options, &job->result);
-    double **values = importance_vertex_values(&job->result, s, job->options.gamma);
+    importance_weights weights = importance_weights_of(&job->options);
+    double **values = importance_vertex_values(&job->result, s, &weights);
     int status =
         importance_write_outputs(job->output, report, s, &job->options, &job->result, values);
     importance_vertex_values_free(values, s);

@@ -17,24 +17,6 @@ typedef struct reduce_cli_request {
     int have_target;
 } reduce_cli_request;
 
-static int parse_method(const char *name, reduce_options *o)
-{
-    if (!strcmp(name, "importance")) {
-        o->method = DECIMATE_IMPORTANCE;
-    } else if (!strcmp(name, "quadric")) {
-        o->method = DECIMATE_QUADRIC;
-    } else if (!strcmp(name, "importance-quadric")) {
-        o->method = DECIMATE_IMPORTANCE;
-        o->quadric_collapses = 1;
-    } else {
-        return error_set(IDMR_EXIT_INPUT,
-                         "--method: '%s' is none of 'importance', 'quadric' and "
-                         "'importance-quadric'",
-                         name);
-    }
-    return 0;
-}
-
 static enum option_parse parse_option(int c, void *context, pass_arguments *arguments)
 {
     reduce_cli_request *request = context;
@@ -45,7 +27,7 @@ static enum option_parse parse_option(int c, void *context, pass_arguments *argu
         request->have_target = 1;
         return option_result(parse_double("--target", optarg, 1e-9, 1, &o->target));
     case OPT_METHOD:
-        return option_result(parse_method(optarg, o));
+        return option_result(reduce_method_parse(optarg, &o->method));
     case OPT_MIN_VERTICES:
         if (parse_unsigned("--min-vertices", optarg, 0, 0xffffffffu, &whole))
             return OPTION_BAD_VALUE;

@@ -55,7 +55,7 @@ static enum option_parse parse_option(int c, void *context, pass_arguments *argu
     render_cli_job *job = context;
     if (c == OPT_EXPOSURE)
         return option_result(parse_double("--exposure", optarg, -64, 64, &job->exposure));
-    if (c == OPT_GAMMA || c == OPT_TOLERANCE)
+    if (c == OPT_GAMMA || c == OPT_TOLERANCE || c == OPT_SHADOW_WEIGHT)
         return OPTION_IMPORTANCE_ONLY;
     return parse_sppm_option(c, &job->options.sppm, &arguments->device_index);
 }

@@ -115,6 +115,8 @@ enum option_parse parse_importance_option(int c, importance_options *o, int *dev
         return option_result(parse_double("--tolerance", optarg, 0, 1e30, &o->tolerance));
     case OPT_GAMMA:
         return option_result(parse_float("--gamma", optarg, 0, 1e6, &o->gamma));
+    case OPT_SHADOW_WEIGHT:
+        return option_result(parse_float("--shadow-weight", optarg, 0, 1e6, &o->shadow_weight));
     default:
         return parse_sppm_option(c, &o->sppm, device_index);
     }
@@ -145,7 +147,9 @@ int parse_pass_arguments(int argc, char **argv, const struct option *table,
             return fail();
         case OPTION_IMPORTANCE_ONLY:
             return usage_error("%s: --%s is an importance pass option", arguments->command,
-                               c == OPT_GAMMA ? "gamma" : "tolerance");
+                               c == OPT_GAMMA           ? "gamma"
+                               : c == OPT_SHADOW_WEIGHT ? "shadow-weight"
+                                                        : "tolerance");
         case OPTION_UNKNOWN:
             return usage_error("%s: unknown option %s", arguments->command, argv[optind - 1]);
         }

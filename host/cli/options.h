@@ -19,6 +19,7 @@ enum option_id {
     OPT_TOLERANCE,
     OPT_PHOTONS,
     OPT_GAMMA,
+    OPT_SHADOW_WEIGHT,
     OPT_ALPHA,
     OPT_RESOLUTION,
     OPT_SEED,
@@ -56,7 +57,8 @@ enum option_id {
 /* Options of the importance pass, shared by `importance` and `reduce`. */
 #define IMPORTANCE_LONG_OPTIONS                                                             \
     SPPM_LONG_OPTIONS, {"tolerance", required_argument, NULL, OPT_TOLERANCE},               \
-        {"gamma", required_argument, NULL, OPT_GAMMA}
+        {"gamma", required_argument, NULL, OPT_GAMMA},                                      \
+        {"shadow-weight", required_argument, NULL, OPT_SHADOW_WEIGHT}
 
 /* Prints the recorded error as "idmr: <message>"; returns its exit code. */
 int fail(void);

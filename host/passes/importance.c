@@ -1,7 +1,7 @@
 /* importance.c — the importance pass on the SPPM core (see importance.h): its buffers and
- * kernels (gather_count, path_importance, pixel_centre_hits in kernels/sppm.cl), reading the
- * fixed-point accumulators into double sums every iteration, the convergence measure and its
- * stop rule, and the importance per triangle, vertex and mesh. */
+ * kernels (gather_count, path_importance, shadow_rays, pixel_centre_hits in kernels/sppm.cl),
+ * reading the fixed-point accumulators into double sums every iteration, the convergence
+ * measure and its stop rule, and the importance per triangle, vertex and mesh. */
 #include "passes/importance.h"
 
 #include <math.h>
@@ -13,67 +13,108 @@
 #include "core/progress.h"
 
 #define STOP_AFTER_CALM_ITERATIONS 3
+#define PER_MILLION_SAMPLES 1e6
 
 void importance_options_default(importance_options *o)
 {
     memset(o, 0, sizeof *o);
     sppm_options_default(&o->sppm, 100);
     o->gamma = 1.0f;
+    o->shadow_weight = 1.0f;
     o->tolerance = 0.0;
     o->accumulate_importance = 1;
 }
 
-void importance_defines(int accumulate_importance, int camera_importance, char *out, size_t size)
+void importance_defines(int accumulate_importance, int camera_importance, int shadows, char *out,
+                        size_t size)
 {
-    snprintf(out, size, "-D IDMR_ACCUMULATE_IMPORTANCE=%d -D IDMR_CAMERA_IMPORTANCE=%d",
-             accumulate_importance ? 1 : 0, camera_importance ? 1 : 0);
+    snprintf(out, size,
+             "-D IDMR_ACCUMULATE_IMPORTANCE=%d -D IDMR_CAMERA_IMPORTANCE=%d "
+             "-D IDMR_SHADOW_IMPORTANCE=%d",
+             accumulate_importance ? 1 : 0, camera_importance ? 1 : 0, shadows ? 1 : 0);
 }
+
+importance_weights importance_weights_of(const importance_options *o)
+{
+    importance_weights w = {o->gamma, o->shadow_weight};
+    return w;
+}
+
+/* The three accumulators of the pass, in the order of importance_result's sums. */
+enum { CAMERA, LIGHT, SHADOW, KINDS };
+static const char *const KIND_NAMES[KINDS] = {"camera importance", "light importance",
+                                              "shadow importance"};
 
 /* The pass's part while the core runs. */
 typedef struct importance_pass {
     const importance_options *options;
     importance_result *result;
-    cl_kernel gather, path, centre_hits;
-    cl_mem gathered, camera_importance, light_importance;
+    int shadows; /* σ > 0: shadow rays */
+    cl_kernel gather, path, shadow, centre_hits;
+    cl_mem gathered, accumulators[KINDS];
     size_t words;     /* accumulator words: one per triangle (at least one) */
     uint64_t *scratch; /* a read-back accumulator */
-    double *previous_camera, *previous_light; /* the sums before this iteration */
+    double *previous;  /* each triangle's weighted sum before this iteration */
     unsigned int calm; /* iterations in a row with Δ below the tolerance */
 } importance_pass;
+
+/* The result's sums of kind k. */
+static double *sums_of(const importance_result *r, int k)
+{
+    return k == CAMERA ? r->camera : k == LIGHT ? r->light : r->shadow;
+}
 
 static int prepare(sppm *core, void *state)
 {
     importance_pass *p = state;
-        p->words = core->scene->triangle_count ? (size_t)core->scene->triangle_count : 1;
+    p->words = core->scene->triangle_count ? (size_t)core->scene->triangle_count : 1;
     const device_buffer_request buffers[] = {
         {&p->gathered, core->slots * sizeof(cl_uint), "gather counts"},
-        {&p->camera_importance, p->words * sizeof(cl_ulong), "camera importance"},
-        {&p->light_importance, p->words * sizeof(cl_ulong), "light importance"},
+        {&p->accumulators[CAMERA], p->words * sizeof(cl_ulong), KIND_NAMES[CAMERA]},
+        {&p->accumulators[LIGHT], p->words * sizeof(cl_ulong), KIND_NAMES[LIGHT]},
+        {&p->accumulators[SHADOW], p->words * sizeof(cl_ulong), KIND_NAMES[SHADOW]},
     };
     p->scratch = xmalloc(p->words * sizeof *p->scratch);
-    p->previous_camera = xcalloc(p->words, sizeof *p->previous_camera);
-    p->previous_light = xcalloc(p->words, sizeof *p->previous_light);
-    return device_create_kernel(core->program, "gather_count", &p->gather) ||
-                   device_create_kernel(core->program, "path_importance", &p->path) ||
-                   device_create_kernel(core->program, "pixel_centre_hits", &p->centre_hits) ||
-                   device_buffers(core->dev, buffers, sizeof buffers / sizeof *buffers,
-                                  &core->summary->buffer_bytes) ||
-                   device_clear(core->dev, p->camera_importance, p->words * sizeof(cl_ulong),
-                                "camera importance") ||
-                   device_clear(core->dev, p->light_importance, p->words * sizeof(cl_ulong),
-                                "light importance") ||
-                   DEVICE_SET_ARG(core->camera_paths, "camera_paths", core->camera_pass_argument,
-                                  p->camera_importance)
+    p->previous = xcalloc(p->words, sizeof *p->previous);
+    if (device_create_kernel(core->program, "gather_count", &p->gather) ||
+        device_create_kernel(core->program, "path_importance", &p->path) ||
+        device_create_kernel(core->program, "pixel_centre_hits", &p->centre_hits) ||
+        (p->shadows && device_create_kernel(core->program, "shadow_rays", &p->shadow)) ||
+        device_buffers(core->dev, buffers, sizeof buffers / sizeof *buffers,
+                       &core->summary->buffer_bytes))
+        return -1;
+    for (int k = 0; k < KINDS; k++)
+        if (device_clear(core->dev, p->accumulators[k], p->words * sizeof(cl_ulong),
+                         KIND_NAMES[k]))
+            return -1;
+    return DEVICE_SET_ARG(core->camera_paths, "camera_paths", core->camera_pass_argument,
+                          p->accumulators[CAMERA]);
+}
+
+/* One shadow ray per hit point (kernels/lib/shadows.h). */
+static int cast_shadow_rays(sppm *core, importance_pass *p)
+{
+    idmr_camera camera = core->scene->camera;
+    cl_uint after_scene = 2 + DEVICE_SCENE_BUFFERS;
+    return DEVICE_SET_ARGS(p->shadow, "shadow_rays", DEVICE_ARG(core->params),
+                           DEVICE_ARG(camera)) ||
+                   device_scene_set_args(&core->uploaded, p->shadow, "shadow_rays", 2) ||
+                   DEVICE_SET_ARGS_FROM(p->shadow, "shadow_rays", after_scene,
+                                        DEVICE_ARG(core->hit_points),
+                                        DEVICE_ARG(p->accumulators[SHADOW])) ||
+                   device_run(core->dev, p->shadow, "shadow_rays", core->pixels,
+                              core->options->local_size)
                ? -1
                : 0;
 }
 
-/* gather_count, then (when importance accumulates) the reverse path walk. */
+/* The shadow rays, gather_count, then (when importance accumulates) the reverse path walk. */
 static int gather(sppm *core, void *state)
 {
     importance_pass *p = state;
     size_t local = core->options->local_size;
-        if (DEVICE_SET_ARGS(p->gather, "gather_count", DEVICE_ARG(core->params),
+    if ((p->shadows && cast_shadow_rays(core, p)) ||
+        DEVICE_SET_ARGS(p->gather, "gather_count", DEVICE_ARG(core->params),
                         DEVICE_ARG(core->photon_records), DEVICE_ARG(core->path_length),
                         DEVICE_ARG(core->hit_points), DEVICE_ARG(core->grid.cell_start),
                         DEVICE_ARG(core->grid.grid_points), DEVICE_ARG(p->gathered)) ||
@@ -84,29 +125,31 @@ static int gather(sppm *core, void *state)
     double start = monotonic_seconds();
     if (DEVICE_SET_ARGS(p->path, "path_importance", DEVICE_ARG(core->params),
                         DEVICE_ARG(core->photon_records), DEVICE_ARG(core->path_length),
-                        DEVICE_ARG(p->gathered), DEVICE_ARG(p->light_importance)) ||
+                        DEVICE_ARG(p->gathered), DEVICE_ARG(p->accumulators[LIGHT])) ||
         device_run(core->dev, p->path, "path_importance", core->params.path_count, local))
         return -1;
     p->result->path_seconds += monotonic_seconds() - start;
     return 0;
 }
 
-/* Adds one accumulator to `sums` (checking saturation) and clears it. */
-static int add_accumulator(sppm *core, importance_pass *p, cl_mem words, const char *name,
-                           double *sums)
+/* Adds accumulator k to the result's sums (checking saturation) and clears it. */
+static int add_accumulator(sppm *core, importance_pass *p, int k)
 {
     size_t n = (size_t)core->scene->triangle_count;
-    if (n && device_read(core->dev, words, n * sizeof *p->scratch, p->scratch, name))
+    double *sums = sums_of(p->result, k);
+    if (n && device_read(core->dev, p->accumulators[k], n * sizeof *p->scratch, p->scratch,
+                         KIND_NAMES[k]))
         return -1;
     for (size_t t = 0; t < n; t++) {
         if (p->scratch[t] >= IDMR_FIXED_SATURATION)
             return error_set(IDMR_EXIT_FAILURE,
                              "%s of triangle %zu came within a factor 2 of the 64-bit fixed-point "
                              "limit in one iteration; use fewer photons per iteration",
-                             name, t);
+                             KIND_NAMES[k], t);
         sums[t] += (double)p->scratch[t] / IDMR_FIXED_SCALE;
     }
-    return device_clear(core->dev, words, p->words * sizeof(cl_ulong), name);
+    return device_clear(core->dev, p->accumulators[k], p->words * sizeof(cl_ulong),
+                        KIND_NAMES[k]);
 }
 
 /* Hit points found by the first iteration's photon vertices, for the report. */
@@ -121,22 +164,38 @@ static int count_gathered(sppm *core, importance_pass *p)
     return status;
 }
 
-/* Δ_n (importance.h) from the sums after n iterations and the ones before. */
-static double convergence_change(const importance_pass *p, const scene *s, unsigned int n)
+/* Triangle t's sum of kind k over the iterations so far, per million of its samples (photon
+ * paths for light importance, pixels of the hit-point image for the others). */
+static double per_million(const importance_result *r, int k, uint64_t t)
+{
+    double samples = k == LIGHT ? r->sppm.photons : (double)r->sppm.width * r->sppm.height;
+    return samples > 0 ? PER_MILLION_SAMPLES * sums_of(r, k)[t] / samples : 0.0;
+}
+
+/* Triangle t's weighted sum over the iterations so far: A(T) (importance.h) times iterations. */
+static double weighted_sum(const importance_result *r, const importance_weights *w, uint64_t t)
+{
+    return w->gamma * per_million(r, CAMERA, t) + per_million(r, LIGHT, t) +
+           w->shadow * per_million(r, SHADOW, t);
+}
+
+/* Δ_n (importance.h) from the sums after n iterations and the ones before (p->previous), which
+ * it then replaces. */
+static double convergence_change(importance_pass *p, const scene *s, unsigned int n)
 {
     const importance_result *r = p->result;
-    float gamma = p->options->gamma;
+    importance_weights w = importance_weights_of(p->options);
     double change = 0, magnitude = 0;
     for (size_t t = 0; t < r->triangle_count; t++) {
-        double area = scene_triangle_area(s, t);
+        double area = scene_triangle_area(s, t), sum = weighted_sum(r, &w, t);
+        double before = p->previous[t];
+        p->previous[t] = sum;
         if (!(area > 0))
             continue;
-        double now = (gamma * r->camera[t] + r->light[t]) / (n * area);
-        double before =
-            n > 1 ? (gamma * p->previous_camera[t] + p->previous_light[t]) / ((n - 1) * area)
-                  : 0.0;
-        change += (now - before) * (now - before);
-        magnitude += now * now;
+        double now_per_area = sum / (n * area);
+        double before_per_area = n > 1 ? before / ((n - 1) * area) : 0.0;
+        change += (now_per_area - before_per_area) * (now_per_area - before_per_area);
+        magnitude += now_per_area * now_per_area;
     }
     return magnitude > 0 ? change / magnitude : 0.0;
 }
@@ -146,11 +205,10 @@ static int collect(sppm *core, void *state, unsigned int n, int *stop, char *det
 {
     importance_pass *p = state;
     importance_result *r = p->result;
-    memcpy(p->previous_camera, r->camera, r->triangle_count * sizeof *r->camera);
-    memcpy(p->previous_light, r->light, r->triangle_count * sizeof *r->light);
-    if (add_accumulator(core, p, p->camera_importance, "camera importance", r->camera) ||
-        add_accumulator(core, p, p->light_importance, "light importance", r->light) ||
-        (n == 0 && count_gathered(core, p)))
+    for (int k = 0; k < KINDS; k++)
+        if ((k != SHADOW || p->shadows) && add_accumulator(core, p, k))
+            return -1;
+    if (n == 0 && count_gathered(core, p))
         return -1;
     r->convergence[n] = convergence_change(p, core->scene, n + 1);
     snprintf(detail, detail_size, "change %.2e", r->convergence[n]);
@@ -164,20 +222,20 @@ static int snapshot(sppm *core, void *state)
 {
     importance_pass *p = state;
     importance_snapshot *out = p->options->snapshot;
-        free(out->gathered);
-    free(out->camera_fixed);
-    free(out->light_fixed);
+    uint64_t **fixed[KINDS] = {&out->camera_fixed, &out->light_fixed, &out->shadow_fixed};
+    free(out->gathered);
     out->gathered = xmalloc(core->slots * sizeof *out->gathered);
-    out->camera_fixed = xmalloc(p->words * sizeof *out->camera_fixed);
-    out->light_fixed = xmalloc(p->words * sizeof *out->light_fixed);
-    return device_read(core->dev, p->gathered, core->slots * sizeof *out->gathered, out->gathered,
-                       "gather counts") ||
-                   device_read(core->dev, p->camera_importance, p->words * sizeof(cl_ulong),
-                               out->camera_fixed, "camera importance") ||
-                   device_read(core->dev, p->light_importance, p->words * sizeof(cl_ulong),
-                               out->light_fixed, "light importance")
-               ? -1
-               : 0;
+    if (device_read(core->dev, p->gathered, core->slots * sizeof *out->gathered, out->gathered,
+                    "gather counts"))
+        return -1;
+    for (int k = 0; k < KINDS; k++) {
+        free(*fixed[k]);
+        *fixed[k] = xmalloc(p->words * sizeof **fixed[k]);
+        if (device_read(core->dev, p->accumulators[k], p->words * sizeof(cl_ulong), *fixed[k],
+                        KIND_NAMES[k]))
+            return -1;
+    }
+    return 0;
 }
 
 /* The triangle seen through each pixel centre of the hit-point image, for the importance
@@ -208,13 +266,12 @@ static int finish(sppm *core, void *state)
 static void release(void *state)
 {
     importance_pass *p = state;
-    cl_kernel kernels[] = {p->gather, p->path, p->centre_hits};
+    cl_kernel kernels[] = {p->gather, p->path, p->shadow, p->centre_hits};
     device_release_kernels(kernels, sizeof kernels / sizeof *kernels);
-    cl_mem buffers[] = {p->gathered, p->camera_importance, p->light_importance};
-    device_release_buffers(buffers, sizeof buffers / sizeof *buffers);
+    device_release_buffers(&p->gathered, 1);
+    device_release_buffers(p->accumulators, KINDS);
     free(p->scratch);
-    free(p->previous_camera);
-    free(p->previous_light);
+    free(p->previous);
 }
 
 void importance_snapshot_free(importance_snapshot *snapshot)
@@ -223,6 +280,7 @@ void importance_snapshot_free(importance_snapshot *snapshot)
     free(snapshot->gathered);
     free(snapshot->camera_fixed);
     free(snapshot->light_fixed);
+    free(snapshot->shadow_fixed);
     memset(snapshot, 0, sizeof *snapshot);
 }
 
@@ -230,18 +288,17 @@ int importance_run(device *d, const scene *s, const bvh *b, const importance_opt
                    importance_result *r)
 {
     memset(r, 0, sizeof *r);
-    if (!(o->gamma >= 0))
-        return error_set(IDMR_EXIT_INPUT, "importance: gamma must be >= 0");
+    if (!(o->gamma >= 0) || !(o->shadow_weight >= 0))
+        return error_set(IDMR_EXIT_INPUT, "importance: gamma and the shadow weight must be >= 0");
     r->triangle_count = (size_t)s->triangle_count;
     r->camera = xcalloc(r->triangle_count + 1, sizeof *r->camera);
     r->light = xcalloc(r->triangle_count + 1, sizeof *r->light);
+    r->shadow = xcalloc(r->triangle_count + 1, sizeof *r->shadow);
     r->convergence = xcalloc(o->sppm.iterations + 1, sizeof *r->convergence);
-    importance_pass state;
-    memset(&state, 0, sizeof state);
-    state.options = o;
-    state.result = r;
-    char defines[96];
-    importance_defines(o->accumulate_importance, o->gamma > 0, defines, sizeof defines);
+    importance_pass state = {.options = o, .result = r, .shadows = o->shadow_weight > 0};
+    char defines[128];
+    importance_defines(o->accumulate_importance, o->gamma > 0, state.shadows, defines,
+                       sizeof defines);
     sppm_pass pass = {.name = "importance",
                       .pass = IDMR_SPPM_IMPORTANCE,
                       .defines = defines,
@@ -264,54 +321,57 @@ void importance_result_free(importance_result *r)
 {
     free(r->camera);
     free(r->light);
+    free(r->shadow);
     free(r->convergence);
     free(r->pixel_triangle);
     sppm_summary_free(&r->sppm);
     memset(r, 0, sizeof *r);
 }
 
-double importance_triangle(const importance_result *r, const scene *s, float gamma, uint64_t t)
+double importance_amount(const importance_result *r, const importance_weights *w, uint64_t t)
 {
-    double area = scene_triangle_area(s, t);
-    if (!(area > 0) || r->sppm.iterations == 0)
-        return 0.0;
-    return (gamma * r->camera[t] + r->light[t]) / (r->sppm.iterations * area);
+    return r->sppm.iterations ? weighted_sum(r, w, t) / r->sppm.iterations : 0.0;
 }
 
-void importance_mesh_vertices(const importance_result *r, const scene *s, size_t m, float gamma,
-                              double *vertex_importance)
+double importance_triangle(const importance_result *r, const scene *s,
+                           const importance_weights *w, uint64_t t)
+{
+    double area = scene_triangle_area(s, t);
+    return area > 0 ? importance_amount(r, w, t) / area : 0.0;
+}
+
+void importance_mesh_vertices(const importance_result *r, const scene *s, size_t m,
+                              const importance_weights *w, double *vertex_importance)
 {
     const scene_mesh *mesh = &s->meshes[m];
     double *area = xcalloc(mesh->vertex_count + 1, sizeof *area);
     memset(vertex_importance, 0, mesh->vertex_count * sizeof *vertex_importance);
     for (uint32_t t = 0; t < mesh->triangle_count; t++) {
-        uint64_t global = (uint64_t)mesh->first_triangle + t;
         double a = scene_mesh_triangle_area(mesh, t);
-        double value = gamma * r->camera[global] + r->light[global];
+        double amount = importance_amount(r, w, (uint64_t)mesh->first_triangle + t);
         for (int k = 0; k < 3; k++) {
             uint32_t v = mesh->indices[3 * (size_t)t + k];
-            vertex_importance[v] += value;
+            vertex_importance[v] += amount;
             area[v] += a;
         }
     }
-    unsigned int iterations = r->sppm.iterations;
     for (uint32_t v = 0; v < mesh->vertex_count; v++)
-        vertex_importance[v] =
-            area[v] > 0 && iterations ? vertex_importance[v] / (iterations * area[v]) : 0.0;
+        vertex_importance[v] = area[v] > 0 ? vertex_importance[v] / area[v] : 0.0;
     free(area);
 }
 
-void importance_mesh_sums(const importance_result *r, const scene *s, size_t m, float gamma,
-                          double *importance_sum, double *camera_sum, double *light_sum)
+importance_sums importance_mesh_sums(const importance_result *r, const scene *s, size_t m,
+                                     const importance_weights *w)
 {
     const scene_mesh *mesh = &s->meshes[m];
-    double camera = 0, light = 0;
-    for (uint32_t t = 0; t < mesh->triangle_count; t++) {
-        camera += r->camera[(uint64_t)mesh->first_triangle + t];
-        light += r->light[(uint64_t)mesh->first_triangle + t];
+    importance_sums sums = {0, 0, 0, 0};
+    double iterations = r->sppm.iterations;
+    for (uint32_t t = 0; t < mesh->triangle_count && iterations > 0; t++) {
+        uint64_t global = (uint64_t)mesh->first_triangle + t;
+        sums.amount += weighted_sum(r, w, global) / iterations;
+        sums.camera += per_million(r, CAMERA, global) / iterations;
+        sums.light += per_million(r, LIGHT, global) / iterations;
+        sums.shadow += per_million(r, SHADOW, global) / iterations;
     }
-    double n = r->sppm.iterations ? r->sppm.iterations : 1;
-    *camera_sum = camera / n;
-    *light_sum = light / n;
-    *importance_sum = (gamma * camera + light) / n;
+    return sums;
 }

@@ -5,22 +5,32 @@
  * triangle (kernels/sppm.cl). Then the host turns the per-triangle sums into importance per
  * triangle, vertex and mesh.
  *
- * What is accumulated: per scene triangle T, camera(T) = Σ Eq. 2 weights of camera path
- * vertices on T and light(T) = Σ over photon vertices on T of weight × (the number of hit
- * points gathered by that vertex and the vertices after it on its path). Both are kept apart,
- * so γ is applied afterwards and a sweep over γ needs no new simulation:
- *   I(T)       = (γ camera(T) + light(T)) / (iterations × area(T))   (0 for zero area)
- *   I(vertex)  = Σ (γ camera + light) / Σ area over the triangles around it  (an area-weighted
- *                mean of I(T); 0 if all of them have zero area)
- *   mesh sum   = Σ (γ camera + light) / iterations over its triangles (unnormalised: no area
- *                division, for the decimation budget)
+ * What is accumulated, per scene triangle T, kept apart so that the weights are applied
+ * afterwards and a sweep over them needs no new simulation:
+ *   camera(T)  Σ Eq. 2 weights of the camera path vertices on T
+ *   light(T)   Σ over photon vertices on T of weight × (the number of hit points gathered by
+ *              that vertex and the vertices after it on its path)
+ *   shadow(T)  Σ shadow weights of the shadow rays T stops (kernels/lib/shadows.h): the
+ *              triangles that cast the shadows the camera sees, most where they outline a sharp
+ *              one (only with shadow weight σ > 0)
+ * Each is taken per million of its samples — camera paths and shadow rays per pixel of the
+ * hit-point image, photon paths per path — so that γ and σ weigh the same at any resolution and
+ * photon count (the paper had to adjust γ to both by hand, 5.2). A triangle's importance amount
+ * per iteration is
+ *   A(T)       = 1e6 (γ camera(T) / pixels + light(T) / photons + σ shadow(T) / pixels)
+ *                / iterations
+ * and from it:
+ *   I(T)       = A(T) / area(T)   (0 for zero area)
+ *   I(vertex)  = Σ A / Σ area over the triangles around it (an area-weighted mean of I(T); 0 if
+ *                all of them have zero area)
+ *   mesh sum   = Σ A over its triangles (unnormalised: no area division, for the budget, Eq. 3)
  *
  * Kernels are built for the scene's feature bits (idmr/features.h); with γ = 0 the camera
  * importance atomics are left out (camera importance is then 0: it would be multiplied by γ = 0
- * anyway).
+ * anyway), and with σ = 0 the shadow rays.
  *
  * Convergence after iteration n: Δ_n = Σ_T (I_n(T) - I_{n-1}(T))² / Σ_T I_n(T)², with I_n the
- * per-triangle importance after n iterations (normalised by n); Δ_1 = 1. It is scale-free. With
+ * per-triangle importance after n iterations; Δ_1 = 1. It is scale-free. With
  * a tolerance E > 0 the pass stops once Δ stays below E for 3 iterations in a row. */
 #ifndef IDMR_IMPORTANCE_H
 #define IDMR_IMPORTANCE_H
@@ -41,6 +51,7 @@ typedef struct importance_snapshot {
     uint32_t *gathered;             /* params.path_count * IDMR_PATH_VERTICES */
     uint64_t *camera_fixed;         /* this iteration's accumulators, fixed point */
     uint64_t *light_fixed;
+    uint64_t *shadow_fixed;         /* zero without shadow rays */
 } importance_snapshot;
 
 void importance_snapshot_free(importance_snapshot *snapshot);
@@ -48,6 +59,7 @@ void importance_snapshot_free(importance_snapshot *snapshot);
 typedef struct importance_options {
     sppm_options sppm;       /* iterations default to 100 */
     float gamma;             /* hit point importance factor γ (default 1) */
+    float shadow_weight;     /* shadow importance factor σ (default 1; 0: no shadow rays) */
     double tolerance;        /* stop once Δ stays below it; 0: run all iterations */
     int accumulate_importance; /* 1; 0 compiles the importance accumulation out (benchmark) */
     importance_snapshot *snapshot; /* when not NULL, receives the last iteration's buffers */
@@ -57,6 +69,7 @@ typedef struct importance_result {
     size_t triangle_count;
     double *camera;          /* per scene triangle, summed over iterations, in weight units */
     double *light;
+    double *shadow;          /* zero without shadow rays */
     double *convergence;     /* Δ per iteration run */
     uint32_t *pixel_triangle; /* per pixel of the hit-point image, the scene triangle seen
                                  through its centre (IDMR_NO_HIT: none): the importance image */
@@ -67,10 +80,18 @@ typedef struct importance_result {
 
 void importance_options_default(importance_options *o);
 
-/* The importance pass's own build defines (IDMR_ACCUMULATE_IMPORTANCE, IDMR_CAMERA_IMPORTANCE)
- * into out. */
-void importance_defines(int accumulate_importance, int camera_importance, char *out,
+/* The importance pass's own build defines (IDMR_ACCUMULATE_IMPORTANCE, IDMR_CAMERA_IMPORTANCE,
+ * IDMR_SHADOW_IMPORTANCE) into out. */
+void importance_defines(int accumulate_importance, int camera_importance, int shadows, char *out,
                         size_t size);
+
+/* The weights the kinds of importance are summed with (above): γ and σ. */
+typedef struct importance_weights {
+    float gamma;
+    float shadow;
+} importance_weights;
+
+importance_weights importance_weights_of(const importance_options *o);
 
 /* Runs the pass. The scene needs a camera and at least one light. Returns 0, or -1 with the
  * error set. `r` is freed with importance_result_free() either way. */
@@ -78,15 +99,24 @@ int importance_run(device *d, const scene *s, const bvh *b, const importance_opt
                    importance_result *r);
 void importance_result_free(importance_result *r);
 
-/* I(T) for scene triangle t, with hit point factor gamma (see above). */
-double importance_triangle(const importance_result *r, const scene *s, float gamma, uint64_t t);
+/* A(T) of scene triangle t (above): its importance amount per iteration. */
+double importance_amount(const importance_result *r, const importance_weights *w, uint64_t t);
+
+/* I(T) for scene triangle t (above). */
+double importance_triangle(const importance_result *r, const scene *s,
+                           const importance_weights *w, uint64_t t);
 
 /* I per vertex of mesh m into vertex_importance[vertex_count]. */
-void importance_mesh_vertices(const importance_result *r, const scene *s, size_t m, float gamma,
-                              double *vertex_importance);
+void importance_mesh_vertices(const importance_result *r, const scene *s, size_t m,
+                              const importance_weights *w, double *vertex_importance);
 
-/* Unnormalised sums over mesh m: γ camera + light, camera, light; each / iterations. */
-void importance_mesh_sums(const importance_result *r, const scene *s, size_t m, float gamma,
-                          double *importance_sum, double *camera_sum, double *light_sum);
+/* Sums over mesh m, each per iteration and per million samples (above): the amount Σ A, and
+ * its parts Σ camera, Σ light, Σ shadow, unweighted. */
+typedef struct importance_sums {
+    double amount, camera, light, shadow;
+} importance_sums;
+
+importance_sums importance_mesh_sums(const importance_result *r, const scene *s, size_t m,
+                                     const importance_weights *w);
 
 #endif

@@ -37,6 +37,7 @@ cJSON *importance_report_json(const scene *s, const device *d, const importance_
     cJSON_AddNumberToObject(root, "tolerance", o->tolerance);
     cJSON_AddNumberToObject(root, "photons_per_iteration", run->photons);
     cJSON_AddNumberToObject(root, "gamma", o->gamma);
+    cJSON_AddNumberToObject(root, "shadow_weight", o->shadow_weight);
     cJSON_AddNumberToObject(root, "seed", o->sppm.seed);
     cJSON_AddNumberToObject(root, "alpha", o->sppm.alpha);
     cJSON *film = cJSON_AddArrayToObject(root, "hit_point_image");
@@ -64,16 +65,17 @@ cJSON *importance_report_json(const scene *s, const device *d, const importance_
     cJSON_AddNumberToObject(seconds, "total", run->seconds.total);
 
     cJSON *meshes = cJSON_AddArrayToObject(root, "meshes");
+    importance_weights weights = importance_weights_of(o);
     for (size_t m = 0; m < s->mesh_count; m++) {
-        double sum, camera, light;
-        importance_mesh_sums(r, s, m, o->gamma, &sum, &camera, &light);
+        importance_sums sums = importance_mesh_sums(r, s, m, &weights);
         cJSON *mesh = cJSON_CreateObject();
         cJSON_AddStringToObject(mesh, "name", s->meshes[m].name);
         cJSON_AddNumberToObject(mesh, "vertices", s->meshes[m].vertex_count);
         cJSON_AddNumberToObject(mesh, "triangles", s->meshes[m].triangle_count);
-        cJSON_AddNumberToObject(mesh, "importance_sum", sum);
-        cJSON_AddNumberToObject(mesh, "camera_sum", camera);
-        cJSON_AddNumberToObject(mesh, "light_sum", light);
+        cJSON_AddNumberToObject(mesh, "importance_sum", sums.amount);
+        cJSON_AddNumberToObject(mesh, "camera_sum", sums.camera);
+        cJSON_AddNumberToObject(mesh, "light_sum", sums.light);
+        cJSON_AddNumberToObject(mesh, "shadow_sum", sums.shadow);
         cJSON_AddItemToArray(meshes, mesh);
     }
     cJSON_AddItemToObject(root, "convergence",
@@ -81,12 +83,13 @@ cJSON *importance_report_json(const scene *s, const device *d, const importance_
     return root;
 }
 
-double **importance_vertex_values(const importance_result *r, const scene *s, float gamma)
+double **importance_vertex_values(const importance_result *r, const scene *s,
+                                  const importance_weights *w)
 {
     double **values = xcalloc(s->mesh_count + 1, sizeof *values);
     for (size_t m = 0; m < s->mesh_count; m++) {
         values[m] = xmalloc((s->meshes[m].vertex_count + 1) * sizeof **values);
-        importance_mesh_vertices(r, s, m, gamma, values[m]);
+        importance_mesh_vertices(r, s, m, w, values[m]);
     }
     return values;
 }
@@ -190,9 +193,10 @@ static int write_importance_image(const char *path, const scene *s, const import
 {
     unsigned int width = r->sppm.width, height = r->sppm.height;
     size_t pixels = (size_t)width * height;
+    importance_weights weights = importance_weights_of(o);
     double *triangle = xmalloc((r->triangle_count + 1) * sizeof *triangle);
     for (size_t t = 0; t < r->triangle_count; t++)
-        triangle[t] = importance_triangle(r, s, o->gamma, t);
+        triangle[t] = importance_triangle(r, s, &weights, t);
     double top = percentile99(triangle, r->triangle_count);
     unsigned char *rgb = xmalloc(3 * pixels);
     for (size_t i = 0; i < pixels; i++) {

@@ -24,7 +24,8 @@ cJSON *importance_report_json(const scene *s, const device *d, const importance_
 
 /* Per-vertex importance of every mesh (importance_mesh_vertices), as one array per mesh:
  * computed once, for the outputs and the decimation. Free with importance_vertex_values_free(). */
-double **importance_vertex_values(const importance_result *r, const scene *s, float gamma);
+double **importance_vertex_values(const importance_result *r, const scene *s,
+                                  const importance_weights *w);
 void importance_vertex_values_free(double **values, const scene *s);
 
 /* Writes report.json (from `report`), convergence.csv, importance/ and importance.png, with the

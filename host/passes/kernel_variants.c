@@ -14,7 +14,7 @@
 #define MAX_VARIANTS 64
 
 static void add_sppm(const device *d, int pass, unsigned int features, int accumulates,
-                     int camera_importance, kernel_variant *list, size_t *count)
+                     int camera_importance, int shadows, kernel_variant *list, size_t *count)
 {
     if (*count == MAX_VARIANTS) {
         fprintf(stderr, "idmr: kernel_variants: more than %d variants\n", MAX_VARIANTS);
@@ -23,13 +23,14 @@ static void add_sppm(const device *d, int pass, unsigned int features, int accum
     kernel_variant *v = &list[(*count)++];
     char defines[96] = "";
     if (pass == IDMR_SPPM_IMPORTANCE)
-        importance_defines(accumulates, camera_importance, defines, sizeof defines);
+        importance_defines(accumulates, camera_importance, shadows, defines, sizeof defines);
     v->file = "sppm.cl";
     v->options = sppm_build_options(d, features, pass, pass == IDMR_SPPM_IMPORTANCE ? defines
                                                                                       : NULL);
-    snprintf(v->label, sizeof v->label, "sppm.cl %s features=0x%03x%s%s%s",
+    snprintf(v->label, sizeof v->label, "sppm.cl %s features=0x%03x%s%s%s%s",
              pass == IDMR_SPPM_IMPORTANCE ? "importance" : "render", features,
              accumulates ? "" : " no-accumulation", camera_importance ? "" : " no-camera-importance",
+             pass == IDMR_SPPM_IMPORTANCE && !shadows ? " no-shadows" : "",
              d->info.int64_atomics ? "" : " 32-bit-atomics");
 }
 
@@ -53,14 +54,15 @@ size_t kernel_variants_list(const device *d, kernel_variant **variants)
     const int passes[2] = {IDMR_SPPM_IMPORTANCE, IDMR_SPPM_RENDER};
     for (int p = 0; p < 2; p++)
         for (size_t k = 0; k < set_count; k++)
-            add_sppm(d, passes[p], sets[k], 1, 1, list, &count);
-    add_sppm(d, IDMR_SPPM_IMPORTANCE, IDMR_FEATURES_ALL, 0, 1, list, &count);
-    add_sppm(d, IDMR_SPPM_IMPORTANCE, IDMR_FEATURES_ALL, 1, 0, list, &count);
+            add_sppm(d, passes[p], sets[k], 1, 1, 1, list, &count);
+    add_sppm(d, IDMR_SPPM_IMPORTANCE, IDMR_FEATURES_ALL, 0, 1, 1, list, &count);
+    add_sppm(d, IDMR_SPPM_IMPORTANCE, IDMR_FEATURES_ALL, 1, 0, 1, list, &count);
+    add_sppm(d, IDMR_SPPM_IMPORTANCE, IDMR_FEATURES_ALL, 1, 1, 0, list, &count);
     if (d->info.int64_atomics) { /* the other side of IDMR_INT64_ATOMICS too */
         device narrow = *d;
         narrow.info.int64_atomics = 0;
         for (int p = 0; p < 2; p++)
-            add_sppm(&narrow, passes[p], IDMR_FEATURES_ALL, 1, 1, list, &count);
+            add_sppm(&narrow, passes[p], IDMR_FEATURES_ALL, 1, 1, 1, list, &count);
     }
     kernel_variant *trace = &list[count++];
     trace->file = "trace.cl";

@@ -4,8 +4,9 @@
  *
  * The variants cover every branch of the #if's in kernels/: for each pass of kernels/sppm.cl,
  * every feature on (the generic program), every feature but one (each bit's #else side), and a
- * minimal scene (diffuse surfaces, an area light); the importance pass also without accumulating
- * and without camera importance; both passes with 32-bit atomics in place of 64-bit ones; and
+ * minimal scene (diffuse surfaces, an area light); the importance pass also without accumulating,
+ * without camera importance and without shadow rays; both passes with 32-bit atomics in place
+ * of 64-bit ones; and
  * kernels/trace.cl. */
 #ifndef IDMR_KERNEL_VARIANTS_H
 #define IDMR_KERNEL_VARIANTS_H
@@ -15,7 +16,7 @@
 #include "device/device.h"
 
 typedef struct kernel_variant {
-    char label[96];   /* e.g. "sppm.cl render features=0x3ff" */
+    char label[128];  /* e.g. "sppm.cl render features=0x3ff" */
     const char *file; /* under kernels/ */
     char *options;    /* build options, malloc'd */
 } kernel_variant;

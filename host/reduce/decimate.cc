@@ -21,12 +21,13 @@ using namespace idmr_decimate;
 namespace {
 
 // The module handles of one decimater: the normal limit and the history always, and one
-// priority module, the importance or the quadric one.
+// priority module: the importance, the quadric or the weighted quadric one.
 struct Modules {
     ModNormalLimitT<Mesh>::Handle normal_limit;
     ModHistoryT<Mesh>::Handle history;
     ModImportanceT<Mesh>::Handle importance;
     OpenMesh::Decimater::ModQuadricT<Mesh>::Handle quadric;
+    ModWeightedQuadricT<Mesh>::Handle weighted_quadric;
 };
 
 // Adds and sets up the modules of `method`. Returns false when the decimater does not
@@ -46,10 +47,14 @@ bool add_modules(ReductionDecimater &decimater, Modules &modules, Mesh &mesh,
         for (auto v : mesh.vertices())
             decimater.module(modules.importance).importance(v) = importance[v.idx()];
         decimater.set_importance(&decimater.module(modules.importance));
+    } else if (method == DECIMATE_COMBINED) {
+        decimater.add(modules.weighted_quadric);
+        for (auto v : mesh.vertices())
+            decimater.module(modules.weighted_quadric).importance(v) = importance[v.idx()];
     } else {
         decimater.add(modules.quadric);
     }
-    return decimater.initialize();
+    return decimater.initialize(); // runs the modules' initialize(): importance is set by now
 }
 
 // Compacts the mesh and copies its vertices and faces into out->mesh; out->output_index maps the
@@ -117,7 +122,7 @@ extern "C" int decimate_mesh(const decimate_input *in, decimate_method method,
                              decimate_output *out)
 {
     std::memset(out, 0, sizeof *out);
-    if (method == DECIMATE_IMPORTANCE && !in->vertex_importance)
+    if (method != DECIMATE_QUADRIC && !in->vertex_importance)
         return error_set(IDMR_EXIT_FAILURE, "mesh '%s': importance decimation without importance",
                          in->name);
     try {

@@ -6,6 +6,10 @@
  *                        the least important neighbour among legal collapses; after a collapse
  *                        the removed vertex's importance is added to the kept one
  *   DECIMATE_QUADRIC     OpenMesh's ModQuadricT (Garland-Heckbert), the view-independent baseline
+ *   DECIMATE_COMBINED    our weighted quadric module: the Garland-Heckbert error with each face's
+ *                        plane weighted by its area × (its importance + a floor), and a plane
+ *                        across every open boundary edge, so the image's important parts keep
+ *                        their geometry and openings their outline (decimate_modules.hh)
  * Both run with our normal-limit module (a collapse may not turn any remaining face's normal by
  * more than max_normal_angle degrees, nor create a zero-area face) and our history module (for
  * each removed vertex, the vertex it went into). We use our own normal limit rather than
@@ -44,7 +48,11 @@
 extern "C" {
 #endif
 
-typedef enum decimate_method { DECIMATE_IMPORTANCE, DECIMATE_QUADRIC } decimate_method;
+typedef enum decimate_method {
+    DECIMATE_IMPORTANCE, /* the paper's: ring importance, least important target */
+    DECIMATE_QUADRIC,    /* OpenMesh's quadric error metric: geometry alone */
+    DECIMATE_COMBINED,   /* quadric error weighted by importance, open boundaries held */
+} decimate_method;
 
 typedef struct decimate_input {
     const char *name; /* for messages */
@@ -52,7 +60,7 @@ typedef struct decimate_input {
     uint32_t vertex_count;
     const uint32_t *indices;
     uint32_t triangle_count;
-    const double *vertex_importance; /* per input vertex; needed by DECIMATE_IMPORTANCE */
+    const double *vertex_importance; /* per input vertex; needed by IMPORTANCE and COMBINED */
     uint64_t target_vertices;        /* vertices to keep; where welding leaves fewer, fewer */
     double max_normal_angle;         /* degrees; default 60 (the paper's α_max) */
     int verify_heap;  /* tests: after every collapse, count heap entries whose stored priority or

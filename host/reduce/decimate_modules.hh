@@ -3,15 +3,22 @@
 //
 //   ModImportanceT   priority (non-binary): a collapse of v0 costs the importance of v0's one-ring,
 //                    centre included; after it the kept vertex v1 holds v0's importance as well
+//   ModWeightedQuadricT
+//                    priority: the Garland–Heckbert quadric error of moving v0 onto v1, each
+//                    face's plane weighted by its area × (its importance + a floor), each open
+//                    boundary edge holding a plane through it across its face (so openings keep
+//                    their outline); v1 takes v0's quadric
 //   ModNormalLimitT  binary: no remaining face around v0 may turn by more than the limit or become
 //                    degenerate
 //   ModHistoryT      binary, always legal: records, per removed vertex, the vertex it went into
 //
-// OpenMesh's decimater accepts exactly one priority module; decimate.cc adds ModImportanceT or
-// OpenMesh's ModQuadricT, never both, and checks initialize().
+// OpenMesh's decimater accepts exactly one priority module; decimate.cc adds ModImportanceT,
+// ModWeightedQuadricT or OpenMesh's ModQuadricT, never two, and checks initialize().
 #ifndef IDMR_DECIMATE_MODULES_HH
 #define IDMR_DECIMATE_MODULES_HH
 
+#include <OpenMesh/Core/Utils/vector_traits.hh>
+#include <OpenMesh/Core/Geometry/QuadricT.hh>
 #include <OpenMesh/Tools/Decimater/ModBaseT.hh>
 
 #include <algorithm>
@@ -54,6 +61,127 @@ template <class MeshT> class ModImportanceT : public OpenMesh::Decimater::ModBas
     }
 
   private:
+    OpenMesh::VPropHandleT<double> importance_;
+};
+
+// Non-binary: the importance-weighted quadric error of a collapse. Face f contributes its plane's
+// quadric weighted by area(f) × (I(f) + floor), with I(f) the mean importance (per area) of its
+// vertices and the floor a small share of the mesh's mean, so unseen faces still rank their
+// collapses by geometry, last. An open boundary edge contributes the plane through it
+// perpendicular to its face, weighted by boundary_weight × length² × (I(f) + floor): moving a
+// boundary vertex off the outline costs as much as a fold, so holes and openings keep their shape.
+template <class MeshT> class ModWeightedQuadricT : public OpenMesh::Decimater::ModBaseT<MeshT> {
+  public:
+    DECIMATING_MODULE(ModWeightedQuadricT, MeshT, WeightedQuadric);
+    typedef OpenMesh::Geometry::QuadricT<double> Quadric;
+    typedef typename MeshT::VertexHandle VertexHandle;
+
+    explicit ModWeightedQuadricT(MeshT &mesh)
+        : Base(mesh, false), floor_share_(0.01), boundary_weight_(10.0)
+    {
+        mesh.add_property(quadric_);
+        mesh.add_property(importance_);
+    }
+    ~ModWeightedQuadricT() override
+    {
+        Base::mesh().remove_property(quadric_);
+        Base::mesh().remove_property(importance_);
+    }
+
+    double &importance(VertexHandle v) { return Base::mesh().property(importance_, v); }
+
+    void initialize() override
+    {
+        MeshT &mesh = Base::mesh();
+        for (auto v : mesh.vertices())
+            quadric(v).clear();
+        double floor = importance_floor();
+        for (auto f : mesh.faces()) {
+            OpenMesh::Vec3d p[3];
+            double face_importance = face_points(f, p) + floor;
+            OpenMesh::Vec3d n = OpenMesh::cross(p[1] - p[0], p[2] - p[0]);
+            double twice_area = n.norm();
+            if (!(twice_area > 0))
+                continue;
+            n /= twice_area;
+            Quadric plane(n[0], n[1], n[2], -OpenMesh::dot(n, p[0]));
+            plane *= 0.5 * twice_area * face_importance;
+            for (auto v : mesh.fv_range(f))
+                quadric(v) += plane;
+            add_boundary_planes(f, n, face_importance);
+        }
+    }
+
+    float collapse_priority(const CollapseInfo &ci) override
+    {
+        Quadric q = quadric(ci.v0);
+        q += quadric(ci.v1);
+        const typename MeshT::Point &p = ci.p1;
+        double error = q(OpenMesh::Vec3d(p[0], p[1], p[2]));
+        return (float)std::min(std::max(error, 0.0), (double)FLT_MAX / 2);
+    }
+
+    void postprocess_collapse(const CollapseInfo &ci) override { quadric(ci.v1) += quadric(ci.v0); }
+
+  private:
+    Quadric &quadric(VertexHandle v) { return Base::mesh().property(quadric_, v); }
+
+    // The face's corners into p[3]; returns its importance, the mean of its vertices'.
+    double face_points(typename MeshT::FaceHandle f, OpenMesh::Vec3d p[3])
+    {
+        MeshT &mesh = Base::mesh();
+        double sum = 0;
+        int k = 0;
+        for (auto v : mesh.fv_range(f)) {
+            const typename MeshT::Point &q = mesh.point(v);
+            p[k++] = OpenMesh::Vec3d(q[0], q[1], q[2]);
+            sum += importance(v);
+        }
+        return sum / 3.0;
+    }
+
+    // floor_share_ of the area-weighted mean importance over the mesh (1 when it has none).
+    double importance_floor()
+    {
+        MeshT &mesh = Base::mesh();
+        double weighted = 0, area = 0;
+        for (auto f : mesh.faces()) {
+            OpenMesh::Vec3d p[3];
+            double face_importance = face_points(f, p);
+            double a = 0.5 * OpenMesh::cross(p[1] - p[0], p[2] - p[0]).norm();
+            weighted += a * face_importance;
+            area += a;
+        }
+        double mean = area > 0 ? weighted / area : 0;
+        return mean > 0 && std::isfinite(mean) ? floor_share_ * mean : 1.0;
+    }
+
+    // For each edge of face f on an open boundary: the plane through it perpendicular to the
+    // face (unit normal n), into the quadrics of its two vertices.
+    void add_boundary_planes(typename MeshT::FaceHandle f, const OpenMesh::Vec3d &n,
+                             double face_importance)
+    {
+        MeshT &mesh = Base::mesh();
+        for (auto h : mesh.fh_range(f)) {
+            if (!mesh.is_boundary(mesh.opposite_halfedge_handle(h)))
+                continue;
+            const typename MeshT::Point &a = mesh.point(mesh.from_vertex_handle(h));
+            const typename MeshT::Point &b = mesh.point(mesh.to_vertex_handle(h));
+            OpenMesh::Vec3d pa(a[0], a[1], a[2]), edge = OpenMesh::Vec3d(b[0], b[1], b[2]) - pa;
+            OpenMesh::Vec3d across = OpenMesh::cross(edge, n);
+            double length = across.norm();
+            if (!(length > 0))
+                continue;
+            across /= length;
+            Quadric plane(across[0], across[1], across[2], -OpenMesh::dot(across, pa));
+            plane *= boundary_weight_ * edge.sqrnorm() * face_importance;
+            quadric(mesh.from_vertex_handle(h)) += plane;
+            quadric(mesh.to_vertex_handle(h)) += plane;
+        }
+    }
+
+    double floor_share_, boundary_weight_;
+    OpenMesh::VPropHandleT<Quadric> quadric_;
     OpenMesh::VPropHandleT<double> importance_;
 };
 

@@ -44,7 +44,8 @@ static int run_importance(reduce_state *st)
     const scene *s = st->scene;
     double start = monotonic_seconds();
     int status = 0;
-    if (o->method == DECIMATE_IMPORTANCE) {
+    if (reduce_method_uses_importance(o->method)) {
+        importance_weights weights = importance_weights_of(&o->importance);
         bvh b;
         status = bvh_build(s, &b);
         if (!status) {
@@ -52,8 +53,7 @@ static int run_importance(reduce_state *st)
             bvh_free(&b);
         }
         if (!status)
-            st->vertex_importance = importance_vertex_values(&st->importance, s,
-                                                             o->importance.gamma);
+            st->vertex_importance = importance_vertex_values(&st->importance, s, &weights);
     }
     st->seconds_importance = monotonic_seconds() - start;
     return status;
@@ -84,6 +84,7 @@ static int plan_budget(reduce_state *st)
     double start = monotonic_seconds();
     st->input = xcalloc(st->count + 1, sizeof *st->input);
     budget_mesh *budget = xcalloc(st->count + 1, sizeof *budget);
+    importance_weights weights = importance_weights_of(&o->importance);
     for (size_t m = 0; m < st->count; m++) {
         st->input[m] = decimation_input(st, m);
         budget[m].name = s->meshes[m].name;
@@ -91,10 +92,8 @@ static int plan_budget(reduce_state *st)
          * input and of the reduced scene. */
         budget[m].vertices = s->meshes[m].vertex_count;
         budget[m].pinned = reduce_mesh_pinned(o, &s->meshes[m]);
-        if (o->method == DECIMATE_IMPORTANCE) {
-            double camera, light;
-            importance_mesh_sums(&st->importance, s, m, o->importance.gamma, &budget[m].importance,
-                                 &camera, &light);
+        if (reduce_method_uses_importance(o->method)) {
+            budget[m].importance = importance_mesh_sums(&st->importance, s, m, &weights).amount;
         } else {
             budget[m].importance = 1.0; /* equal factors: the uniform D of the baseline */
         }
@@ -158,7 +157,7 @@ static int write_report(reduce_state *st)
     const reduce_options *o = st->options;
     cJSON *report = reduce_report_json(st);
     int status;
-    if (o->method == DECIMATE_IMPORTANCE) {
+    if (reduce_method_uses_importance(o->method)) {
         status = importance_write_outputs(st->outdir, report, st->scene, &o->importance,
                                           &st->importance, st->vertex_importance);
     } else {

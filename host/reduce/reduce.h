@@ -7,11 +7,12 @@
  *                            factor / vertices_before / vertices_after, per-stage seconds
  *   OUTDIR/importance.png, importance/, convergence.csv   (method importance)
  *
- * Methods: "importance" (ours, the paper's: importance sets each mesh's budget, Eq. 3, and the
- * order of collapses within it, 3.4), "quadric" (OpenMesh's quadric decimation at the uniform
- * factor D, the view-independent baseline; no importance pass) and "importance-quadric"
- * (importance sets each mesh's budget, quadric error metrics choose the collapses: the paper
- * leaves combining the two open, 3.4; this is the combination that needs no weighting).
+ * Methods (reduce_method): "importance" (the paper's: importance sets each mesh's budget, Eq. 3,
+ * and the order of collapses within it, 3.4), "quadric" (OpenMesh's quadric decimation at the
+ * uniform factor D, the view-independent baseline; no importance pass), "importance-quadric"
+ * (importance sets each mesh's budget, quadric error metrics choose the collapses) and
+ * "combined" (importance sets each mesh's budget, and the collapses follow the quadric error
+ * weighted by importance, open boundaries held: decimate.h, DECIMATE_COMBINED).
  * Emitters and meshes named with --keep are never decimated; meshes with at most min_vertices
  * vertices neither. OUTDIR must not exist or be empty unless force is set, and must not be the
  * scene's own directory.
@@ -27,11 +28,17 @@
 #include "passes/importance.h"
 #include "core/scene.h"
 
+typedef enum reduce_method {
+    REDUCE_IMPORTANCE,
+    REDUCE_QUADRIC,
+    REDUCE_IMPORTANCE_QUADRIC,
+    REDUCE_COMBINED,
+} reduce_method;
+
 typedef struct reduce_options {
     importance_options importance;
     double target;           /* D: fraction of all vertices to keep, (0, 1] */
-    decimate_method method;  /* DECIMATE_IMPORTANCE: importance budget; QUADRIC: uniform */
-    int quadric_collapses;   /* with DECIMATE_IMPORTANCE: collapse by quadrics ("importance-quadric") */
+    reduce_method method;
     unsigned long min_vertices; /* default 16 */
     double max_normal_angle; /* degrees, default 60 */
     const char **keep;       /* mesh names never decimated */
@@ -42,8 +49,15 @@ typedef struct reduce_options {
 
 void reduce_options_default(reduce_options *o);
 
-/* "importance", "quadric" or "importance-quadric", as --method names them. */
-const char *reduce_method_name(const reduce_options *o);
+/* The method as --method names it ("importance", "quadric", "importance-quadric",
+ * "combined"), and back: 0, or -1 with the error set (IDMR_EXIT_INPUT) naming the choices. */
+const char *reduce_method_name(reduce_method method);
+int reduce_method_parse(const char *name, reduce_method *method);
+
+/* Whether the method runs the importance pass (and budgets meshes by Eq. 3), and how its
+ * collapses are chosen. */
+int reduce_method_uses_importance(reduce_method method);
+decimate_method reduce_method_collapses(reduce_method method);
 
 /* Runs the whole reduction of scene `s` (loaded from its file) into outdir. Returns 0, or -1
  * with the error set. */

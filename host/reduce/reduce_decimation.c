@@ -100,9 +100,7 @@ int reduce_decimation(reduce_state *st)
 {
     const reduce_options *o = st->options;
     double start = monotonic_seconds();
-    decimate_method method = o->method == DECIMATE_IMPORTANCE && !o->quadric_collapses
-                                 ? DECIMATE_IMPORTANCE
-                                 : DECIMATE_QUADRIC;
+    decimate_method method = reduce_method_collapses(o->method);
     unsigned int threads = o->threads ? o->threads : (unsigned int)sysconf(_SC_NPROCESSORS_ONLN);
     st->output = xcalloc(st->count + 1, sizeof *st->output);
     unsigned char *redo = xcalloc(st->count + 1, 1);

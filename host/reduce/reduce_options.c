@@ -2,6 +2,8 @@
  * meshes the options keep as they are (see reduce.h, reduce_stages.h). */
 #include <string.h>
 
+#include "core/error.h"
+
 #include "reduce/reduce_stages.h"
 
 void reduce_options_default(reduce_options *o)
@@ -9,16 +11,53 @@ void reduce_options_default(reduce_options *o)
     memset(o, 0, sizeof *o);
     importance_options_default(&o->importance);
     o->target = 0.1;
-    o->method = DECIMATE_IMPORTANCE;
+    o->method = REDUCE_IMPORTANCE;
     o->min_vertices = 16;
     o->max_normal_angle = 60.0;
 }
 
-const char *reduce_method_name(const reduce_options *o)
+/* The methods, as --method names them, with how each chooses collapses. */
+static const struct {
+    const char *name;
+    reduce_method method;
+    decimate_method collapses;
+} METHODS[] = {
+    {"importance", REDUCE_IMPORTANCE, DECIMATE_IMPORTANCE},
+    {"quadric", REDUCE_QUADRIC, DECIMATE_QUADRIC},
+    {"importance-quadric", REDUCE_IMPORTANCE_QUADRIC, DECIMATE_QUADRIC},
+    {"combined", REDUCE_COMBINED, DECIMATE_COMBINED},
+};
+#define METHOD_COUNT (sizeof METHODS / sizeof *METHODS)
+
+const char *reduce_method_name(reduce_method method)
 {
-    if (o->method == DECIMATE_QUADRIC)
-        return "quadric";
-    return o->quadric_collapses ? "importance-quadric" : "importance";
+    for (size_t i = 0; i < METHOD_COUNT; i++)
+        if (METHODS[i].method == method)
+            return METHODS[i].name;
+    return "unknown";
+}
+
+int reduce_method_parse(const char *name, reduce_method *method)
+{
+    for (size_t i = 0; i < METHOD_COUNT; i++)
+        if (!strcmp(METHODS[i].name, name)) {
+            *method = METHODS[i].method;
+            return 0;
+        }
+    return error_set(IDMR_EXIT_INPUT,
+                     "--method: '%s' is none of 'importance', 'quadric', 'importance-quadric' "
+                     "and 'combined'",
+                     name);
+}
+
+int reduce_method_uses_importance(reduce_method method) { return method != REDUCE_QUADRIC; }
+
+decimate_method reduce_method_collapses(reduce_method method)
+{
+    for (size_t i = 0; i < METHOD_COUNT; i++)
+        if (METHODS[i].method == method)
+            return METHODS[i].collapses;
+    return DECIMATE_QUADRIC;
 }
 
 static int is_kept(const reduce_options *o, const char *name)

@@ -19,7 +19,7 @@ static void add_totals(cJSON *root, const reduce_state *st)
 {
     const reduce_options *o = st->options;
     cJSON_AddNumberToObject(root, "target", o->target);
-    cJSON_AddStringToObject(root, "method", reduce_method_name(o));
+    cJSON_AddStringToObject(root, "method", reduce_method_name(o->method));
     cJSON_AddNumberToObject(root, "max_normal_angle", o->max_normal_angle);
     cJSON_AddNumberToObject(root, "min_vertices", (double)o->min_vertices);
     cJSON_AddNumberToObject(root, "vertices_before", (double)st->plan.total_before);
@@ -75,7 +75,7 @@ static void add_mesh(cJSON *meshes, const reduce_state *st, size_t m)
 cJSON *reduce_report_json(const reduce_state *st)
 {
     const reduce_options *o = st->options;
-    cJSON *root = o->method == DECIMATE_IMPORTANCE
+    cJSON *root = reduce_method_uses_importance(o->method)
                       ? importance_report_json(st->scene, st->device, &o->importance,
                                                &st->importance)
                       : report_without_importance(st->scene);

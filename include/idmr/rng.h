@@ -19,6 +19,7 @@
 #define IDMR_STREAM_RENDER_CAMERA 3u
 #define IDMR_STREAM_RENDER_PHOTON 4u
 #define IDMR_STREAM_TEST 5u
+#define IDMR_STREAM_IMPORTANCE_SHADOW 6u
 
 typedef struct idmr_rng {
     unsigned int key;

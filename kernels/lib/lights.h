@@ -10,6 +10,23 @@
 #include "lib/sampling.h"
 #include "lib/scene.h"
 
+#if HAS_FEATURE(IDMR_FEATURE_AREA)
+/* A point of area light `light`, uniform over its area (a triangle chosen by area, then a point
+ * in it), and that triangle's unit front normal. */
+inline void sample_area_point(const scene_view *scene, global const idmr_light *light,
+                              idmr_rng *rng, float3 *p, float3 *n)
+{
+    uint t = light->cdf_offset + sample_cdf(scene->emitter_cdf + light->cdf_offset,
+                                            light->triangle_count, idmr_rng_float(rng));
+    float3 v0 = scene->emitter_triangles[3 * t].xyz;
+    float3 e1 = scene->emitter_triangles[3 * t + 1].xyz;
+    float3 e2 = scene->emitter_triangles[3 * t + 2].xyz;
+    float su = sqrt(idmr_rng_float(rng)), v = idmr_rng_float(rng);
+    *p = v0 + (1.0f - v) * su * e1 + v * su * e2;
+    *n = normalize(cross(e1, e2));
+}
+#endif
+
 /* Emission of one photon path: a light chosen in proportion to power, then a position and a
  * direction by the light's kind. Returns false if the sample is rejected (outside a spot's
  * smooth falloff), in which case the path stays empty. *light_index is the light chosen. */
@@ -21,15 +38,8 @@ inline bool emit(const scene_view *scene, const idmr_sppm_params *params, idmr_r
     global const idmr_light *light = scene->lights + index;
 #if HAS_FEATURE(IDMR_FEATURE_AREA)
     if (light->kind == IDMR_LIGHT_AREA) {
-        uint t = light->cdf_offset +
-                 sample_cdf(scene->emitter_cdf + light->cdf_offset, light->triangle_count,
-                            idmr_rng_float(rng));
-        float3 v0 = scene->emitter_triangles[3 * t].xyz;
-        float3 e1 = scene->emitter_triangles[3 * t + 1].xyz;
-        float3 e2 = scene->emitter_triangles[3 * t + 2].xyz;
-        float su = sqrt(idmr_rng_float(rng)), v = idmr_rng_float(rng);
-        float3 p = v0 + (1.0f - v) * su * e1 + v * su * e2;
-        float3 n = normalize(cross(e1, e2));
+        float3 p, n;
+        sample_area_point(scene, light, rng, &p, &n);
         *origin = offset_origin(p, n, params->ray_epsilon);
         *direction = sample_cosine(n, rng);
         return true;
@@ -75,6 +85,52 @@ inline bool emit(const scene_view *scene, const idmr_sppm_params *params, idmr_r
     }
 #endif
     return false;
+}
+
+/* Where a shadow ray from receiver point p goes (shadow importance, kernels/sppm.cl): a light
+ * chosen in proportion to power and a point on it. Sets the unit direction towards it, the
+ * distance (INFINITY for a directional light), the light's size (the width of an area light,
+ * sqrt of its area; 0 for point-like lights, whose shadows are sharp) and the share of the light
+ * that reaches p (a spot's falloff; 0 behind an area light or outside a spot's cone). Returns
+ * false when the light is an environment (its shadows are too soft to draw an outline) or
+ * reaches p not at all. */
+inline bool shadow_light_sample(const scene_view *scene, const idmr_sppm_params *params,
+                                float3 p, idmr_rng *rng, float3 *direction, float *distance,
+                                float *size, float *reach)
+{
+    uint index = sample_cdf(scene->light_cdf, params->light_count, idmr_rng_float(rng));
+    global const idmr_light *light = scene->lights + index;
+    float3 target = vload3(0, light->position);
+    *size = 0.0f;
+    *reach = 1.0f;
+#if HAS_FEATURE(IDMR_FEATURE_AREA)
+    if (light->kind == IDMR_LIGHT_AREA) {
+        float3 n;
+        sample_area_point(scene, light, rng, &target, &n);
+        *size = sqrt(light->area);
+        *reach = dot(p - target, n) > 0.0f ? 1.0f : 0.0f; /* in front of the emitting side */
+    }
+#endif
+#if HAS_FEATURE(IDMR_FEATURE_DIRECTIONAL)
+    if (light->kind == IDMR_LIGHT_DIRECTIONAL) {
+        *direction = -vload3(0, light->direction);
+        *distance = INFINITY;
+        return true;
+    }
+#endif
+    if (light->kind == IDMR_LIGHT_ENVIRONMENT)
+        return false;
+    float3 towards = target - p;
+    *distance = length(towards);
+    if (!(*distance > 0.0f))
+        return false;
+    *direction = towards / *distance;
+#if HAS_FEATURE(IDMR_FEATURE_SPOT)
+    if (light->kind == IDMR_LIGHT_SPOT)
+        *reach = smoothstep(light->cos_cutoff, light->cos_falloff_start,
+                            dot(-*direction, vload3(0, light->direction)));
+#endif
+    return *reach > 0.0f;
 }
 
 /* The flux a photon of light `light_index` starts with: emission × the light's sample factor
