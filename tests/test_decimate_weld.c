@@ -136,7 +136,7 @@ static void test_non_manifold_fin(void **state)
 {
     float positions[] = {0, 0, 0, 1, 0, 0, 0.5f, 1, 0, 0.5f, -1, 0, 0.5f, 0, 1};
     uint32_t indices[] = {0, 1, 2, 1, 0, 3, 0, 1, 4};
-    mesh_data fin = {5, 3, positions, indices, NULL};
+    mesh_data fin = {5, 3, positions, indices, NULL, NULL};
     double importance[5] = {1, 2, 3, 4, 5};
     decimate_output full;
     check_accounting("fin", &fin, importance, &full);
@@ -153,7 +153,7 @@ static void test_non_manifold_tetrahedra(void **state)
 {
     float positions[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, -1, 0, 0, 0, -1, 0, 0, 0, -1};
     uint32_t indices[] = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3, 0, 4, 5, 0, 6, 4, 0, 5, 6, 4, 6, 5};
-    mesh_data tetra = {7, 8, positions, indices, NULL};
+    mesh_data tetra = {7, 8, positions, indices, NULL, NULL};
     double importance[7] = {1, 2, 3, 4, 5, 6, 7};
     decimate_output full;
     check_accounting("tetrahedra", &tetra, importance, &full);
@@ -170,7 +170,7 @@ static void test_non_manifold_seam(void **state)
 {
     float positions[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 0, 0, 1, 1, 0, 0, 1, 0};
     uint32_t indices[] = {0, 1, 2, 3, 4, 5};
-    mesh_data seam = {6, 2, positions, indices, NULL};
+    mesh_data seam = {6, 2, positions, indices, NULL, NULL};
     double importance[6] = {1, 1, 1, 1, 1, 1};
     decimate_output full;
     check_accounting("seam", &seam, importance, &full);

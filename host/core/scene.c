@@ -33,6 +33,7 @@ void scene_free(scene *s)
         free(m->positions);
         free(m->indices);
         free(m->texcoords);
+        free(m->normals);
     }
     for (size_t i = 0; i < s->material_count; i++) {
         free(s->material_info[i].name);

@@ -31,6 +31,9 @@ typedef struct scene_mesh {
     float *positions;  /* world space, xyz per vertex */
     uint32_t *indices; /* three vertex indices per triangle */
     float *texcoords;  /* uv per vertex, or NULL */
+    float *normals;    /* world-space unit shading normal per vertex, or NULL: shaded flat.
+                        * The loader sets them (io/shapes.h: shapes_smooth_normals); a zero
+                        * normal shades its triangles flat. Owned by the scene. */
     uint32_t material; /* index into scene.materials */
     int light;         /* index into scene.lights if the shape is an area emitter, else -1 */
     uint32_t first_triangle; /* set by scene_finalize() */

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "core/error.h"
+#include "idmr/normal_packing.h"
 
 float device_scene_ray_epsilon(const scene *s)
 {
@@ -16,9 +17,26 @@ float device_scene_ray_epsilon(const scene *s)
     return epsilon > 0 ? (float)epsilon : 1e-30f;
 }
 
-/* Per-triangle unit normals (w = area) and material indices. A degenerate triangle gets a
- * zero normal (the traversal never returns it). */
-static void triangle_data(const scene *s, float *normals, uint32_t *material_of)
+/* Triangle t's shading normals: its corners' vertex normals packed (idmr/normal_packing.h)
+ * with w = 1, or w = 0 (shaded flat) when the mesh has none or one of them is zero. */
+static void shading_corners(const scene_mesh *mesh, uint32_t t, uint32_t out[4])
+{
+    memset(out, 0, 4 * sizeof *out);
+    if (!mesh->normals)
+        return;
+    for (int corner = 0; corner < 3; corner++) {
+        const float *n = &mesh->normals[3 * (size_t)mesh->indices[3 * (size_t)t + corner]];
+        if (!(n[0] * n[0] + n[1] * n[1] + n[2] * n[2] > 0.0f))
+            return;
+        out[corner] = idmr_pack_unit_vector(n[0], n[1], n[2]);
+    }
+    out[3] = 1u;
+}
+
+/* Per-triangle unit normals (w = area), shading normals and material indices. A degenerate
+ * triangle gets a zero normal (the traversal never returns it). */
+static void triangle_data(const scene *s, float *normals, uint32_t *shading,
+                          uint32_t *material_of)
 {
     for (size_t m = 0; m < s->mesh_count; m++) {
         const scene_mesh *mesh = &s->meshes[m];
@@ -39,6 +57,7 @@ static void triangle_data(const scene *s, float *normals, uint32_t *material_of)
             for (int k = 0; k < 3; k++)
                 out[k] = length > 0 ? (float)(n[k] / length) : 0.0f;
             out[3] = (float)(0.5 * length);
+            shading_corners(mesh, t, &shading[4 * ((size_t)mesh->first_triangle + t)]);
             material_of[mesh->first_triangle + t] = mesh->material;
         }
     }
@@ -66,9 +85,9 @@ uint64_t device_scene_geometry_bytes(const scene *s)
     for (size_t i = 0; i < s->light_count; i++)
         if (s->lights[i].kind == IDMR_LIGHT_AREA)
             emitters += s->lights[i].triangle_count;
-    /* Per triangle a float4 normal and a material index; per light its struct and CDF entry;
-     * per emitter triangle a CDF entry and three float4. */
-    return triangles * (4 * sizeof(float) + sizeof(uint32_t)) +
+    /* Per triangle a float4 normal, a uint4 of shading normals and a material index; per
+     * light its struct and CDF entry; per emitter triangle a CDF entry and three float4. */
+    return triangles * (4 * sizeof(float) + 4 * sizeof(uint32_t) + sizeof(uint32_t)) +
            (s->material_count ? s->material_count : 1) * sizeof(idmr_material) +
            lights * (sizeof(idmr_light) + sizeof(float)) +
            (emitters ? emitters : 1) * (sizeof(float) + 12 * sizeof(float));
@@ -79,6 +98,7 @@ uint64_t device_scene_geometry_bytes(const scene *s)
 typedef struct upload_arrays {
     size_t triangles, lights, emitters;
     float *normals;           /* 4 per triangle */
+    uint32_t *shading;        /* 4 per triangle */
     uint32_t *material_of;    /* per triangle */
     idmr_light *light;        /* the scene's lights with cdf_offset filled */
     float *light_cdf;         /* per light */
@@ -139,8 +159,9 @@ static void arrays_build(const scene *s, upload_arrays *a)
             a->emitters += s->lights[i].triangle_count;
     a->emitters = a->emitters ? a->emitters : 1;
     a->normals = xcalloc(4 * a->triangles, sizeof *a->normals);
+    a->shading = xcalloc(4 * a->triangles, sizeof *a->shading);
     a->material_of = xcalloc(a->triangles, sizeof *a->material_of);
-    triangle_data(s, a->normals, a->material_of);
+    triangle_data(s, a->normals, a->shading, a->material_of);
     a->light = xcalloc(a->lights, sizeof *a->light);
     memcpy(a->light, s->lights, s->light_count * sizeof *a->light);
     a->light_cdf = xcalloc(a->lights, sizeof *a->light_cdf);
@@ -156,6 +177,7 @@ static void arrays_build(const scene *s, upload_arrays *a)
 static void arrays_free(upload_arrays *a)
 {
     free(a->normals);
+    free(a->shading);
     free(a->material_of);
     free(a->light);
     free(a->light_cdf);
@@ -172,6 +194,8 @@ static int arrays_upload(device *d, const scene *s, const upload_arrays *a, devi
     cl_mem_flags read = CL_MEM_READ_ONLY;
     return device_buffer(d, read, 4 * sizeof(float) * a->triangles, a->normals,
                          "triangle normals", &out->triangle_normals) ||
+                   device_buffer(d, read, 4 * sizeof(uint32_t) * a->triangles, a->shading,
+                                 "shading normals", &out->triangle_shading) ||
                    device_buffer(d, read, sizeof(uint32_t) * a->triangles, a->material_of,
                                  "triangle materials", &out->triangle_materials) ||
                    device_buffer(d, read, sizeof(idmr_material) * materials, material_data,
@@ -209,9 +233,9 @@ int device_scene_upload(device *d, const scene *s, const bvh *b, device_scene *o
 
 /* The buffers in SCENE_BUFFERS order (kernels/lib/scene.h). */
 #define SCENE_BUFFER_LIST(ds)                                                                \
-    {&(ds)->nodes,     &(ds)->leaves,    &(ds)->triangle_normals, &(ds)->triangle_materials,  \
-     &(ds)->materials, &(ds)->lights,    &(ds)->light_cdf,        &(ds)->emitter_cdf,         \
-     &(ds)->emitter_triangles}
+    {&(ds)->nodes,           &(ds)->leaves,          &(ds)->triangle_normals,                  \
+     &(ds)->triangle_shading, &(ds)->triangle_materials, &(ds)->materials, &(ds)->lights,      \
+     &(ds)->light_cdf,       &(ds)->emitter_cdf,     &(ds)->emitter_triangles}
 
 void device_scene_release(device_scene *ds)
 {

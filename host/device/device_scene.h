@@ -3,6 +3,8 @@
  *
  *   nodes, leaves            the BVH (idmr/bvh_layout.h)
  *   triangle_normals         float4 per scene triangle: unit winding normal, w = area
+ *   triangle_shading         uint4 per scene triangle: its corners' shading normals packed
+ *                            (idmr/normal_packing.h), w = 1; all zero: shaded flat
  *   triangle_materials       uint per scene triangle
  *   materials, lights        idmr_material[], idmr_light[] (lights with cdf_offset filled)
  *   light_cdf                float per light: cumulative power, last entry 1
@@ -21,6 +23,7 @@ typedef struct device_scene {
     cl_mem nodes;
     cl_mem leaves;
     cl_mem triangle_normals;
+    cl_mem triangle_shading;
     cl_mem triangle_materials;
     cl_mem materials;
     cl_mem lights;
@@ -45,7 +48,7 @@ int device_scene_upload(device *d, const scene *s, const bvh *b, device_scene *o
 void device_scene_release(device_scene *ds);
 
 /* The buffers a kernel's SCENE_BUFFERS parameters take (kernels/lib/scene.h). */
-#define DEVICE_SCENE_BUFFERS 9u
+#define DEVICE_SCENE_BUFFERS 10u
 
 /* Binds the scene's buffers as arguments first .. first + DEVICE_SCENE_BUFFERS - 1 of `kernel`
  * (named `kernel_name` in errors). Returns 0, or -1 with the error set. */

@@ -75,8 +75,7 @@ extern "C" int mesh_io_read_oriented(const char *path, mesh_data *out, int orien
     mesh.request_vertex_texcoords2D();
     mesh.request_vertex_normals();
     OpenMesh::IO::Options options = OpenMesh::IO::Options::VertexTexCoord;
-    if (orient)
-        options += OpenMesh::IO::Options::VertexNormal;
+    options += OpenMesh::IO::Options::VertexNormal;
     bool ok;
     try {
         ok = OpenMesh::IO::read_mesh(mesh, path, options);
@@ -120,6 +119,14 @@ extern "C" int mesh_io_read_oriented(const char *path, mesh_data *out, int orien
                 if (flipped)
                     (*flipped)++;
             }
+        }
+    }
+    if (options.check(OpenMesh::IO::Options::VertexNormal)) {
+        out->normals = (float *)xmalloc(3 * sizeof(float) * out->vertex_count);
+        for (auto v : mesh.vertices()) {
+            const TriMesh::Normal &n = mesh.normal(v);
+            for (int k = 0; k < 3; k++)
+                out->normals[3 * (size_t)v.idx() + k] = n[k];
         }
     }
     if (options.check(OpenMesh::IO::Options::VertexTexCoord)) {
@@ -194,5 +201,6 @@ extern "C" void mesh_data_free(mesh_data *mesh)
     std::free(mesh->positions);
     std::free(mesh->indices);
     std::free(mesh->texcoords);
+    std::free(mesh->normals);
     std::memset(mesh, 0, sizeof *mesh);
 }

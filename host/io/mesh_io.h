@@ -19,6 +19,8 @@ typedef struct mesh_data {
     float *positions;  /* xyz per vertex, malloc'd */
     uint32_t *indices; /* three per triangle, malloc'd */
     float *texcoords;  /* uv per vertex if the file has them, else NULL; malloc'd */
+    float *normals;    /* xyz per vertex if the file has them (not normalised), else NULL;
+                        * malloc'd. Meshes are written without them. */
 } mesh_data;
 
 /* Reads `path` into `out`. Returns 0, or -1 with the error set (error.h) naming the file:

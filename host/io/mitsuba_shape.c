@@ -21,9 +21,10 @@ static int is_mesh_file_type(const char *type)
            strcmp(type, "stl") == 0;
 }
 
-/* Reads a mesh file shape; *file gets the resolved path, *written the path as in the file. */
+/* Reads a mesh file shape; *file gets the resolved path, *written the path as in the file,
+ * *face_normals the shape's face_normals flag. */
 static int shape_read_file(loader *ld, xmlNodePtr node, mesh_data *mesh, char **file,
-                           const char **written)
+                           const char **written, int *face_normals)
 {
     if (mitsuba_prop_string(node, "filename", NULL, written))
         return -1;
@@ -33,10 +34,9 @@ static int shape_read_file(loader *ld, xmlNodePtr node, mesh_data *mesh, char **
     if (access(*file, R_OK) != 0)
         return mitsuba_fail(node, "cannot read '%s' (%s): %s", *written, *file, strerror(errno));
     /* Mitsuba's front side comes from the file's normals unless face_normals is set. */
-    int face_normals;
-    if (mitsuba_prop_bool(node, "face_normals", 0, &face_normals))
+    if (mitsuba_prop_bool(node, "face_normals", 0, face_normals))
         return -1;
-    if (mesh_io_read_oriented(*file, mesh, !face_normals, NULL))
+    if (mesh_io_read_oriented(*file, mesh, !*face_normals, NULL))
         return mitsuba_fail_prefix(node);
     return 0;
 }
@@ -70,12 +70,14 @@ static int shape_builtin(xmlNodePtr node, const char *type, mesh_data *mesh)
     return 0;
 }
 
-/* The shape's geometry in world space. */
+/* The shape's geometry in world space, with Mitsuba's shading normals: a mesh file's own
+ * normals, smooth vertex normals where it has none, none (flat) under face_normals; a built-in
+ * shape's from shapes.h. */
 static int shape_geometry(loader *ld, xmlNodePtr node, const char *type, mesh_data *mesh,
                           char **file, const char **written)
 {
     xform to_world;
-    int flip, builtin = !is_mesh_file_type(type);
+    int flip, face_normals = 0, builtin = !is_mesh_file_type(type);
     memset(mesh, 0, sizeof *mesh);
     if (strcmp(type, "serialized") == 0)
         return mitsuba_fail(node,
@@ -83,7 +85,7 @@ static int shape_geometry(loader *ld, xmlNodePtr node, const char *type, mesh_da
     if (mitsuba_prop_transform(node, "to_world", &to_world) ||
         mitsuba_prop_bool(node, "flip_normals", 0, &flip))
         return -1;
-    if (!builtin && shape_read_file(ld, node, mesh, file, written))
+    if (!builtin && shape_read_file(ld, node, mesh, file, written, &face_normals))
         return -1;
     if (builtin) {
         int status = shape_builtin(node, type, mesh);
@@ -92,7 +94,13 @@ static int shape_geometry(loader *ld, xmlNodePtr node, const char *type, mesh_da
         if (status < 0)
             return -1;
     }
+    if (face_normals) {
+        free(mesh->normals);
+        mesh->normals = NULL;
+    }
     shapes_transform(mesh, &to_world);
+    if (!builtin && !face_normals && !mesh->normals)
+        shapes_smooth_normals(mesh);
     /* A built-in shape's normal is transformed as a normal, so a mirror flips its winding. */
     if (builtin && xform_determinant3(&to_world) < 0.0)
         flip = !flip;
@@ -197,6 +205,7 @@ int mitsuba_load_shape(loader *ld, xmlNodePtr node)
     scene_mesh *added = scene_add_mesh(ld->s, name, type, file, (int)xmlGetLineNo(node),
                                        mesh.vertex_count, mesh.positions, mesh.triangle_count,
                                        mesh.indices, mesh.texcoords);
+    added->normals = mesh.normals;
     free(file);
     int material = shape_material(ld, has_inline_bsdf ? &inline_bsdf : NULL, parts.bsdf_entry,
                                   added->name);

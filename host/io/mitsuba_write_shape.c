@@ -103,6 +103,31 @@ static int property_dropped(const char *type, xmlNodePtr child)
            (strcmp(type, "obj") == 0 && is_any_property(child, obj, sizeof obj / sizeof *obj));
 }
 
+/* A built-in shape with edges (all but the sphere) is shaded flat; as a PLY without normals
+ * Mitsuba would smooth it (a cube's corners), so it says face_normals, in the document's
+ * dialect (faceNormals before version 2), unless it already does. */
+static void keep_flat_shading(xmlNodePtr shape, const char *type)
+{
+    static const char *const flat[] = {"rectangle", "cube", "disk"};
+    int is_flat = 0;
+    for (size_t i = 0; i < sizeof flat / sizeof *flat; i++)
+        is_flat |= strcmp(type, flat[i]) == 0;
+    if (!is_flat)
+        return;
+    for (xmlNodePtr child = xmlFirstElementChild(shape); child; child = xmlNextElementSibling(child))
+        if (mitsuba_is_property(child, "face_normals"))
+            return;
+    xmlNodePtr root = xmlDocGetRootElement(shape->doc);
+    xmlChar *version = root ? xmlGetProp(root, (const xmlChar *)"version") : NULL;
+    int old_dialect = version && version[0] >= '0' && version[0] <= '1' && version[1] == '.';
+    xmlFree(version);
+    xmlNodePtr element = xmlNewDocNode(shape->doc, NULL, (const xmlChar *)"boolean", NULL);
+    xmlNewProp(element, (const xmlChar *)"name",
+               (const xmlChar *)(old_dialect ? "faceNormals" : "face_normals"));
+    xmlNewProp(element, (const xmlChar *)"value", (const xmlChar *)"true");
+    add_only_child(shape, element);
+}
+
 void mitsuba_shape_to_ply(xmlNodePtr shape, const char *ply)
 {
     char type[64];
@@ -119,6 +144,7 @@ void mitsuba_shape_to_ply(xmlNodePtr shape, const char *ply)
         else if (property_dropped(type, child))
             remove_with_indent(child);
     }
+    keep_flat_shading(shape, type);
     xmlSetProp(shape, (const xmlChar *)"type", (const xmlChar *)"ply");
     if (filename)
         xmlSetProp(filename, (const xmlChar *)"value", (const xmlChar *)ply);

@@ -2,6 +2,7 @@
 #include "io/shapes.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "core/error.h"
@@ -94,6 +95,11 @@ void shapes_sphere(const double center[3], double radius, unsigned int rings, un
                               center[2] + radius * cos(theta));
         }
     }
+    /* Mitsuba's sphere is smooth: its shading normal is the radial direction. */
+    out->normals = xmalloc(sizeof(float) * 3 * vertices);
+    for (uint32_t v = 0; v < vertices; v++)
+        for (int k = 0; k < 3; k++)
+            out->normals[3 * v + k] = (float)((out->positions[3 * v + k] - center[k]) / radius);
     for (unsigned int s = 0; s < segments; s++) {
         shapes_set_triangle(out, t++, 0, shapes_sphere_vertex(segments, 1, s),
                             shapes_sphere_vertex(segments, 1, s + 1));
@@ -122,6 +128,53 @@ void shapes_flip_winding(mesh_data *mesh)
 void shapes_transform(mesh_data *mesh, const xform *to_world)
 {
     xform_apply_points(to_world, mesh->positions, mesh->vertex_count);
+    if (mesh->normals)
+        xform_apply_normals(to_world, mesh->normals, mesh->vertex_count);
+}
+
+/* The angle at corner a of triangle (a, b, c), in double. */
+static double corner_angle(const float *a, const float *b, const float *c)
+{
+    double u[3], v[3], cross[3];
+    for (int k = 0; k < 3; k++) {
+        u[k] = (double)b[k] - a[k];
+        v[k] = (double)c[k] - a[k];
+    }
+    xform_cross(u, v, cross);
+    return atan2(sqrt(xform_dot(cross, cross)), xform_dot(u, v));
+}
+
+void shapes_smooth_normals(mesh_data *mesh)
+{
+    free(mesh->normals);
+    double *sum = xcalloc(3 * (size_t)mesh->vertex_count, sizeof *sum);
+    for (uint32_t t = 0; t < mesh->triangle_count; t++) {
+        const uint32_t *ix = &mesh->indices[3 * (size_t)t];
+        const float *p[3];
+        for (int k = 0; k < 3; k++)
+            p[k] = &mesh->positions[3 * (size_t)ix[k]];
+        double e1[3], e2[3], n[3];
+        for (int k = 0; k < 3; k++) {
+            e1[k] = (double)p[1][k] - p[0][k];
+            e2[k] = (double)p[2][k] - p[0][k];
+        }
+        xform_cross(e1, e2, n);
+        if (xform_normalize(n) == 0.0)
+            continue; /* a zero-area triangle has no direction to give */
+        for (int corner = 0; corner < 3; corner++) {
+            double angle = corner_angle(p[corner], p[(corner + 1) % 3], p[(corner + 2) % 3]);
+            for (int k = 0; k < 3; k++)
+                sum[3 * (size_t)ix[corner] + k] += angle * n[k];
+        }
+    }
+    mesh->normals = xmalloc(sizeof(float) * 3 * (size_t)mesh->vertex_count);
+    for (uint32_t v = 0; v < mesh->vertex_count; v++) {
+        double *n = &sum[3 * (size_t)v];
+        double length = xform_normalize(n);
+        for (int k = 0; k < 3; k++)
+            mesh->normals[3 * (size_t)v + k] = length > 0 ? (float)n[k] : 0.0f;
+    }
+    free(sum);
 }
 
 double shapes_signed_volume(const mesh_data *mesh)

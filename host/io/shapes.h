@@ -9,7 +9,8 @@
  *   cube       [-1,1]³, 8 vertices, 12 triangles
  *   disk       unit disk in z = 0, normal +z: a centre vertex and `segments` rim vertices
  *   sphere     UV sphere about `center`, poles on ±z: 2 + (rings-1)·segments vertices,
- *              2·segments·(rings-1) triangles (1984 with the default 32 × 32) */
+ *              2·segments·(rings-1) triangles (1984 with the default 32 × 32), with radial
+ *              vertex normals (Mitsuba's sphere is smooth); the others have none (flat). */
 #ifndef IDMR_SHAPES_H
 #define IDMR_SHAPES_H
 
@@ -31,10 +32,18 @@ void shapes_sphere(const double center[3], double radius, unsigned int rings, un
 /* Reverses every triangle's winding (Mitsuba's flip_normals). */
 void shapes_flip_winding(mesh_data *mesh);
 
-/* Applies `to_world` to the positions; the winding is kept. (For built-in shapes Mitsuba
+/* Applies `to_world` to the positions (and the normals, if any: xform_apply_normals); the
+ * winding is kept. (For built-in shapes Mitsuba
  * transforms the normal, so a mirroring transform needs shapes_flip_winding() as well; for
  * mesh files Mitsuba's geometric normal follows the winding, so they are left alone.) */
 void shapes_transform(mesh_data *mesh, const xform *to_world);
+
+/* Replaces the mesh's normals by smooth vertex normals, as Mitsuba computes them for a mesh
+ * file without normals that is not marked face_normals: at each vertex the unit normals of the
+ * triangles around it, weighted by the triangle's angle at that vertex (Thürmer and Wüthrich
+ * 1998: independent of how a flat region is triangulated). Zero-area triangles add nothing; a
+ * vertex only they touch gets a zero normal (the kernels then shade it flat). */
+void shapes_smooth_normals(mesh_data *mesh);
 
 /* Signed volume enclosed by a closed mesh (positive when wound outward); for tests. */
 double shapes_signed_volume(const mesh_data *mesh);

@@ -134,6 +134,25 @@ void xform_apply_points(const xform *t, float *xyz, unsigned long count)
     }
 }
 
+void xform_apply_normals(const xform *t, float *xyz, unsigned long count)
+{
+    const double *m = t->m;
+    /* cofactor[row][col] of the 3x3 linear part, m[4 * row + col] */
+    double c[9] = {m[5] * m[10] - m[6] * m[9], m[6] * m[8] - m[4] * m[10], m[4] * m[9] - m[5] * m[8],
+                   m[2] * m[9] - m[1] * m[10], m[0] * m[10] - m[2] * m[8], m[1] * m[8] - m[0] * m[9],
+                   m[1] * m[6] - m[2] * m[5], m[2] * m[4] - m[0] * m[6], m[0] * m[5] - m[1] * m[4]};
+    for (unsigned long i = 0; i < count; i++) {
+        double n[3], out[3];
+        for (int k = 0; k < 3; k++)
+            n[k] = xyz[3 * i + k];
+        for (int row = 0; row < 3; row++)
+            out[row] = c[3 * row] * n[0] + c[3 * row + 1] * n[1] + c[3 * row + 2] * n[2];
+        double length = xform_normalize(out);
+        for (int k = 0; k < 3; k++)
+            xyz[3 * i + k] = length > 0 ? (float)out[k] : 0.0f;
+    }
+}
+
 double xform_determinant3(const xform *t)
 {
     const double *m = t->m;

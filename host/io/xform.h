@@ -37,6 +37,12 @@ void xform_apply_vector(const xform *t, const double v[3], double out[3]);
 /* Transforms `count` xyz float points in place. */
 void xform_apply_points(const xform *t, float *xyz, unsigned long count);
 
+/* Transforms `count` xyz float normals in place by the inverse transpose of the linear part
+ * (its cofactor matrix: the same direction, without inverting) and normalises them; a normal
+ * that is zero, or that the transform collapses, becomes zero. Orientation is not kept under a
+ * mirroring transform (callers orient shading normals by the geometric one). */
+void xform_apply_normals(const xform *t, float *xyz, unsigned long count);
+
 /* Determinant of the linear 3x3 part (negative: the transform mirrors). */
 double xform_determinant3(const xform *t);
 

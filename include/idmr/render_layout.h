@@ -29,7 +29,7 @@ typedef struct idmr_render_hit {
     float throughput[3];   /* product of the specular weights along the camera path */
     unsigned int material; /* of the surface the hit point lies on */
     float outgoing[3];     /* unit: from the hit point back along the camera path */
-    float pad;
+    unsigned int shading_normal; /* packed (idmr/normal_packing.h), facing the camera path */
     float emitted[3];      /* radiance of the emitters the camera path saw */
     float pad2;
 } idmr_render_hit;

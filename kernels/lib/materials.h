@@ -4,8 +4,11 @@
  * compiled out (features.h).
  *
  * Conventions: n is a triangle's unit winding normal (its "front" side, Mitsuba's convention
- * for one-sided bsdfs); d is the unit direction a path travels; n_side is n turned to face the
- * side a path arrives from. */
+ * for one-sided bsdfs); ns the shading normal there (scene.h: shading_normal, in n's
+ * hemisphere); d is the unit direction a path travels; n_side is ns turned to face the side a
+ * path arrives from. Which side a path is on, and so whether it enters a dielectric or meets
+ * a one-sided surface's back, is the geometric normal's business; directions and lobes are
+ * the shading normal's, as in Mitsuba. */
 #ifndef IDMR_KERNEL_MATERIALS_H
 #define IDMR_KERNEL_MATERIALS_H
 
@@ -50,16 +53,18 @@ inline bool side_reflects(const global idmr_material *m, float3 d, float3 n)
 
 /* Smooth specular continuation (mirror, dielectric): the direction after the interface, the
  * choice between reflection and refraction made with probability Fresnel. n is the winding
- * normal, d the unit incoming direction. */
-inline float3 scatter_specular(const global idmr_material *m, float3 d, float3 n, idmr_rng *rng)
+ * normal (it says whether the path enters), ns the shading normal (it bends the path),
+ * d the unit incoming direction. */
+inline float3 scatter_specular(const global idmr_material *m, float3 d, float3 n, float3 ns,
+                               idmr_rng *rng)
 {
-    float cos_dn = dot(d, n);
-    float3 n_side = cos_dn < 0.0f ? n : -n; /* faces the incoming side */
+    float cos_ds = dot(d, ns);
+    float3 n_side = cos_ds < 0.0f ? ns : -ns; /* faces the incoming direction */
 #if HAS_FEATURE(IDMR_FEATURE_DIELECTRIC)
     if (m->kind == IDMR_MATERIAL_DIELECTRIC) {
-        bool entering = cos_dn < 0.0f;
+        bool entering = dot(d, n) < 0.0f;
         float eta = entering ? m->ext_ior / m->int_ior : m->int_ior / m->ext_ior;
-        float cos_i = fabs(cos_dn);
+        float cos_i = fabs(cos_ds);
         float f = fresnel_dielectric(cos_i, eta);
         if (m->flags & IDMR_MATERIAL_THIN) {
             /* A thin slab: multiple internal reflections, no refraction of the direction. */
@@ -104,17 +109,20 @@ inline float ggx_g1(float cos_v, float alpha)
  * importance paths carry no flux, so the roulette is their only absorption. A one-sided
  * surface absorbs what arrives at its back.
  *
+ * Shading normals need no correction here: the adjoint BSDF's factor |o·ns| / |o·n| (Veach
+ * 1997, §5.3) times the geometric cosine |o·n| of the next vertex leaves |o·ns|, which sampling
+ * around ns divides out; the radiance estimate applies the other half (sppm.cl: render_gather).
+ *
  * Glossy lobes (GGX): the microfacet normal h is sampled in proportion to D(h) cos θ_h, so the
  * weight of the reflection is the lobe colour × G(i, o) |i·h| / (cos_i cos θ_h). A plastic
  * chooses its coating with probability Fresnel(cos_i), which the lobe's Fresnel factor cancels.
  * Roughness is at least IDMR_MIN_GLOSSY_ROUGHNESS, so that a glossy lobe is never a delta the
  * renderer's density estimate cannot see. */
 #define IDMR_MIN_GLOSSY_ROUGHNESS 0.05f
-inline int scatter(const global idmr_material *m, float3 *d, float3 n, idmr_rng *rng,
+inline int scatter(const global idmr_material *m, float3 *d, float3 n, float3 ns, idmr_rng *rng,
                    float3 *weight)
 {
-    float cos_dn = dot(*d, n);
-    float3 n_side = cos_dn < 0.0f ? n : -n;
+    float3 n_side = dot(*d, n) < 0.0f ? ns : -ns;
     if (material_is_specular(m)) {
         float3 colour = m->kind == IDMR_MATERIAL_MIRROR ? vload3(0, m->specular) : (float3)(1.0f);
         float survival = max3(colour);
@@ -122,7 +130,7 @@ inline int scatter(const global idmr_material *m, float3 *d, float3 n, idmr_rng 
             return SCATTER_ABSORBED;
         if (idmr_rng_float(rng) >= survival)
             return SCATTER_ABSORBED;
-        *d = scatter_specular(m, *d, n, rng);
+        *d = scatter_specular(m, *d, n, ns, rng);
         *weight = colour / survival;
         return SCATTER_SPECULAR;
     }
@@ -132,7 +140,7 @@ inline int scatter(const global idmr_material *m, float3 *d, float3 n, idmr_rng 
 #if HAS_FEATURE(IDMR_FEATURE_GLOSSY)
     if (m->kind == IDMR_MATERIAL_GLOSSY) {
         bool metal = max3(diffuse) <= 0.0f;
-        float cos_i = -dot(*d, n_side);
+        float cos_i = fmax(0.0f, -dot(*d, n_side));
         /* A plastic's coating reflects with Fresnel probability, a metal always. */
         float f = metal ? 1.0f : fresnel_dielectric(cos_i, m->ext_ior / m->int_ior);
         if (idmr_rng_float(rng) < f) {

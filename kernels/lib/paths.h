@@ -88,7 +88,7 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
     idmr_hit_point hp = {{0.0f, 0.0f, 0.0f}, pixel, {0.0f, 0.0f, 0.0f}, 0u}; /* none yet */
 #if PASS_RENDER
     float3 throughput = (float3)(1.0f), radiance = (float3)(0.0f);
-    idmr_render_hit rh = {{0.0f, 0.0f, 0.0f}, 0u, {0.0f, 0.0f, 0.0f}, 0.0f,
+    idmr_render_hit rh = {{0.0f, 0.0f, 0.0f}, 0u, {0.0f, 0.0f, 0.0f}, 0u,
                           {0.0f, 0.0f, 0.0f}, 0.0f}; /* zero where there is no hit point */
 #endif
     for (int depth = 0; depth < IDMR_CAMERA_DEPTH; depth++) {
@@ -100,6 +100,7 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
             break;
         }
         float3 n = scene->triangle_normals[hit.triangle].xyz;
+        float3 ns = shading_normal(scene, hit, n);
         float3 p = origin + hit.t * d;
         global const idmr_material *m = triangle_material(scene, hit.triangle);
 #if PASS_IMPORTANCE && IDMR_ACCUMULATE_IMPORTANCE && IDMR_CAMERA_IMPORTANCE
@@ -119,6 +120,8 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
 #if PASS_RENDER
             vstore3(throughput, 0, rh.throughput);
             rh.material = scene->triangle_materials[hit.triangle];
+            float3 ns_side = dot(d, n) < 0.0f ? ns : -ns;
+            rh.shading_normal = idmr_pack_unit_vector(ns_side.x, ns_side.y, ns_side.z);
             vstore3(-d, 0, rh.outgoing);
 #endif
             break;
@@ -128,7 +131,7 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
         if (m->kind == IDMR_MATERIAL_MIRROR)
             throughput *= vload3(0, m->specular);
 #endif
-        d = scatter_specular(m, d, n, &rng);
+        d = scatter_specular(m, d, n, ns, &rng);
         origin = offset_origin(p, dot(d, n_side) > 0.0f ? n_side : -n_side, params->ray_epsilon);
 #endif
     }
@@ -157,6 +160,7 @@ inline uint photon_path(const scene_view *scene, const idmr_sppm_params *params,
         if (hit.triangle == IDMR_NO_HIT)
             break;
         float3 n = scene->triangle_normals[hit.triangle].xyz;
+        float3 ns = shading_normal(scene, hit, n);
         float3 p = origin + hit.t * d;
         float3 n_side = dot(d, n) < 0.0f ? n : -n;
         global const idmr_material *m = triangle_material(scene, hit.triangle);
@@ -180,7 +184,7 @@ inline uint photon_path(const scene_view *scene, const idmr_sppm_params *params,
         }
 #endif
         float3 weight;
-        if (scatter(m, &d, n, &rng, &weight) == SCATTER_ABSORBED)
+        if (scatter(m, &d, n, ns, &rng, &weight) == SCATTER_ABSORBED)
             break;
 #if PASS_RENDER
         flux *= weight;

@@ -5,6 +5,8 @@
  *
  *   nodes, leaves          the BVH (idmr/bvh_layout.h)
  *   triangle_normals       float4 per scene triangle: unit winding normal, w = area
+ *   triangle_shading       uint4 per scene triangle: corner shading normals packed
+ *                          (idmr/normal_packing.h), w = 1; w = 0: shaded flat
  *   triangle_materials     uint per scene triangle: index into materials
  *   materials, lights      idmr_material[], idmr_light[]
  *   light_cdf              per light: cumulative power, last entry 1
@@ -17,10 +19,13 @@
 #include "idmr/bvh_layout.h"
 #include "idmr/light.h"
 #include "idmr/material.h"
+#include "idmr/normal_packing.h"
+#include "idmr/ray.h"
 
 #define SCENE_BUFFERS                                                                        \
     global const idmr_bvh_node *nodes, global const idmr_triangle4 *leaves,                  \
-        global const float4 *triangle_normals, global const uint *triangle_materials,        \
+        global const float4 *triangle_normals, global const uint4 *triangle_shading,         \
+        global const uint *triangle_materials,                                               \
         global const idmr_material *materials, global const idmr_light *lights,              \
         global const float *light_cdf, global const float *emitter_cdf,                      \
         global const float4 *emitter_triangles
@@ -29,6 +34,7 @@ typedef struct scene_view {
     global const idmr_bvh_node *nodes;
     global const idmr_triangle4 *leaves;
     global const float4 *triangle_normals;
+    global const uint4 *triangle_shading;
     global const uint *triangle_materials;
     global const idmr_material *materials;
     global const idmr_light *lights;
@@ -39,13 +45,37 @@ typedef struct scene_view {
 
 /* The scene_view of a kernel that takes SCENE_BUFFERS. */
 #define SCENE_VIEW()                                                                         \
-    ((scene_view){nodes, leaves, triangle_normals, triangle_materials, materials, lights,   \
-                  light_cdf, emitter_cdf, emitter_triangles})
+    ((scene_view){nodes, leaves, triangle_normals, triangle_shading, triangle_materials,     \
+                  materials, lights, light_cdf, emitter_cdf, emitter_triangles})
 
 /* The material of scene triangle t. */
 inline global const idmr_material *triangle_material(const scene_view *scene, uint t)
 {
     return scene->materials + scene->triangle_materials[t];
+}
+
+/* The shading normal at `hit` on a triangle with unit winding normal n: the corners' vertex
+ * normals interpolated with the hit's barycentrics and normalised, turned into n's hemisphere
+ * (so that the side a path is on is always the geometric one); n itself where the triangle is
+ * shaded flat or the interpolation vanishes. */
+inline float3 shading_normal(const scene_view *scene, idmr_hit hit, float3 n)
+{
+    uint4 packed = scene->triangle_shading[hit.triangle];
+    if (packed.w == 0u)
+        return n;
+    float c0[3], c1[3], c2[3];
+    idmr_unpack_unit_vector(packed.x, c0);
+    idmr_unpack_unit_vector(packed.y, c1);
+    idmr_unpack_unit_vector(packed.z, c2);
+    float w0 = 1.0f - hit.u - hit.v;
+    float3 s = w0 * normalize((float3)(c0[0], c0[1], c0[2])) +
+               hit.u * normalize((float3)(c1[0], c1[1], c1[2])) +
+               hit.v * normalize((float3)(c2[0], c2[1], c2[2]));
+    float length2 = dot(s, s);
+    if (!(length2 > 1e-12f))
+        return n;
+    s *= rsqrt(length2);
+    return dot(s, n) < 0.0f ? -s : s;
 }
 
 /* Offsets a surface point to the side `side` (a unit normal) points to, so that a ray leaving
