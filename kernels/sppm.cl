@@ -187,28 +187,6 @@ inline ulong radiance_units(float c, float scale)
     return units > 0.0f ? (ulong)(fmin(units, IDMR_RENDER_CONTRIBUTION_LIMIT) + 0.5f) : 0ul;
 }
 
-inline float3 unpack_shading_normal(uint packed)
-{
-    float xyz[3];
-    idmr_unpack_unit_vector(packed, xyz);
-    return normalize((float3)(xyz[0], xyz[1], xyz[2]));
-}
-
-/* Photons arrive with a density in proportion to |incoming·n| (the geometric normal); the
- * radiance a shading normal reflects is in proportion to |incoming·ns| (Veach 1997, §5.3), so
- * each photon counts |incoming·ns| / |incoming·n|. Limited to IDMR_SHADING_CORRECTION_LIMIT,
- * since a photon grazing a facet that the shading normal faces would otherwise carry a
- * weight without bound (a small, bright bias instead of fireflies). 1 on a flat triangle. */
-#define IDMR_SHADING_CORRECTION_LIMIT 10.0f
-inline float shading_correction(float3 incoming, float3 ns, float3 n)
-{
-    float cos_geometric = fabs(dot(incoming, n));
-    float cos_shading = fabs(dot(incoming, ns));
-    return cos_shading < IDMR_SHADING_CORRECTION_LIMIT * cos_geometric
-               ? cos_shading / cos_geometric
-               : IDMR_SHADING_CORRECTION_LIMIT;
-}
-
 kernel void render_gather(idmr_sppm_params params, global const idmr_render_photon *photons,
                           global const uint *path_length, global const idmr_hit_point *hit_points,
                           global const idmr_render_hit *render_hits,
@@ -234,7 +212,7 @@ kernel void render_gather(idmr_sppm_params params, global const idmr_render_phot
             if (!hit_point_gathers(hp, p, side, r2))
                 continue;
             global const idmr_render_hit *rh = render_hits + index;
-            float3 ns = unpack_shading_normal(rh->shading_normal);
+            float3 ns = unpack_normal(rh->shading_normal);
             float3 c = vload3(0, rh->throughput) * flux *
                        brdf(materials + rh->material, incoming, vload3(0, rh->outgoing), ns) *
                        shading_correction(incoming, ns, vload3(0, hp->normal));

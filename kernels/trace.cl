@@ -1,6 +1,8 @@
 /* trace.cl — ray batches through the BVH: closest hit and any hit (occlusion).
- * Used by the traversal tests (against Embree) and the traversal benchmark; the light
- * transport kernels call traverse_closest()/traverse_any() from traverse.h directly. */
+ * Used by the traversal tests (against Embree), the shading tests and the traversal
+ * benchmark; the light transport kernels call traverse_closest()/traverse_any() from
+ * traverse.h directly. */
+#include "lib/shading.h"
 #include "lib/traverse.h"
 
 /* Ray i (of ray_count) as origin (xyz) with tmin (w) and direction (xyz) with tmax (w); false
@@ -36,4 +38,20 @@ kernel void trace_any(global const idmr_ray *rays, global idmr_hit *hits, uint r
     if (load_ray(rays, ray_count, get_global_id(0), &o, &d))
         hits[get_global_id(0)] =
             occlusion_hit(traverse_any(nodes, leaves, o.xyz, d.xyz, o.w, d.w), d.w);
+}
+
+/* The shading normal (lib/shading.h) at each closest hit; zero where a ray hit nothing. For the
+ * shading tests, against the host's interpolation of the mesh's normals. */
+kernel void hit_shading_normals(global const idmr_hit *hits, uint hit_count,
+                                global const float4 *triangle_normals,
+                                global const uint4 *triangle_shading, global float4 *normals)
+{
+    uint i = get_global_id(0);
+    if (i >= hit_count)
+        return;
+    idmr_hit hit = hits[i];
+    float3 n = (float3)(0.0f);
+    if (hit.triangle != IDMR_NO_HIT)
+        n = shading_normal(triangle_shading, hit, triangle_normals[hit.triangle].xyz);
+    normals[i] = (float4)(n, 0.0f);
 }

@@ -4,9 +4,9 @@
  * compiled out (features.h).
  *
  * Conventions: n is a triangle's unit winding normal (its "front" side, Mitsuba's convention
- * for one-sided bsdfs); ns the shading normal there (scene.h: shading_normal, in n's
- * hemisphere); d is the unit direction a path travels; n_side is ns turned to face the side a
- * path arrives from. Which side a path is on, and so whether it enters a dielectric or meets
+ * for one-sided bsdfs); ns the shading normal there (lib/shading.h: in n's hemisphere); d is
+ * the unit direction a path travels; n_side is ns turned to face the side a path arrives
+ * from. Which side a path is on, and so whether it enters a dielectric or meets
  * a one-sided surface's back, is the geometric normal's business; directions and lobes are
  * the shading normal's, as in Mitsuba. */
 #ifndef IDMR_KERNEL_MATERIALS_H

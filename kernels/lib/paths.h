@@ -30,6 +30,7 @@
 #include "lib/lights.h"
 #include "lib/materials.h"
 #include "lib/scene.h"
+#include "lib/shading.h"
 #include "lib/traverse.h"
 
 #ifndef IDMR_SPPM_PASS
@@ -100,7 +101,7 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
             break;
         }
         float3 n = scene->triangle_normals[hit.triangle].xyz;
-        float3 ns = shading_normal(scene, hit, n);
+        float3 ns = shading_normal(scene->triangle_shading, hit, n);
         float3 p = origin + hit.t * d;
         global const idmr_material *m = triangle_material(scene, hit.triangle);
 #if PASS_IMPORTANCE && IDMR_ACCUMULATE_IMPORTANCE && IDMR_CAMERA_IMPORTANCE
@@ -160,7 +161,7 @@ inline uint photon_path(const scene_view *scene, const idmr_sppm_params *params,
         if (hit.triangle == IDMR_NO_HIT)
             break;
         float3 n = scene->triangle_normals[hit.triangle].xyz;
-        float3 ns = shading_normal(scene, hit, n);
+        float3 ns = shading_normal(scene->triangle_shading, hit, n);
         float3 p = origin + hit.t * d;
         float3 n_side = dot(d, n) < 0.0f ? n : -n;
         global const idmr_material *m = triangle_material(scene, hit.triangle);

@@ -5,8 +5,7 @@
  *
  *   nodes, leaves          the BVH (idmr/bvh_layout.h)
  *   triangle_normals       float4 per scene triangle: unit winding normal, w = area
- *   triangle_shading       uint4 per scene triangle: corner shading normals packed
- *                          (idmr/normal_packing.h), w = 1; w = 0: shaded flat
+ *   triangle_shading       uint4 per scene triangle: corner shading normals (lib/shading.h)
  *   triangle_materials     uint per scene triangle: index into materials
  *   materials, lights      idmr_material[], idmr_light[]
  *   light_cdf              per light: cumulative power, last entry 1
@@ -19,8 +18,6 @@
 #include "idmr/bvh_layout.h"
 #include "idmr/light.h"
 #include "idmr/material.h"
-#include "idmr/normal_packing.h"
-#include "idmr/ray.h"
 
 #define SCENE_BUFFERS                                                                        \
     global const idmr_bvh_node *nodes, global const idmr_triangle4 *leaves,                  \
@@ -52,30 +49,6 @@ typedef struct scene_view {
 inline global const idmr_material *triangle_material(const scene_view *scene, uint t)
 {
     return scene->materials + scene->triangle_materials[t];
-}
-
-/* The shading normal at `hit` on a triangle with unit winding normal n: the corners' vertex
- * normals interpolated with the hit's barycentrics and normalised, turned into n's hemisphere
- * (so that the side a path is on is always the geometric one); n itself where the triangle is
- * shaded flat or the interpolation vanishes. */
-inline float3 shading_normal(const scene_view *scene, idmr_hit hit, float3 n)
-{
-    uint4 packed = scene->triangle_shading[hit.triangle];
-    if (packed.w == 0u)
-        return n;
-    float c0[3], c1[3], c2[3];
-    idmr_unpack_unit_vector(packed.x, c0);
-    idmr_unpack_unit_vector(packed.y, c1);
-    idmr_unpack_unit_vector(packed.z, c2);
-    float w0 = 1.0f - hit.u - hit.v;
-    float3 s = w0 * normalize((float3)(c0[0], c0[1], c0[2])) +
-               hit.u * normalize((float3)(c1[0], c1[1], c1[2])) +
-               hit.v * normalize((float3)(c2[0], c2[1], c2[2]));
-    float length2 = dot(s, s);
-    if (!(length2 > 1e-12f))
-        return n;
-    s *= rsqrt(length2);
-    return dot(s, n) < 0.0f ? -s : s;
 }
 
 /* Offsets a surface point to the side `side` (a unit normal) points to, so that a ray leaving
