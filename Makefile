@@ -137,8 +137,10 @@ $(BUILD)/tests/bench_decimation: tests/bench_decimation.c $(BUILD)/libidmr.a $(F
 test: bin/idmr kernels $(TEST_PROGRAMS)
 	@scripts/run-tests.sh $(TEST_PROGRAMS)
 
-bench: bin/idmr $(BENCH_PROGRAMS)
+# The benchmark programs, then the reduction error of each method (scripts/bench-reduction-quality).
+bench: bin/idmr kernels $(BENCH_PROGRAMS)
 	@set -e; for b in $(BENCH_PROGRAMS); do $$b; done
+	@scripts/bench-reduction-quality
 
 demo: bin/idmr kernels
 	@scripts/demo.sh

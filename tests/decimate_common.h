@@ -208,11 +208,11 @@ static inline void model_close(model_fixture *f)
  * neighbours (i±1, j), (i, j±1), (i+1, j+1), (i-1, j-1) around a convex hexagon. */
 static inline void make_grid(unsigned int size, double spike, mesh_data *m)
 {
+    memset(m, 0, sizeof *m);
     m->vertex_count = size * size;
     m->triangle_count = 2 * (size - 1) * (size - 1);
     m->positions = malloc(sizeof(float) * 3 * m->vertex_count);
     m->indices = malloc(sizeof(uint32_t) * 3 * m->triangle_count);
-    m->texcoords = NULL;
     for (unsigned int j = 0; j < size; j++)
         for (unsigned int i = 0; i < size; i++) {
             float *p = &m->positions[3 * (j * size + i)];

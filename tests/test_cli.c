@@ -453,8 +453,8 @@ static void test_refused(void **state)
 
 #define SHORT_PASS "--iterations 2 --photons 20000 --resolution 0.25 --quiet"
 
-/* The shipped scene reduced to 0.2 by both importance methods (a short importance pass, the
- * same seed): out/ by method importance, hybrid/ by importance-quadric. */
+/* The shipped scene reduced to 0.2 by two importance methods (a short importance pass, the
+ * same seed): out/ by the default method (combined), hybrid/ by importance-quadric. */
 static shared_runs reductions = {
     .prefix = "idmr-cli-reduce",
     .commands = {"bin/idmr reduce data/cornell/scene.xml --target 0.2 -o %s/out " SHORT_PASS,
@@ -467,7 +467,7 @@ static void test_reduce_meets_requested_vertices(void **state)
     cJSON *report = shared_runs_json(&reductions, "out/report.json");
     assert_non_null(strstr(reductions.results[0].err, "reduced scene in"));
     assert_true(number(report, "vertices_after") == number(report, "vertices_requested"));
-    assert_string_equal(string(report, "method"), "importance");
+    assert_string_equal(string(report, "method"), "combined");
     cJSON_Delete(report);
 }
 

@@ -470,6 +470,7 @@ static void test_v3_in_fragment_copies_it(void **state)
     assert_has(r.text, "<include filename=\"includes/frag.xml\"/>");
     assert_has(r.text, "<shape type=\"ply\" id=\"box\">\n"
                        "        <string name=\"filename\" value=\"meshes/box.ply\"/>\n"
+                       "        <boolean name=\"face_normals\" value=\"true\"/>\n"
                        "    </shape>");
     reduction_finish(&r);
 }
@@ -661,6 +662,7 @@ static void test_v05_replaced_shapes_text(void **state)
                        "\t\t<emitter type=\"area\">");
     assert_has(r.text, "<shape type=\"ply\" id=\"Backdrop\">\n"
                        "\t\t<string name=\"filename\" value=\"meshes/Backdrop.ply\"/>\n"
+                       "\t\t<boolean name=\"faceNormals\" value=\"true\"/>\n"
                        "\t</shape>");
     reduction_finish(&r);
 }

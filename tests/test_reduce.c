@@ -72,7 +72,7 @@ static void check_cornell_files(const char *dir)
 static void check_cornell_totals(const reduction *r, const scene *s)
 {
     const cJSON *report = r->report;
-    assert_method(report, "importance");
+    assert_method(report, "combined");
     assert_true(number(report, "target") == 0.1);
     uint64_t before = (uint64_t)number(report, "vertices_before");
     uint64_t after = (uint64_t)number(report, "vertices_after");

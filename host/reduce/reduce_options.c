@@ -11,7 +11,7 @@ void reduce_options_default(reduce_options *o)
     memset(o, 0, sizeof *o);
     importance_options_default(&o->importance);
     o->target = 0.1;
-    o->method = REDUCE_IMPORTANCE;
+    o->method = REDUCE_COMBINED;
     o->min_vertices = 16;
     o->max_normal_angle = 60.0;
 }
