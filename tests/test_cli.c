@@ -410,6 +410,41 @@ static void test_each_bsdf_warns_once(void **state)
     remove_tree(dir);
 }
 
+/* ---- help ---- */
+
+/* `idmr COMMAND --help` and `idmr help COMMAND` print the same text on stdout and exit 0: that
+ * command's options, with the SPPM options only where the command takes them, and nothing of
+ * the other commands'; `idmr --help` holds every command's part. */
+static void test_command_help(void **state)
+{
+    static const struct {
+        const char *command, *own_option;
+        int sppm;
+    } cases[] = {{"render", "--exposure EV", 1},
+                 {"reduce", "--method M            combined", 1},
+                 {"importance", "--shadow-weight", 1},
+                 {"info", "--no-bvh", 0},
+                 {"compare", "--paired", 0},
+                 {"kernels", "kernels [--device N]", 0},
+                 {"devices", "devices [--json]", 0}};
+    run_result all = run("bin/idmr --help");
+    assert_succeeded(&all);
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        run_result r = run("bin/idmr %s --help", cases[i].command);
+        run_result h = run("bin/idmr help %s", cases[i].command);
+        assert_succeeded(&r);
+        assert_succeeded(&h);
+        assert_string_equal(r.out, h.out);
+        if (!strstr(r.out, cases[i].own_option) || !strstr(all.out, cases[i].own_option))
+            fail_msg("'%s' lacks '%s':\n%s", r.command, cases[i].own_option, r.out);
+        assert_int_equal(strstr(r.out, "--iterations N") != NULL, cases[i].sppm);
+        assert_int_equal(strstr(r.out, "--diff-max") != NULL, !strcmp(cases[i].command, "compare"));
+        run_free(&r);
+        run_free(&h);
+    }
+    run_free(&all);
+}
+
 /* ---- refused command lines: exit 2 and a message naming the problem, before any work ---- */
 
 typedef struct refusal {
@@ -418,6 +453,8 @@ typedef struct refusal {
 
 static const refusal REFUSALS[] = {
     {"bin/idmr frobnicate", "unknown command"},
+    {"bin/idmr help frobnicate", "help: unknown command 'frobnicate'"},
+    {"bin/idmr help render reduce", "help: expected at most one COMMAND"},
     {"bin/idmr info", "info: expected one SCENE argument"},
     {"bin/idmr info --bogus data/cornell/scene.xml", "info: unknown option --bogus"},
     {"bin/idmr info /nonexistent/scene.xml", "/nonexistent/scene.xml"},
@@ -620,6 +657,7 @@ int main(void)
         cmocka_unit_test(test_render_images_beside_each_other),
         cmocka_unit_test(test_compare_image_with_itself),
         cmocka_unit_test(test_compare_other_seed),
+        cmocka_unit_test(test_command_help),
     };
     struct CMUnitTest refused[sizeof REFUSALS / sizeof *REFUSALS];
     for (size_t i = 0; i < sizeof REFUSALS / sizeof *REFUSALS; i++)

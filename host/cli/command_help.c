@@ -1,77 +1,116 @@
-/* command_help.c — the help text of bin/idmr (idmr --help, idmr help): the commands with
- * their own options, then the options the SPPM core gives importance, reduce and render. */
+/* command_help.c — the help text of bin/idmr: the whole of it (idmr --help, idmr help) and one
+ * command's part (idmr help COMMAND, idmr COMMAND --help). Each command's text is written once,
+ * in COMMAND_HELP; the SPPM options, which importance, reduce and render share, once as well. */
+#include <string.h>
+
 #include "cli/commands.h"
+
+static const char HEADER[] =
+    "usage: idmr [-v] COMMAND [options]\n"
+    "\n"
+    "Illumination-driven mesh reduction: learn which triangles carry the light a camera\n"
+    "sees, then decimate a Mitsuba scene to a vertex budget.\n";
+
+/* One command's usage lines and options. `sppm`: it takes the SPPM options too. */
+static const struct {
+    const char *name;
+    int sppm;
+    const char *text;
+} COMMAND_HELP[] = {
+    {"devices", 0, "  devices [--json]          list OpenCL platforms and devices\n"},
+    {"info", 0,
+     "  info SCENE [--json]       meshes, materials, lights, camera, bounding box, feature\n"
+     "                            bits and device memory of a Mitsuba scene\n"
+     "      --no-bvh              skip the BVH build (memory then excludes the BVH)\n"},
+    {"importance", 1,
+     "  importance SCENE -o DIR   learn which triangles carry the light the camera sees;\n"
+     "                            writes DIR/report.json, convergence.csv, importance.png\n"
+     "                            and importance/<mesh>.ply; takes the SPPM options\n"
+     "      --tolerance E         stop once the change per iteration stays below E\n"
+     "      --gamma G             weight of camera paths against light paths (default 1)\n"
+     "      --shadow-weight W     weight of the triangles that cast the shadows the camera\n"
+     "                            sees (default 1; 0: no shadow rays)\n"},
+    {"reduce", 1,
+     "  reduce SCENE --target D -o OUTDIR\n"
+     "                            the reduced scene: OUTDIR/scene.xml and meshes/*.ply with\n"
+     "                            about D of all vertices; takes the options of importance\n"
+     "      --method M            combined (default: importance budgets each mesh and\n"
+     "                            weights its quadric error; open boundaries held),\n"
+     "                            importance (the paper's: importance orders collapses),\n"
+     "                            quadric (uniform D, view-independent) or\n"
+     "                            importance-quadric (importance budgets per mesh, plain\n"
+     "                            quadric collapses within each)\n"
+     "      --min-vertices N      meshes this small are not decimated (default 16)\n"
+     "      --max-normal-angle A  no collapse turns a face more than A degrees (default 60)\n"
+     "      --keep NAME           never decimate mesh NAME (repeatable; emitters never are)\n"
+     "      --threads N           decimation threads (default: all cores)\n"
+     "      --force               write into a non-empty OUTDIR\n"},
+    {"render", 1,
+     "  render SCENE -o IMAGE     stochastic progressive photon mapping: IMAGE.exr (linear),\n"
+     "                            IMAGE.png (sRGB) and IMAGE.json (timings, device memory);\n"
+     "                            takes the SPPM options\n"
+     "      --exposure EV         PNG brightness: linear values times 2^EV (default 0)\n"},
+    {"compare", 0,
+     "  compare A B [--diff D.png] [--json]\n"
+     "                            RMSE, PSNR and relative MSE of image A against the\n"
+     "                            reference B (linear RGB), and a false-colour error image\n"
+     "      --diff-max E          top of the error image's ramp (default: the 99th\n"
+     "                            percentile of the error)\n"
+     "  compare --paired A1 A2 B1 B2 [--tile N] [--json]\n"
+     "                            the change a reduction makes to the converged image, render\n"
+     "                            noise cancelled: A = original, B = reduced scene, 1 and 2\n"
+     "                            two seeds; reduction_rmse ± standard error (N-pixel tiles,\n"
+     "                            default 16)\n"},
+    {"kernels", 0,
+     "  kernels [--device N] [--quiet]\n"
+     "                            build every kernel program variant on the device (a\n"
+     "                            kernel error fails with its build log; warms the cache)\n"},
+};
+
+static const char SPPM_OPTIONS[] =
+    "SPPM options (the photon-mapping core of importance, reduce and render):\n"
+    "      --iterations N        iterations (default 100; render: 64)\n"
+    "      --time-limit S        stop after the iteration in which S seconds pass\n"
+    "      --radius R            first gather radius (default: 2.5 pixel footprints at the\n"
+    "                            median distance of what the camera sees)\n"
+    "      --photons P           photon paths per iteration (default 1,000,000 on a GPU,\n"
+    "                            500,000 on a CPU)\n"
+    "      --alpha A             SPPM radius reduction (default 0.7)\n"
+    "      --resolution F        scale of the scene's film for hit points (default 1)\n"
+    "      --seed S              random seed (default 1)\n"
+    "      --device N            OpenCL device (see `idmr devices`)\n"
+    "      --quiet               no progress on stderr\n"
+    "      --generic             kernels with every feature, not only the scene's\n";
+
+static const char GLOBAL_OPTIONS[] =
+    "global options:\n"
+    "  -v, --verbose             log progress, kernel build options and timings\n"
+    "  -h, --help                this text (idmr COMMAND --help: that command's)\n"
+    "      --version             print the version\n"
+    "\n"
+    "environment:\n"
+    "  IDMR_DEVICE=N             default OpenCL device (see `idmr devices`)\n"
+    "  IDMR_ROOT=DIR             directory holding kernels/ and include/\n"
+    "  IDMR_CACHE_DIR=DIR        compiled kernel cache (default ~/.cache/idmr; off: none)\n";
 
 void command_help(FILE *out)
 {
-    fputs("usage: idmr [-v] COMMAND [options]\n"
-          "\n"
-          "Illumination-driven mesh reduction: learn which triangles carry the light a camera\n"
-          "sees, then decimate a Mitsuba scene to a vertex budget.\n"
-          "\n"
-          "commands:\n"
-          "  devices [--json]          list OpenCL platforms and devices\n"
-          "  info SCENE [--json]       meshes, materials, lights, camera, bounding box, feature\n"
-          "                            bits and device memory of a Mitsuba scene\n"
-          "      --no-bvh              skip the BVH build (memory then excludes the BVH)\n"
-          "  importance SCENE -o DIR   learn which triangles carry the light the camera sees;\n"
-          "                            writes DIR/report.json, convergence.csv, importance.png\n"
-          "                            and importance/<mesh>.ply; takes the SPPM options\n"
-          "      --tolerance E         stop once the change per iteration stays below E\n"
-          "      --gamma G             weight of camera paths against light paths (default 1)\n"
-          "      --shadow-weight W     weight of the triangles that cast the shadows the camera\n"
-          "                            sees (default 1; 0: no shadow rays)\n"
-          "  reduce SCENE --target D -o OUTDIR\n"
-          "                            the reduced scene: OUTDIR/scene.xml and meshes/*.ply with\n"
-          "                            about D of all vertices; takes the options of importance\n"
-          "      --method M            importance (default: the paper's), quadric (uniform D,\n"
-          "                            view-independent) or importance-quadric (importance\n"
-          "                            budgets per mesh, quadric collapses within each)\n"
-          "      --min-vertices N      meshes this small are not decimated (default 16)\n"
-          "      --max-normal-angle A  no collapse turns a face more than A degrees (default 60)\n"
-          "      --keep NAME           never decimate mesh NAME (repeatable; emitters never are)\n"
-          "      --threads N           decimation threads (default: all cores)\n"
-          "      --force               write into a non-empty OUTDIR\n"
-          "  render SCENE -o IMAGE     stochastic progressive photon mapping: IMAGE.exr (linear),\n"
-          "                            IMAGE.png (sRGB) and IMAGE.json (timings, device memory);\n"
-          "                            takes the SPPM options\n"
-          "      --exposure EV         PNG brightness: linear values times 2^EV (default 0)\n"
-          "  compare A B [--diff D.png] [--json]\n"
-          "                            RMSE, PSNR and relative MSE of image A against the\n"
-          "                            reference B (linear RGB), and a false-colour error image\n"
-          "      --diff-max E          top of the error image's ramp (default: the 99th\n"
-          "                            percentile of the error)\n"
-          "  compare --paired A1 A2 B1 B2 [--tile N] [--json]\n"
-          "                            the change a reduction makes to the converged image, render\n"
-          "                            noise cancelled: A = original, B = reduced scene, 1 and 2\n"
-          "                            two seeds; reduction_rmse ± standard error (N-pixel tiles,\n"
-          "                            default 16)\n"
-          "  kernels [--device N] [--quiet]\n"
-          "                            build every kernel program variant on the device (a\n"
-          "                            kernel error fails with its build log; warms the cache)\n"
-          "\n"
-          "SPPM options (the photon-mapping core of importance, reduce and render):\n"
-          "      --iterations N        iterations (default 100; render: 64)\n"
-          "      --time-limit S        stop after the iteration in which S seconds pass\n"
-          "      --radius R            first gather radius (default: 2.5 pixel footprints at the\n"
-          "                            median distance of what the camera sees)\n"
-          "      --photons P           photon paths per iteration (default 1,000,000 on a GPU,\n"
-          "                            500,000 on a CPU)\n"
-          "      --alpha A             SPPM radius reduction (default 0.7)\n"
-          "      --resolution F        scale of the scene's film for hit points (default 1)\n"
-          "      --seed S              random seed (default 1)\n"
-          "      --device N            OpenCL device (see `idmr devices`)\n"
-          "      --quiet               no progress on stderr\n"
-          "      --generic             kernels with every feature, not only the scene's\n"
-          "\n"
-          "global options:\n"
-          "  -v, --verbose             log progress, kernel build options and timings\n"
-          "  -h, --help                this text\n"
-          "      --version             print the version\n"
-          "\n"
-          "environment:\n"
-          "  IDMR_DEVICE=N             default OpenCL device (see `idmr devices`)\n"
-          "  IDMR_ROOT=DIR             directory holding kernels/ and include/\n"
-          "  IDMR_CACHE_DIR=DIR        compiled kernel cache (default ~/.cache/idmr; off: none)\n",
-          out);
+    fprintf(out, "%s\ncommands:\n", HEADER);
+    for (size_t i = 0; i < sizeof COMMAND_HELP / sizeof *COMMAND_HELP; i++)
+        fputs(COMMAND_HELP[i].text, out);
+    fprintf(out, "\n%s\n%s", SPPM_OPTIONS, GLOBAL_OPTIONS);
+}
+
+int command_help_one(const char *name, FILE *out)
+{
+    for (size_t i = 0; i < sizeof COMMAND_HELP / sizeof *COMMAND_HELP; i++) {
+        if (strcmp(COMMAND_HELP[i].name, name))
+            continue;
+        fprintf(out, "usage: idmr [-v] %s ...\n\n%s", name, COMMAND_HELP[i].text);
+        if (COMMAND_HELP[i].sppm)
+            fprintf(out, "\n%s", SPPM_OPTIONS);
+        fputs("\n(all commands: `idmr --help`)\n", out);
+        return 0;
+    }
+    return -1;
 }

@@ -31,4 +31,8 @@ int command_kernels(int argc, char **argv);
 /* The help text (idmr --help, idmr help) on `out`. */
 void command_help(FILE *out);
 
+/* One command's usage and options (idmr help COMMAND, idmr COMMAND --help) on `out`; -1 when
+ * there is no such command. */
+int command_help_one(const char *name, FILE *out);
+
 #endif

@@ -6,6 +6,7 @@
  *   idmr [-v] reduce SCENE --target D -o OUTDIR [options]
  *   idmr [-v] render SCENE -o IMAGE [options]
  *   idmr compare A B [--diff DIFF.png] [--diff-max E] [--json]
+ *   idmr help [COMMAND], idmr COMMAND --help   (command_help.c)
  *
  * Each command lives in command_<name>.c (commands.h); what they share of their options, in
  * options.c. Exit codes (core/error.h): 0 success, 1 runtime failure, 2 bad input or usage.
@@ -29,6 +30,15 @@ static const struct {
     {"kernels", command_kernels},
 };
 
+/* Whether a command's arguments (argv[0] its name) hold -h or --help, before any "--". */
+static int asks_for_help(int argc, char **argv)
+{
+    for (int i = 1; i < argc && strcmp(argv[i], "--"); i++)
+        if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help"))
+            return 1;
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     int first = 1;
@@ -51,13 +61,24 @@ int main(int argc, char **argv)
         return IDMR_EXIT_INPUT;
     }
     const char *command = argv[first];
-    optind = 1;
-    for (size_t i = 0; i < sizeof COMMANDS / sizeof *COMMANDS; i++)
-        if (!strcmp(command, COMMANDS[i].name))
-            return COMMANDS[i].run(argc - first, argv + first);
     if (!strcmp(command, "help")) {
-        command_help(stdout);
+        if (first + 1 >= argc) {
+            command_help(stdout);
+            return 0;
+        }
+        if (first + 2 < argc)
+            return usage_error("help: expected at most one COMMAND");
+        if (command_help_one(argv[first + 1], stdout))
+            return usage_error("help: unknown command '%s'", argv[first + 1]);
         return 0;
+    }
+    optind = 1;
+    for (size_t i = 0; i < sizeof COMMANDS / sizeof *COMMANDS; i++) {
+        if (strcmp(command, COMMANDS[i].name))
+            continue;
+        if (asks_for_help(argc - first, argv + first))
+            return command_help_one(command, stdout) ? IDMR_EXIT_INPUT : 0;
+        return COMMANDS[i].run(argc - first, argv + first);
     }
     return usage_error("unknown command '%s'", command);
 }
