@@ -473,6 +473,9 @@ static const refusal REFUSALS[] = {
     {"bin/idmr render data/cornell/scene.xml -o /tmp/x --gamma 2", "importance pass option"},
     {"bin/idmr render data/cornell/scene.xml -o /tmp/x --time-limit soon", "--time-limit"},
     {"bin/idmr render data/cornell/scene.xml -o /tmp/x --exposure 100", "--exposure"},
+    {"bin/idmr render data/cornell/scene.xml -o /tmp", "-o '/tmp' names a directory"},
+    {"bin/idmr render data/cornell/scene.xml -o /tmp/idmr-no-such-dir/", "names a directory"},
+    {"bin/idmr render data/cornell/scene.xml -o /tmp/idmr-no-such-dir/.exr", "names a directory"},
 };
 
 /* state: the refusal. */

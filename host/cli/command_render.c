@@ -6,10 +6,12 @@
 #include <stdio.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "cli/pass_setup.h"
+#include "core/error.h"
 #include "core/files.h"
 #include "core/json.h"
 #include "io/mitsuba.h"
@@ -30,8 +32,9 @@ typedef struct render_cli_job {
 } render_cli_job;
 
 /* The paths of `-o image`: its stem (without a trailing ".exr" or ".png") with each
- * extension, and the stem's directory. */
-static void render_paths_from(const char *image, render_cli_paths *paths)
+ * extension, and the stem's directory. -1 (a usage error printed) when the stem names a
+ * directory (it ends in '/', or one exists there), which would give hidden files "DIR/.exr". */
+static int render_paths_from(const char *image, render_cli_paths *paths)
 {
     char stem[4096];
     snprintf(stem, sizeof stem, "%s", image);
@@ -39,6 +42,13 @@ static void render_paths_from(const char *image, render_cli_paths *paths)
     if (length > 4 &&
         (!strcasecmp(stem + length - 4, ".exr") || !strcasecmp(stem + length - 4, ".png")))
         stem[length - 4] = '\0';
+    length = strlen(stem);
+    struct stat info;
+    if (length == 0 || stem[length - 1] == '/' ||
+        (stat(stem, &info) == 0 && S_ISDIR(info.st_mode)))
+        return usage_error("render: -o '%s' names a directory; give the image's path in it, "
+                           "such as '%s%simage'",
+                           image, stem, length && stem[length - 1] == '/' ? "" : "/");
     snprintf(paths->exr, sizeof paths->exr, "%s.exr", stem);
     snprintf(paths->png, sizeof paths->png, "%s.png", stem);
     snprintf(paths->json, sizeof paths->json, "%s.json", stem);
@@ -48,6 +58,7 @@ static void render_paths_from(const char *image, render_cli_paths *paths)
         *slash = '\0';
     else
         paths->directory[0] = '\0';
+    return 0;
 }
 
 static enum option_parse parse_option(int c, void *context, pass_arguments *arguments)
@@ -101,7 +112,8 @@ int command_render(int argc, char **argv)
         return code;
     if (!arguments.output)
         return usage_error("render: -o IMAGE is required");
-    render_paths_from(arguments.output, &job.paths);
+    if (render_paths_from(arguments.output, &job.paths))
+        return IDMR_EXIT_INPUT;
     scene *s = mitsuba_load(arguments.scene);
     if (!s)
         return fail();
