@@ -996,6 +996,53 @@ static void run_error_case(void **state)
     assert_int_equal(error_code(), IDMR_EXIT_INPUT);
 }
 
+/* PLY files cut off or mislabelled fail with a message naming the file and what is wrong; a
+ * header cut off before "end_header" used to make OpenMesh's reader loop forever. A header
+ * with CRLF line ends still loads. */
+static void test_broken_ply_files(void **state)
+{
+    static const struct {
+        const char *file, *text, *what;
+    } cases[] = {
+        {"cut.ply", "ply\nformat ascii 1.0\n", "no \"end_header\" line"},
+        {"cut-in-element.ply", "ply\nformat ascii 1.0\nelement vertex 3\nprop",
+         "no \"end_header\" line"},
+        {"empty.ply", "", "not a PLY file"},
+        {"obj-inside.ply", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "not a PLY file"},
+        {"crlf.ply",
+         "ply\r\nformat ascii 1.0\r\nelement vertex 3\r\nproperty float x\r\n"
+         "property float y\r\nproperty float z\r\nelement face 1\r\n"
+         "property list uchar int vertex_indices\r\nend_header\r\n0 0 0\r\n1 0 0\r\n"
+         "0 1 0\r\n3 0 1 2\r\n",
+         NULL},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        char body[256];
+        write_file(cases[i].file, cases[i].text);
+        snprintf(body, sizeof body,
+                 "  <shape type=\"ply\"><string name=\"filename\" value=\"%s\"/></shape>\n",
+                 cases[i].file);
+        error_clear();
+        scene *s = mitsuba_load(write_scene("3.0.0", body));
+        if (!cases[i].what) {
+            if (!s)
+                fail_msg("%s: %s", cases[i].file, error_message());
+            assert_int_equal(s->meshes[0].triangle_count, 1);
+            scene_free(s);
+            continue;
+        }
+        if (s) {
+            scene_free(s);
+            fail_msg("%s loaded", cases[i].file);
+        }
+        const char *message = error_message();
+        if (!strstr(message, cases[i].file) || !strstr(message, cases[i].what) ||
+            !strstr(message, "scene.xml:2:"))
+            fail_msg("%s: unexpected message '%s'", cases[i].file, message);
+        assert_int_equal(error_code(), IDMR_EXIT_INPUT);
+    }
+}
+
 static void test_error_missing_scene_file(void **state)
 {
     error_clear();
@@ -1131,6 +1178,7 @@ int main(void)
         cmocka_unit_test(test_real_cbox),
         cmocka_unit_test(test_real_glass_of_water_without_mesh000),
         cmocka_unit_test(test_real_glass_of_water_missing_mesh),
+        cmocka_unit_test(test_broken_ply_files),
         cmocka_unit_test(test_real_living_room),
     };
     struct CMUnitTest tests[128];

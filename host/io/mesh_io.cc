@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <strings.h>
 #include <string>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -40,6 +41,30 @@ namespace {
 typedef OpenMesh::TriMesh_ArrayKernelT<> TriMesh;
 
 
+// A PLY file (by its extension) must start with "ply" and close its header with a line
+// "end_header" within its first 64 KiB: OpenMesh's reader loops forever on a file cut off
+// inside its header.
+int check_ply_header(const char *path, FILE *f)
+{
+    size_t length = std::strlen(path);
+    if (length < 4 || strcasecmp(path + length - 4, ".ply") != 0)
+        return 0;
+    std::vector<char> head(65537);
+    size_t got = std::fread(head.data(), 1, head.size() - 1, f);
+    head[got] = '\0';
+    if (std::strncmp(head.data(), "ply", 3) != 0 || (head[3] != '\n' && head[3] != '\r'))
+        return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': not a PLY file (it does not "
+                         "start with the line \"ply\")", path);
+    for (const char *line = head.data(); line; line = std::strchr(line, '\n')) {
+        line += *line == '\n';
+        if (std::strncmp(line, "end_header", 10) == 0 &&
+            (line[10] == '\n' || line[10] == '\r' || line[10] == '\0'))
+            return 0;
+    }
+    return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': its PLY header has no "
+                     "\"end_header\" line (a truncated file?)", path);
+}
+
 int check_readable(const char *path)
 {
     struct stat info;
@@ -50,8 +75,9 @@ int check_readable(const char *path)
     FILE *f = fopen(path, "rb");
     if (!f)
         return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': %s", path, strerror(errno));
+    int status = check_ply_header(path, f);
     fclose(f);
-    return 0;
+    return status;
 }
 
 } // namespace
