@@ -410,6 +410,38 @@ static void test_each_bsdf_warns_once(void **state)
     remove_tree(dir);
 }
 
+/* A scene whose only light emits nothing: render refuses it (the image would be black);
+ * importance runs, from camera paths alone, and says so. */
+static void test_dark_scene(void **state)
+{
+    char dir[64], path[128];
+    make_temp_dir(dir, "idmr-cli-dark");
+    snprintf(path, sizeof path, "%s/scene.xml", dir);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs("<scene version=\"3.0.0\">\n"
+          "  <shape type=\"rectangle\"/>\n"
+          "  <emitter type=\"point\"><point name=\"position\" x=\"0\" y=\"0\" z=\"2\"/>\n"
+          "    <rgb name=\"intensity\" value=\"0\"/></emitter>\n"
+          "  <sensor type=\"perspective\"><film type=\"hdrfilm\">\n"
+          "    <integer name=\"width\" value=\"16\"/><integer name=\"height\" value=\"16\"/>\n"
+          "  </film></sensor>\n"
+          "</scene>\n",
+          f);
+    fclose(f);
+    run_result r = run("bin/idmr render %s -o %s/image --iterations 1 --quiet", path, dir);
+    assert_int_equal(r.status, 2);
+    assert_non_null(strstr(r.err, "no light emits any power"));
+    run_free(&r);
+    r = run("bin/idmr importance %s -o %s/importance --iterations 1 --photons 1000 --quiet", path,
+            dir);
+    assert_succeeded(&r);
+    if (!strstr(r.err, "warning") || !strstr(r.err, "camera paths alone"))
+        fail_msg("no warning about the dark light: %s", r.err);
+    run_free(&r);
+    remove_tree(dir);
+}
+
 /* ---- help ---- */
 
 /* `idmr COMMAND --help` and `idmr help COMMAND` print the same text on stdout and exit 0: that
@@ -649,6 +681,7 @@ int main(void)
         cmocka_unit_test(test_missing_mesh_is_named),
         cmocka_unit_test(test_malformed_xml),
         cmocka_unit_test(test_each_bsdf_warns_once),
+        cmocka_unit_test(test_dark_scene),
         cmocka_unit_test(test_reduce_meets_requested_vertices),
         cmocka_unit_test(test_reduced_scene_loads_with_reported_vertices),
         cmocka_unit_test(test_importance_quadric_meets_same_total),

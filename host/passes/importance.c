@@ -290,6 +290,13 @@ int importance_run(device *d, const scene *s, const bvh *b, const importance_opt
     memset(r, 0, sizeof *r);
     if (!(o->gamma >= 0) || !(o->shadow_weight >= 0))
         return error_set(IDMR_EXIT_INPUT, "importance: gamma and the shadow weight must be >= 0");
+    double total_power = 0;
+    for (size_t i = 0; i < s->light_count; i++)
+        total_power += s->lights[i].power > 0 ? s->lights[i].power : 0;
+    if (!(total_power > 0))
+        warn("%s: no light emits any power: light and shadow importance stay zero, importance "
+             "comes from camera paths alone",
+             s->file);
     r->triangle_count = (size_t)s->triangle_count;
     r->camera = xcalloc(r->triangle_count + 1, sizeof *r->camera);
     r->light = xcalloc(r->triangle_count + 1, sizeof *r->light);
