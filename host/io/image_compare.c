@@ -146,8 +146,7 @@ void image_paired_error_of(const float *a1, const float *a2, const float *b1, co
         return;
     int tiles_x = (width + tile - 1) / tile, tiles_y = (height + tile - 1) / tile;
     size_t tiles = (size_t)tiles_x * (size_t)tiles_y;
-    double *tile_sum = xcalloc(tiles, sizeof *tile_sum);
-    double *tile_values = xcalloc(tiles, sizeof *tile_values);
+    double *tile_noise = xcalloc(tiles, sizeof *tile_noise);
     double product_sum = 0, noisy_sum = 0;
     for (int y = 0; y < height; y++)
         for (int x = 0; x < width; x++) {
@@ -157,26 +156,20 @@ void image_paired_error_of(const float *a1, const float *a2, const float *b1, co
                 double d1 = (double)a1[i] - b1[i], d2 = (double)a2[i] - b2[i];
                 product_sum += d1 * d2;
                 noisy_sum += d1 * d1;
-                tile_sum[t] += d1 * d2;
-                tile_values[t] += 1;
+                tile_noise[t] += 0.5 * (d1 * d1 - d2 * d2);
             }
         }
     out->tiles = (unsigned int)tiles;
     out->mse = product_sum / values;
-    double variance = 0;
-    for (size_t t = 0; t < tiles; t++) {
-        double share = tile_values[t] / values, mean = tile_sum[t] / tile_values[t];
-        variance += share * share * (mean - out->mse) * (mean - out->mse);
-    }
-    if (tiles > 1)
-        variance *= (double)tiles / (double)(tiles - 1);
+    double variance = 0; /* of the estimate: Σ over tiles of (their share of the noise term)² */
+    for (size_t t = 0; t < tiles; t++)
+        variance += (tile_noise[t] / values) * (tile_noise[t] / values);
     out->mse_standard_error = sqrt(variance);
     out->rmse = out->mse > 0 ? sqrt(out->mse) : 0.0;
     double high = out->mse + out->mse_standard_error, low = out->mse - out->mse_standard_error;
     out->rmse_standard_error = 0.5 * (sqrt(high > 0 ? high : 0) - sqrt(low > 0 ? low : 0));
     out->noisy_rmse = sqrt(noisy_sum / values);
-    free(tile_sum);
-    free(tile_values);
+    free(tile_noise);
 }
 
 int image_compare_paired(const char *a1, const char *a2, const char *b1, const char *b2,

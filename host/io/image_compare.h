@@ -13,16 +13,22 @@
  * unbiased estimate of the reduction's MSE (it can come out below zero from noise). Using the
  * same seed for A1 and B1 only helps: their noise is correlated and partly cancels in A1 - B1.
  *     reduction_rmse = sqrt(max(0, mse)).
- * Its standard error comes from the means of square tiles (tile × tile pixels, 16 by default, at
- * most a quarter of the image's smaller side), taken as independent samples:
- * se(mse) = sqrt(Σ w_t² (m_t - mse)² × T / (T - 1)), with w_t a tile's share of the pixels.
- * Tiles hold the renders' noise together with its correlation between neighbouring pixels
- * (photon mapping shares photons across a gather radius), which per-pixel estimates would miss;
- * the spread of the true change from tile to tile counts in as well, so the standard error is
- * conservative where a reduction changes a few tiles only. On the RMSE scale, se(rmse) is half
- * the width of [sqrt(max(0, mse - se)), sqrt(max(0, mse + se))]: se / (2 rmse) for a clear
- * change, at most sqrt(se) when the change is within its noise. For contrast, `noisy_rmse` is the
- * plain RMSE of A1 against B1, which holds the renders' noise as well.
+ * Its standard error is that of the render noise in it, not of the change's spread over the
+ * image. With x1 = A1 - B1 = d + n1 and x2 = A2 - B2 = d + n2 (d the change, n1 and n2 the two
+ * seeds' independent noise), the estimate's error per value is d (n1 + n2) + n1 n2, and
+ *     z = (x1² - x2²) / 2 = d (n1 - n2) + (n1² - n2²) / 2
+ * has mean 0 and, for Gaussian noise, exactly that variance and that covariance between
+ * neighbouring pixels (for heavier tails z's is larger: the error is overstated, not hidden).
+ * Summed over square tiles (tile × tile pixels, 16 by default, at most a quarter of the image's
+ * smaller side), which hold the noise's correlation between neighbours (photon mapping shares
+ * photons across a gather radius), taken as independent:
+ *     se(mse) = sqrt(Σ_t (Σ_{values in t} z / values)²).
+ * A change confined to a few pixels (the glints of a glass model) is thus measured to the
+ * precision the noise allows; a spread of tile means would count the change itself as noise.
+ * On the RMSE scale, se(rmse) is half the width of [sqrt(max(0, mse - se)), sqrt(max(0, mse +
+ * se))]: se / (2 rmse) for a clear change, at most sqrt(se) when the change is within its noise.
+ * For contrast, `noisy_rmse` is the plain RMSE of A1 against B1, which holds the renders' noise
+ * as well.
  *
  * Images with NaN or infinite values are refused with an error naming the file, the count and
  * the first pixel: a comparison with them would be meaningless. */
