@@ -18,7 +18,9 @@
  * seeds' independent noise), the estimate's error per value is d (n1 + n2) + n1 n2, and
  *     z = (x1² - x2²) / 2 = d (n1 - n2) + (n1² - n2²) / 2
  * has mean 0 and, for Gaussian noise, exactly that variance and that covariance between
- * neighbouring pixels (for heavier tails z's is larger: the error is overstated, not hidden).
+ * neighbouring pixels. Otherwise its noise-only part, (n1² - n2²) / 2, has (κ - 1) / 2 times the
+ * variance of n1 n2 (κ the noise's kurtosis, 3 for Gaussian): render noise, with its fireflies,
+ * has heavier tails than Gaussian, so its error is overstated rather than hidden.
  * Summed over square tiles (tile × tile pixels, 16 by default, at most a quarter of the image's
  * smaller side), which hold the noise's correlation between neighbours (photon mapping shares
  * photons across a gather radius), taken as independent:
