@@ -21,13 +21,15 @@ using namespace idmr_decimate;
 namespace {
 
 // The module handles of one decimater: the normal limit and the history always, and one
-// priority module: the importance, the quadric or the weighted quadric one.
+// priority module: the importance, the quadric or the weighted quadric one (with the boundary
+// lock).
 struct Modules {
     ModNormalLimitT<Mesh>::Handle normal_limit;
     ModHistoryT<Mesh>::Handle history;
     ModImportanceT<Mesh>::Handle importance;
     OpenMesh::Decimater::ModQuadricT<Mesh>::Handle quadric;
     ModWeightedQuadricT<Mesh>::Handle weighted_quadric;
+    ModBoundaryLockT<Mesh>::Handle boundary_lock;
 };
 
 // Adds and sets up the modules of `method`. Returns false when the decimater does not
@@ -49,6 +51,7 @@ bool add_modules(ReductionDecimater &decimater, Modules &modules, Mesh &mesh,
         decimater.set_importance(&decimater.module(modules.importance));
     } else if (method == DECIMATE_COMBINED) {
         decimater.add(modules.weighted_quadric);
+        decimater.add(modules.boundary_lock);
         for (auto v : mesh.vertices())
             decimater.module(modules.weighted_quadric).importance(v) = importance[v.idx()];
     } else {

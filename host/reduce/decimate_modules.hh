@@ -10,6 +10,8 @@
 //                    their outline); v1 takes v0's quadric
 //   ModNormalLimitT  binary: no remaining face around v0 may turn by more than the limit or become
 //                    degenerate
+//   ModBoundaryLockT binary (combined only): a boundary vertex goes only where the outline stays
+//                    within 1 % of its length
 //   ModHistoryT      binary, always legal: records, per removed vertex, the vertex it went into
 //
 // OpenMesh's decimater accepts exactly one priority module; decimate.cc adds ModImportanceT,
@@ -234,6 +236,51 @@ template <class MeshT> class ModNormalLimitT : public OpenMesh::Decimater::ModBa
     }
 
     double min_cos_;
+};
+
+// Binary: an open boundary keeps its outline. A boundary vertex v0 may only go into a boundary
+// neighbour v1 (the legality test sees to that), which replaces the outline u - v0 - v1 (u its
+// other boundary neighbour) by u - v1; the collapse is legal only if v0 lies within
+// max_deviation × |u - v1| of that segment, so corners stay, straight or gently curved runs
+// thin out (a circle keeps about 80 vertices at the default 1 %), and no hole closes or
+// opening grows over: a wall keeps covering what it covered.
+template <class MeshT> class ModBoundaryLockT : public OpenMesh::Decimater::ModBaseT<MeshT> {
+  public:
+    DECIMATING_MODULE(ModBoundaryLockT, MeshT, BoundaryLock);
+    explicit ModBoundaryLockT(MeshT &mesh) : Base(mesh, true), max_deviation_(0.01) {}
+
+    float collapse_priority(const CollapseInfo &ci) override
+    {
+        MeshT &mesh = Base::mesh();
+        if (!mesh.is_boundary(ci.v0))
+            return Base::LEGAL_COLLAPSE;
+        typename MeshT::HalfedgeHandle out = mesh.halfedge_handle(ci.v0);
+        if (!mesh.is_boundary(out))
+            return Base::ILLEGAL_COLLAPSE; // not a simple boundary vertex: keep it
+        typename MeshT::VertexHandle next = mesh.to_vertex_handle(out);
+        typename MeshT::VertexHandle previous =
+            mesh.from_vertex_handle(mesh.prev_halfedge_handle(out));
+        typename MeshT::VertexHandle u = next == ci.v1 ? previous : next;
+        if (u == ci.v1 || (next != ci.v1 && previous != ci.v1))
+            return Base::ILLEGAL_COLLAPSE;
+        OpenMesh::Vec3d a = point(u), b = point(ci.v1), p = point(ci.v0);
+        OpenMesh::Vec3d chord = b - a;
+        double length2 = chord.sqrnorm();
+        double t = length2 > 0 ? std::min(1.0, std::max(0.0, OpenMesh::dot(p - a, chord) / length2))
+                               : 0.0;
+        double deviation2 = (p - (a + chord * t)).sqrnorm();
+        return deviation2 <= max_deviation_ * max_deviation_ * length2 ? Base::LEGAL_COLLAPSE
+                                                                        : Base::ILLEGAL_COLLAPSE;
+    }
+
+  private:
+    OpenMesh::Vec3d point(typename MeshT::VertexHandle v)
+    {
+        const typename MeshT::Point &q = Base::mesh().point(v);
+        return OpenMesh::Vec3d(q[0], q[1], q[2]);
+    }
+
+    double max_deviation_;
 };
 
 // Binary, always legal: records which vertex each removed vertex went into.
