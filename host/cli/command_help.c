@@ -35,7 +35,7 @@ static const struct {
      "                            the reduced scene: OUTDIR/scene.xml and meshes/*.ply with\n"
      "                            about D of all vertices; takes the options of importance\n"
      "      --method M            combined (default: importance budgets each mesh and\n"
-     "                            weights its quadric error; open boundaries held),\n"
+     "                            weights its quadric error; open boundaries locked),\n"
      "                            importance (the paper's: importance orders collapses),\n"
      "                            quadric (uniform D, view-independent) or\n"
      "                            importance-quadric (importance budgets per mesh, plain\n"

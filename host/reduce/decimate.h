@@ -9,7 +9,10 @@
  *   DECIMATE_COMBINED    our weighted quadric module: the Garland-Heckbert error with each face's
  *                        plane weighted by its area × (its importance + a floor), and a plane
  *                        across every open boundary edge, so the image's important parts keep
- *                        their geometry and openings their outline (decimate_modules.hh)
+ *                        their geometry; and our boundary lock: a boundary vertex is removed
+ *                        only where the outline stays within 1 % of the new edge's length, so
+ *                        openings keep their outline and no hole closes, even where the mesh
+ *                        then misses its target (decimate_modules.hh)
  * Both run with our normal-limit module (a collapse may not turn any remaining face's normal by
  * more than max_normal_angle degrees, nor create a zero-area face) and our history module (for
  * each removed vertex, the vertex it went into). We use our own normal limit rather than
@@ -51,7 +54,7 @@ extern "C" {
 typedef enum decimate_method {
     DECIMATE_IMPORTANCE, /* the paper's: ring importance, least important target */
     DECIMATE_QUADRIC,    /* OpenMesh's quadric error metric: geometry alone */
-    DECIMATE_COMBINED,   /* quadric error weighted by importance, open boundaries held */
+    DECIMATE_COMBINED,   /* quadric error weighted by importance, open boundaries locked */
 } decimate_method;
 
 typedef struct decimate_input {

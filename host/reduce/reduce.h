@@ -12,7 +12,7 @@
  * uniform factor D, the view-independent baseline; no importance pass), "importance-quadric"
  * (importance sets each mesh's budget, quadric error metrics choose the collapses) and
  * "combined" (importance sets each mesh's budget, and the collapses follow the quadric error
- * weighted by importance, open boundaries held: decimate.h, DECIMATE_COMBINED), the default:
+ * weighted by importance, open boundaries locked: decimate.h, DECIMATE_COMBINED), the default:
  * it changes the rendered image least on the evaluation scenes (README, Evaluation).
  * Emitters and meshes named with --keep are never decimated; meshes with at most min_vertices
  * vertices neither. OUTDIR must not exist or be empty unless force is set, and must not be the
