@@ -384,21 +384,29 @@ static void test_malformed_xml(void **state)
 
 /* A bsdf's warning comes once per bsdf: a declared one referenced by two shapes warns once,
  * an inline one once. */
+/* `xml` written as DIR/scene.xml in a new temporary directory DIR (dir, 64 bytes); its path
+ * into path (128 bytes). */
+static void write_temp_scene(const char *prefix, const char *xml, char *dir, char *path)
+{
+    make_temp_dir(dir, prefix);
+    snprintf(path, 128, "%s/scene.xml", dir);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs(xml, f);
+    fclose(f);
+}
+
 static void test_each_bsdf_warns_once(void **state)
 {
     char dir[64], path[128];
-    make_temp_dir(dir, "idmr-cli-warn");
-    snprintf(path, sizeof path, "%s/scene.xml", dir);
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fputs("<scene version=\"3.0.0\">\n"
-          "  <bsdf type=\"roughdielectric\" id=\"glass\"/>\n"
-          "  <shape type=\"sphere\"><ref id=\"glass\"/></shape>\n"
-          "  <shape type=\"cube\"><ref id=\"glass\"/></shape>\n"
-          "  <shape type=\"rectangle\"><bsdf type=\"roughdielectric\"/></shape>\n"
-          "</scene>\n",
-          f);
-    fclose(f);
+    write_temp_scene("idmr-cli-warn",
+                     "<scene version=\"3.0.0\">\n"
+                     "  <bsdf type=\"roughdielectric\" id=\"glass\"/>\n"
+                     "  <shape type=\"sphere\"><ref id=\"glass\"/></shape>\n"
+                     "  <shape type=\"cube\"><ref id=\"glass\"/></shape>\n"
+                     "  <shape type=\"rectangle\"><bsdf type=\"roughdielectric\"/></shape>\n"
+                     "</scene>\n",
+                     dir, path);
     run_result r = run("bin/idmr info %s", path);
     assert_int_equal(r.status, 0);
     int count = 0;
@@ -415,20 +423,17 @@ static void test_each_bsdf_warns_once(void **state)
 static void test_dark_scene(void **state)
 {
     char dir[64], path[128];
-    make_temp_dir(dir, "idmr-cli-dark");
-    snprintf(path, sizeof path, "%s/scene.xml", dir);
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fputs("<scene version=\"3.0.0\">\n"
-          "  <shape type=\"rectangle\"/>\n"
-          "  <emitter type=\"point\"><point name=\"position\" x=\"0\" y=\"0\" z=\"2\"/>\n"
-          "    <rgb name=\"intensity\" value=\"0\"/></emitter>\n"
-          "  <sensor type=\"perspective\"><film type=\"hdrfilm\">\n"
-          "    <integer name=\"width\" value=\"16\"/><integer name=\"height\" value=\"16\"/>\n"
-          "  </film></sensor>\n"
-          "</scene>\n",
-          f);
-    fclose(f);
+    write_temp_scene(
+        "idmr-cli-dark",
+        "<scene version=\"3.0.0\">\n"
+        "  <shape type=\"rectangle\"/>\n"
+        "  <emitter type=\"point\"><point name=\"position\" x=\"0\" y=\"0\" z=\"2\"/>\n"
+        "    <rgb name=\"intensity\" value=\"0\"/></emitter>\n"
+        "  <sensor type=\"perspective\"><film type=\"hdrfilm\">\n"
+        "    <integer name=\"width\" value=\"16\"/><integer name=\"height\" value=\"16\"/>\n"
+        "  </film></sensor>\n"
+        "</scene>\n",
+        dir, path);
     run_result r = run("bin/idmr render %s -o %s/image --iterations 1 --quiet", path, dir);
     assert_int_equal(r.status, 2);
     assert_non_null(strstr(r.err, "no light emits any power"));
