@@ -113,17 +113,25 @@ static size_t boundary_edges(const mesh_data *m, uint32_t **pairs)
     return count;
 }
 
-/* The frame decimated by `method` with uniform importance to `target` vertices. */
-static void decimate_frame(decimate_method method, uint64_t target, mesh_data *frame,
-                           decimate_output *out)
+/* The frame decimated by `method` with uniform importance to `target` vertices, the boundary
+ * lock at `tolerance` (0: the default). */
+static void decimate_frame_locked(decimate_method method, uint64_t target, double tolerance,
+                                  mesh_data *frame, decimate_output *out)
 {
     make_frame(33, 10, 22, frame);
     double *importance = malloc(sizeof(double) * frame->vertex_count);
     for (uint32_t v = 0; v < frame->vertex_count; v++)
         importance[v] = 1.0;
     decimate_input in = input_of("frame", frame, importance, target);
+    in.boundary_tolerance = tolerance;
     assert_int_equal(decimate_mesh(&in, method, out), 0);
     free(importance);
+}
+
+static void decimate_frame(decimate_method method, uint64_t target, mesh_data *frame,
+                           decimate_output *out)
+{
+    decimate_frame_locked(method, target, 0, frame, out);
 }
 
 /* The frame cut from 968 vertices towards `target` keeps its outline, its area and its
@@ -186,6 +194,19 @@ static void test_frame_keeps_outline_and_opening(void **state) { check_frame(24,
  * (the boundary lock) rather than cut a corner or cover the opening. */
 static void test_frame_stops_at_its_corners(void **state) { check_frame(4, 8, 16); }
 
+/* With the lock off (infinite tolerance, what reduce comes to when a scene's total cannot be met
+ * otherwise), the frame goes below its corners. */
+static void test_frame_unlocked_goes_below_its_corners(void **state)
+{
+    mesh_data frame;
+    decimate_output out;
+    decimate_frame_locked(DECIMATE_COMBINED, 6, INFINITY, &frame, &out);
+    print_message("unlocked, asked for 6: %u\n", out.mesh.vertex_count);
+    assert_true(out.mesh.vertex_count < 8);
+    decimate_output_free(&out);
+    mesh_data_free(&frame);
+}
+
 /* A sheet 41 x 41 with bumps on every inner vertex (so every collapse costs something) and a
  * straight, flat outline (which the boundary lock lets thin out), and the number of decimated
  * vertices left of x = 20 and right of it. */
@@ -237,6 +258,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_frame_keeps_outline_and_opening),
         cmocka_unit_test(test_frame_stops_at_its_corners),
+        cmocka_unit_test(test_frame_unlocked_goes_below_its_corners),
         cmocka_unit_test(test_importance_decides_where_detail_stays),
     };
     return cmocka_run_group_tests_name("decimate_combined", tests, NULL, NULL);

@@ -10,9 +10,11 @@
  *                        plane weighted by its area × (its importance + a floor), and a plane
  *                        across every open boundary edge, so the image's important parts keep
  *                        their geometry; and our boundary lock: a boundary vertex is removed
- *                        only where the outline stays within 1 % of the new edge's length, so
- *                        openings keep their outline and no hole closes, even where the mesh
- *                        then misses its target (decimate_modules.hh)
+ *                        only where the outline stays within 1 % of the new edge's length
+ *                        (boundary_tolerance), so openings keep their outline and no hole
+ *                        closes, even where the mesh then misses its target; reduce relaxes it
+ *                        only where the scene's total cannot be met otherwise
+ *                        (decimate_modules.hh, reduce_decimation.c)
  * Both run with our normal-limit module (a collapse may not turn any remaining face's normal by
  * more than max_normal_angle degrees, nor create a zero-area face) and our history module (for
  * each removed vertex, the vertex it went into). We use our own normal limit rather than
@@ -66,6 +68,8 @@ typedef struct decimate_input {
     const double *vertex_importance; /* per input vertex; needed by IMPORTANCE and COMBINED */
     uint64_t target_vertices;        /* vertices to keep; where welding leaves fewer, fewer */
     double max_normal_angle;         /* degrees; default 60 (the paper's α_max) */
+    double boundary_tolerance; /* COMBINED: the boundary lock's limit, as a share of the new
+                                  edge's length; 0: the default 1 %; infinite: no lock */
     int verify_heap;  /* tests: after every collapse, count heap entries whose stored priority or
                          target differs from a fresh evaluation (heap_violations) */
     int reheap_removed_ring_only; /* tests: re-score as OpenMesh's DecimaterT does */

@@ -249,10 +249,13 @@ template <class MeshT> class ModBoundaryLockT : public OpenMesh::Decimater::ModB
     DECIMATING_MODULE(ModBoundaryLockT, MeshT, BoundaryLock);
     explicit ModBoundaryLockT(MeshT &mesh) : Base(mesh, true), max_deviation_(0.01) {}
 
+    // The limit as a share of the new edge's length; infinite: every collapse is legal.
+    void set_max_deviation(double share) { max_deviation_ = share; }
+
     float collapse_priority(const CollapseInfo &ci) override
     {
         MeshT &mesh = Base::mesh();
-        if (!mesh.is_boundary(ci.v0))
+        if (!mesh.is_boundary(ci.v0) || std::isinf(max_deviation_))
             return Base::LEGAL_COLLAPSE;
         typename MeshT::HalfedgeHandle out = mesh.halfedge_handle(ci.v0);
         if (!mesh.is_boundary(out))

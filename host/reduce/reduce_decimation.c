@@ -2,7 +2,12 @@
  * the plan decimates, in parallel, largest first; then up to COMPENSATION_ROUNDS rounds that take
  * what meshes could not give up (too few legal collapses) from the meshes that met their targets
  * and have room above the floor (min_vertices), in proportion to that room. A round lowers those
- * meshes' targets in st->plan and decimates them again from their inputs. */
+ * meshes' targets in st->plan and decimates them again from their inputs. With the combined
+ * method, when no mesh has room left and the total is still above the request, the meshes that
+ * missed their targets have their boundary lock relaxed one step (1 % -> 5 % -> 25 % -> none,
+ * LOCK_STEPS) and are decimated again: outlines give way only as far as the budget demands.
+ * Where that leaves the total below the request (the meshes that compensated gave for meshes
+ * that then reached their targets after all), the shortfall goes back to those meshes. */
 #include <math.h>
 #include <stdlib.h>
 #include <unistd.h>
@@ -12,6 +17,10 @@
 #include "reduce/reduce_stages.h"
 
 #define COMPENSATION_ROUNDS 3
+
+/* The boundary lock's tolerance, step by step (decimate.h, boundary_tolerance). */
+static const double LOCK_STEPS[] = {0.01, 0.05, 0.25, INFINITY};
+#define LOCK_STEP_COUNT (sizeof LOCK_STEPS / sizeof *LOCK_STEPS)
 
 /* Decimates the meshes flagged in `redo` to st->plan.target, replacing earlier outputs. */
 static int decimate_selected(reduce_state *st, decimate_method method, unsigned int threads,
@@ -86,6 +95,66 @@ static int compensate(reduce_state *st, uint64_t excess, uint64_t floor_vertices
     return taken > 0;
 }
 
+/* Relaxes the boundary lock one step for each decimated mesh that missed its target and flags
+ * it in `redo`; counts the meshes in st->locks_relaxed. False if none could be relaxed. */
+static int relax_locks(reduce_state *st, unsigned char *redo)
+{
+    int any = 0;
+    for (size_t m = 0; m < st->count; m++) {
+        redo[m] = 0;
+        decimate_input *in = &st->input[m];
+        if (!st->plan.decimate[m] || st->output[m].mesh.vertex_count <= st->plan.target[m])
+            continue;
+        double current = in->boundary_tolerance > 0 ? in->boundary_tolerance : LOCK_STEPS[0];
+        size_t step = 0;
+        while (step < LOCK_STEP_COUNT && LOCK_STEPS[step] <= current)
+            step++;
+        if (step == LOCK_STEP_COUNT)
+            continue; /* already unlocked */
+        if (current == LOCK_STEPS[0])
+            st->locks_relaxed++;
+        in->boundary_tolerance = LOCK_STEPS[step];
+        redo[m] = 1;
+        any = 1;
+    }
+    return any;
+}
+
+/* After relaxed locks let meshes reach their targets, the meshes that gave up vertices for them
+ * (compensation) may have given too many: hands the shortfall back to them, in proportion to
+ * what they gave, up to their planned targets (`planned`), and flags them in `redo`. False if
+ * there is nothing to hand back. */
+static int give_back(reduce_state *st, uint64_t shortfall, const uint64_t *planned,
+                     unsigned char *redo)
+{
+    uint64_t given = 0;
+    for (size_t m = 0; m < st->count; m++) {
+        redo[m] = 0;
+        if (st->plan.decimate[m] && st->plan.target[m] < planned[m])
+            given += planned[m] - st->plan.target[m];
+    }
+    if (given == 0 || shortfall == 0)
+        return 0;
+    uint64_t returned = 0;
+    for (size_t m = 0; m < st->count && returned < shortfall; m++) {
+        if (!st->plan.decimate[m] || st->plan.target[m] >= planned[m])
+            continue;
+        uint64_t room = planned[m] - st->plan.target[m];
+        uint64_t share = (uint64_t)floor((double)shortfall * room / given);
+        if (share > room)
+            share = room;
+        if (share > shortfall - returned)
+            share = shortfall - returned;
+        if (share == 0)
+            continue;
+        st->plan.target[m] += share;
+        st->plan.factor[m] = (double)st->plan.target[m] / st->scene->meshes[m].vertex_count;
+        returned += share;
+        redo[m] = 1;
+    }
+    return returned > 0;
+}
+
 /* Vertices of the reduced scene: the decimated meshes' outputs and the others as they are. */
 static uint64_t vertices_after(const reduce_state *st)
 {
@@ -107,18 +176,36 @@ int reduce_decimation(reduce_state *st)
     for (size_t m = 0; m < st->count; m++)
         redo[m] = (unsigned char)st->plan.decimate[m];
     progress bar;
-    progress_begin(&bar, "decimation", COMPENSATION_ROUNDS + 1, o->importance.sppm.progress);
-    int status = 0;
-    for (unsigned int round = 0; !status && round <= COMPENSATION_ROUNDS; round++) {
+    unsigned int rounds = 0, last = COMPENSATION_ROUNDS + LOCK_STEP_COUNT - 1;
+    progress_begin(&bar, "decimation", last + 2, o->importance.sppm.progress);
+    uint64_t *planned = xcalloc(st->count + 1, sizeof *planned);
+    for (size_t m = 0; m < st->count; m++)
+        planned[m] = st->plan.target[m];
+    int status = 0, relaxed = 0;
+    for (unsigned int round = 0; !status && round <= last; round++) {
         status = decimate_selected(st, method, threads, redo);
         progress_update(&bar, round + 1, NULL);
         st->vertices_after = vertices_after(st);
         uint64_t requested = st->plan.total_requested;
-        if (status || st->vertices_after <= requested || round == COMPENSATION_ROUNDS ||
-            !compensate(st, st->vertices_after - requested, o->min_vertices, redo))
+        if (status || st->vertices_after <= requested || round == last)
             break;
-        st->compensation_rounds = round + 1;
+        if (rounds < COMPENSATION_ROUNDS &&
+            compensate(st, st->vertices_after - requested, o->min_vertices, redo)) {
+            st->compensation_rounds = ++rounds;
+            continue;
+        }
+        if (method != DECIMATE_COMBINED || !relax_locks(st, redo))
+            break;
+        relaxed = 1;
     }
+    uint64_t requested = st->plan.total_requested;
+    if (!status && relaxed && st->vertices_after < requested &&
+        give_back(st, requested - st->vertices_after, planned, redo)) {
+        status = decimate_selected(st, method, threads, redo);
+        st->vertices_after = vertices_after(st);
+    }
+    progress_update(&bar, last + 2, NULL);
+    free(planned);
     progress_end(&bar);
     free(redo);
     st->seconds_decimation = monotonic_seconds() - start;

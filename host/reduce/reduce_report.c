@@ -1,6 +1,8 @@
 /* reduce_report.c — report.json of `idmr reduce` (see reduce.h for the keys): the importance
  * report's object (method importance) or a bare one with the scene, meshes and seconds, to which
  * the reduction adds its options, vertex totals, stage seconds and per-mesh figures. */
+#include <math.h>
+
 #include "reduce/reduce_stages.h"
 
 #include "passes/importance_outputs.h"
@@ -30,6 +32,7 @@ static void add_totals(cJSON *root, const reduce_state *st)
                             (double)st->vertices_after - (double)st->plan.total_requested);
     cJSON_AddBoolToObject(root, "uniform_fallback", st->plan.uniform_fallback);
     cJSON_AddNumberToObject(root, "compensation_rounds", st->compensation_rounds);
+    cJSON_AddNumberToObject(root, "boundary_locks_relaxed", st->locks_relaxed);
 }
 
 static void add_seconds(cJSON *seconds, const reduce_state *st)
@@ -62,6 +65,14 @@ static void add_mesh(cJSON *meshes, const reduce_state *st, size_t m)
                             decimated ? out->mesh.vertex_count : in->vertex_count);
     cJSON_AddNumberToObject(mesh, "triangles_after",
                             decimated ? out->mesh.triangle_count : in->triangle_count);
+    if (decimated && st->options->method == REDUCE_COMBINED) {
+        double set = st->input[m].boundary_tolerance;
+        double tolerance = set > 0 ? set : 0.01;
+        if (isinf(tolerance))
+            cJSON_AddNullToObject(mesh, "boundary_tolerance");
+        else
+            cJSON_AddNumberToObject(mesh, "boundary_tolerance", tolerance);
+    }
     if (decimated) {
         cJSON_AddNumberToObject(mesh, "vertices_welded", out->vertices_welded);
         cJSON_AddNumberToObject(mesh, "vertices_uncollapsible", out->vertices_uncollapsible);

@@ -38,6 +38,7 @@ typedef struct reduce_state {
                                       in compensation rounds */
     decimate_output *output;       /* decimation: per mesh the plan decimates */
     unsigned int compensation_rounds;
+    unsigned int locks_relaxed;     /* decimation: meshes whose boundary lock was relaxed */
     uint64_t vertices_after;       /* decimation: vertices of the reduced scene */
     char **ply;                    /* write: per decimated mesh, its file relative to outdir */
     size_t meshes_written;
