@@ -4,8 +4,9 @@
  * and have room above the floor (min_vertices), in proportion to that room. A round lowers those
  * meshes' targets in st->plan and decimates them again from their inputs. With the combined
  * method, when no mesh has room left and the total is still above the request, the meshes that
- * missed their targets have their boundary lock relaxed one step (1 % -> 5 % -> 25 % -> none,
- * LOCK_STEPS) and are decimated again: outlines give way only as far as the budget demands.
+ * missed their targets most, as many as cover the excess, have their boundary lock relaxed one
+ * step (1 % -> 5 % -> 25 % -> none, LOCK_STEPS) and are decimated again: outlines give way only
+ * as far as the budget demands.
  * Where that leaves the total below the request (the meshes that compensated gave for meshes
  * that then reached their targets after all), the shortfall goes back to those meshes. */
 #include <math.h>
@@ -95,26 +96,46 @@ static int compensate(reduce_state *st, uint64_t excess, uint64_t floor_vertices
     return taken > 0;
 }
 
-/* Relaxes the boundary lock one step for each decimated mesh that missed its target and flags
- * it in `redo`; counts the meshes in st->locks_relaxed. False if none could be relaxed. */
-static int relax_locks(reduce_state *st, unsigned char *redo)
+/* Vertices mesh m keeps above its target (0 when it met it or is not decimated). */
+static uint64_t missed_by(const reduce_state *st, size_t m)
 {
+    uint64_t after = st->output[m].mesh.vertex_count, target = st->plan.target[m];
+    return st->plan.decimate[m] && after > target ? after - target : 0;
+}
+
+/* The next step of mesh m's lock, or LOCK_STEP_COUNT when it is off already. */
+static size_t next_lock_step(const reduce_state *st, size_t m)
+{
+    double set = st->input[m].boundary_tolerance, current = set > 0 ? set : LOCK_STEPS[0];
+    size_t step = 0;
+    while (step < LOCK_STEP_COUNT && LOCK_STEPS[step] <= current)
+        step++;
+    return step;
+}
+
+/* Relaxes the boundary lock one step for the meshes that missed their targets, those that
+ * missed most first, until their misses cover `excess`, and flags them in `redo`; counts the
+ * meshes relaxed for the first time in st->locks_relaxed. False if none could be relaxed. */
+static int relax_locks(reduce_state *st, uint64_t excess, unsigned char *redo)
+{
+    uint64_t covered = 0;
     int any = 0;
-    for (size_t m = 0; m < st->count; m++) {
+    for (size_t m = 0; m < st->count; m++)
         redo[m] = 0;
-        decimate_input *in = &st->input[m];
-        if (!st->plan.decimate[m] || st->output[m].mesh.vertex_count <= st->plan.target[m])
-            continue;
-        double current = in->boundary_tolerance > 0 ? in->boundary_tolerance : LOCK_STEPS[0];
-        size_t step = 0;
-        while (step < LOCK_STEP_COUNT && LOCK_STEPS[step] <= current)
-            step++;
-        if (step == LOCK_STEP_COUNT)
-            continue; /* already unlocked */
-        if (current == LOCK_STEPS[0])
+    while (covered < excess) {
+        size_t worst = st->count;
+        for (size_t m = 0; m < st->count; m++)
+            if (!redo[m] && missed_by(st, m) > 0 && next_lock_step(st, m) < LOCK_STEP_COUNT &&
+                (worst == st->count || missed_by(st, m) > missed_by(st, worst)))
+                worst = m;
+        if (worst == st->count)
+            break;
+        size_t step = next_lock_step(st, worst);
+        if (step == 1)
             st->locks_relaxed++;
-        in->boundary_tolerance = LOCK_STEPS[step];
-        redo[m] = 1;
+        st->input[worst].boundary_tolerance = LOCK_STEPS[step];
+        covered += missed_by(st, worst);
+        redo[worst] = 1;
         any = 1;
     }
     return any;
@@ -194,7 +215,7 @@ int reduce_decimation(reduce_state *st)
             st->compensation_rounds = ++rounds;
             continue;
         }
-        if (method != DECIMATE_COMBINED || !relax_locks(st, redo))
+        if (method != DECIMATE_COMBINED || !relax_locks(st, st->vertices_after - requested, redo))
             break;
         relaxed = 1;
     }
