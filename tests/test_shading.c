@@ -44,6 +44,17 @@ static void normalise(double v[3])
         v[k] /= length;
 }
 
+/* Mesh m's normal at vertex v is within `degrees` of the direction `expected` (any length). */
+static void assert_normal_near(const scene_mesh *m, uint32_t v, double expected[3],
+                               double degrees)
+{
+    double n[3] = {m->normals[3 * v], m->normals[3 * v + 1], m->normals[3 * v + 2]};
+    normalise(expected);
+    if (!(angle_degrees(expected, n) < degrees))
+        fail_msg("vertex %u: normal (%g, %g, %g) is %g degrees from (%g, %g, %g)", v, n[0], n[1],
+                 n[2], angle_degrees(expected, n), expected[0], expected[1], expected[2]);
+}
+
 /* ---- packing ---- */
 
 static void test_packing_keeps_directions_within_0_01_degrees(void **state)
@@ -100,13 +111,10 @@ static void test_cube_without_normals_gets_its_corner_directions(void **state)
     assert_non_null(m->normals);
     double centre[3] = {1.0, 0.5, 1.5};
     for (uint32_t v = 0; v < m->vertex_count; v++) {
-        double corner[3], n[3];
-        for (int k = 0; k < 3; k++) {
+        double corner[3];
+        for (int k = 0; k < 3; k++)
             corner[k] = m->positions[3 * v + k] > centre[k] ? 1.0 : -1.0;
-            n[k] = m->normals[3 * v + k];
-        }
-        normalise(corner);
-        assert_true(angle_degrees(corner, n) < 1e-4);
+        assert_normal_near(m, v, corner, 1e-4);
     }
     scene_free(s);
 }
@@ -132,11 +140,9 @@ static void test_file_normals_transform_as_normals(void **state)
                           "</shape>\n");
     const scene_mesh *m = &s->meshes[0];
     assert_non_null(m->normals);
-    double expected[3] = {0.5, 0.0, 1.0};
-    normalise(expected);
     for (uint32_t v = 0; v < m->vertex_count; v++) {
-        double n[3] = {m->normals[3 * v], m->normals[3 * v + 1], m->normals[3 * v + 2]};
-        assert_true(angle_degrees(expected, n) < 1e-4);
+        double expected[3] = {0.5, 0.0, 1.0};
+        assert_normal_near(m, v, expected, 1e-4);
     }
     scene_free(s);
 }
@@ -149,13 +155,10 @@ static void test_sphere_normals_are_radial(void **state)
     assert_non_null(m->normals);
     const double centre[3] = {1, 2, 3};
     for (uint32_t v = 0; v < m->vertex_count; v++) {
-        double radial[3], n[3];
-        for (int k = 0; k < 3; k++) {
+        double radial[3];
+        for (int k = 0; k < 3; k++)
             radial[k] = m->positions[3 * v + k] - centre[k];
-            n[k] = m->normals[3 * v + k];
-        }
-        normalise(radial);
-        assert_true(angle_degrees(radial, n) < 1e-3);
+        assert_normal_near(m, v, radial, 1e-3);
     }
     scene_free(s);
 }
@@ -166,11 +169,7 @@ static trace_device tdev;
 
 static int group_setup(void **state)
 {
-    if (trace_device_open(&tdev, device_test_device())) {
-        print_error("trace_device_open: %s\n", error_message());
-        return -1;
-    }
-    return 0;
+    return trace_device_open_reporting(&tdev, device_test_device());
 }
 
 static int group_teardown(void **state)

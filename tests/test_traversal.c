@@ -22,11 +22,7 @@ static scene *living_room;
 
 static int group_setup(void **state)
 {
-    if (trace_device_open(&tdev, device_test_device())) {
-        print_error("trace_device_open: %s\n", error_message());
-        return -1;
-    }
-    return 0;
+    return trace_device_open_reporting(&tdev, device_test_device());
 }
 
 static int group_teardown(void **state)

@@ -244,6 +244,15 @@ static inline int trace_device_open(trace_device *t, device *d)
     return 0;
 }
 
+/* trace_device_open(), saying on stderr why it failed (a test group's setup). */
+static inline int trace_device_open_reporting(trace_device *t, device *d)
+{
+    if (trace_device_open(t, d) == 0)
+        return 0;
+    fprintf(stderr, "trace_device_open: %s\n", error_message());
+    return -1;
+}
+
 /* The BVH of one scene, uploaded. */
 typedef struct trace_geometry {
     bvh tree;

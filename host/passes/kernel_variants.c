@@ -21,7 +21,7 @@ static void add_sppm(const device *d, int pass, unsigned int features, int accum
         abort(); /* the list is fixed in this file: a programming error */
     }
     kernel_variant *v = &list[(*count)++];
-    char defines[96] = "";
+    char defines[128] = "";
     if (pass == IDMR_SPPM_IMPORTANCE)
         importance_defines(accumulates, camera_importance, shadows, defines, sizeof defines);
     v->file = "sppm.cl";
