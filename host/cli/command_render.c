@@ -6,7 +6,6 @@
 #include <stdio.h>
 #include <string.h>
 #include <strings.h>
-#include <sys/stat.h>
 
 #include "cli/commands.h"
 #include "cli/options.h"
@@ -32,8 +31,9 @@ typedef struct render_cli_job {
 } render_cli_job;
 
 /* The paths of `-o image`: its stem (without a trailing ".exr" or ".png") with each
- * extension, and the stem's directory. -1 (a usage error printed) when the stem names a
- * directory (it ends in '/', or one exists there), which would give hidden files "DIR/.exr". */
+ * extension, and the stem's directory. -1 (a usage error printed) when the stem has no name
+ * of its own (it ends in '/'), which would give hidden files "DIR/.exr". A directory of the
+ * stem's name may exist: `-o out/reduced.exr` beside the reduced scene out/reduced/ is fine. */
 static int render_paths_from(const char *image, render_cli_paths *paths)
 {
     char stem[4096];
@@ -43,12 +43,10 @@ static int render_paths_from(const char *image, render_cli_paths *paths)
         (!strcasecmp(stem + length - 4, ".exr") || !strcasecmp(stem + length - 4, ".png")))
         stem[length - 4] = '\0';
     length = strlen(stem);
-    struct stat info;
-    if (length == 0 || stem[length - 1] == '/' ||
-        (stat(stem, &info) == 0 && S_ISDIR(info.st_mode)))
+    if (length == 0 || stem[length - 1] == '/')
         return usage_error("render: -o '%s' names a directory; give the image's path in it, "
-                           "such as '%s%simage'",
-                           image, stem, length && stem[length - 1] == '/' ? "" : "/");
+                           "such as '%simage'",
+                           image, stem);
     snprintf(paths->exr, sizeof paths->exr, "%s.exr", stem);
     snprintf(paths->png, sizeof paths->png, "%s.png", stem);
     snprintf(paths->json, sizeof paths->json, "%s.json", stem);
