@@ -197,6 +197,7 @@ static void replace_mesh(const scene_mesh *m, mitsuba_replacement *r, char *ply,
     r->xml_file = m->xml_file;
     r->xml_line = m->xml_line;
     r->ply = ply;
+    r->face_normals = m->flat_normals;
 }
 
 /* Output mesh b of input mesh a: the same geometry and light; a replaced one comes from its
@@ -707,7 +708,7 @@ static void write_failing_replacement(const char *file, int line, const char *wh
     write_scene3();
     snapshot_files(&inputs, in_dir, scene3_files, ARRAY_COUNT(scene3_files));
     snprintf(path, sizeof path, "%s", file[0] == '/' ? file : path_in(in_dir, file));
-    mitsuba_replacement r = {path, line, "meshes/x.ply"};
+    mitsuba_replacement r = {path, line, "meshes/x.ply", 0};
     snprintf(where, sizeof where, "%s:%d:", path, line);
     assert_write_fails(path_in(in_dir, "scene.xml"), &r, 1, where, what);
     snapshot_check(&inputs);
@@ -739,8 +740,8 @@ static void test_error_shape_replaced_twice(void **state)
     const char *scene_file = path_in(in_dir, "scene.xml");
     scene *s = test_load_scene(scene_file);
     const scene_mesh *quad = test_find_mesh(s, "quad");
-    mitsuba_replacement twice[2] = {{quad->xml_file, quad->xml_line, "meshes/a.ply"},
-                                    {quad->xml_file, quad->xml_line, "meshes/b.ply"}};
+    mitsuba_replacement twice[2] = {{quad->xml_file, quad->xml_line, "meshes/a.ply", 0},
+                                    {quad->xml_file, quad->xml_line, "meshes/b.ply", 0}};
     assert_write_fails(scene_file, twice, 2, "scene.xml:", "replaced twice");
     scene_free(s);
     snapshot_check(&inputs);

@@ -30,10 +30,14 @@ typedef struct scene_mesh {
     uint32_t triangle_count;
     float *positions;  /* world space, xyz per vertex */
     uint32_t *indices; /* three vertex indices per triangle */
-    float *texcoords;  /* uv per vertex, or NULL */
+    float *texcoords;  /* uv per vertex as Mitsuba reads them (an OBJ's v turned), or NULL */
     float *normals;    /* world-space unit shading normal per vertex, or NULL: shaded flat.
                         * The loader sets them (io/shapes.h: shapes_smooth_normals); a zero
                         * normal shades its triangles flat. Owned by the scene. */
+    int file_normals;  /* the normals are the mesh file's own (a reduced mesh writes them);
+                        * 0: computed by the loader, or none */
+    int flat_normals;  /* the file's normals shade the mesh flat (io/shapes.h:
+                        * shapes_normals_flat): a reduced mesh says face_normals instead */
     uint32_t material; /* index into scene.materials */
     int light;         /* index into scene.lights if the shape is an area emitter, else -1 */
     uint32_t first_triangle; /* set by scene_finalize() */

@@ -176,6 +176,14 @@ extern "C" int mesh_io_write_ply(const char *path, const mesh_data *mesh, const 
         out.request_vertex_colors();
         options += OpenMesh::IO::Options::VertexColor;
     }
+    if (mesh->texcoords) {
+        out.request_vertex_texcoords2D();
+        options += OpenMesh::IO::Options::VertexTexCoord;
+    }
+    if (mesh->normals) {
+        out.request_vertex_normals();
+        options += OpenMesh::IO::Options::VertexNormal;
+    }
     OpenMesh::VPropHandleT<float> property;
     if (values) {
         out.add_property(property, value_name);
@@ -191,6 +199,13 @@ extern "C" int mesh_io_write_ply(const char *path, const mesh_data *mesh, const 
                                             colors[3 * (size_t)v + 2]));
         if (values)
             out.property(property, h) = values[v];
+        if (mesh->texcoords)
+            out.set_texcoord2D(h, TriMesh::TexCoord2D(mesh->texcoords[2 * (size_t)v],
+                                                      mesh->texcoords[2 * (size_t)v + 1]));
+        if (mesh->normals) {
+            const float *n = &mesh->normals[3 * (size_t)v];
+            out.set_normal(h, TriMesh::Normal(n[0], n[1], n[2]));
+        }
         return h;
     };
     for (uint32_t v = 0; v < mesh->vertex_count; v++)

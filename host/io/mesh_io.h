@@ -20,7 +20,7 @@ typedef struct mesh_data {
     uint32_t *indices; /* three per triangle, malloc'd */
     float *texcoords;  /* uv per vertex if the file has them, else NULL; malloc'd */
     float *normals;    /* xyz per vertex if the file has them (not normalised), else NULL;
-                        * malloc'd. Meshes are written without them. */
+                        * malloc'd */
 } mesh_data;
 
 /* Reads `path` into `out`. Returns 0, or -1 with the error set (error.h) naming the file:
@@ -34,9 +34,10 @@ int mesh_io_read(const char *path, mesh_data *out);
  * the number of triangles turned. */
 int mesh_io_read_oriented(const char *path, mesh_data *out, int orient, uint32_t *flipped);
 
-/* Writes `mesh` as a binary PLY through OpenMesh, with an optional per-vertex float property
- * `value_name` (values may be NULL) and optional per-vertex RGB colours (colors: 3 bytes per
- * vertex, may be NULL). The file is written under a temporary name and renamed. A face that
+/* Writes `mesh` as a binary PLY through OpenMesh, with its texture coordinates (u, v) and
+ * normals (nx, ny, nz) where it has them, an optional per-vertex float property `value_name`
+ * (values may be NULL) and optional per-vertex RGB colours (colors: 3 bytes per vertex, may be
+ * NULL). The file is written under a temporary name and renamed. A face that
  * OpenMesh cannot attach (a non-manifold spot) is written with copies of its vertices, as
  * OpenMesh's reader does. Returns 0, or -1 with the error set. */
 int mesh_io_write_ply(const char *path, const mesh_data *mesh, const float *values,

@@ -22,7 +22,9 @@ static int is_mesh_file_type(const char *type)
 }
 
 /* Reads a mesh file shape; *file gets the resolved path, *written the path as in the file,
- * *face_normals the shape's face_normals flag. */
+ * *face_normals the shape's face_normals flag. An OBJ's texture coordinates are turned as
+ * Mitsuba turns them (v -> 1 - v, unless flip_tex_coords is false), so they mean what they mean
+ * in a PLY. */
 static int shape_read_file(loader *ld, xmlNodePtr node, mesh_data *mesh, char **file,
                            const char **written, int *face_normals)
 {
@@ -38,6 +40,13 @@ static int shape_read_file(loader *ld, xmlNodePtr node, mesh_data *mesh, char **
         return -1;
     if (mesh_io_read_oriented(*file, mesh, !*face_normals, NULL))
         return mitsuba_fail_prefix(node);
+    int flip_tex_coords = 0;
+    if (strcmp(mitsuba_attr(node, "type"), "obj") == 0 &&
+        mitsuba_prop_bool(node, "flip_tex_coords", 1, &flip_tex_coords))
+        return -1;
+    if (flip_tex_coords && mesh->texcoords)
+        for (uint32_t v = 0; v < mesh->vertex_count; v++)
+            mesh->texcoords[2 * (size_t)v + 1] = 1.0f - mesh->texcoords[2 * (size_t)v + 1];
     return 0;
 }
 
@@ -72,9 +81,10 @@ static int shape_builtin(xmlNodePtr node, const char *type, mesh_data *mesh)
 
 /* The shape's geometry in world space, with Mitsuba's shading normals: a mesh file's own
  * normals, smooth vertex normals where it has none, none (flat) under face_normals; a built-in
- * shape's from shapes.h. */
+ * shape's from shapes.h. *file_normals says whether the normals are the mesh file's own: 1, or
+ * 2 where they shade the mesh flat (shapes_normals_flat). */
 static int shape_geometry(loader *ld, xmlNodePtr node, const char *type, mesh_data *mesh,
-                          char **file, const char **written)
+                          char **file, const char **written, int *file_normals)
 {
     xform to_world;
     int flip, face_normals = 0, builtin = !is_mesh_file_type(type);
@@ -99,6 +109,7 @@ static int shape_geometry(loader *ld, xmlNodePtr node, const char *type, mesh_da
         mesh->normals = NULL;
     }
     shapes_transform(mesh, &to_world);
+    *file_normals = builtin || !mesh->normals ? 0 : shapes_normals_flat(mesh) ? 2 : 1;
     if (!builtin && !face_normals && !mesh->normals)
         shapes_smooth_normals(mesh);
     /* A built-in shape's normal is transformed as a normal, so a mirror flips its winding. */
@@ -196,7 +207,8 @@ int mitsuba_load_shape(loader *ld, xmlNodePtr node)
     if ((has_inline_bsdf && mitsuba_parse_bsdf(ld, parts.bsdf, 0, &inline_bsdf)) ||
         (parts.emitter && mitsuba_emitter_area(ld, parts.emitter, &light)))
         return -1;
-    if (shape_geometry(ld, node, type, &mesh, &file, &written)) {
+    int file_normals = 0;
+    if (shape_geometry(ld, node, type, &mesh, &file, &written, &file_normals)) {
         mesh_data_free(&mesh);
         free(file);
         return -1;
@@ -206,6 +218,8 @@ int mitsuba_load_shape(loader *ld, xmlNodePtr node)
                                        mesh.vertex_count, mesh.positions, mesh.triangle_count,
                                        mesh.indices, mesh.texcoords);
     added->normals = mesh.normals;
+    added->file_normals = file_normals != 0;
+    added->flat_normals = file_normals == 2;
     free(file);
     int material = shape_material(ld, has_inline_bsdf ? &inline_bsdf : NULL, parts.bsdf_entry,
                                   added->name);

@@ -333,7 +333,8 @@ static int write_doc_out(writer *w, size_t index, const char *target)
     }
     for (size_t i = 0; i < w->replacement_count; i++)
         if (w->shapes[i]->doc == d->doc)
-            mitsuba_shape_to_ply(w->shapes[i], w->replacements[i].ply);
+            mitsuba_shape_to_ply(w->shapes[i], w->replacements[i].ply,
+                                 w->replacements[i].face_normals);
     char *path = mitsuba_path_join(w->outdir, target);
     int status = write_tree(d, path);
     free(path);

@@ -47,6 +47,7 @@ typedef struct mitsuba_replacement {
     const char *xml_file; /* scene_mesh.xml_file of the shape */
     int xml_line;         /* scene_mesh.xml_line */
     const char *ply;      /* the new mesh, relative to outdir, e.g. "meshes/knot.ply" */
+    int face_normals;     /* the mesh is shaded flat: the shape says face_normals */
 } mitsuba_replacement;
 
 /* Writes outdir/scene.xml (and outdir/includes/ copies where needed, see above) for the scene

@@ -103,13 +103,14 @@ static int property_dropped(const char *type, xmlNodePtr child)
            (strcmp(type, "obj") == 0 && is_any_property(child, obj, sizeof obj / sizeof *obj));
 }
 
-/* A built-in shape with edges (all but the sphere) is shaded flat; as a PLY without normals
- * Mitsuba would smooth it (a cube's corners), so it says face_normals, in the document's
- * dialect (faceNormals before version 2), unless it already does. */
-static void keep_flat_shading(xmlNodePtr shape, const char *type)
+/* A built-in shape with edges (all but the sphere), or one whose normals were flat (flat_normals), is
+ * shaded flat; as a PLY without normals Mitsuba would smooth it (a cube's corners), so it says
+ * face_normals, in the document's dialect (faceNormals before version 2), unless it already
+ * does. */
+static void keep_flat_shading(xmlNodePtr shape, const char *type, int flat_normals)
 {
     static const char *const flat[] = {"rectangle", "cube", "disk"};
-    int is_flat = 0;
+    int is_flat = flat_normals;
     for (size_t i = 0; i < sizeof flat / sizeof *flat; i++)
         is_flat |= strcmp(type, flat[i]) == 0;
     if (!is_flat)
@@ -128,7 +129,7 @@ static void keep_flat_shading(xmlNodePtr shape, const char *type)
     add_only_child(shape, element);
 }
 
-void mitsuba_shape_to_ply(xmlNodePtr shape, const char *ply)
+void mitsuba_shape_to_ply(xmlNodePtr shape, const char *ply, int face_normals)
 {
     char type[64];
     const char *written_type = mitsuba_attr(shape, "type");
@@ -144,7 +145,7 @@ void mitsuba_shape_to_ply(xmlNodePtr shape, const char *ply)
         else if (property_dropped(type, child))
             remove_with_indent(child);
     }
-    keep_flat_shading(shape, type);
+    keep_flat_shading(shape, type, face_normals);
     xmlSetProp(shape, (const xmlChar *)"type", (const xmlChar *)"ply");
     if (filename)
         xmlSetProp(filename, (const xmlChar *)"value", (const xmlChar *)ply);

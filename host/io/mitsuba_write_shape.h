@@ -9,7 +9,7 @@
 /* Makes `shape` type="ply" with <string name="filename" value="ply"/> (an existing filename
  * property is overwritten, else one is added as the first child) and removes the properties
  * that a world-space PLY no longer has. A rectangle, cube or disk gets face_normals (the PLY
- * carries no normals, and they are flat). */
-void mitsuba_shape_to_ply(xmlNodePtr shape, const char *ply);
+ * carries no normals, and they are flat), as does any shape when `face_normals` is set. */
+void mitsuba_shape_to_ply(xmlNodePtr shape, const char *ply, int face_normals);
 
 #endif

@@ -144,6 +144,22 @@ static double corner_angle(const float *a, const float *b, const float *c)
     return atan2(sqrt(xform_dot(cross, cross)), xform_dot(u, v));
 }
 
+/* Triangle t's corners into p and its unit geometric normal (by its winding) into n; returns 0
+ * for a zero-area triangle (n is then zero). */
+static double triangle_normal(const mesh_data *mesh, uint32_t t, const float *p[3], double n[3])
+{
+    const uint32_t *ix = &mesh->indices[3 * (size_t)t];
+    for (int k = 0; k < 3; k++)
+        p[k] = &mesh->positions[3 * (size_t)ix[k]];
+    double e1[3], e2[3];
+    for (int k = 0; k < 3; k++) {
+        e1[k] = (double)p[1][k] - p[0][k];
+        e2[k] = (double)p[2][k] - p[0][k];
+    }
+    xform_cross(e1, e2, n);
+    return xform_normalize(n);
+}
+
 void shapes_smooth_normals(mesh_data *mesh)
 {
     free(mesh->normals);
@@ -151,15 +167,8 @@ void shapes_smooth_normals(mesh_data *mesh)
     for (uint32_t t = 0; t < mesh->triangle_count; t++) {
         const uint32_t *ix = &mesh->indices[3 * (size_t)t];
         const float *p[3];
-        for (int k = 0; k < 3; k++)
-            p[k] = &mesh->positions[3 * (size_t)ix[k]];
-        double e1[3], e2[3], n[3];
-        for (int k = 0; k < 3; k++) {
-            e1[k] = (double)p[1][k] - p[0][k];
-            e2[k] = (double)p[2][k] - p[0][k];
-        }
-        xform_cross(e1, e2, n);
-        if (xform_normalize(n) == 0.0)
+        double n[3];
+        if (triangle_normal(mesh, t, p, n) == 0.0)
             continue; /* a zero-area triangle has no direction to give */
         for (int corner = 0; corner < 3; corner++) {
             double angle = corner_angle(p[corner], p[(corner + 1) % 3], p[(corner + 2) % 3]);
@@ -175,6 +184,25 @@ void shapes_smooth_normals(mesh_data *mesh)
             mesh->normals[3 * (size_t)v + k] = length > 0 ? (float)n[k] : 0.0f;
     }
     free(sum);
+}
+
+int shapes_normals_flat(const mesh_data *mesh)
+{
+    if (!mesh->normals)
+        return 0;
+    for (uint32_t t = 0; t < mesh->triangle_count; t++) {
+        const float *p[3];
+        double n[3];
+        if (triangle_normal(mesh, t, p, n) == 0.0)
+            continue;
+        for (int corner = 0; corner < 3; corner++) {
+            const float *given = &mesh->normals[3 * (size_t)mesh->indices[3 * (size_t)t + corner]];
+            double g[3] = {given[0], given[1], given[2]};
+            if (xform_normalize(g) > 0.0 && xform_dot(g, n) < SHAPES_FLAT_COS)
+                return 0;
+        }
+    }
+    return 1;
 }
 
 double shapes_signed_volume(const mesh_data *mesh)

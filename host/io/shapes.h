@@ -45,6 +45,13 @@ void shapes_transform(mesh_data *mesh, const xform *to_world);
  * vertex only they touch gets a zero normal (the kernels then shade it flat). */
 void shapes_smooth_normals(mesh_data *mesh);
 
+/* Whether the mesh's normals shade it flat: at every corner of every triangle of non-zero area
+ * the normal is within about 0.8 degrees of the triangle's geometric normal (cosine at least
+ * SHAPES_FLAT_COS; a zero normal, which the kernels shade flat, counts as flat). A mesh split
+ * at every edge to carry face normals (an OBJ with one vn per face) is; 0 without normals. */
+#define SHAPES_FLAT_COS 0.9999
+int shapes_normals_flat(const mesh_data *mesh);
+
 /* Signed volume enclosed by a closed mesh (positive when wound outward); for tests. */
 double shapes_signed_volume(const mesh_data *mesh);
 

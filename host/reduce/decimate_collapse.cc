@@ -139,7 +139,20 @@ void ReductionDecimater::heap_vertex(Mesh::VertexHandle v)
     heap_.push(entry);
 }
 
-// Resets the per-vertex records and scores every vertex; returns how many are not deleted.
+// The wedges of the vertices a collapse changes: v1, vl, vr (they lose corners), and v0 when
+// with_v0 (before the collapse).
+size_t ReductionDecimater::wedges_around(const CollapseInfo &ci, bool with_v0)
+{
+    size_t sum = 0;
+    Mesh::VertexHandle touched[4] = {ci.v0, ci.v1, ci.vl, ci.vr};
+    for (int k = with_v0 ? 0 : 1; k < 4; k++)
+        if (touched[k].is_valid())
+            sum += wedge_count(mesh_, *attributes_, touched[k], scratch_);
+    return sum;
+}
+
+// Resets the per-vertex records and scores every vertex; returns how many are not deleted,
+// counted once per wedge.
 size_t ReductionDecimater::heap_all_vertices()
 {
     size_t n = mesh_.n_vertices();
@@ -150,7 +163,7 @@ size_t ReductionDecimater::heap_all_vertices()
     size_t alive = 0;
     for (auto v : mesh_.vertices())
         if (!mesh_.status(v).deleted()) {
-            alive++;
+            alive += attributes_ ? wedge_count(mesh_, *attributes_, v, scratch_) : 1;
             heap_vertex(v);
         }
     return alive;
@@ -208,11 +221,12 @@ size_t ReductionDecimater::decimate_to(size_t target_vertices, bool verify, bool
         removed_ring.clear();
         for (auto w : mesh_.vv_range(ci.v0))
             removed_ring.push_back(w);
+        size_t before = attributes_ ? wedges_around(ci, true) : 1;
         preprocess_collapse(ci);
         mesh_.collapse(h);
         postprocess_collapse(ci);
         collapses++;
-        alive--;
+        alive -= before - (attributes_ ? wedges_around(ci, false) : 0);
         reheap_after_collapse(ci, removed_ring_only, removed_ring);
         if (verify)
             *violations += count_stale();

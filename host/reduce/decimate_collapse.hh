@@ -26,13 +26,19 @@ namespace idmr_decimate {
 class ReductionDecimater : public OpenMesh::Decimater::BaseDecimaterT<Mesh> {
   public:
     typedef OpenMesh::Decimater::BaseDecimaterT<Mesh> Base;
-    explicit ReductionDecimater(Mesh &mesh) : Base(mesh), mesh_(mesh), importance_(nullptr) {}
+    explicit ReductionDecimater(Mesh &mesh)
+        : Base(mesh), mesh_(mesh), importance_(nullptr), attributes_(nullptr)
+    {
+    }
 
     // Tie-break source: the importance module, or none.
     void set_importance(ModImportanceT<Mesh> *importance) { importance_ = importance; }
 
-    // Collapses until target_vertices are left or no legal collapse remains; returns the number
-    // of collapses. verify: after every collapse add the stale heap entries to *violations
+    // The corners' attributes, when the mesh has them: vertices are then counted once per wedge.
+    void set_attributes(const AttributeTable *attributes) { attributes_ = attributes; }
+
+    // Collapses until target_vertices are left (counted once per wedge) or no legal collapse
+    // remains; returns the number of collapses. verify: after every collapse add the stale heap entries to *violations
     // (tests); removed_ring_only: re-score as OpenMesh's DecimaterT does (tests).
     size_t decimate_to(size_t target_vertices, bool verify, bool removed_ring_only,
                        uint64_t *violations);
@@ -64,9 +70,12 @@ class ReductionDecimater : public OpenMesh::Decimater::BaseDecimaterT<Mesh> {
     void reheap_after_collapse(const CollapseInfo &ci, bool removed_ring_only,
                                const std::vector<Mesh::VertexHandle> &removed_ring);
     uint64_t count_stale();
+    size_t wedges_around(const CollapseInfo &ci, bool with_v0);
 
     Mesh &mesh_;
     ModImportanceT<Mesh> *importance_;
+    const AttributeTable *attributes_;
+    std::vector<uint32_t> scratch_;
     std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap_;
     std::vector<unsigned> version_;
     std::vector<Mesh::HalfedgeHandle> target_;

@@ -13,6 +13,8 @@
 
 #include <vector>
 
+#include "reduce/decimate_attributes.hh"
+
 extern "C" {
 #include "reduce/decimate.h"
 }
@@ -31,10 +33,11 @@ typedef OpenMesh::Decimater::CollapseInfoT<Mesh> CollapseInfo;
 // Builds `mesh` from `in` (decimate_weld.cc): welded vertices, faces attached with retries, the
 // rest patched or loose and locked. Fills out->welded_of and the welding counts of `out`
 // (vertices_welded, vertices_uncollapsible, faces_patched, faces_loose, faces_dropped), and
-// `importance` per mesh vertex (the largest of the input vertices welded into it). Throws what
-// OpenMesh throws.
+// `importance` per mesh vertex (the largest of the input vertices welded into it), and, where the
+// input has texture coordinates or normals, `attributes` (its table and the faces' corners).
+// Throws what OpenMesh throws.
 void build_welded_mesh(const decimate_input *in, Mesh &mesh, decimate_output *out,
-                       std::vector<double> &importance);
+                       std::vector<double> &importance, AttributeTable &attributes);
 
 } // namespace idmr_decimate
 

@@ -3,6 +3,10 @@
 // until no more attach, what still fails patched onto copied vertices or left loose with locked
 // copies, and vertices that no face uses removed.
 //
+// Where the input has attributes, input vertices welded into one position keep one attribute id
+// per distinct (bit-identical) attribute set, and every face records its corners' ids
+// (decimate_attributes.hh).
+//
 // Mesh vertices in order of creation: the welded vertices (index = welded index, in order of
 // first appearance in the input), then the patch copies, then three locked copies per loose face.
 #include "reduce/decimate_openmesh.hh"
@@ -35,21 +39,95 @@ struct PositionHash {
     }
 };
 
+// A welded vertex and the bit pattern of an attribute set at it, for numbering attribute sets.
+struct AttributeKey {
+    uint32_t welded;
+    uint32_t bits[5];
+    bool operator==(const AttributeKey &o) const
+    {
+        return std::memcmp(this, &o, sizeof *this) == 0;
+    }
+};
+struct AttributeHash {
+    size_t operator()(const AttributeKey &k) const
+    {
+        size_t h = k.welded;
+        for (uint32_t b : k.bits)
+            h = h * 1000003u ^ b;
+        return h;
+    }
+};
+
 // What the rebuild steps share: the input, the mesh being built, the output's welding figures,
-// the importance per mesh vertex and the handle of each welded vertex.
+// the importance per mesh vertex, the handle of each welded vertex, and the attribute table with
+// the attribute id of each input vertex.
 struct WeldedBuild {
     const decimate_input *in;
     Mesh &mesh;
     decimate_output *out;
     std::vector<double> &importance;
+    AttributeTable &attributes;
     std::vector<Mesh::VertexHandle> handles;
+    std::vector<uint32_t> attribute_of;
 
     // The welded vertex of corner k of input triangle t.
     uint32_t welded_corner(uint32_t t, int k) const
     {
         return out->welded_of[in->indices[3 * (size_t)t + k]];
     }
+
+    // Adds the face (a, b, c) for input triangle t (its corners k = 0, 1, 2) and records the
+    // corners' attribute ids. Returns the face (invalid if it could not be attached).
+    Mesh::FaceHandle add_face(uint32_t t, Mesh::VertexHandle a, Mesh::VertexHandle b,
+                              Mesh::VertexHandle c)
+    {
+        Mesh::FaceHandle f = mesh.add_face(a, b, c);
+        if (f.is_valid() && attributes.present()) {
+            CornerSet &set = mesh.property(attributes.corners, f);
+            Mesh::VertexHandle corner[3] = {a, b, c};
+            for (int k = 0; k < 3; k++) {
+                set.vertex[k] = corner[k].idx();
+                set.id[k] = attribute_of[in->indices[3 * (size_t)t + k]];
+            }
+        }
+        return f;
+    }
 };
+
+// Numbers the attribute sets: per welded vertex, one id per bit-distinct set (uv, normal as the
+// input has them, -0 folded into 0); fills the table's values.
+void number_attributes(WeldedBuild &b)
+{
+    AttributeTable &table = b.attributes;
+    table.uv_floats = b.in->texcoords ? 2 : 0;
+    table.normal_floats = b.in->normals ? 3 : 0;
+    if (!table.present())
+        return;
+    b.mesh.add_property(table.corners);
+    std::unordered_map<AttributeKey, uint32_t, AttributeHash> id_of;
+    b.attribute_of.resize(b.in->vertex_count);
+    for (uint32_t v = 0; v < b.in->vertex_count; v++) {
+        float value[5] = {0, 0, 0, 0, 0};
+        int n = 0;
+        for (int k = 0; k < table.uv_floats; k++)
+            value[n++] = b.in->texcoords[2 * (size_t)v + k] + 0.0f;
+        for (int k = 0; k < table.normal_floats; k++)
+            value[n++] = b.in->normals[3 * (size_t)v + k] + 0.0f;
+        AttributeKey key;
+        std::memset(&key, 0, sizeof key);
+        key.welded = b.out->welded_of[v];
+        std::memcpy(key.bits, value, sizeof(float) * n);
+        auto found = id_of.find(key);
+        if (found != id_of.end()) {
+            b.attribute_of[v] = found->second;
+            continue;
+        }
+        uint32_t id = (uint32_t)id_of.size();
+        id_of.emplace(key, id);
+        b.attribute_of[v] = id;
+        table.values.insert(table.values.end(), value, value + n);
+    }
+}
 
 // One mesh vertex per distinct position; a welded vertex keeps the largest importance of the
 // input vertices welded into it.
@@ -87,15 +165,15 @@ std::vector<uint32_t> attach_faces(WeldedBuild &b)
             b.out->faces_dropped++;
             continue;
         }
-        if (!b.mesh.add_face(b.handles[a], b.handles[c1], b.handles[c2]).is_valid())
+        if (!b.add_face(t, b.handles[a], b.handles[c1], b.handles[c2]).is_valid())
             pending.push_back(t);
     }
     for (bool progress = true; progress && !pending.empty();) {
         progress = false;
         std::vector<uint32_t> still;
         for (uint32_t t : pending) {
-            if (b.mesh.add_face(b.handles[b.welded_corner(t, 0)], b.handles[b.welded_corner(t, 1)],
-                                b.handles[b.welded_corner(t, 2)])
+            if (b.add_face(t, b.handles[b.welded_corner(t, 0)], b.handles[b.welded_corner(t, 1)],
+                           b.handles[b.welded_corner(t, 2)])
                     .is_valid())
                 progress = true;
             else
@@ -126,7 +204,7 @@ std::vector<uint32_t> patch_faces(WeldedBuild &b, const std::vector<uint32_t> &p
     for (uint32_t t : pending) {
         Mesh::VertexHandle a = copy_of(b.welded_corner(t, 0)), c1 = copy_of(b.welded_corner(t, 1)),
                            c2 = copy_of(b.welded_corner(t, 2));
-        if (!b.mesh.add_face(a, c1, c2).is_valid())
+        if (!b.add_face(t, a, c1, c2).is_valid())
             loose.push_back(t);
     }
     b.out->faces_patched = (uint32_t)(pending.size() - loose.size());
@@ -145,33 +223,37 @@ void add_loose_faces(WeldedBuild &b, const std::vector<uint32_t> &loose)
             b.mesh.status(copy[k]).set_locked(true);
             b.importance.push_back(b.importance[welded]);
         }
-        b.mesh.add_face(copy[0], copy[1], copy[2]);
+        b.add_face(t, copy[0], copy[1], copy[2]);
         b.out->faces_loose++;
         b.out->vertices_uncollapsible += 3;
     }
 }
 
 // A position used only by patched or loose faces keeps a vertex without faces: remove it (it
-// would never collapse, count against the budget, and be written out).
+// would never collapse, count against the budget, and be written out). Counts the rest as
+// vertices_welded, once per wedge.
 void remove_isolated_vertices(WeldedBuild &b)
 {
-    uint32_t isolated = 0;
-    for (auto v : b.mesh.vertices())
-        if (b.mesh.is_isolated(v)) {
+    uint32_t kept = 0;
+    std::vector<uint32_t> scratch;
+    for (auto v : b.mesh.vertices()) {
+        if (b.mesh.is_isolated(v))
             b.mesh.status(v).set_deleted(true);
-            isolated++;
-        }
-    b.out->vertices_welded = (uint32_t)b.mesh.n_vertices() - isolated;
+        else
+            kept += wedge_count(b.mesh, b.attributes, v, scratch);
+    }
+    b.out->vertices_welded = kept;
 }
 
 } // namespace
 
 void build_welded_mesh(const decimate_input *in, Mesh &mesh, decimate_output *out,
-                       std::vector<double> &importance)
+                       std::vector<double> &importance, AttributeTable &attributes)
 {
     mesh_io_silence_openmesh_logs(); // failed add_face calls would each log a line
-    WeldedBuild b{in, mesh, out, importance, {}};
+    WeldedBuild b{in, mesh, out, importance, attributes, {}, {}};
     weld_vertices(b);
+    number_attributes(b);
     std::vector<uint32_t> pending = attach_faces(b);
     std::vector<uint32_t> loose = patch_faces(b, pending);
     add_loose_faces(b, loose);

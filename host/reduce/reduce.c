@@ -59,7 +59,9 @@ static int run_importance(reduce_state *st)
     return status;
 }
 
-/* What mesh m is decimated from: the scene's mesh and its per-vertex importance. */
+/* What mesh m is decimated from: the scene's mesh, its texture coordinates, its normals where
+ * they are its file's own and not flat (computed ones are not written: the reader of the output
+ * computes them again; flat ones become face_normals), and its per-vertex importance. */
 static decimate_input decimation_input(const reduce_state *st, size_t m)
 {
     const scene_mesh *mesh = &st->scene->meshes[m];
@@ -70,6 +72,8 @@ static decimate_input decimation_input(const reduce_state *st, size_t m)
     in.vertex_count = mesh->vertex_count;
     in.indices = mesh->indices;
     in.triangle_count = mesh->triangle_count;
+    in.texcoords = mesh->texcoords;
+    in.normals = mesh->file_normals && !mesh->flat_normals ? mesh->normals : NULL;
     in.vertex_importance = st->vertex_importance ? st->vertex_importance[m] : NULL;
     in.max_normal_angle = st->options->max_normal_angle;
     return in;
@@ -141,8 +145,8 @@ static int write_reduced_scene(reduce_state *st)
         name_ply(st, m);
         snprintf(path, sizeof path, "%s/%s", st->outdir, st->ply[m]);
         status = mesh_io_write_ply(path, &st->output[m].mesh, NULL, NULL, NULL);
-        replacements[st->meshes_written++] =
-            (mitsuba_replacement){s->meshes[m].xml_file, s->meshes[m].xml_line, st->ply[m]};
+        replacements[st->meshes_written++] = (mitsuba_replacement){
+            s->meshes[m].xml_file, s->meshes[m].xml_line, st->ply[m], s->meshes[m].flat_normals};
     }
     if (!status)
         status = mitsuba_write_reduced(s->file, st->outdir, replacements, st->meshes_written);

@@ -2,11 +2,13 @@
  * the plan decimates, in parallel, largest first; then up to COMPENSATION_ROUNDS rounds that take
  * what meshes could not give up (too few legal collapses) from the meshes that met their targets
  * and have room above the floor (min_vertices), in proportion to that room. A round lowers those
- * meshes' targets in st->plan and decimates them again from their inputs. With the combined
- * method, when no mesh has room left and the total is still above the request, the meshes that
- * missed their targets most, as many as cover the excess, have their boundary lock relaxed one
- * step (1 % -> 5 % -> 25 % -> none, LOCK_STEPS) and are decimated again: outlines give way only
- * as far as the budget demands.
+ * meshes' targets in st->plan and decimates them again from their inputs. When no mesh has room
+ * left and the total is still above the request, the meshes that missed their targets most, as
+ * many as cover the excess, have their locks relaxed one step and are decimated again: first
+ * their attribute seams are freed (decimate.h, "Attributes"; only meshes with attributes have
+ * that step), then, with the combined method, their boundary lock goes from 1 % to 5 %, 25 % and
+ * none (LOCK_STEPS): textures and creases, then outlines, give way only as far as the budget
+ * demands.
  * Where that leaves the total below the request (the meshes that compensated gave for meshes
  * that then reached their targets after all), the shortfall goes back to those meshes. */
 #include <math.h>
@@ -19,8 +21,15 @@
 
 #define COMPENSATION_ROUNDS 3
 
-/* The boundary lock's tolerance, step by step (decimate.h, boundary_tolerance). */
-static const double LOCK_STEPS[] = {0.01, 0.05, 0.25, INFINITY};
+/* The locks of a mesh, step by step: its attribute seams, then (combined) the boundary lock's
+ * tolerance (decimate.h, seams_free and boundary_tolerance). */
+typedef struct lock_step {
+    int seams_free;
+    double boundary_tolerance;
+} lock_step;
+static const lock_step LOCK_STEPS[] = {
+    {0, 0.01}, {1, 0.01}, {1, 0.05}, {1, 0.25}, {1, INFINITY},
+};
 #define LOCK_STEP_COUNT (sizeof LOCK_STEPS / sizeof *LOCK_STEPS)
 
 /* Decimates the meshes flagged in `redo` to st->plan.target, replacing earlier outputs. */
@@ -103,20 +112,37 @@ static uint64_t missed_by(const reduce_state *st, size_t m)
     return st->plan.decimate[m] && after > target ? after - target : 0;
 }
 
-/* The next step of mesh m's lock, or LOCK_STEP_COUNT when it is off already. */
-static size_t next_lock_step(const reduce_state *st, size_t m)
+/* Whether step s of the ladder changes anything for mesh m: the seam step only where the mesh
+ * has attributes, the boundary steps only under the combined method. */
+static int lock_step_applies(const reduce_state *st, size_t m, size_t s, decimate_method method)
 {
-    double set = st->input[m].boundary_tolerance, current = set > 0 ? set : LOCK_STEPS[0];
+    const decimate_input *in = &st->input[m];
+    if (s == 1)
+        return in->texcoords || in->normals;
+    return method == DECIMATE_COMBINED;
+}
+
+/* The next step of mesh m's locks that changes anything, or LOCK_STEP_COUNT when none is left. */
+static size_t next_lock_step(const reduce_state *st, size_t m, decimate_method method)
+{
+    const decimate_input *in = &st->input[m];
+    double tolerance =
+        in->boundary_tolerance > 0 ? in->boundary_tolerance : LOCK_STEPS[0].boundary_tolerance;
     size_t step = 0;
-    while (step < LOCK_STEP_COUNT && LOCK_STEPS[step] <= current)
+    while (step < LOCK_STEP_COUNT && LOCK_STEPS[step].seams_free <= in->seams_free &&
+           LOCK_STEPS[step].boundary_tolerance <= tolerance)
+        step++;
+    while (step < LOCK_STEP_COUNT && !lock_step_applies(st, m, step, method))
         step++;
     return step;
 }
 
-/* Relaxes the boundary lock one step for the meshes that missed their targets, those that
- * missed most first, until their misses cover `excess`, and flags them in `redo`; counts the
- * meshes relaxed for the first time in st->locks_relaxed. False if none could be relaxed. */
-static int relax_locks(reduce_state *st, uint64_t excess, unsigned char *redo)
+/* Relaxes the locks one step for the meshes that missed their targets, those that missed most
+ * first, until their misses cover `excess`, and flags them in `redo`; counts the meshes whose
+ * seams are freed in st->seams_freed and those whose boundary lock is relaxed for the first
+ * time in st->locks_relaxed. False if none could be relaxed. */
+static int relax_locks(reduce_state *st, uint64_t excess, decimate_method method,
+                       unsigned char *redo)
 {
     uint64_t covered = 0;
     int any = 0;
@@ -125,15 +151,22 @@ static int relax_locks(reduce_state *st, uint64_t excess, unsigned char *redo)
     while (covered < excess) {
         size_t worst = st->count;
         for (size_t m = 0; m < st->count; m++)
-            if (!redo[m] && missed_by(st, m) > 0 && next_lock_step(st, m) < LOCK_STEP_COUNT &&
+            if (!redo[m] && missed_by(st, m) > 0 &&
+                next_lock_step(st, m, method) < LOCK_STEP_COUNT &&
                 (worst == st->count || missed_by(st, m) > missed_by(st, worst)))
                 worst = m;
         if (worst == st->count)
             break;
-        size_t step = next_lock_step(st, worst);
-        if (step == 1)
+        size_t step = next_lock_step(st, worst, method);
+        decimate_input *in = &st->input[worst];
+        if (LOCK_STEPS[step].seams_free && !in->seams_free)
+            st->seams_freed++;
+        if (method == DECIMATE_COMBINED &&
+            LOCK_STEPS[step].boundary_tolerance > LOCK_STEPS[0].boundary_tolerance &&
+            !(in->boundary_tolerance > LOCK_STEPS[0].boundary_tolerance))
             st->locks_relaxed++;
-        st->input[worst].boundary_tolerance = LOCK_STEPS[step];
+        in->seams_free = LOCK_STEPS[step].seams_free;
+        in->boundary_tolerance = LOCK_STEPS[step].boundary_tolerance;
         covered += missed_by(st, worst);
         redo[worst] = 1;
         any = 1;
@@ -215,7 +248,7 @@ int reduce_decimation(reduce_state *st)
             st->compensation_rounds = ++rounds;
             continue;
         }
-        if (method != DECIMATE_COMBINED || !relax_locks(st, st->vertices_after - requested, redo))
+        if (!relax_locks(st, st->vertices_after - requested, method, redo))
             break;
         relaxed = 1;
     }

@@ -33,6 +33,7 @@ static void add_totals(cJSON *root, const reduce_state *st)
     cJSON_AddBoolToObject(root, "uniform_fallback", st->plan.uniform_fallback);
     cJSON_AddNumberToObject(root, "compensation_rounds", st->compensation_rounds);
     cJSON_AddNumberToObject(root, "boundary_locks_relaxed", st->locks_relaxed);
+    cJSON_AddNumberToObject(root, "seams_freed", st->seams_freed);
 }
 
 static void add_seconds(cJSON *seconds, const reduce_state *st)
@@ -72,6 +73,12 @@ static void add_mesh(cJSON *meshes, const reduce_state *st, size_t m)
             cJSON_AddNullToObject(mesh, "boundary_tolerance");
         else
             cJSON_AddNumberToObject(mesh, "boundary_tolerance", tolerance);
+    }
+    const decimate_input *decimated_from = &st->input[m];
+    if (decimated && (decimated_from->texcoords || decimated_from->normals)) {
+        cJSON_AddBoolToObject(mesh, "texcoords", decimated_from->texcoords != NULL);
+        cJSON_AddBoolToObject(mesh, "normals", decimated_from->normals != NULL);
+        cJSON_AddStringToObject(mesh, "seams", decimated_from->seams_free ? "free" : "kept");
     }
     if (decimated) {
         cJSON_AddNumberToObject(mesh, "vertices_welded", out->vertices_welded);

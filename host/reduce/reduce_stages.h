@@ -39,6 +39,7 @@ typedef struct reduce_state {
     decimate_output *output;       /* decimation: per mesh the plan decimates */
     unsigned int compensation_rounds;
     unsigned int locks_relaxed;     /* decimation: meshes whose boundary lock was relaxed */
+    unsigned int seams_freed;       /* decimation: meshes whose attribute seams were freed */
     uint64_t vertices_after;       /* decimation: vertices of the reduced scene */
     char **ply;                    /* write: per decimated mesh, its file relative to outdir */
     size_t meshes_written;
