@@ -103,6 +103,13 @@ static int plan_budget(reduce_state *st)
         }
     }
     int status = budget_distribute(budget, st->count, o->target, o->min_vertices, &st->plan);
+    /* Nothing to remove (D = 1): every mesh that could be decimated is still rewritten, as its
+     * PLY without a collapse, so the output is the scene converted (and a check of the writer:
+     * another renderer must show it as the input). */
+    if (!status && st->plan.total_requested == st->plan.total_before)
+        for (size_t m = 0; m < st->count; m++)
+            if (!budget[m].pinned && budget[m].vertices > o->min_vertices)
+                st->plan.decimate[m] = 1;
     free(budget);
     st->seconds_budget = monotonic_seconds() - start;
     return status;
@@ -172,7 +179,7 @@ static int write_report(reduce_state *st)
     cJSON_Delete(report);
     if (!status)
         fprintf(stderr,
-                "idmr: %llu -> %llu vertices (target %.4g: %llu), %zu of %zu meshes decimated; "
+                "idmr: %llu -> %llu vertices (target %.4g: %llu), %zu of %zu meshes rewritten; "
                 "reduced scene in %s/scene.xml\n",
                 (unsigned long long)st->plan.total_before, (unsigned long long)st->vertices_after,
                 o->target, (unsigned long long)st->plan.total_requested, st->meshes_written,
