@@ -134,7 +134,9 @@ $(BUILD)/tests/bench_decimation: tests/bench_decimation.c $(BUILD)/libidmr.a $(F
 	$(CC) $(CPPFLAGS) -Itests $(CFLAGS) $(LDFLAGS) -o $@ $< $(BUILD)/libidmr.a -lmeshoptimizer $(LDLIBS)
 
 # Runs every test program; scripts/run-tests.sh prints one closing "N passed, N failed" line.
+# Mitsuba 3 (test_mitsuba_renders) comes from .venv/, installed first when missing.
 test: bin/idmr kernels $(TEST_PROGRAMS)
+	@scripts/install-deps.sh --python
 	@scripts/run-tests.sh $(TEST_PROGRAMS)
 
 # The benchmark programs, then the reduction error of each method (scripts/bench-reduction-quality).

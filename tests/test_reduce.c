@@ -285,16 +285,44 @@ static void test_target_out_of_range(void **state)
     }
 }
 
-/* D = 1 keeps everything (quadric: no importance pass needed). */
+static int compare_points(const void *a, const void *b)
+{
+    return memcmp(a, b, 3 * sizeof(float));
+}
+
+/* D = 1 removes nothing and still rewrites every mesh that could be decimated (the knot) as
+ * its PLY: the same vertices and triangles, in the PLY's order (quadric: no importance pass
+ * needed). The rest stay as they were. */
 static void test_target_one(void **state)
 {
     reduce_options o;
     small_options(&o);
     o.target = 1;
     o.method = REDUCE_QUADRIC;
-    scene *s;
+    scene *s = test_load_scene(CORNELL);
     reduction r;
-    reduce_nothing(&o, &s, &r);
+    reduction_run(&r, s, &o);
+    assert_int_equal(check_report_against_output(r.report, s, r.out), s->vertex_count);
+    assert_true(file_exists(r.dir, "meshes/knot.ply"));
+    assert_true(is_decimated(mesh_entry(r.report, "knot")));
+    for (size_t m = 0; m < s->mesh_count; m++) {
+        const scene_mesh *in = &s->meshes[m], *out = test_find_mesh(r.out, in->name);
+        if (strcmp(in->name, "knot") != 0) {
+            assert_same_mesh(in, out);
+            continue;
+        }
+        assert_int_equal(in->vertex_count, out->vertex_count);
+        assert_int_equal(in->triangle_count, out->triangle_count);
+        size_t bytes = 3 * sizeof(float) * in->vertex_count;
+        float *a = malloc(bytes), *b = malloc(bytes);
+        memcpy(a, in->positions, bytes);
+        memcpy(b, out->positions, bytes);
+        qsort(a, in->vertex_count, 3 * sizeof(float), compare_points);
+        qsort(b, in->vertex_count, 3 * sizeof(float), compare_points);
+        assert_memory_equal(a, b, bytes);
+        free(a);
+        free(b);
+    }
     reduction_free(&r);
     scene_free(s);
 }

@@ -112,14 +112,16 @@ static uint64_t missed_by(const reduce_state *st, size_t m)
     return st->plan.decimate[m] && after > target ? after - target : 0;
 }
 
-/* Whether step s of the ladder changes anything for mesh m: the seam step only where the mesh
- * has attributes, the boundary steps only under the combined method. */
+/* Whether step s (> 0) of the ladder changes anything for mesh m: freeing seams only where the
+ * mesh has attributes, a boundary tolerance only under the combined method. */
 static int lock_step_applies(const reduce_state *st, size_t m, size_t s, decimate_method method)
 {
     const decimate_input *in = &st->input[m];
-    if (s == 1)
-        return in->texcoords || in->normals;
-    return method == DECIMATE_COMBINED;
+    int frees_seams = LOCK_STEPS[s].seams_free != LOCK_STEPS[s - 1].seams_free;
+    int moves_boundary =
+        LOCK_STEPS[s].boundary_tolerance != LOCK_STEPS[s - 1].boundary_tolerance;
+    return (frees_seams && (in->texcoords || in->normals)) ||
+           (moves_boundary && method == DECIMATE_COMBINED);
 }
 
 /* The next step of mesh m's locks that changes anything, or LOCK_STEP_COUNT when none is left. */
