@@ -75,10 +75,9 @@ bool add_modules(ReductionDecimater &decimater, Modules &modules, Mesh &mesh,
 // wedges in the order of its faces; `corner_out` gets, per face, the output vertex of each corner.
 // The faces' corner sets name vertices by their index before garbage collection: old_index.
 void split_wedges(Mesh &mesh, const AttributeTable &attributes,
-                      const std::vector<uint32_t> &old_index,
-                      std::vector<std::array<uint32_t, 3>> &corner_out,
-                      std::vector<uint32_t> &first_of, std::vector<uint32_t> &vertex_of,
-                      std::vector<uint32_t> &id_of)
+                  const std::vector<uint32_t> &old_index,
+                  std::vector<std::array<uint32_t, 3>> &corner_out, std::vector<uint32_t> &first_of,
+                  std::vector<uint32_t> &vertex_of, std::vector<uint32_t> &id_of)
 {
     corner_out.assign(mesh.n_faces(), {{0, 0, 0}});
     first_of.assign(mesh.n_vertices(), 0);
