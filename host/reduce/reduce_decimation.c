@@ -31,6 +31,9 @@ static const lock_step LOCK_STEPS[] = {
     {0, 0.01}, {1, 0.01}, {1, 0.05}, {1, 0.25}, {1, INFINITY},
 };
 #define LOCK_STEP_COUNT (sizeof LOCK_STEPS / sizeof *LOCK_STEPS)
+/* Rounds of relaxing: each moves the meshes that missed most one step, only as many as cover
+ * the excess, so meshes take turns; three turns per step. */
+#define RELAX_ROUNDS (3 * (LOCK_STEP_COUNT - 1))
 
 /* Decimates the meshes flagged in `redo` to st->plan.target, replacing earlier outputs. */
 static int decimate_selected(reduce_state *st, decimate_method method, unsigned int threads,
@@ -176,24 +179,32 @@ static int relax_locks(reduce_state *st, uint64_t excess, decimate_method method
     return any;
 }
 
+/* Whether mesh m gave up vertices for others (its target is below the planned one) and met its
+ * target, so that a higher target keeps more (a mesh that missed a lowered target would not). */
+static int can_take_back(const reduce_state *st, size_t m, const uint64_t *planned)
+{
+    return st->plan.decimate[m] && st->plan.target[m] < planned[m] &&
+           st->output[m].mesh.vertex_count <= st->plan.target[m];
+}
+
 /* After relaxed locks let meshes reach their targets, the meshes that gave up vertices for them
- * (compensation) may have given too many: hands the shortfall back to them, in proportion to
- * what they gave, up to their planned targets (`planned`), and flags them in `redo`. False if
- * there is nothing to hand back. */
+ * (compensation) may have given too many: hands the shortfall back to those that can take it,
+ * in proportion to what they gave, up to their planned targets (`planned`), and flags them in
+ * `redo`. False if there is nothing to hand back. */
 static int give_back(reduce_state *st, uint64_t shortfall, const uint64_t *planned,
                      unsigned char *redo)
 {
     uint64_t given = 0;
     for (size_t m = 0; m < st->count; m++) {
         redo[m] = 0;
-        if (st->plan.decimate[m] && st->plan.target[m] < planned[m])
+        if (can_take_back(st, m, planned))
             given += planned[m] - st->plan.target[m];
     }
     if (given == 0 || shortfall == 0)
         return 0;
     uint64_t returned = 0;
     for (size_t m = 0; m < st->count && returned < shortfall; m++) {
-        if (!st->plan.decimate[m] || st->plan.target[m] >= planned[m])
+        if (!can_take_back(st, m, planned))
             continue;
         uint64_t room = planned[m] - st->plan.target[m];
         uint64_t share = (uint64_t)floor((double)shortfall * room / given);
@@ -232,7 +243,7 @@ int reduce_decimation(reduce_state *st)
     for (size_t m = 0; m < st->count; m++)
         redo[m] = (unsigned char)st->plan.decimate[m];
     progress bar;
-    unsigned int rounds = 0, last = COMPENSATION_ROUNDS + LOCK_STEP_COUNT - 1;
+    unsigned int rounds = 0, last = COMPENSATION_ROUNDS + RELAX_ROUNDS;
     progress_begin(&bar, "decimation", last + 2, o->importance.sppm.progress);
     uint64_t *planned = xcalloc(st->count + 1, sizeof *planned);
     for (size_t m = 0; m < st->count; m++)
