@@ -81,10 +81,11 @@ static int shape_builtin(xmlNodePtr node, const char *type, mesh_data *mesh)
 
 /* The shape's geometry in world space, with Mitsuba's shading normals: a mesh file's own
  * normals, smooth vertex normals where it has none, none (flat) under face_normals; a built-in
- * shape's from shapes.h. *file_normals says whether the normals are the mesh file's own: 1, or
- * 2 where they shade the mesh flat (shapes_normals_flat). */
+ * shape's from shapes.h. *file_normals says whether the normals are the mesh file's own, and
+ * *flat_normals whether those shade the mesh flat (shapes_normals_flat). */
 static int shape_geometry(loader *ld, xmlNodePtr node, const char *type, mesh_data *mesh,
-                          char **file, const char **written, int *file_normals)
+                          char **file, const char **written, int *file_normals,
+                          int *flat_normals)
 {
     xform to_world;
     int flip, face_normals = 0, builtin = !is_mesh_file_type(type);
@@ -109,7 +110,8 @@ static int shape_geometry(loader *ld, xmlNodePtr node, const char *type, mesh_da
         mesh->normals = NULL;
     }
     shapes_transform(mesh, &to_world);
-    *file_normals = builtin || !mesh->normals ? 0 : shapes_normals_flat(mesh) ? 2 : 1;
+    *file_normals = !builtin && mesh->normals;
+    *flat_normals = *file_normals && shapes_normals_flat(mesh);
     if (!builtin && !face_normals && !mesh->normals)
         shapes_smooth_normals(mesh);
     /* A built-in shape's normal is transformed as a normal, so a mirror flips its winding. */
@@ -207,8 +209,8 @@ int mitsuba_load_shape(loader *ld, xmlNodePtr node)
     if ((has_inline_bsdf && mitsuba_parse_bsdf(ld, parts.bsdf, 0, &inline_bsdf)) ||
         (parts.emitter && mitsuba_emitter_area(ld, parts.emitter, &light)))
         return -1;
-    int file_normals = 0;
-    if (shape_geometry(ld, node, type, &mesh, &file, &written, &file_normals)) {
+    int file_normals = 0, flat_normals = 0;
+    if (shape_geometry(ld, node, type, &mesh, &file, &written, &file_normals, &flat_normals)) {
         mesh_data_free(&mesh);
         free(file);
         return -1;
@@ -218,8 +220,8 @@ int mitsuba_load_shape(loader *ld, xmlNodePtr node)
                                        mesh.vertex_count, mesh.positions, mesh.triangle_count,
                                        mesh.indices, mesh.texcoords);
     added->normals = mesh.normals;
-    added->file_normals = file_normals != 0;
-    added->flat_normals = file_normals == 2;
+    added->file_normals = file_normals;
+    added->flat_normals = flat_normals;
     free(file);
     int material = shape_material(ld, has_inline_bsdf ? &inline_bsdf : NULL, parts.bsdf_entry,
                                   added->name);

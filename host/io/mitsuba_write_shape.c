@@ -103,10 +103,10 @@ static int property_dropped(const char *type, xmlNodePtr child)
            (strcmp(type, "obj") == 0 && is_any_property(child, obj, sizeof obj / sizeof *obj));
 }
 
-/* A built-in shape with edges (all but the sphere), or one whose normals were flat (flat_normals), is
- * shaded flat; as a PLY without normals Mitsuba would smooth it (a cube's corners), so it says
- * face_normals, in the document's dialect (faceNormals before version 2), unless it already
- * does. */
+/* A built-in shape with edges (all but the sphere), or one whose normals were flat
+ * (flat_normals), is shaded flat; as a PLY without normals Mitsuba would smooth it (a cube's
+ * corners), so it says face_normals, in the document's dialect (faceNormals before version 2),
+ * unless it already does. */
 static void keep_flat_shading(xmlNodePtr shape, const char *type, int flat_normals)
 {
     static const char *const flat[] = {"rectangle", "cube", "disk"};

@@ -62,7 +62,8 @@ bool add_modules(ReductionDecimater &decimater, Modules &modules, Mesh &mesh,
         decimater.add(modules.weighted_quadric);
         decimater.add(modules.boundary_lock);
         decimater.module(modules.boundary_lock)
-            .set_max_deviation(in->boundary_tolerance > 0 ? in->boundary_tolerance : 0.01);
+            .set_max_deviation(in->boundary_tolerance > 0 ? in->boundary_tolerance
+                                                          : DECIMATE_BOUNDARY_TOLERANCE);
         for (auto v : mesh.vertices())
             decimater.module(modules.weighted_quadric).importance(v) = importance[v.idx()];
     } else {

@@ -37,27 +37,27 @@
  * which are locked (they cannot be collapsed) and counted apart, so the collapsible surface
  * gets the budget that remains after them. Faces that weld into zero area are dropped.
  *
- * Attributes (texture coordinates, shading normals): where the input gives them, they are kept per
- * triangle corner, so a vertex split in the input (a UV seam, a normal crease: input vertices at
- * one position with different attributes) is welded for the topology but keeps one attribute
- * set per wedge (the corners around it that share one). A collapse moves the removed vertex's
- * corners onto the kept vertex's corner in the same wedge, so every corner keeps an attribute
- * set that belongs to its position; the output splits each vertex again, once per wedge. With
- * seams kept (the default), a vertex of one wedge may go into a neighbour only where the two
- * triangles of the edge share the neighbour's wedge, a vertex of two wedges only along the seam
- * (into a vertex that continues it), and a vertex where three or more wedges meet (a seam
- * junction, a cube's corner) not at all: seams and creases stay where they are or move along
- * themselves, and a mesh flat-shaded by split vertices stays flat. With seams free, any
- * collapse is legal as far as seams go, and corners take the nearest wedge of the kept vertex (reduce relaxes
- * seams only where the scene's total cannot be met otherwise). With normals, always, no collapse
- * may leave a corner's normal behind its moved triangle (a non-positive dot with the triangle's
- * geometric normal): a renderer interpolating them would find a zero or backward shading
- * normal (Mitsuba 3: NaN samples). Vertex counts (targets, the
+ * Attributes (texture coordinates, shading normals): where the input gives them, they are kept
+ * per triangle corner, so a vertex split in the input (a UV seam, a normal crease: input
+ * vertices at one position with different attributes) is welded for the topology but keeps one
+ * attribute set per wedge (the corners around it that share one). A collapse moves the removed
+ * vertex's corners onto the kept vertex's corner in the same wedge, so every corner keeps an
+ * attribute set that belongs to its position; the output splits each vertex again, once per
+ * wedge. With seams kept (the default), a vertex of one wedge may go into a neighbour only
+ * where the two triangles of the edge share the neighbour's wedge, a vertex of two wedges only
+ * along the seam (into a vertex that continues it), and a vertex where three or more wedges
+ * meet (a seam junction, a cube's corner) not at all: seams and creases stay where they are or
+ * move along themselves, and a mesh flat-shaded by split vertices stays flat. With seams free,
+ * any collapse is legal as far as seams go, and corners take the nearest wedge of the kept
+ * vertex (reduce frees seams only where the scene's total cannot be met otherwise). With
+ * normals, always, no collapse may leave a corner's normal behind its moved triangle (a
+ * non-positive dot with the triangle's geometric normal): a renderer interpolating them would
+ * find a zero or backward shading normal (Mitsuba 3: NaN samples). Vertex counts (targets, the
  * counts reported) count a vertex once per wedge, as the output holds them.
  *
  * Files (C++, sharing decimate_openmesh.hh): decimate.cc (decimate_mesh, decimate_measure),
- * decimate_weld.cc (the welded rebuild), decimate_modules.hh (the modules; decimate_attributes.hh the wedges),
- * decimate_collapse.cc/.hh (the collapse loop), decimate_parallel.cc (decimate_many),
+ * decimate_weld.cc (the welded rebuild), decimate_modules.hh (the modules),
+ * decimate_attributes.hh (the wedges and their module), decimate_collapse.cc/.hh (the collapse loop), decimate_parallel.cc (decimate_many),
  * decimate_stock.cc (decimate_stock_quadric). */
 #ifndef IDMR_DECIMATE_H
 #define IDMR_DECIMATE_H
@@ -89,13 +89,15 @@ typedef struct decimate_input {
     uint64_t target_vertices;        /* vertices to keep; where welding leaves fewer, fewer */
     double max_normal_angle;         /* degrees; default 60 (the paper's α_max) */
     double boundary_tolerance; /* COMBINED: the boundary lock's limit, as a share of the new
-                                  edge's length; 0: the default 1 %; infinite: no lock */
+                                  edge's length; 0: DECIMATE_BOUNDARY_TOLERANCE; infinite: no
+                                  lock */
     int seams_free; /* attribute seams may be collapsed across (see "Attributes" above) */
     int verify_heap;  /* tests: after every collapse, count heap entries whose stored priority or
                          target differs from a fresh evaluation (heap_violations) */
     int reheap_removed_ring_only; /* tests: re-score as OpenMesh's DecimaterT does */
 } decimate_input;
 
+#define DECIMATE_BOUNDARY_TOLERANCE 0.01 /* the boundary lock's default limit: 1 % */
 #define DECIMATE_REMOVED 0xffffffffu /* output_index of a vertex that is not in the output */
 
 typedef struct decimate_output {

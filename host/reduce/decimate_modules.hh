@@ -28,6 +28,10 @@
 #include <cmath>
 #include <cstdint>
 
+extern "C" {
+#include "reduce/decimate.h"
+}
+
 namespace idmr_decimate {
 
 // Non-binary: priority = importance of the vertex and its one-ring; the kept vertex inherits the
@@ -247,7 +251,10 @@ template <class MeshT> class ModNormalLimitT : public OpenMesh::Decimater::ModBa
 template <class MeshT> class ModBoundaryLockT : public OpenMesh::Decimater::ModBaseT<MeshT> {
   public:
     DECIMATING_MODULE(ModBoundaryLockT, MeshT, BoundaryLock);
-    explicit ModBoundaryLockT(MeshT &mesh) : Base(mesh, true), max_deviation_(0.01) {}
+    explicit ModBoundaryLockT(MeshT &mesh)
+        : Base(mesh, true), max_deviation_(DECIMATE_BOUNDARY_TOLERANCE)
+    {
+    }
 
     // The limit as a share of the new edge's length; infinite: every collapse is legal.
     void set_max_deviation(double share) { max_deviation_ = share; }

@@ -28,7 +28,8 @@ typedef struct lock_step {
     double boundary_tolerance;
 } lock_step;
 static const lock_step LOCK_STEPS[] = {
-    {0, 0.01}, {1, 0.01}, {1, 0.05}, {1, 0.25}, {1, INFINITY},
+    {0, DECIMATE_BOUNDARY_TOLERANCE}, {1, DECIMATE_BOUNDARY_TOLERANCE}, {1, 0.05}, {1, 0.25},
+    {1, INFINITY},
 };
 #define LOCK_STEP_COUNT (sizeof LOCK_STEPS / sizeof *LOCK_STEPS)
 /* Rounds of relaxing: each moves the meshes that missed most one step, only as many as cover

@@ -68,7 +68,7 @@ static void add_mesh(cJSON *meshes, const reduce_state *st, size_t m)
                             decimated ? out->mesh.triangle_count : in->triangle_count);
     if (decimated && st->options->method == REDUCE_COMBINED) {
         double set = st->input[m].boundary_tolerance;
-        double tolerance = set > 0 ? set : 0.01;
+        double tolerance = set > 0 ? set : DECIMATE_BOUNDARY_TOLERANCE;
         if (isinf(tolerance))
             cJSON_AddNullToObject(mesh, "boundary_tolerance");
         else
