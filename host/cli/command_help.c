@@ -77,6 +77,8 @@ static const char SPPM_OPTIONS[] =
     "                            500,000 on a CPU)\n"
     "      --alpha A             SPPM radius reduction (default 0.7)\n"
     "      --resolution F        scale of the scene's film for hit points (default 1)\n"
+    "      --max-depth D         surface interactions of a camera path, at most (default 16,\n"
+    "                            the paper's; render: 64, with Russian roulette from 16)\n"
     "      --seed S              random seed (default 1)\n"
     "      --device N            OpenCL device (see `idmr devices`)\n"
     "      --quiet               no progress on stderr\n"

@@ -81,6 +81,8 @@ enum option_parse parse_sppm_option(int c, sppm_options *o, int *device_index)
         return option_result(parse_float("--alpha", optarg, 1e-3, 1, &o->alpha));
     case OPT_RESOLUTION:
         return option_result(parse_float("--resolution", optarg, 1e-3, 16, &o->resolution));
+    case OPT_MAX_DEPTH:
+        return option_result(parse_unsigned("--max-depth", optarg, 1, 1024, &o->max_depth));
     case OPT_SEED:
         return option_result(parse_unsigned("--seed", optarg, 0, 0xffffffffu, &o->seed));
     case OPT_TIME_LIMIT:

@@ -37,6 +37,7 @@ enum option_id {
     OPT_TIME_LIMIT,
     OPT_RADIUS,
     OPT_EXPOSURE,
+    OPT_MAX_DEPTH,
 };
 
 /* Options of the SPPM core, shared by `importance`, `reduce` and `render` (-o among them). */
@@ -46,6 +47,7 @@ enum option_id {
         {"photons", required_argument, NULL, OPT_PHOTONS},                                  \
         {"alpha", required_argument, NULL, OPT_ALPHA},                                      \
         {"resolution", required_argument, NULL, OPT_RESOLUTION},                            \
+        {"max-depth", required_argument, NULL, OPT_MAX_DEPTH},                              \
         {"seed", required_argument, NULL, OPT_SEED},                                        \
         {"time-limit", required_argument, NULL, OPT_TIME_LIMIT},                            \
         {"radius", required_argument, NULL, OPT_RADIUS},                                    \

@@ -1,7 +1,7 @@
 /* mitsuba_color.c — colour-valued properties: <rgb> (linear), <srgb> (linearised), <spectrum>
- * (a grey value, or wavelength:value pairs integrated to linear sRGB by host/io/spectrum.h),
- * <float> (grey), and bitmap <texture>s (inline or by <ref>), which only a diffuse reflectance
- * accepts. */
+ * (a grey value, or wavelength:value pairs; converted by host/io/spectrum.h as an emission inside
+ * an <emitter>, else as a reflectance, as Mitsuba 3 does), <float> (grey), and bitmap <texture>s
+ * (inline or by <ref>), which only a diffuse reflectance accepts. */
 #include "io/mitsuba_loader.h"
 
 #include <stdlib.h>
@@ -9,6 +9,15 @@
 
 #include "core/error.h"
 #include "io/spectrum.h"
+
+/* How a <spectrum> converts: as an emission when an <emitter> holds it, else as a reflectance. */
+static spectrum_use spectrum_use_of(xmlNodePtr node)
+{
+    for (xmlNodePtr up = node->parent; up && up->type == XML_ELEMENT_NODE; up = up->parent)
+        if (mitsuba_is_tag(up, "emitter"))
+            return SPECTRUM_EMISSION;
+    return SPECTRUM_REFLECTANCE;
+}
 
 /* "400:0.5, 500:0.7, ...": increasing wavelengths (nm) with their values. */
 static int parse_spectrum_pairs(xmlNodePtr node, const char *text, float rgb[3])
@@ -36,7 +45,7 @@ static int parse_spectrum_pairs(xmlNodePtr node, const char *text, float rgb[3])
     if (status == 0 && count == 0)
         status = mitsuba_fail(node, "empty spectrum");
     if (status == 0)
-        spectrum_to_rgb(lambda, value, count, rgb);
+        spectrum_to_rgb(lambda, value, count, spectrum_use_of(node), rgb);
     free(lambda);
     free(value);
     return status ? -1 : 0;
@@ -51,7 +60,7 @@ static int parse_spectrum(xmlNodePtr node, const char *value, float rgb[3])
     double grey;
     if (mitsuba_parse_number(node, value, &grey))
         return -1;
-    rgb[0] = rgb[1] = rgb[2] = (float)grey;
+    spectrum_to_rgb(NULL, &grey, 1, spectrum_use_of(node), rgb);
     return 0;
 }
 

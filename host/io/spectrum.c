@@ -27,13 +27,34 @@ void spectrum_cie_xyz(double lambda, double xyz[3])
              0.681 * spectrum_lobe(lambda, 459.0, 26.0, 13.8);
 }
 
-/* The spectrum at `lambda`: linear between samples, end values held outside. */
+/* CIE standard illuminant D65, relative spectral power at 360, 370, ..., 830 nm (CIE 15). */
+#define D65_FIRST 360.0
+#define D65_STEP 10.0
+static const double d65_table[] = {
+    46.6383, 52.0891, 49.9755, 54.6482, 82.7549, 91.486,  93.4318, 86.6823, 104.865, 117.008,
+    117.812, 114.861, 115.923, 108.811, 109.354, 107.802, 104.79,  107.689, 104.405, 104.046,
+    100.0,   96.3342, 95.788,  88.6856, 90.0062, 89.5991, 87.6987, 83.2886, 83.6992, 80.0268,
+    80.2146, 82.2778, 78.2842, 69.7213, 71.6091, 74.349,  61.604,  69.8856, 75.087,  63.5927,
+    46.4182, 66.8054, 63.3828, 64.304,  59.4519, 51.959,  57.4406, 60.3125};
+
+/* D65 at `lambda` (360–830 nm), linear between the table's entries. */
+static double d65(double lambda)
+{
+    int last = (int)(sizeof d65_table / sizeof d65_table[0]) - 1;
+    double x = (lambda - D65_FIRST) / D65_STEP;
+    int i = x <= 0.0 ? 0 : x >= last ? last - 1 : (int)x;
+    double t = x - i;
+    t = t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t;
+    return d65_table[i] + t * (d65_table[i + 1] - d65_table[i]);
+}
+
+/* The spectrum at `lambda`: linear between samples, zero outside them; one sample is flat. */
 static double spectrum_eval(const double *lambda, const double *value, int count, double at)
 {
-    if (at <= lambda[0])
+    if (count == 1)
         return value[0];
-    if (at >= lambda[count - 1])
-        return value[count - 1];
+    if (at < lambda[0] || at > lambda[count - 1])
+        return 0.0;
     int lo = 0, hi = count - 1;
     while (hi - lo > 1) {
         int mid = (lo + hi) / 2;
@@ -54,31 +75,29 @@ static void spectrum_xyz_to_linear_srgb(const double xyz[3], double rgb[3])
         rgb[row] = m[3 * row] * xyz[0] + m[3 * row + 1] * xyz[1] + m[3 * row + 2] * xyz[2];
 }
 
-/* Unbalanced linear sRGB of a spectrum; a NULL lambda means the flat spectrum 1. */
-static void spectrum_raw_rgb(const double *lambda, const double *value, int count, double rgb[3])
+void spectrum_to_rgb(const double *lambda, const double *value, int count, spectrum_use use,
+                     float rgb[3])
 {
-    double xyz[3] = {0.0, 0.0, 0.0}, y_integral = 0.0;
+    double xyz[3] = {0.0, 0.0, 0.0}, y_integral = 0.0, out[3];
+    if (count == 1 && use == SPECTRUM_REFLECTANCE) { /* D65 white is (1, 1, 1) by definition */
+        rgb[0] = rgb[1] = rgb[2] = (float)value[0];
+        return;
+    }
     double step = (SPECTRUM_LAMBDA_MAX - SPECTRUM_LAMBDA_MIN) / SPECTRUM_STEPS;
     for (int i = 0; i < SPECTRUM_STEPS; i++) {
         double at = SPECTRUM_LAMBDA_MIN + (i + 0.5) * step, cmf[3];
-        double s = lambda ? spectrum_eval(lambda, value, count, at) : 1.0;
+        double illuminant = use == SPECTRUM_REFLECTANCE ? d65(at) : 1.0;
+        double s = spectrum_eval(lambda, value, count, at) * illuminant;
         spectrum_cie_xyz(at, cmf);
         for (int k = 0; k < 3; k++)
             xyz[k] += s * cmf[k];
-        y_integral += cmf[1];
+        y_integral += illuminant * cmf[1];
     }
     for (int k = 0; k < 3; k++)
         xyz[k] /= y_integral;
-    spectrum_xyz_to_linear_srgb(xyz, rgb);
-}
-
-void spectrum_to_rgb(const double *lambda, const double *value, int count, float rgb[3])
-{
-    double white[3], raw[3];
-    spectrum_raw_rgb(NULL, NULL, 0, white);
-    spectrum_raw_rgb(lambda, value, count, raw);
+    spectrum_xyz_to_linear_srgb(xyz, out);
     for (int k = 0; k < 3; k++)
-        rgb[k] = (float)(raw[k] / white[k]);
+        rgb[k] = (float)out[k];
 }
 
 float spectrum_srgb_to_linear(float encoded)

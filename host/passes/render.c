@@ -17,6 +17,7 @@ void render_options_default(render_options *o)
 {
     memset(o, 0, sizeof *o);
     sppm_options_default(&o->sppm, 64);
+    o->sppm.max_depth = IDMR_RENDER_DEPTH;
 }
 
 void render_snapshot_free(render_snapshot *snapshot)
@@ -226,6 +227,7 @@ cJSON *render_report_json(const scene *s, const device *d, const render_options 
     cJSON_AddNumberToObject(root, "photons_stored_first_iteration", (double)run->photon_records);
     cJSON_AddNumberToObject(root, "seed", o->sppm.seed);
     cJSON_AddNumberToObject(root, "alpha", o->sppm.alpha);
+    cJSON_AddNumberToObject(root, "max_depth", o->sppm.max_depth);
     cJSON_AddNumberToObject(root, "first_radius", run->iterations ? run->radius[0] : 0);
     cJSON_AddNumberToObject(root, "last_radius",
                             run->iterations ? run->radius[run->iterations - 1] : 0);

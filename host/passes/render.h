@@ -20,7 +20,8 @@
  *   - textured reflectance by the texture's mean colour (textures are not looked up);
  *   - an envmap by its mean radiance, seen and lit uniformly;
  *   - photon paths store at most 8 photons (non-specular surfaces) and end after 32 surface
- *     interactions; camera paths follow at most 16 specular interactions.
+ *     interactions; camera paths follow at most --max-depth surface interactions (default 64),
+ *     with Russian roulette from the 16th (kernels/lib/paths.h).
  * Sums are exact: per pixel and channel in 64-bit fixed point (idmr/render_layout.h), and the
  * mean over iterations in double on the host; a render is bit-identical for the same seed,
  * device and options, whatever the work-group size. */

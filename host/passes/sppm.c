@@ -24,6 +24,7 @@ void sppm_options_default(sppm_options *o, unsigned int iterations)
     o->seed = 1;
     o->alpha = 0.7f;
     o->resolution = 1.0f;
+    o->max_depth = IDMR_CAMERA_DEPTH;
 }
 
 unsigned int sppm_default_photons(const device *d)
@@ -199,6 +200,7 @@ static void params_begin(sppm *core)
     memcpy(params->scene_center, core->uploaded.center, sizeof params->scene_center);
     params->scene_radius = core->uploaded.radius;
     params->ray_epsilon = core->uploaded.ray_epsilon;
+    params->camera_depth = core->options->max_depth;
 }
 
 /* What the first iteration's paths decide, read back once: the initial gather radius² (from

@@ -44,6 +44,8 @@ typedef struct sppm_options {
     unsigned int seed;       /* default 1 */
     float alpha;             /* radius reduction α of the SPPM schedule (default 0.7) */
     float resolution;        /* scale of the scene's film for the hit-point image (default 1) */
+    unsigned int max_depth;  /* camera path: surface interactions at most (default
+                                IDMR_CAMERA_DEPTH; the renderer's IDMR_RENDER_DEPTH) */
     double radius;           /* first gather radius; 0: from what the camera sees (below) */
     double time_limit;       /* seconds; > 0 stops after the iteration in which they pass */
     size_t local_size;       /* work-group size; 0 lets the runtime choose */

@@ -20,7 +20,9 @@
 #include "idmr/layout.h"
 
 #define IDMR_PATH_VERTICES 8     /* records per photon path slot (paper: 8) */
-#define IDMR_CAMERA_DEPTH 16     /* camera path: surface interactions (paper: 16) */
+#define IDMR_CAMERA_DEPTH 16     /* camera path: surface interactions by default (paper: 16) */
+#define IDMR_RENDER_DEPTH 64     /* the renderer's default: deep glass (ice in water) lit */
+#define IDMR_CAMERA_RR_DEPTH 16  /* renderer: Russian roulette on camera paths from here */
 #define IDMR_PHOTON_BOUNCES 32   /* photon path: surface interactions, at most */
 #define IDMR_SCAN_CHUNK 256      /* grid prefix sum: cells per work-item */
 #define IDMR_FIXED_SATURATION (1ull << 62)
@@ -59,7 +61,7 @@ typedef struct idmr_sppm_params {
     float ray_epsilon; /* origin offset of secondary rays, along the normal */
     float cell_size;
     float fixed_scale; /* renderer: fixed-point units per unit of pixel radiance */
-    float pad;
+    unsigned int camera_depth; /* camera path: surface interactions at most */
 } idmr_sppm_params;
 
 IDMR_STATIC_ASSERT(sizeof(idmr_sppm_params) == 80, "idmr_sppm_params is 80 bytes");

@@ -4,12 +4,15 @@
  *
  *   camera path   one per pixel, jittered within it, through mirrors and dielectrics (Fresnel
  *                 chooses reflection or refraction) to the first non-specular surface, where it
- *                 leaves a hit point; at most IDMR_CAMERA_DEPTH surface interactions.
+ *                 leaves a hit point; at most params->camera_depth surface interactions.
  *     importance  adds the Eq. 2 weight 1 - |n·d| of every surface it hits to that triangle's
  *                 camera importance (unless IDMR_CAMERA_IMPORTANCE or IDMR_ACCUMULATE_IMPORTANCE is 0)
  *     render      carries the specular throughput (a mirror's colour), adds the emission it
  *                 sees (an area light's front, the environment once it leaves the scene) and
- *                 ends at the back of a one-sided surface (black, no hit point)
+ *                 ends at the back of a one-sided surface (black, no hit point); from
+ *                 IDMR_CAMERA_RR_DEPTH interactions on, Russian roulette continues it with
+ *                 probability min(0.95, largest throughput channel), dividing by it, so that
+ *                 deep glass costs little and stays unbiased up to camera_depth
  *   photon path   one per work-item, emitted by a light chosen in proportion to power, scattered
  *                 with Russian roulette at every surface (materials.h), at most
  *                 IDMR_PHOTON_BOUNCES interactions and IDMR_PATH_VERTICES records, which fill
@@ -92,7 +95,7 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
     idmr_render_hit rh = {{0.0f, 0.0f, 0.0f}, 0u, {0.0f, 0.0f, 0.0f}, 0u,
                           {0.0f, 0.0f, 0.0f}, 0.0f}; /* zero where there is no hit point */
 #endif
-    for (int depth = 0; depth < IDMR_CAMERA_DEPTH; depth++) {
+    for (uint depth = 0; depth < params->camera_depth; depth++) {
         idmr_hit hit = traverse_closest(scene->nodes, scene->leaves, origin, d, 0.0f, INFINITY);
         if (hit.triangle == IDMR_NO_HIT) {
 #if PASS_RENDER
@@ -131,6 +134,12 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
 #if PASS_RENDER
         if (m->kind == IDMR_MATERIAL_MIRROR)
             throughput *= vload3(0, m->specular);
+        if (depth + 1 >= IDMR_CAMERA_RR_DEPTH) {
+            float survive = fmin(0.95f, fmax(throughput.x, fmax(throughput.y, throughput.z)));
+            if (idmr_rng_float(&rng) >= survive)
+                break;
+            throughput /= survive;
+        }
 #endif
         d = scatter_specular(m, d, n, ns, &rng);
         origin = offset_origin(p, dot(d, n_side) > 0.0f ? n_side : -n_side, params->ray_epsilon);
