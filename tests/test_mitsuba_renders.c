@@ -11,8 +11,10 @@
  *     standard errors (plus float rounding). A texture turned upside down (uv images: paired
  *     mse 0.32 +- 0.0003 when OBJ coordinates are not turned), lost normals or a smoothed box
  *     would not be.
- *   - Reduced to 10 % (the default method), the living room renders without one invalid
- *     (NaN) sample and with its mean per channel within 5 % of the input's.
+ *   - Reduced to 10 % (the default method) with --bundle and then moved one directory deeper
+ *     (so that no path out of it would still resolve), the living room renders without one
+ *     invalid (NaN) sample and with its mean per channel within 5 % of the input's: its
+ *     textures and environment map are the bundled copies.
  * Small films and sample counts keep it to about a minute on 2 cores; runs from the repository
  * root (as `make test` does), with ../shared/data beside it. */
 #include <math.h>
@@ -22,6 +24,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include <cmocka.h>
 
@@ -145,9 +148,14 @@ static void test_living_room_reduced_renders_clean(void **state)
 {
     (void)state;
     reduce(LIVING_ROOM, "living-room-10",
-           "--target 0.1 --iterations 4 --resolution 0.1 --photons 100000");
-    char out[128];
-    snprintf(out, sizeof out, "%s/living-room-10/scene.xml", work);
+           "--target 0.1 --iterations 4 --resolution 0.1 --photons 100000 --bundle");
+    char from[128], to[128], out[160];
+    snprintf(from, sizeof from, "%s/living-room-10", work);
+    snprintf(to, sizeof to, "%s/moved", work);
+    assert_int_equal(mkdir(to, 0755), 0);
+    snprintf(to, sizeof to, "%s/moved/living-room-10", work);
+    assert_int_equal(rename(from, to), 0);
+    snprintf(out, sizeof out, "%s/scene.xml", to);
     free(mitsuba_render(LIVING_ROOM, "living-room-10-in", "path", 0.1, 16, 1));
     char *err = mitsuba_render(out, "living-room-10-out", "path", 0.1, 16, 1);
     if (strstr(err, "Invalid sample"))

@@ -21,15 +21,18 @@
 
 #include "io/image.h"
 #include "io/mesh_io.h"
+#include "io/mitsuba_paths.h"
 #include "io/mitsuba_write.h"
 
 /* ---------------------------------------------------------------------------------------- */
 /* Helpers                                                                                  */
 
 static char in_dir[64], out_dir[64];
+static int bundle; /* the next reduction copies what the scene reads into out_dir (--bundle) */
 
 static int make_dirs(void **state)
 {
+    bundle = 0;
     if (temp_dir_make(in_dir, "mw-in") || temp_dir_make(out_dir, "mw-out"))
         return -1;
     return mkdir(path_in(out_dir, "meshes"), 0755);
@@ -112,20 +115,26 @@ static size_t count_substrings(const char *text, const char *needle)
     return n;
 }
 
-/* The real path of in_dir/name (static buffer). */
-static const char *real_in(const char *name)
+/* in_dir/name as the output names it: relative to out_dir, "../<in_dir's name>/name" (both
+ * directories are made side by side; static buffer). */
+static const char *from_out(const char *name)
 {
-    static char real[PATH_MAX];
-    if (!realpath(path_in(in_dir, name), real))
-        fail_msg("realpath %s failed", name);
-    return real;
+    static char relative[PATH_MAX];
+    char in_real[PATH_MAX], out_real[PATH_MAX];
+    assert_non_null(realpath(in_dir, in_real));
+    assert_non_null(realpath(out_dir, out_real));
+    const char *in_base = strrchr(in_real, '/') + 1, *out_base = strrchr(out_real, '/') + 1;
+    assert_true(in_base - in_real == out_base - out_real &&
+                strncmp(in_real, out_real, (size_t)(in_base - in_real)) == 0);
+    snprintf(relative, sizeof relative, "../%s/%s", in_base, name);
+    return relative;
 }
 
-/* `format` with the real path of in_dir/name in place of its %s (static buffer). */
-static const char *with_real_in(const char *format, const char *name)
+/* `format` with from_out(name) in place of its %s (static buffer). */
+static const char *with_from_out(const char *format, const char *name)
 {
     static char text[PATH_MAX + 64];
-    snprintf(text, sizeof text, format, real_in(name));
+    snprintf(text, sizeof text, format, from_out(name));
     return text;
 }
 
@@ -136,6 +145,20 @@ static void assert_same_file(const char *a, const char *b)
     assert_non_null(realpath(a, real_a));
     assert_non_null(realpath(b, real_b));
     assert_string_equal(real_b, real_a);
+}
+
+/* `copy` is a copy of `original` under out_dir/assets/ (--bundle). */
+static void assert_bundled_copy(const char *original, const char *copy)
+{
+    char assets[PATH_MAX], real_copy[PATH_MAX];
+    size_t size_a = 0, size_b = 0;
+    assert_non_null(realpath(path_in(out_dir, "assets"), assets));
+    assert_non_null(realpath(copy, real_copy));
+    assert_true(strncmp(real_copy, assets, strlen(assets)) == 0);
+    char *a = read_all(original, &size_a), *b = read_all(copy, &size_b);
+    assert_true(a && b && size_a == size_b && memcmp(a, b, size_a) == 0);
+    free(a);
+    free(b);
 }
 
 /* A unit quad in the xy plane (OBJ, 4 vertices, 2 triangles). */
@@ -213,7 +236,9 @@ static void check_output_mesh(const scene_mesh *a, const scene_mesh *b, int repl
         assert_same_file(ply, b->file);
     } else {
         assert_string_equal(b->shape_type, a->shape_type);
-        if (a->file)
+        if (a->file && bundle)
+            assert_bundled_copy(a->file, b->file);
+        else if (a->file)
             assert_same_file(a->file, b->file);
     }
 }
@@ -245,7 +270,7 @@ static void reduce_and_check(reduction *r, const char *scene_file, const char *c
     for (size_t i = 0; i < count; i++)
         replace_mesh(test_find_mesh(r->input, names[i]), &replacements[i], ply[i], sizeof ply[i]);
     error_clear();
-    if (mitsuba_write_reduced(scene_file, out_dir, replacements, count))
+    if (mitsuba_write_reduced(scene_file, out_dir, replacements, count, bundle))
         fail_msg("mitsuba_write_reduced failed: %s", error_message());
     r->output = test_load_scene(path_in(out_dir, "scene.xml"));
     r->text = read_output("scene.xml");
@@ -402,7 +427,7 @@ static void test_v3_in_scene_fragment_stays(void **state)
     reduction r;
     reduce_scene3_in_scene(&r);
     assert_false(file_exists(path_in(out_dir, "includes")));
-    assert_has(r.text, with_real_in("<include filename=\"%s\"/>", "parts/frag.xml"));
+    assert_has(r.text, with_from_out("<include filename=\"%s\"/>", "parts/frag.xml"));
     reduction_finish(&r);
 }
 
@@ -420,13 +445,13 @@ static void test_v3_in_scene_raw_text_survives(void **state)
     reduction_finish(&r);
 }
 
-/* Paths: absolute for what stays, the $name one resolved, the PLYs relative to outdir. */
+/* Paths: relative to outdir for what stays, the $name one resolved, the PLYs in outdir. */
 static void test_v3_in_scene_paths(void **state)
 {
     reduction r;
     reduce_scene3_in_scene(&r);
-    assert_has(r.text, with_real_in("value=\"%s\"", "tet.ply"));
-    assert_has(r.text, with_real_in("value=\"%s\"", "textures/tex.png"));
+    assert_has(r.text, with_from_out("value=\"%s\"", "tet.ply"));
+    assert_has(r.text, with_from_out("value=\"%s\"", "textures/tex.png"));
     assert_has(r.text, "<shape type=\"ply\" id=\"quad\">\n"
                        "        <string name=\"filename\" value=\"meshes/quad.ply\"/>\n"
                        "        <ref id=\"checker\"/>\n"
@@ -544,16 +569,151 @@ static void test_fragment_copies_named_apart(void **state)
 }
 
 /* A fragment whose relative path resolves only from the scene's directory is copied with the
- * path made absolute. */
+ * path made relative to outdir (where Mitsuba 3 and idmr's loader both find it). */
 static void test_fragment_with_scene_relative_path_copied(void **state)
 {
     reduction r;
     reduce_three_fragments(&r);
     assert_has(r.text, "<include filename=\"includes/kept.xml\"/>");
     char *copy = read_output("includes/kept.xml");
-    assert_has(copy, with_real_in("value=\"%s\"", "quad.obj"));
+    assert_has(copy, with_from_out("value=\"%s\"", "quad.obj"));
     free(copy);
     reduction_finish(&r);
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* Moving the output                                                                        */
+
+/* Paths relative to a directory, computed from the components alone. */
+static void test_path_relative(void **state)
+{
+    static const char *const cases[][3] = {
+        {"/a/b/out", "/a/b/in/tex.png", "../in/tex.png"},
+        {"/a/b/out", "/a/b/out/meshes/m.ply", "meshes/m.ply"},
+        {"/a/b/out/", "/a//x/y.png", "../../x/y.png"},
+        {"/a", "/a/b.png", "b.png"},
+        {"/tmp/out", "/work/in/tex.png", NULL}, /* only the root shared: stays absolute */
+        {"/a/out", "/a/in/../tex.png", NULL},   /* never resolved */
+        {"/a/out", "relative.png", NULL},
+    };
+    for (size_t i = 0; i < ARRAY_COUNT(cases); i++) {
+        char *got = mitsuba_path_relative(cases[i][0], cases[i][1]);
+        if (!cases[i][2])
+            assert_null(got);
+        else
+            assert_string_equal(got, cases[i][2]);
+        free(got);
+    }
+}
+
+/* Moves in_dir and out_dir (by their names) into `parent`, or back from it. */
+static void move_pair(const char *parent, int back)
+{
+    const char *dirs[2] = {in_dir, out_dir};
+    for (int i = 0; i < 2; i++) {
+        const char *moved = path_in(parent, strrchr(dirs[i], '/') + 1);
+        assert_int_equal(back ? rename(moved, dirs[i]) : rename(dirs[i], moved), 0);
+    }
+}
+
+/* The output and its input, moved together to another directory, still load: textures,
+ * fragments (one copied, relative to outdir) and kept meshes included. */
+static void test_output_moves_with_its_input(void **state)
+{
+    static const char *const names[] = {"part", "quad"};
+    char parent[64];
+    reduction r;
+    write_scene3();
+    reduce_in_dir(&r, scene3_files, ARRAY_COUNT(scene3_files), names, ARRAY_COUNT(names));
+    assert_int_equal(temp_dir_make(parent, "mw-moved"), 0);
+    move_pair(parent, 0);
+    char moved_scene[PATH_MAX];
+    snprintf(moved_scene, sizeof moved_scene, "%s/%s/scene.xml", parent, strrchr(out_dir, '/') + 1);
+    scene *moved = test_load_scene(moved_scene);
+    move_pair(parent, 1);
+    assert_int_equal(moved->mesh_count, r.input->mesh_count);
+    assert_int_equal(moved->vertex_count, r.input->vertex_count);
+    assert_int_equal(moved->texture_count, 1);
+    assert_non_null(strstr(moved->textures[0].file, parent));
+    scene_free(moved);
+    temp_dir_remove(parent);
+    reduction_finish(&r);
+}
+
+/* --bundle: what the scene reads is copied beside the output, named relative to it, and the
+ * output alone, moved elsewhere with its input gone, loads as the input did. */
+static void test_bundle_moves_alone(void **state)
+{
+    static const char *const names[] = {"quad", "lamp"};
+    char parent[64], hidden[80], moved[96], moved_scene[128];
+    reduction r;
+    bundle = 1;
+    write_scene3();
+    reduce_in_dir(&r, scene3_files, ARRAY_COUNT(scene3_files), names, ARRAY_COUNT(names));
+    assert_has(r.text, "value=\"assets/tex.png\"");
+    assert_has(r.text, "value=\"assets/tet.ply\"");
+    assert_has(r.text, "<include filename=\"includes/frag.xml\"/>");
+    char *copy = read_output("includes/frag.xml");
+    assert_has(copy, "value=\"assets/part.obj\"");
+    free(copy);
+    assert_true(file_exists(path_in(out_dir, "assets/tex.png")));
+    assert_int_equal(temp_dir_make(parent, "mw-bundle"), 0);
+    snprintf(hidden, sizeof hidden, "%s-hidden", in_dir);
+    assert_int_equal(rename(in_dir, hidden), 0);
+    snprintf(moved, sizeof moved, "%s/anywhere", parent);
+    snprintf(moved_scene, sizeof moved_scene, "%s/scene.xml", moved);
+    assert_int_equal(rename(out_dir, moved), 0);
+    scene *alone = test_load_scene(moved_scene);
+    assert_int_equal(rename(moved, out_dir), 0);
+    assert_int_equal(rename(hidden, in_dir), 0);
+    assert_int_equal(alone->mesh_count, r.input->mesh_count);
+    assert_int_equal(alone->vertex_count, r.input->vertex_count);
+    assert_int_equal(alone->texture_count, 1);
+    assert_non_null(strstr(alone->textures[0].file, parent));
+    scene_free(alone);
+    temp_dir_remove(parent);
+    reduction_finish(&r);
+}
+
+/* --bundle never copies over a file the scene reads: a texture that already sits where its
+ * copy would go (out_dir/assets/tex.png) is refused, and stays as it was. */
+static void test_bundle_refuses_to_overwrite_an_input(void **state)
+{
+    char xml[PATH_MAX + 1024], assets[PATH_MAX];
+    snapshot inputs = {0};
+    static const char *const texture[] = {"tex.png"};
+    snprintf(assets, sizeof assets, "%s", path_in(out_dir, "assets"));
+    assert_int_equal(mkdir(assets, 0755), 0);
+    const unsigned char rgb[] = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12};
+    assert_int_equal(image_write_rgb8(path_in(assets, "tex.png"), 2, 2, rgb), 0);
+    snapshot_files(&inputs, assets, texture, 1);
+    write_text(in_dir, "quad.obj", quad_obj);
+    snprintf(xml, sizeof xml,
+             "<scene version=\"3.0.0\">\n"
+             "    <shape type=\"obj\" id=\"quad\">\n"
+             "        <string name=\"filename\" value=\"quad.obj\"/>\n"
+             "        <bsdf type=\"diffuse\">\n"
+             "            <texture type=\"bitmap\" name=\"reflectance\">\n"
+             "                <string name=\"filename\" value=\"%s/tex.png\"/>\n"
+             "            </texture>\n"
+             "        </bsdf>\n"
+             "    </shape>\n"
+             "</scene>\n",
+             assets);
+    const char *scene_file = write_text(in_dir, "scene.xml", xml);
+    scene *input = test_load_scene(scene_file);
+    mitsuba_replacement replacement;
+    char ply[256];
+    replace_mesh(test_find_mesh(input, "quad"), &replacement, ply, sizeof ply);
+    bundle = 1;
+    error_clear();
+    assert_int_equal(mitsuba_write_reduced(scene_file, out_dir, &replacement, 1, bundle), -1);
+    if (!strstr(error_message(), "tex.png") || !strstr(error_message(), "never overwritten"))
+        fail_msg("message '%s' lacks the file or the reason", error_message());
+    assert_int_equal(error_code(), IDMR_EXIT_INPUT);
+    assert_false(file_exists(path_in(out_dir, "scene.xml")));
+    snapshot_check(&inputs);
+    scene_free(input);
 }
 
 /* ---------------------------------------------------------------------------------------- */
@@ -668,7 +828,7 @@ static void test_v05_replaced_shapes_text(void **state)
     reduction_finish(&r);
 }
 
-/* camelCase properties are dropped as their snake_case forms are; what stays is absolute. */
+/* camelCase properties are dropped as their snake_case forms are; what stays is relative. */
 static void test_v05_properties_and_paths(void **state)
 {
     static const char *const dropped[] = {"flipNormals", "flipTexCoords", "center"};
@@ -677,8 +837,8 @@ static void test_v05_properties_and_paths(void **state)
     assert_lacks_all(r.text, dropped, ARRAY_COUNT(dropped));
     /* The sensor's and other.obj's toWorld stay. */
     assert_int_equal(count_substrings(r.text, "name=\"toWorld\""), 2);
-    assert_has(r.text, with_real_in("value=\"%s\"", "models/other.obj"));
-    assert_has(r.text, with_real_in("<include filename=\"%s\"/>", "more.xml"));
+    assert_has(r.text, with_from_out("value=\"%s\"", "models/other.obj"));
+    assert_has(r.text, with_from_out("<include filename=\"%s\"/>", "more.xml"));
     assert_false(file_exists(path_in(out_dir, "includes")));
     reduction_finish(&r);
 }
@@ -692,7 +852,7 @@ static void assert_write_fails(const char *scene_file, const mitsuba_replacement
                                size_t count, const char *where, const char *what)
 {
     error_clear();
-    assert_int_equal(mitsuba_write_reduced(scene_file, out_dir, r, count), -1);
+    assert_int_equal(mitsuba_write_reduced(scene_file, out_dir, r, count, bundle), -1);
     if (!strstr(error_message(), where) || (what && !strstr(error_message(), what)))
         fail_msg("message '%s' lacks '%s' or '%s'", error_message(), where, what ? what : "");
     assert_int_equal(error_code(), IDMR_EXIT_INPUT);
@@ -861,6 +1021,10 @@ int main(void)
         WRITER_TEST(test_v3_in_fragment_copy_contents),
         WRITER_TEST(test_fragment_copies_named_apart),
         WRITER_TEST(test_fragment_with_scene_relative_path_copied),
+        WRITER_TEST(test_path_relative),
+        WRITER_TEST(test_output_moves_with_its_input),
+        WRITER_TEST(test_bundle_moves_alone),
+        WRITER_TEST(test_bundle_refuses_to_overwrite_an_input),
         WRITER_TEST(test_v05_scene_reloads),
         WRITER_TEST(test_v05_replaced_shapes_text),
         WRITER_TEST(test_v05_properties_and_paths),

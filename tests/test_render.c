@@ -12,6 +12,9 @@
  *                            1, 1e-3 and 1e4
  *   caustic                  a glass ball focuses a point light: the floor under it is brighter
  *                            than the floor around its shadow
+ *   periscope                a light seen through 24 mirrors (0.9 each): --max-depth cuts the
+ *                            camera path exactly at the light's interaction, and Russian
+ *                            roulette beyond the 16th keeps the mean at 0.9^24
  *   glossy                   against GGX written out here from the textbook formulas: a glossy
  *                            plane under a point light (the BRDF the gather evaluates), and the
  *                            flux a photon keeps after scattering off it against the lobe's
@@ -414,6 +417,83 @@ static void test_glass_ball_caustic(void **state)
     assert_true(focus > 2 * around);
 }
 
+/* ---- 4b. a periscope of mirrors: --max-depth and Russian roulette ---- */
+
+#define PERISCOPE_MIRRORS 24 /* more than IDMR_CAMERA_RR_DEPTH: the roulette decides */
+#define PERISCOPE_SPECULAR 0.9 /* imp_mirror's colour */
+
+/* A staircase of PERISCOPE_MIRRORS mirrors at 45° in the plane z = 0, one unit apart: the
+ * camera looks along +x at the first, each turns the view by 90° (+x to +y, +y to +x), and
+ * after the last the view meets an area light of radiance 1 facing it. The field of view is
+ * narrow enough (tan 0.002) that every camera ray takes the same path: every pixel sees the
+ * light through all the mirrors, radiance 0.9^24, and through nothing else. */
+static scene *periscope_scene(void)
+{
+    scene *s = scene_create("periscope.xml");
+    uint32_t mirror = imp_mirror(s, "mirror");
+    const float half = 0.2f, diagonal = 0.2f / (float)M_SQRT2;
+    for (int i = 0; i < PERISCOPE_MIRRORS; i++) {
+        float x = (float)(i / 2), y = (float)((i + 1) / 2);
+        /* Even mirrors face (-1, 1, 0) (the view arrives along +x), odd ones (1, -1, 0). */
+        float sign = i % 2 == 0 ? 1.0f : -1.0f;
+        char name[32];
+        snprintf(name, sizeof name, "mirror%d", i);
+        imp_add_quad(s, name, mirror, V3(x, y, 0), V3(0, 0, sign * half),
+                     V3(diagonal, diagonal, 0));
+    }
+    float light_x = PERISCOPE_MIRRORS / 2, light_y = PERISCOPE_MIRRORS / 2;
+    scene_mesh *light = imp_add_quad(s, "light", imp_diffuse(s, "black", 0, 0),
+                                     V3(light_x, light_y, 0), V3(0, 0, 0.3f), V3(0, 0.3f, 0));
+    imp_area_light(s, light, 1.0f);
+    imp_look_at(s, V3(-1, 0, 0), V3(0, 0, 0), V3(0, 0, 1), 64, 64, 0.002f);
+    return test_finalize_scene(s);
+}
+
+/* Renders the periscope with camera paths of at most `max_depth` interactions; the mean pixel
+ * value and its standard error (pixels are independent). */
+static double render_periscope(const scene *s, unsigned int max_depth, double *standard_error)
+{
+    render_options o;
+    render_result r;
+    test_render_options(&o, 16, 1000);
+    o.sppm.max_depth = max_depth;
+    o.sppm.radius = 0.05;
+    test_run_render(s, NULL, &o, &r);
+    size_t pixels = (size_t)r.sppm.width * r.sppm.height;
+    double sum = 0, squares = 0;
+    for (size_t p = 0; p < pixels; p++) {
+        double v = pixel_mean(&r, p);
+        sum += v;
+        squares += v * v;
+    }
+    render_result_free(&r);
+    double mean = sum / pixels;
+    *standard_error = sqrt(fmax(squares / pixels - mean * mean, 0) / (pixels - 1));
+    return mean;
+}
+
+/* The light sits at the 25th surface interaction: --max-depth 24 ends every path on the last
+ * mirror (black), 25 reaches it, and with the default (64) the same: Russian roulette from the
+ * 16th interaction on stops most paths (0.9^24 survive) but divides the survivors by their
+ * chance, so the mean is 0.9^24 within four standard errors. */
+static void test_periscope_depth_and_roulette(void **state)
+{
+    scene *s = periscope_scene();
+    double expected = pow(PERISCOPE_SPECULAR, PERISCOPE_MIRRORS), error;
+    double cut = render_periscope(s, PERISCOPE_MIRRORS, &error);
+    print_message("  max depth %d: mean %.5f (exact 0)\n", PERISCOPE_MIRRORS, cut);
+    assert_true(cut == 0.0);
+    const unsigned int depths[2] = {PERISCOPE_MIRRORS + 1, IDMR_RENDER_DEPTH};
+    for (int i = 0; i < 2; i++) {
+        double mean = render_periscope(s, depths[i], &error);
+        print_message("  max depth %u: mean %.5f +- %.5f, exact 0.9^%d = %.5f\n", depths[i], mean,
+                      error, PERISCOPE_MIRRORS, expected);
+        assert_true(error > 0 && error < 0.1 * expected);
+        assert_true(fabs(mean - expected) < 4 * error);
+    }
+    scene_free(s);
+}
+
 /* ---- 5. glossy lobes against the textbook GGX ---- */
 
 #define GLOSSY_ROUGHNESS 0.3
@@ -679,6 +759,7 @@ int main(void)
         cmocka_unit_test(test_furnace_at_radius_1e_3),
         cmocka_unit_test(test_furnace_at_radius_1e4),
         cmocka_unit_test(test_glass_ball_caustic),
+        cmocka_unit_test(test_periscope_depth_and_roulette),
         cmocka_unit_test(test_glossy_plane_under_point_light),
         cmocka_unit_test(test_metal_scattering_keeps_the_albedo),
         cmocka_unit_test(test_plastic_scattering_keeps_the_albedo),

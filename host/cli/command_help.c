@@ -44,7 +44,10 @@ static const struct {
      "      --max-normal-angle A  no collapse turns a face more than A degrees (default 60)\n"
      "      --keep NAME           never decimate mesh NAME (repeatable; emitters never are)\n"
      "      --threads N           decimation threads (default: all cores)\n"
-     "      --force               write into a non-empty OUTDIR\n"},
+     "      --force               write into a non-empty OUTDIR\n"
+     "      --bundle              copy every file the scene reads (textures, meshes kept,\n"
+     "                            fragments) into OUTDIR, so OUTDIR can be moved alone;\n"
+     "                            without it, OUTDIR/scene.xml names them relative to OUTDIR\n"},
     {"render", 1,
      "  render SCENE -o IMAGE     stochastic progressive photon mapping: IMAGE.exr (linear),\n"
      "                            IMAGE.png (sRGB) and IMAGE.json (timings, device memory);\n"
@@ -77,7 +80,8 @@ static const char SPPM_OPTIONS[] =
     "                            500,000 on a CPU)\n"
     "      --alpha A             SPPM radius reduction (default 0.7)\n"
     "      --resolution F        scale of the scene's film for hit points (default 1)\n"
-    "      --max-depth D         surface interactions of a camera path, at most (default 16,\n"
+    "      --max-depth D         surface interactions of a camera path, the emitter it sees\n"
+    "                            last included, as Mitsuba's max_depth counts (default 16,\n"
     "                            the paper's; render: 64, with Russian roulette from 16)\n"
     "      --seed S              random seed (default 1)\n"
     "      --device N            OpenCL device (see `idmr devices`)\n"

@@ -42,6 +42,9 @@ static enum option_parse parse_option(int c, void *context, pass_arguments *argu
     case OPT_FORCE:
         o->force = 1;
         return OPTION_TAKEN;
+    case OPT_BUNDLE:
+        o->bundle = 1;
+        return OPTION_TAKEN;
     case OPT_THREADS:
         return option_result(parse_unsigned("--threads", optarg, 1, 1024, &o->threads));
     default:
@@ -76,6 +79,7 @@ int command_reduce(int argc, char **argv)
         {"max-normal-angle", required_argument, NULL, OPT_MAX_NORMAL_ANGLE},
         {"keep", required_argument, NULL, OPT_KEEP},
         {"force", no_argument, NULL, OPT_FORCE},
+        {"bundle", no_argument, NULL, OPT_BUNDLE},
         {"threads", required_argument, NULL, OPT_THREADS},
         {0, 0, 0, 0}};
     reduce_cli_request request = {.have_target = 0};

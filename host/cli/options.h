@@ -38,6 +38,7 @@ enum option_id {
     OPT_RADIUS,
     OPT_EXPOSURE,
     OPT_MAX_DEPTH,
+    OPT_BUNDLE,
 };
 
 /* Options of the SPPM core, shared by `importance`, `reduce` and `render` (-o among them). */

@@ -43,6 +43,45 @@ int files_write_atomic(const char *path, const void *bytes, size_t size)
     return 0;
 }
 
+int files_copy_atomic(const char *source, const char *path)
+{
+    struct stat from, to;
+    if (stat(source, &from) != 0)
+        return error_set(IDMR_EXIT_INPUT, "cannot read '%s': %s", source, strerror(errno));
+    if (stat(path, &to) == 0 && from.st_dev == to.st_dev && from.st_ino == to.st_ino)
+        return error_set(IDMR_EXIT_INPUT,
+                         "'%s' is the input '%s' itself: not overwritten (inputs are never "
+                         "written)",
+                         path, source);
+    FILE *in = fopen(source, "rb");
+    if (!in)
+        return error_set(IDMR_EXIT_INPUT, "cannot read '%s': %s", source, strerror(errno));
+    char temporary[4096];
+    int fd = files_create_temporary(path, "", temporary, sizeof temporary);
+    if (fd < 0) {
+        fclose(in);
+        return -1;
+    }
+    FILE *out = fdopen(fd, "wb");
+    if (!out)
+        close(fd);
+    static char buffer[1 << 16];
+    size_t n;
+    int ok = out != NULL;
+    while (ok && (n = fread(buffer, 1, sizeof buffer, in)) > 0)
+        ok = fwrite(buffer, 1, n, out) == n;
+    int read_failed = ferror(in);
+    fclose(in);
+    ok = (out && fclose(out) == 0) && ok && !read_failed;
+    if (!ok || rename(temporary, path) != 0) {
+        error_set(IDMR_EXIT_FAILURE, "cannot copy '%s' to '%s': %s", source, path,
+                  read_failed ? "read error" : strerror(errno));
+        unlink(temporary);
+        return -1;
+    }
+    return 0;
+}
+
 /* mkdir that accepts an existing entry; 0, or -1 with the error set. */
 static int make_one_directory(const char *path)
 {

@@ -21,6 +21,11 @@ int files_create_temporary(const char *path, const char *suffix, char *temporary
 /* Writes `bytes` to `path` through a temporary file and rename(). 0, or -1 with the error set. */
 int files_write_atomic(const char *path, const void *bytes, size_t size);
 
+/* Copies the file `source` to `path` through a temporary file and rename(). A `path` that is
+ * `source` itself (however spelled) is refused: inputs are never written. 0, or -1 with the
+ * error set naming the file that could not be read or written. */
+int files_copy_atomic(const char *source, const char *path);
+
 /* Creates `dir` (and parents) if missing; an existing non-directory is an error. Returns 0, or
  * -1 with the error set naming the directory. */
 int files_make_directory(const char *dir);

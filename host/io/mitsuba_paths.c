@@ -50,6 +50,62 @@ char *mitsuba_path_absolute(const char *path)
     return out;
 }
 
+/* The next component of a path at *p (skipping slashes): its length, 0 at the end. */
+static size_t next_component(const char **p)
+{
+    while (**p == '/')
+        (*p)++;
+    size_t length = strcspn(*p, "/");
+    return length;
+}
+
+/* Whether a path has a "." or ".." component. */
+static int has_dot_component(const char *path)
+{
+    for (const char *p = path; next_component(&p); p += strcspn(p, "/")) {
+        size_t length = strcspn(p, "/");
+        if ((length == 1 && p[0] == '.') || (length == 2 && p[0] == '.' && p[1] == '.'))
+            return 1;
+    }
+    return 0;
+}
+
+char *mitsuba_path_relative(const char *from_dir, const char *target)
+{
+    if (from_dir[0] != '/' || target[0] != '/' || has_dot_component(from_dir) ||
+        has_dot_component(target))
+        return NULL;
+    /* Skip the components both share. */
+    const char *a = from_dir, *b = target;
+    size_t shared = 0;
+    for (;;) {
+        const char *a_next = a, *b_next = b;
+        size_t la = next_component(&a_next), lb = next_component(&b_next);
+        if (la == 0 || la != lb || strncmp(a_next, b_next, la) != 0)
+            break;
+        a = a_next + la;
+        b = b_next + lb;
+        shared++;
+    }
+    if (shared == 0)
+        return NULL;
+    size_t ups = 0;
+    for (const char *p = a; next_component(&p); p += strcspn(p, "/"))
+        ups++;
+    while (*b == '/')
+        b++;
+    size_t size = 3 * ups + strlen(b) + 2;
+    char *out = xmalloc(size), *end = out;
+    for (size_t i = 0; i < ups; i++)
+        end += sprintf(end, "../");
+    sprintf(end, "%s", b);
+    if (!out[0])
+        sprintf(out, ".");
+    else if (end > out && !*end && end[-1] == '/')
+        end[-1] = '\0';
+    return out;
+}
+
 char *mitsuba_resolve(const char *naming_file, const char *scene_dir, const char *written,
                       int *from_scene_dir)
 {

@@ -16,6 +16,11 @@ char *mitsuba_path_real(const char *path);
 /* The absolute form of a path that may not exist: cwd/path, without resolving links. */
 char *mitsuba_path_absolute(const char *path);
 
+/* `target` (an absolute path) relative to the directory `from_dir` (absolute), e.g.
+ * "../scene/textures/wood.png"; NULL when the two share no directory below the root, or when
+ * either holds "." or ".." components (a path that was never resolved). */
+char *mitsuba_path_relative(const char *from_dir, const char *target);
+
 /* `written` resolved as the loader resolves it: from the directory of `naming_file`, then from
  * `scene_dir`; when neither exists, the first. *from_scene_dir (may be NULL) is set when only
  * the second found it. */

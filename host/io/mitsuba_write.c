@@ -28,6 +28,7 @@
 #include "io/mitsuba_xml.h"
 
 #define WRITE_INCLUDES_DIR "includes"
+#define WRITE_ASSETS_DIR "assets"
 
 typedef struct write_doc {
     char *path; /* as the loader names it: the scene path as given, or dir(includer)/written */
@@ -43,8 +44,14 @@ typedef struct write_doc {
 typedef struct write_path_edit {
     xmlNodePtr node;
     const char *attribute; /* "value" or "filename" */
-    char *value;
+    char *value;           /* the absolute path it names */
 } write_path_edit;
+
+/* A file copied beside the output scene (--bundle). */
+typedef struct write_asset {
+    char *real; /* the input file */
+    char *name; /* "assets/<name>", relative to outdir */
+} write_asset;
 
 typedef struct write_include {
     xmlNodePtr node; /* the <include> element */
@@ -54,6 +61,8 @@ typedef struct write_include {
 
 typedef struct writer {
     const char *outdir;
+    char *outdir_real;
+    int bundle; /* copy what the scene names under outdir/assets/ */
     char *scene_dir;
     write_doc *docs; /* the scene first */
     size_t doc_count;
@@ -66,6 +75,8 @@ typedef struct writer {
     size_t replacement_count;
     char **replacement_real; /* realpath of each replacement's xml_file, or NULL */
     xmlNodePtr *shapes;      /* the <shape> node of each replacement, once found */
+    write_asset *assets;
+    size_t asset_count;
 } writer;
 
 /* ---------------------------------------------------------------------------------------- */
@@ -140,7 +151,8 @@ static int doc_open(writer *w, const char *path, int depth, size_t *index)
     return walk(w, *index, root, depth);
 }
 
-/* A relative path in `attribute` of `node`: records its absolute rewrite. */
+/* A path in `attribute` of `node`: records what it names (absolute), for pass 2 to rewrite. An
+ * absolute path stays as written, unless --bundle copies what it names. */
 static void note_path(writer *w, size_t doc, xmlNodePtr node, const char *attribute)
 {
     const char *written = mitsuba_attr(node, attribute);
@@ -153,7 +165,7 @@ static void note_path(writer *w, size_t doc, xmlNodePtr node, const char *attrib
                       : xstrdup(written);
     if (!value) /* an undefined parameter: left as written (the loader rejects it) */
         return;
-    if (value[0] == '/' && !strchr(written, '$')) {
+    if (value[0] == '/' && !strchr(written, '$') && !w->bundle) {
         free(value);
         return;
     }
@@ -244,29 +256,126 @@ static int walk(writer *w, size_t doc, xmlNodePtr parent, int depth)
 /* ---------------------------------------------------------------------------------------- */
 /* Pass 2: editing and writing                                                              */
 
-/* Whether `name` is the copy name of one of the documents 1 .. before-1. */
-static int copy_name_taken(const writer *w, size_t before, const char *name)
+/* Whether `name` already names an output: a fragment's copy or a bundled file. */
+static int output_name_taken(const writer *w, const char *name)
 {
-    for (size_t j = 1; j < before; j++)
+    for (size_t j = 1; j < w->doc_count; j++)
         if (w->docs[j].copy_name && strcmp(w->docs[j].copy_name, name) == 0)
+            return 1;
+    for (size_t j = 0; j < w->asset_count; j++)
+        if (strcmp(w->assets[j].name, name) == 0)
             return 1;
     return 0;
 }
 
-/* "includes/<base name>" for the copy of document i, made unique with -2, -3, ... before the
+/* "<dir>/<base name of path>", made unique among the outputs with -2, -3, ... before the
  * extension. */
-static char *copy_name_for(const writer *w, size_t i)
+static char *unique_output_name(const writer *w, const char *dir, const char *path)
 {
-    const char *path = w->docs[i].path;
     const char *base = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
     const char *dot = strrchr(base, '.');
     int stem = dot && dot != base ? (int)(dot - base) : (int)strlen(base);
     const char *extension = dot && dot != base ? dot : "";
     char name[PATH_MAX];
-    snprintf(name, sizeof name, WRITE_INCLUDES_DIR "/%s", base);
-    for (int n = 2; copy_name_taken(w, i, name); n++)
-        snprintf(name, sizeof name, WRITE_INCLUDES_DIR "/%.*s-%d%s", stem, base, n, extension);
+    snprintf(name, sizeof name, "%s/%s", dir, base);
+    for (int n = 2; output_name_taken(w, name); n++)
+        snprintf(name, sizeof name, "%s/%.*s-%d%s", dir, stem, base, n, extension);
     return xstrdup(name);
+}
+
+/* Whether `real` is a file the scene reads: one of its documents, or a path one of them names. */
+static int is_scene_input(const writer *w, const char *real)
+{
+    for (size_t i = 0; i < w->doc_count; i++)
+        if (strcmp(w->docs[i].real, real) == 0)
+            return 1;
+    for (size_t i = 0; i < w->edit_count; i++) {
+        char *named = mitsuba_path_real(w->edits[i].value);
+        int same = named && strcmp(named, real) == 0;
+        free(named);
+        if (same)
+            return 1;
+    }
+    return 0;
+}
+
+/* The name of real's copy under outdir/assets/ (--bundle), copying it on first use. */
+static int bundle_file(writer *w, const char *real, const char **name)
+{
+    for (size_t i = 0; i < w->asset_count; i++)
+        if (strcmp(w->assets[i].real, real) == 0) {
+            *name = w->assets[i].name;
+            return 0;
+        }
+    char *asset = unique_output_name(w, WRITE_ASSETS_DIR, real);
+    char *target = mitsuba_path_join(w->outdir, asset);
+    char *target_real = mitsuba_path_real(target);
+    int status = 0;
+    if (target_real && is_scene_input(w, target_real))
+        status = error_set(IDMR_EXIT_INPUT,
+                           "bundling '%s' would overwrite '%s', which the scene reads: choose "
+                           "another output directory (inputs are never overwritten)",
+                           real, target);
+    if (status == 0) {
+        char *dir = mitsuba_path_join(w->outdir, WRITE_ASSETS_DIR);
+        status = files_make_directory(dir);
+        free(dir);
+    }
+    if (status == 0)
+        status = files_copy_atomic(real, target);
+    free(target);
+    free(target_real);
+    if (status) {
+        free(asset);
+        return -1;
+    }
+    w->assets = xrealloc(w->assets, (w->asset_count + 1) * sizeof *w->assets);
+    w->assets[w->asset_count++] = (write_asset){xstrdup(real), asset};
+    *name = asset;
+    return 0;
+}
+
+/* Whether idmr's loader, reading outdir/out_doc, resolves `relative` to the file `absolute`
+ * names (true when that file does not exist: nothing to tell apart). */
+static int resolves_to(const writer *w, const char *out_doc, const char *relative,
+                       const char *absolute)
+{
+    char *target = mitsuba_path_real(absolute);
+    if (!target)
+        return 1;
+    char *doc_path = mitsuba_path_join(w->outdir, out_doc);
+    char *resolved = mitsuba_resolve(doc_path, w->outdir, relative, NULL);
+    char *resolved_real = mitsuba_path_real(resolved);
+    int same = resolved_real && strcmp(resolved_real, target) == 0;
+    free(target);
+    free(doc_path);
+    free(resolved);
+    free(resolved_real);
+    return same;
+}
+
+/* What outdir/out_doc says for the input file `absolute`: with --bundle, its copy under assets/
+ * (an existing file); else its path relative to outdir, when idmr's loader finds the same file
+ * through it from out_doc (Mitsuba 3 resolves from the scene's directory, outdir, in any
+ * document); else `absolute`. *text is malloc'd. */
+static int output_path(writer *w, const char *out_doc, const char *absolute, char **text)
+{
+    char *real = w->bundle ? mitsuba_path_real(absolute) : NULL;
+    if (real) {
+        const char *name;
+        int status = bundle_file(w, real, &name);
+        free(real);
+        *text = status ? NULL : xstrdup(name);
+        return status;
+    }
+    char *relative = mitsuba_path_relative(w->outdir_real, absolute);
+    if (relative && resolves_to(w, out_doc, relative, absolute)) {
+        *text = relative;
+        return 0;
+    }
+    free(relative);
+    *text = xstrdup(absolute);
+    return 0;
 }
 
 /* Which fragments are copied, and under which names; returns how many. */
@@ -274,7 +383,7 @@ static size_t plan_copies(writer *w)
 {
     size_t copies = 0;
     for (size_t i = 1; i < w->doc_count; i++)
-        w->docs[i].copy = w->docs[i].replaced || w->docs[i].fallback;
+        w->docs[i].copy = w->docs[i].replaced || w->docs[i].fallback || w->bundle;
     /* A fragment that includes a copy must point at it, so it is copied too. */
     for (int changed = 1; changed;) {
         changed = 0;
@@ -286,7 +395,7 @@ static size_t plan_copies(writer *w)
     }
     for (size_t i = 1; i < w->doc_count; i++)
         if (w->docs[i].copy) {
-            w->docs[i].copy_name = copy_name_for(w, i);
+            w->docs[i].copy_name = unique_output_name(w, WRITE_INCLUDES_DIR, w->docs[i].path);
             copies++;
         }
     return copies;
@@ -315,21 +424,36 @@ static int write_tree(const write_doc *d, const char *target)
     return status;
 }
 
+/* Sets `attribute` of `node` to what outdir/target says for the input file `absolute`. */
+static int set_path(writer *w, const char *target, xmlNodePtr node, const char *attribute,
+                    const char *absolute)
+{
+    char *text;
+    if (output_path(w, target, absolute, &text))
+        return -1;
+    xmlSetProp(node, (const xmlChar *)attribute, (const xmlChar *)text);
+    free(text);
+    return 0;
+}
+
 /* Applies the edits that fall in document `index` and writes it to outdir/target. */
 static int write_doc_out(writer *w, size_t index, const char *target)
 {
     write_doc *d = &w->docs[index];
     for (size_t i = 0; i < w->edit_count; i++)
-        if (w->edits[i].node->doc == d->doc)
-            xmlSetProp(w->edits[i].node, (const xmlChar *)w->edits[i].attribute,
-                       (const xmlChar *)w->edits[i].value);
+        if (w->edits[i].node->doc == d->doc &&
+            set_path(w, target, w->edits[i].node, w->edits[i].attribute, w->edits[i].value))
+            return -1;
     for (size_t i = 0; i < w->include_count; i++) {
         const write_include *link = &w->includes[i];
         if (link->parent != index)
             continue;
         const write_doc *child = &w->docs[link->child];
-        xmlSetProp(link->node, (const xmlChar *)"filename",
-                   (const xmlChar *)(child->copy ? child->copy_name : child->real));
+        if (child->copy)
+            xmlSetProp(link->node, (const xmlChar *)"filename",
+                       (const xmlChar *)child->copy_name);
+        else if (set_path(w, target, link->node, "filename", child->real))
+            return -1;
     }
     for (size_t i = 0; i < w->replacement_count; i++)
         if (w->shapes[i]->doc == d->doc)
@@ -362,7 +486,13 @@ static void writer_free(writer *w)
         free(w->replacement_real[i]);
     free(w->replacement_real);
     free(w->shapes);
+    for (size_t i = 0; i < w->asset_count; i++) {
+        free(w->assets[i].real);
+        free(w->assets[i].name);
+    }
+    free(w->assets);
     free(w->scene_dir);
+    free(w->outdir_real);
 }
 
 /* Checks that each replacement found its shape and that no shape is replaced twice. */
@@ -398,12 +528,17 @@ static int write_copies(writer *w)
 }
 
 int mitsuba_write_reduced(const char *scene_file, const char *outdir,
-                          const mitsuba_replacement *replacements, size_t count)
+                          const mitsuba_replacement *replacements, size_t count, int bundle)
 {
     writer w;
     memset(&w, 0, sizeof w);
     xmlInitParser();
     w.outdir = outdir;
+    w.bundle = bundle;
+    w.outdir_real = mitsuba_path_real(outdir);
+    if (!w.outdir_real)
+        return error_set(IDMR_EXIT_FAILURE, "output directory '%s': %s", outdir,
+                         strerror(errno));
     w.scene_dir = mitsuba_path_directory(scene_file);
     w.replacements = replacements;
     w.replacement_count = count;

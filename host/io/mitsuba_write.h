@@ -18,20 +18,32 @@
  *                   name="filename" value=...>, for meshes, bitmaps, envmaps, ...) and every
  *                   filename="..." attribute (<spectrum filename>, <include filename>) — is
  *                   resolved as the loader resolves it (the naming file's directory, then the
- *                   scene's) and rewritten as the absolute path (realpath) of what it resolved
- *                   to; a path that resolves to nothing becomes the absolute form of the
- *                   loader's first candidate. Absolute paths stay as written. A value holding
- *                   $name references is resolved with the <default> values (collected as the
- *                   loader does: per file, in include order, the first definition wins) and
- *                   written resolved and absolute; one that names an undefined parameter is
- *                   left unchanged (the loader rejects such a scene anyway).
+ *                   scene's) to a file (realpath; a path that resolves to nothing: the absolute
+ *                   form of the loader's first candidate), and rewritten relative to outdir,
+ *                   in the scene and in the copies under includes/ alike: Mitsuba 3 resolves
+ *                   every document's paths from the scene's directory, idmr's loader from the
+ *                   naming document's and then the scene's. So an output folder beside its
+ *                   input (or inside the same tree) can be moved with it. The path is written
+ *                   absolute instead when outdir and the file share no directory below the
+ *                   root, or when idmr's loader would find another file through the relative
+ *                   form. Absolute paths stay as written. A value holding $name references is
+ *                   resolved with the <default> values (collected as the loader does: per file,
+ *                   in include order, the first definition wins) and written resolved; one that
+ *                   names an undefined parameter is left unchanged (the loader rejects such a
+ *                   scene anyway).
+ *   bundle          (bundle != 0) every file a path names (relative or absolute: textures,
+ *                   envmaps, meshes not replaced) is copied to outdir/assets/<base name> (made
+ *                   unique with -2, -3, ...; one copy per file) and named "assets/<name>", and
+ *                   every fragment is copied under includes/: outdir then holds all the scene
+ *                   reads and can be moved or sent anywhere. A copy that would replace a file
+ *                   the scene reads is refused.
  *   includes        a fragment is written as a rewritten copy under outdir/includes/ (its base
  *                   name, made unique with -2, -3, ... before the extension) when it holds a
  *                   replaced shape, when it includes a fragment that is copied, or when one of
  *                   its relative paths resolved only through the scene's directory (it would no
  *                   longer resolve from outdir); the <include> then names "includes/<name>".
- *                   Other fragments stay where they are and are included by absolute path. A
- *                   fragment included twice is copied once.
+ *                   Other fragments stay where they are and are included by their path
+ *                   (relative, as above). A fragment included twice is copied once.
  * Paths written into the output (the PLY, the copies) are relative to outdir, the scene's
  * directory: Mitsuba's file resolver finds them from there, and so does idmr's loader, whose
  * second candidate is the scene's directory.
@@ -50,13 +62,14 @@ typedef struct mitsuba_replacement {
     int face_normals;     /* the mesh is shaded flat: the shape says face_normals */
 } mitsuba_replacement;
 
-/* Writes outdir/scene.xml (and outdir/includes/ copies where needed, see above) for the scene
- * file `scene_file` with `count` shapes replaced. outdir must exist; the input files are never
- * written; every file goes through files_write_atomic() (temporary name + rename), the scene
- * last. Returns 0, or -1 with the error set naming the file (and line): unreadable or malformed
- * XML, an unresolvable include, a replacement whose file:line matches no <shape> element (or
- * more than one), two replacements of one shape, a failed write. */
+/* Writes outdir/scene.xml (and outdir/includes/ copies where needed, outdir/assets/ with
+ * `bundle`; see above) for the scene file `scene_file` with `count` shapes replaced. outdir
+ * must exist; the input files are never written; every file goes through a temporary name and
+ * rename(), the scene last. Returns 0, or -1 with the error set naming the file (and line):
+ * unreadable or malformed XML, an unresolvable include, a replacement whose file:line matches
+ * no <shape> element (or more than one), two replacements of one shape, a failed write or
+ * copy. */
 int mitsuba_write_reduced(const char *scene_file, const char *outdir,
-                          const mitsuba_replacement *replacements, size_t count);
+                          const mitsuba_replacement *replacements, size_t count, int bundle);
 
 #endif

@@ -156,7 +156,8 @@ static int write_reduced_scene(reduce_state *st)
             s->meshes[m].xml_file, s->meshes[m].xml_line, st->ply[m], s->meshes[m].flat_normals};
     }
     if (!status)
-        status = mitsuba_write_reduced(s->file, st->outdir, replacements, st->meshes_written);
+        status = mitsuba_write_reduced(s->file, st->outdir, replacements, st->meshes_written,
+                                       st->options->bundle);
     free(replacements);
     st->seconds_write = monotonic_seconds() - start;
     return status;

@@ -16,7 +16,8 @@
  * it changes the rendered image least on the evaluation scenes (README, Evaluation).
  * Emitters and meshes named with --keep are never decimated; meshes with at most min_vertices
  * vertices neither. OUTDIR must not exist or be empty unless force is set, and must not be the
- * scene's own directory.
+ * scene's own directory. The paths OUTDIR/scene.xml names are relative to OUTDIR; with bundle,
+ * every file it names is copied under OUTDIR (io/mitsuba_write.h).
  *
  * Files: reduce.c (the pipeline and its option, importance, budget and writing stages),
  * reduce_outdir.c, reduce_decimation.c (with the compensation rounds), reduce_report.c; the
@@ -45,6 +46,7 @@ typedef struct reduce_options {
     const char **keep;       /* mesh names never decimated */
     size_t keep_count;
     int force;               /* allow a non-empty OUTDIR */
+    int bundle;              /* copy every file the scene reads into OUTDIR/assets/ */
     unsigned int threads;    /* decimation threads; 0: all cores */
 } reduce_options;
 
