@@ -145,6 +145,18 @@ static inline void imp_area_light(scene *s, scene_mesh *m, float radiance)
     m->light = scene_add_light(s, &l);
 }
 
+/* The environment light of a width x height map (rgb copied) in the frame to_world (NULL: the
+ * identity). */
+static inline void imp_environment(scene *s, int width, int height, const float *rgb,
+                                   const double *to_world)
+{
+    static const double identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    float *copy = malloc(3 * sizeof *copy * (size_t)width * height);
+    memcpy(copy, rgb, 3 * sizeof *copy * (size_t)width * height);
+    if (scene_add_environment(s, NULL, width, height, copy, to_world ? to_world : identity) < 0)
+        fail_msg("scene_add_environment: %s", error_message());
+}
+
 /* ---- camera ---- */
 
 /* The scene's camera: a pinhole at `origin` looking at `target` (trace_look_at). */

@@ -222,14 +222,21 @@ static void test_info_glass_of_water(void **state)
     cJSON_Delete(json);
 }
 
-static void test_info_living_room_warns_about_envmap(void **state)
+/* The living room's sky is its environment map, named with its size, without a warning. */
+static void test_info_living_room_environment_map(void **state)
 {
     run_result r = run("bin/idmr info --json ../shared/data/scenes/living-room/scene.xml");
     assert_int_equal(r.status, 0);
-    assert_non_null(strstr(r.err, "envmap"));
+    assert_null(strstr(r.err, "envmap"));
     cJSON *json = parse_or_fail(r.out);
     assert_true(cJSON_GetArraySize(item(json, "meshes")) >= 60);
     assert_true(array_has_string(item(json, "features"), "textured"));
+    const cJSON *light = cJSON_GetArrayItem(item(json, "lights"), 0);
+    assert_string_equal(cJSON_GetStringValue(item(light, "type")), "environment");
+    const cJSON *map = item(light, "map");
+    assert_non_null(strstr(cJSON_GetStringValue(item(map, "file")), "Sky 19.exr"));
+    assert_true(cJSON_GetNumberValue(item(map, "width")) > 1);
+    assert_true(cJSON_GetNumberValue(item(map, "height")) > 1);
     cJSON_Delete(json);
     run_free(&r);
 }
@@ -621,7 +628,7 @@ int main(void)
         cmocka_unit_test(test_info_cornell_bbox),
         cmocka_unit_test(test_info_cornell_bvh_memory),
         cmocka_unit_test(test_info_glass_of_water),
-        cmocka_unit_test(test_info_living_room_warns_about_envmap),
+        cmocka_unit_test(test_info_living_room_environment_map),
         cmocka_unit_test(test_info_text_agrees_with_json_cornell),
         cmocka_unit_test(test_info_text_agrees_with_json_living_room),
         cmocka_unit_test(test_missing_mesh_is_named),

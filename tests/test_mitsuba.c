@@ -871,31 +871,38 @@ static void run_emitter_case(void **state)
     scene_free(s);
 }
 
-/* An envmap becomes a uniform environment light of the map's mean radiance times scale: a
- * white 8-bit map (sRGB 255 = linear 1) with scale 2 gives radiance 2. */
-static void test_envmap_is_uniform_environment(void **state)
+/* An envmap becomes the scene's environment map, times its scale, in its frame: a white 8-bit
+ * 4 x 2 map (sRGB 255 = linear 1) with scale 2 has radiance 2 everywhere (the light's mean),
+ * the to_world rotation and its inverse are kept, and the luminance integral is 4π × 2. */
+static void test_envmap_is_the_environment(void **state)
 {
     unsigned char white[4 * 2 * 3];
     memset(white, 255, sizeof white);
     assert_int_equal(image_write_rgb8(path_in(temp_dir, "sky.png"), 4, 2, white), 0);
-    const char *path = write_scene("3.0.0", "  <shape type=\"cube\"/>\n"
-                                            "  <emitter type=\"envmap\">\n"
-                                            "    <string name=\"filename\" value=\"sky.png\"/>\n"
-                                            "    <float name=\"scale\" value=\"2\"/>\n"
-                                            "  </emitter>\n");
-    char *log;
-    scene *s = load_capturing_stderr(path, &log);
-    if (!s)
-        fail_msg("load failed: %s", error_message());
+    scene *s = load_scene("3.0.0", "  <shape type=\"cube\"/>\n"
+                                   "  <emitter type=\"envmap\">\n"
+                                   "    <string name=\"filename\" value=\"sky.png\"/>\n"
+                                   "    <float name=\"scale\" value=\"2\"/>\n"
+                                   "    <transform name=\"to_world\">\n"
+                                   "      <rotate y=\"1\" angle=\"90\"/>\n"
+                                   "    </transform>\n"
+                                   "  </emitter>\n");
     assert_int_equal(s->light_count, 1);
     assert_int_equal(s->lights[0].kind, IDMR_LIGHT_ENVIRONMENT);
     for (int c = 0; c < 3; c++)
         assert_float_equal(s->lights[0].emission[c], 2.0f, 1e-4f);
     assert_true(s->features & IDMR_FEATURE_ENVIRONMENT);
-    if (!strstr(log, "scene.xml:3:") || !strstr(log, "<emitter type=\"envmap\">") ||
-        !strstr(log, "directional structure is ignored"))
-        fail_msg("warning '%s' lacks file:line, element or reason", log);
-    free(log);
+    const scene_environment *e = &s->environment;
+    assert_int_equal(e->width, 4);
+    assert_int_equal(e->height, 2);
+    assert_float_equal(e->rgb[0], 2.0f, 1e-4f);
+    assert_float_equal(e->luminance_integral, 4 * M_PI * 2.0, 1e-3);
+    /* R_y(90°) takes +z to +x: row 0 is (0, 0, 1); its inverse is its transpose. */
+    const double expected[9] = {0, 0, 1, 0, 1, 0, -1, 0, 0};
+    for (int k = 0; k < 9; k++) {
+        assert_float_equal(e->to_world[k], expected[k], 1e-9);
+        assert_float_equal(e->to_map[k], expected[3 * (k % 3) + k / 3], 1e-9);
+    }
     scene_free(s);
 }
 
@@ -988,6 +995,9 @@ static const error_case error_cases[] = {
      "    <bsdf type=\"twosided\"><bsdf type=\"blendbsdf\"/></bsdf>\n"
      "  </shape>\n",
      3, "<bsdf type=\"blendbsdf\">", "unsupported bsdf type", NULL},
+    {"error_second_environment", "3.0.0",
+     "  <emitter type=\"constant\"/>\n  <emitter type=\"constant\"/>\n", 3,
+     "<emitter type=\"constant\">", "at most one", NULL},
     {"error_unsupported_emitter", "3.0.0", "  <emitter type=\"sunsky\"/>\n", 2,
      "<emitter type=\"sunsky\">", "unsupported emitter type", NULL},
     {"error_unsupported_shape", "3.0.0",
@@ -1205,13 +1215,13 @@ static void test_real_living_room(void **state)
     assert_true(s->mesh_count >= 60);
     assert_true(s->features & IDMR_FEATURE_TEXTURED);
     assert_true(s->texture_count >= 1);
-    /* The sky map becomes one environment light of its mean radiance. */
+    /* The sky map becomes the one environment light. */
     assert_int_equal(s->light_count, 1);
     assert_int_equal(s->lights[0].kind, IDMR_LIGHT_ENVIRONMENT);
     assert_true(s->lights[0].emission[0] > 0 && s->lights[0].emission[2] > 0);
     assert_true(s->features & IDMR_FEATURE_ENVIRONMENT);
-    if (!strstr(log, "directional structure is ignored"))
-        fail_msg("no envmap warning in: %s", log);
+    assert_true(s->environment.width > 1 && s->environment.height > 1);
+    assert_null(strstr(log, "envmap"));
     free(log);
     scene_free(s);
 }
@@ -1246,7 +1256,7 @@ int main(void)
         cmocka_unit_test(test_bsdf_diffuse_red_spectrum),
         cmocka_unit_test(test_spectrum_use_by_element),
         cmocka_unit_test(test_bsdf_wrappers_and_refs),
-        cmocka_unit_test(test_envmap_is_uniform_environment),
+        cmocka_unit_test(test_envmap_is_the_environment),
         cmocka_unit_test(test_constant_environment),
         cmocka_unit_test(test_default_substitution),
         cmocka_unit_test(test_include),

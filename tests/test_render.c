@@ -280,19 +280,22 @@ static void test_spot_light_power(void **state)
 }
 
 /* A black 2 x 2 plane facing up (`flags`: IDMR_MATERIAL_TWOSIDED or 0) seen from above, under
- * a directional or environment light of emission `value`. */
+ * a directional light or a constant environment (a 1 x 1 map) of emission `value`. */
 static scene *plane_under(const char *name, int kind, float value, unsigned int flags)
 {
     scene *s = scene_create(name);
     uint32_t black = imp_diffuse(s, "black", 0.0f, flags);
     imp_add_quad(s, "plane", black, V3(0, 0, 0), V3(1, 0, 0), V3(0, 1, 0));
-    idmr_light light;
-    memset(&light, 0, sizeof light);
-    light.kind = kind;
-    if (kind == IDMR_LIGHT_DIRECTIONAL)
+    if (kind == IDMR_LIGHT_ENVIRONMENT) {
+        imp_environment(s, 1, 1, V3(value, value, value), NULL);
+    } else {
+        idmr_light light;
+        memset(&light, 0, sizeof light);
+        light.kind = kind;
         light.direction[2] = -1; /* straight down */
-    light.emission[0] = light.emission[1] = light.emission[2] = value;
-    scene_add_light(s, &light);
+        light.emission[0] = light.emission[1] = light.emission[2] = value;
+        scene_add_light(s, &light);
+    }
     imp_look_at(s, V3(0, -0.5f, 3), V3(0, 0, 0), V3(0, 1, 0), 8, 8, 0.5f);
     return s;
 }
@@ -313,6 +316,154 @@ static void test_environment_light_power(void **state)
 {
     scene *s = plane_under("environment.xml", IDMR_LIGHT_ENVIRONMENT, 0.5f, 0);
     expect_power(s, M_PI * 0.5 * 4.0, binomial_tolerance(4.0 / (4 * M_PI * 2.0)));
+}
+
+/* ---- 2b. environment maps ---- */
+
+/* The direction of map position (u, v) in the map's frame, as Mitsuba 3 defines it (+y up,
+ * φ = 2πu from -z towards +x, θ = πv from +y), turned into the world by the row-major
+ * to_world. */
+static void map_direction(const double to_world[9], double u, double v, double out[3])
+{
+    double phi = 2 * M_PI * u, theta = M_PI * v;
+    double d[3] = {sin(phi) * sin(theta), cos(theta), -cos(phi) * sin(theta)};
+    for (int row = 0; row < 3; row++)
+        out[row] = to_world[3 * row] * d[0] + to_world[3 * row + 1] * d[1] +
+                   to_world[3 * row + 2] * d[2];
+}
+
+/* ∫ max(0, ω·up) dω over map pixel (x, y) of a width x height map, by the midpoint rule on a
+ * 64 x 64 grid in (φ, cos θ) (uniform in solid angle). */
+static double pixel_cosine_integral(const double to_world[9], int width, int height, int x,
+                                    int y, const double up[3])
+{
+    const int n = 64;
+    double cos_top = cos(M_PI * y / height), cos_bottom = cos(M_PI * (y + 1) / height);
+    double sum = 0;
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+            double u = (x + (i + 0.5) / n) / width;
+            double c = cos_top + (cos_bottom - cos_top) * (j + 0.5) / n, d[3];
+            map_direction(to_world, u, acos(c) / M_PI, d);
+            sum += fmax(0.0, d[0] * up[0] + d[1] * up[1] + d[2] * up[2]);
+        }
+    return sum / (n * n) * (2 * M_PI / width) * (cos_top - cos_bottom);
+}
+
+/* The map's frame turned by R_y(90°) then tilted: a rotation that mixes every axis. */
+static const double MAP_TO_WORLD[9] = {0, 0.6, 0.8, 0, 0.8, -0.6, -1, 0, 0};
+
+/* A camera looking along the world direction of the centre of map pixel (2, 1) of an 8 x 4
+ * map whose every pixel differs (R = 1 + x + 8y, G = 2R, B = R / 2), with a field of view well
+ * inside that pixel and no geometry in view: every image pixel shows that map pixel's
+ * radiance exactly (the direction mapping, the frame and the channels as Mitsuba 3's). */
+static void test_environment_map_seen_directly(void **state)
+{
+    enum { W = 8, H = 4 };
+    float map[3 * W * H];
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            float value = 1.0f + x + 8.0f * y;
+            map[3 * (y * W + x)] = value;
+            map[3 * (y * W + x) + 1] = 2 * value;
+            map[3 * (y * W + x) + 2] = 0.5f * value;
+        }
+    double d[3];
+    map_direction(MAP_TO_WORLD, 2.5 / W, 1.5 / H, d);
+    scene *s = scene_create("environment-seen.xml");
+    imp_add_quad(s, "behind", imp_diffuse(s, "grey", 0.5f, 0),
+                 V3((float)-d[0] * 5, (float)-d[1] * 5, (float)-d[2] * 5), V3(0.1f, 0, 0),
+                 V3(0, 0.1f, 0));
+    imp_environment(s, W, H, map, MAP_TO_WORLD);
+    float up_hint[3] = {fabs(d[1]) < 0.9 ? 0.0f : 1.0f, fabs(d[1]) < 0.9 ? 1.0f : 0.0f, 0};
+    imp_look_at(s, V3(0, 0, 0), V3((float)d[0], (float)d[1], (float)d[2]), up_hint, 16, 16,
+                0.01f);
+    test_finalize_scene(s);
+    render_result r;
+    render(s, 1, 1000, NULL, 0, &r);
+    const float *expected = &map[3 * (1 * W + 2)];
+    for (size_t p = 0; p < (size_t)r.sppm.width * r.sppm.height; p++)
+        for (int c = 0; c < 3; c++)
+            if (fabsf(r.image[3 * p + c] - expected[c]) > 1e-5f * expected[c])
+                fail_msg("pixel %zu channel %d: %g, the map's %g", p, c, r.image[3 * p + c],
+                         expected[c]);
+    render_result_free(&r);
+    scene_free(s);
+}
+
+/* A grey 32 x 16 map, black but for one pixel (radiance 40) and a dim band (radiance 0.5 in
+ * row 12), in the tilted frame: the photons' first-hit flux on the front of the one-sided
+ * 2 x 2 plane is A Σ L ∫_pixel max(0, ω·z) dω. Photons are drawn by luminance, each carrying
+ * the same flux, so the count that hits is binomial. */
+static void test_environment_map_power(void **state)
+{
+    enum { W = 32, H = 16 };
+    static float map[3 * W * H];
+    memset(map, 0, sizeof map);
+    for (int x = 0; x < W; x++)
+        for (int c = 0; c < 3; c++)
+            map[3 * (12 * W + x) + c] = 0.5f;
+    for (int c = 0; c < 3; c++)
+        map[3 * (5 * W + 21) + c] = 40.0f;
+    scene *s = scene_create("environment-map.xml");
+    imp_add_quad(s, "plane", imp_diffuse(s, "black", 0.0f, 0), V3(0, 0, 0), V3(1, 0, 0),
+                 V3(0, 1, 0));
+    imp_environment(s, W, H, map, MAP_TO_WORLD);
+    imp_look_at(s, V3(0, -0.5f, 3), V3(0, 0, 0), V3(0, 1, 0), 8, 8, 0.5f);
+    const double up[3] = {0, 0, 1};
+    double power = 0, integral = 0;
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            double radiance = map[3 * (y * W + x)];
+            if (radiance > 0) {
+                power += 4.0 * radiance * pixel_cosine_integral(MAP_TO_WORLD, W, H, x, y, up);
+                integral += radiance * scene_environment_pixel_solid_angle(W, H, y);
+            }
+        }
+    assert_true(power > 0);
+    /* The bounding disc has radius √2: the chance a photon hits is power / (π R² ∫ L dω). */
+    expect_power(s, power, binomial_tolerance(power / (M_PI * 2.0 * integral)));
+}
+
+/* The same map, one bright pixel and nothing else, over a white-ish diffuse 2 x 2 plane seen
+ * from above: the plane is lit like by a directional light of irradiance
+ * E = L ∫_pixel max(0, ω·z) dω from that pixel's direction, so it shows ρ E / π wherever the
+ * camera sees it (away from its edges, where the gather disc leaves the plane). */
+static void test_environment_patch_lights_like_a_directional_light(void **state)
+{
+    enum { W = 32, H = 16 };
+    static float map[3 * W * H];
+    memset(map, 0, sizeof map);
+    for (int c = 0; c < 3; c++)
+        map[3 * (5 * W + 21) + c] = 40.0f;
+    const double up[3] = {0, 0, 1}, albedo = 0.8;
+    double irradiance = 40.0 * pixel_cosine_integral(MAP_TO_WORLD, W, H, 21, 5, up);
+    scene *s = scene_create("environment-patch.xml");
+    imp_add_quad(s, "plane", imp_diffuse(s, "white", (float)albedo, 0), V3(0, 0, 0),
+                 V3(1, 0, 0), V3(0, 1, 0));
+    imp_environment(s, W, H, map, MAP_TO_WORLD);
+    imp_look_at(s, V3(0, 0, 3), V3(0, 0, 0), V3(0, 1, 0), 64, 64, 0.3f);
+    test_finalize_scene(s);
+    render_result r;
+    render(s, 16, 50000, NULL, 0, &r);
+    double sum = 0;
+    size_t count = 0;
+    for (unsigned int y = 0; y < r.sppm.height; y++)
+        for (unsigned int x = 0; x < r.sppm.width; x++) {
+            double p[3];
+            if (pixel_centre_on_floor(&s->camera, &r, x, y, p) && fabs(p[0]) < 0.6 &&
+                fabs(p[1]) < 0.6) {
+                sum += pixel_mean(&r, (size_t)y * r.sppm.width + x);
+                count++;
+            }
+        }
+    render_result_free(&r);
+    scene_free(s);
+    double expected = albedo / M_PI * irradiance, mean = sum / count;
+    print_message("  %zu pixels: mean %.5f, ρ E / π = %.5f (ratio %.4f)\n", count, mean, expected,
+                  mean / expected);
+    assert_true(count > 500);
+    assert_true(fabs(mean / expected - 1) < 0.03);
 }
 
 /* ---- 3. furnace ---- */
@@ -755,6 +906,9 @@ int main(void)
         cmocka_unit_test(test_spot_light_power),
         cmocka_unit_test(test_directional_light_power),
         cmocka_unit_test(test_environment_light_power),
+        cmocka_unit_test(test_environment_map_seen_directly),
+        cmocka_unit_test(test_environment_map_power),
+        cmocka_unit_test(test_environment_patch_lights_like_a_directional_light),
         cmocka_unit_test(test_furnace_at_unit_radius),
         cmocka_unit_test(test_furnace_at_radius_1e_3),
         cmocka_unit_test(test_furnace_at_radius_1e4),

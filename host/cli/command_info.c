@@ -5,7 +5,7 @@
  *
  * The object: {scene, meshes: [{name, shape, file?, vertices, triangles, material,
  * material_kind, emitter}], materials: [{name, bsdf, kind}], lights: [{type, emission, power,
- * area?}], camera?: {origin, forward, up, fov, fov_axis, width, height}, bbox: {min, max},
+ * area?, map?: {file?, width, height}}] (emission: an environment's mean radiance), camera?: {origin, forward, up, fov, fov_axis, width, height}, bbox: {min, max},
  * features: [name], vertices, triangles, device_memory: {geometry, bvh?, total?}, bvh?: {nodes,
  * leaves, triangle_references, degenerate_triangles, depth, build_seconds}}; the keys marked ?
  * are left out when the scene has no such thing (or --no-bvh). */
@@ -65,6 +65,13 @@ static cJSON *lights_json(const scene *s)
         cJSON_AddNumberToObject(o, "power", l->power);
         if (l->kind == IDMR_LIGHT_AREA)
             cJSON_AddNumberToObject(o, "area", l->area);
+        if (l->kind == IDMR_LIGHT_ENVIRONMENT) {
+            cJSON *map = cJSON_AddObjectToObject(o, "map");
+            if (s->environment.file)
+                cJSON_AddStringToObject(map, "file", s->environment.file);
+            cJSON_AddNumberToObject(map, "width", s->environment.width);
+            cJSON_AddNumberToObject(map, "height", s->environment.height);
+        }
         cJSON_AddItemToArray(lights, o);
     }
     return lights;

@@ -48,6 +48,8 @@ void scene_free(scene *s)
     free(s->material_info);
     free(s->lights);
     free(s->textures);
+    free(s->environment.rgb);
+    free(s->environment.file);
     free(s->file);
     free(s->dir);
     free(s);
@@ -140,6 +142,84 @@ int scene_add_texture(scene *s, const char *file, int width, int height, float *
     return (int)s->texture_count++;
 }
 
+double scene_environment_pixel_solid_angle(int width, int height, int row)
+{
+    return 2.0 * M_PI / width *
+           (cos(M_PI * row / height) - cos(M_PI * (row + 1) / height));
+}
+
+/* The inverse of a row-major 3x3 matrix; 0 when it is singular. */
+static int invert3(const double m[9], double out[9])
+{
+    double c[9] = {m[4] * m[8] - m[5] * m[7], m[5] * m[6] - m[3] * m[8],
+                   m[3] * m[7] - m[4] * m[6], m[2] * m[7] - m[1] * m[8],
+                   m[0] * m[8] - m[2] * m[6], m[1] * m[6] - m[0] * m[7],
+                   m[1] * m[5] - m[2] * m[4], m[2] * m[3] - m[0] * m[5],
+                   m[0] * m[4] - m[1] * m[3]}; /* cofactors */
+    double det = m[0] * c[0] + m[1] * c[1] + m[2] * c[2];
+    if (!(fabs(det) > 1e-12))
+        return 0;
+    for (int row = 0; row < 3; row++)
+        for (int col = 0; col < 3; col++)
+            out[3 * row + col] = c[3 * col + row] / det;
+    return 1;
+}
+
+/* Checks the map's values (setting negative ones to 0); its mean radiance over the sphere and
+ * the integral of its luminance. 0, or -1 with the error set. */
+static int environment_sums(int width, int height, float *rgb, float mean[3], double *integral)
+{
+    double sum[3] = {0, 0, 0};
+    *integral = 0;
+    for (int y = 0; y < height; y++) {
+        double solid_angle = scene_environment_pixel_solid_angle(width, height, y);
+        for (int x = 0; x < width; x++) {
+            float *pixel = &rgb[3 * ((size_t)y * width + x)];
+            for (int c = 0; c < 3; c++) {
+                if (!isfinite(pixel[c]))
+                    return error_set(IDMR_EXIT_INPUT,
+                                     "environment map pixel (%d, %d) is not finite (%g)", x, y,
+                                     pixel[c]);
+                pixel[c] = pixel[c] > 0 ? pixel[c] : 0.0f;
+                sum[c] += pixel[c] * solid_angle;
+            }
+            *integral += idmr_luminance(pixel[0], pixel[1], pixel[2]) * solid_angle;
+        }
+    }
+    for (int c = 0; c < 3; c++)
+        mean[c] = (float)(sum[c] / (4.0 * M_PI));
+    return 0;
+}
+
+int scene_add_environment(scene *s, const char *file, int width, int height, float *rgb,
+                          const double to_world[9])
+{
+    scene_environment *e = &s->environment;
+    idmr_light light;
+    memset(&light, 0, sizeof light);
+    light.kind = IDMR_LIGHT_ENVIRONMENT;
+    int status = 0;
+    if (e->width)
+        status = error_set(IDMR_EXIT_INPUT, "a second environment emitter: a scene has at most "
+                                            "one (constant or envmap), as in Mitsuba 3");
+    else if (width < 1 || height < 1)
+        status = error_set(IDMR_EXIT_INPUT, "an environment map of %d x %d pixels", width, height);
+    else if (!invert3(to_world, e->to_map))
+        status = error_set(IDMR_EXIT_INPUT, "the environment's to_world is singular");
+    else
+        status = environment_sums(width, height, rgb, light.emission, &e->luminance_integral);
+    if (status) {
+        free(rgb);
+        return -1;
+    }
+    e->width = width;
+    e->height = height;
+    e->rgb = rgb;
+    memcpy(e->to_world, to_world, sizeof e->to_world);
+    e->file = file ? xstrdup(file) : NULL;
+    return scene_add_light(s, &light);
+}
+
 static void triangle_vertices(const scene_mesh *m, uint32_t t, const float *v[3])
 {
     for (int k = 0; k < 3; k++)
@@ -170,10 +250,10 @@ double scene_diagonal(const scene *s)
     return sqrt(d2);
 }
 
-/* Rec. 709 / sRGB luminance of a linear RGB triple: lights are chosen by luminous power. */
+/* Luminance of a linear RGB triple (idmr_luminance): lights are chosen by luminous power. */
 static double luminance(const float rgb[3])
 {
-    return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
+    return idmr_luminance(rgb[0], rgb[1], rgb[2]);
 }
 
 /* Area lights: triangle range and area from their mesh; power by kind. A spot's power uses the
@@ -212,8 +292,9 @@ static void finalize_lights(scene *s)
             l->power = (float)(M_PI * radius * radius * y);
             break;
         case IDMR_LIGHT_ENVIRONMENT:
-            /* Uniform radiance y into the bounding sphere: 4π r² × π y. */
-            l->power = (float)(4.0 * M_PI * M_PI * radius * radius * y);
+            /* Through the bounding disc from every direction: π r² ∫ Y(L) dω (4π r² × π y for
+             * a uniform environment). */
+            l->power = (float)(M_PI * radius * radius * s->environment.luminance_integral);
             break;
         }
     }

@@ -62,6 +62,18 @@ typedef struct scene_camera_info {
     float to_world[16]; /* row-major 4x4 */
 } scene_camera_info;
 
+/* The environment light's map: at most one per scene, as in Mitsuba 3. Equirectangular in
+ * Mitsuba's frame (idmr/environment.h), linear radiance with the emitter's scale applied, top
+ * row first; a constant environment is a 1 × 1 map. width 0: the scene has none. */
+typedef struct scene_environment {
+    int width, height;
+    float *rgb;                /* 3 per pixel, no negative values */
+    double to_world[9];        /* the map frame's rotation into the world, row-major */
+    double to_map[9];          /* its inverse */
+    double luminance_integral; /* ∫ Y(L(ω)) dω over the sphere */
+    char *file;                /* the map's file; NULL for a constant */
+} scene_environment;
+
 typedef struct scene {
     char *file; /* the scene file as given */
     char *dir;  /* its directory: relative paths in the file resolve from here */
@@ -78,6 +90,8 @@ typedef struct scene {
 
     scene_texture *textures;
     size_t texture_count;
+
+    scene_environment environment;
 
     idmr_camera camera;
     scene_camera_info camera_info;
@@ -114,6 +128,17 @@ int scene_find_texture(const scene *s, const char *file);
 /* Adds the texture read from `file` (linear RGB, width × height, top row first) and takes
  * ownership of rgb (malloc'd); its mean is computed here. Returns its index. */
 int scene_add_texture(scene *s, const char *file, int width, int height, float *rgb);
+
+/* Adds the environment light: sets the scene's map (see scene_environment), taking ownership
+ * of rgb (malloc'd; negative values are set to 0; freed on failure too), and adds an
+ * IDMR_LIGHT_ENVIRONMENT light whose emission is the map's mean radiance over the sphere; file
+ * may be NULL. Returns the light's index, or -1 with the error set when the scene has an
+ * environment already, to_world is singular, or a value is not finite. */
+int scene_add_environment(scene *s, const char *file, int width, int height, float *rgb,
+                          const double to_world[9]);
+
+/* Solid angle of a pixel in row `row` of an equirectangular map of width × height. */
+double scene_environment_pixel_solid_angle(int width, int height, int row);
 
 /* Numbers triangles, completes area lights, computes bbox and feature bits. Returns 0, or -1
  * with the error set (for example a scene with more than 2^32 - 1 triangles). */

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "core/error.h"
+#include "idmr/environment.h"
 #include "idmr/normal_packing.h"
 
 float device_scene_ray_epsilon(const scene *s)
@@ -78,6 +79,14 @@ static int upload_bvh(device *d, const bvh *b, cl_mem *nodes, cl_mem *leaves)
                : 0;
 }
 
+/* Floats of the environment buffer (idmr/environment.h): a header alone without a map. */
+static size_t environment_floats(const scene *s)
+{
+    const scene_environment *e = &s->environment;
+    return e->width ? (size_t)idmr_env_floats((unsigned int)e->width, (unsigned int)e->height)
+                    : IDMR_ENV_HEADER;
+}
+
 uint64_t device_scene_geometry_bytes(const scene *s)
 {
     uint64_t triangles = s->triangle_count ? s->triangle_count : 1;
@@ -90,7 +99,52 @@ uint64_t device_scene_geometry_bytes(const scene *s)
     return triangles * (4 * sizeof(float) + 4 * sizeof(uint32_t) + sizeof(uint32_t)) +
            (s->material_count ? s->material_count : 1) * sizeof(idmr_material) +
            lights * (sizeof(idmr_light) + sizeof(float)) +
-           (emitters ? emitters : 1) * (sizeof(float) + 12 * sizeof(float));
+           (emitters ? emitters : 1) * (sizeof(float) + 12 * sizeof(float)) +
+           environment_floats(s) * sizeof(float);
+}
+
+/* The environment buffer (idmr/environment.h): header, the CDFs of the pixel weights
+ * Y(L) × ΔΩ (summed in double), the radiance. A row without light gets a uniform CDF it is
+ * never chosen by. */
+static float *environment_build(const scene *s)
+{
+    const scene_environment *e = &s->environment;
+    float *out = xcalloc(environment_floats(s), sizeof *out);
+    if (!e->width)
+        return out;
+    unsigned int width = (unsigned int)e->width, height = (unsigned int)e->height;
+    for (int k = 0; k < 9; k++) {
+        out[IDMR_ENV_TO_WORLD + k] = (float)e->to_world[k];
+        out[IDMR_ENV_TO_MAP + k] = (float)e->to_map[k];
+    }
+    out[IDMR_ENV_INTEGRAL] = (float)e->luminance_integral;
+    out[IDMR_ENV_WIDTH] = (float)width;
+    out[IDMR_ENV_HEIGHT] = (float)height;
+    float *marginal = out + idmr_env_marginal(), *conditional = out + idmr_env_conditional(height);
+    double *row_weight = xcalloc(height, sizeof *row_weight), total = 0;
+    for (unsigned int y = 0; y < height; y++) {
+        const float *row = e->rgb + 3 * (size_t)y * width;
+        float *cdf = conditional + (size_t)y * width;
+        double running = 0;
+        for (unsigned int x = 0; x < width; x++) {
+            running += idmr_luminance(row[3 * x], row[3 * x + 1], row[3 * x + 2]);
+            cdf[x] = (float)running;
+        }
+        for (unsigned int x = 0; x < width; x++)
+            cdf[x] = running > 0 ? (float)(cdf[x] / running) : (float)(x + 1) / (float)width;
+        cdf[width - 1] = 1.0f;
+        row_weight[y] = running * scene_environment_pixel_solid_angle(e->width, e->height, (int)y);
+        total += row_weight[y];
+    }
+    double running = 0;
+    for (unsigned int y = 0; y < height; y++) {
+        running += row_weight[y];
+        marginal[y] = total > 0 ? (float)(running / total) : (float)(y + 1) / (float)height;
+    }
+    marginal[height - 1] = 1.0f;
+    free(row_weight);
+    memcpy(out + idmr_env_radiance(width, height), e->rgb, 3 * sizeof(float) * width * height);
+    return out;
 }
 
 /* What the upload copies to the device, built on the host; counts are at least 1 (a buffer
@@ -104,6 +158,7 @@ typedef struct upload_arrays {
     float *light_cdf;         /* per light */
     float *emitter_cdf;       /* per emitter triangle */
     float *emitter_triangles; /* 12 per emitter triangle */
+    float *environment;       /* idmr/environment.h */
 } upload_arrays;
 
 /* Lights are chosen in proportion to power (uniformly if none has any): their CDF. */
@@ -172,6 +227,7 @@ static void arrays_build(const scene *s, upload_arrays *a)
     for (size_t i = 0; i < s->light_count; i++)
         if (a->light[i].kind == IDMR_LIGHT_AREA)
             at = fill_emitter(s, &a->light[i], at, a);
+    a->environment = environment_build(s);
 }
 
 static void arrays_free(upload_arrays *a)
@@ -183,6 +239,7 @@ static void arrays_free(upload_arrays *a)
     free(a->light_cdf);
     free(a->emitter_cdf);
     free(a->emitter_triangles);
+    free(a->environment);
 }
 
 static int arrays_upload(device *d, const scene *s, const upload_arrays *a, device_scene *out)
@@ -207,7 +264,9 @@ static int arrays_upload(device *d, const scene *s, const upload_arrays *a, devi
                    device_buffer(d, read, sizeof(float) * a->emitters, a->emitter_cdf,
                                  "emitter CDF", &out->emitter_cdf) ||
                    device_buffer(d, read, 12 * sizeof(float) * a->emitters, a->emitter_triangles,
-                                 "emitter triangles", &out->emitter_triangles)
+                                 "emitter triangles", &out->emitter_triangles) ||
+                   device_buffer(d, read, sizeof(float) * environment_floats(s), a->environment,
+                                 "environment map", &out->environment)
                ? -1
                : 0;
 }
@@ -235,7 +294,8 @@ int device_scene_upload(device *d, const scene *s, const bvh *b, device_scene *o
 #define SCENE_BUFFER_LIST(ds)                                                                \
     {&(ds)->nodes,           &(ds)->leaves,          &(ds)->triangle_normals,                  \
      &(ds)->triangle_shading, &(ds)->triangle_materials, &(ds)->materials, &(ds)->lights,      \
-     &(ds)->light_cdf,       &(ds)->emitter_cdf,     &(ds)->emitter_triangles}
+     &(ds)->light_cdf,       &(ds)->emitter_cdf,     &(ds)->emitter_triangles,                 \
+     &(ds)->environment}
 
 void device_scene_release(device_scene *ds)
 {

@@ -11,6 +11,7 @@
  *   emitter_cdf              per area light, its triangles' cumulative area (each light's
  *                            stretch ends at 1), in light order
  *   emitter_triangles        3 float4 per emitter_cdf entry: v0, v1 - v0, v2 - v0
+ *   environment              the environment map and its sampling CDFs (idmr/environment.h)
  * Also the scene's bounding sphere and the secondary-ray offset. */
 #ifndef IDMR_DEVICE_SCENE_H
 #define IDMR_DEVICE_SCENE_H
@@ -30,6 +31,7 @@ typedef struct device_scene {
     cl_mem light_cdf;
     cl_mem emitter_cdf;
     cl_mem emitter_triangles;
+    cl_mem environment;
     unsigned int light_count;
     float center[3];
     float radius;      /* bounding sphere of the scene box */
@@ -48,7 +50,7 @@ int device_scene_upload(device *d, const scene *s, const bvh *b, device_scene *o
 void device_scene_release(device_scene *ds);
 
 /* The buffers a kernel's SCENE_BUFFERS parameters take (kernels/lib/scene.h). */
-#define DEVICE_SCENE_BUFFERS 10u
+#define DEVICE_SCENE_BUFFERS 11u
 
 /* Binds the scene's buffers as arguments first .. first + DEVICE_SCENE_BUFFERS - 1 of `kernel`
  * (named `kernel_name` in errors). Returns 0, or -1 with the error set. */

@@ -20,9 +20,8 @@
  *             ignored), bumpmap/normalmap (inner bsdf, warned). A bitmap texture is accepted for
  *             the diffuse reflectance (reflectance / diffuse_reflectance).
  *   emitter   point, spot, directional, area (inside a shape, or by id), constant (radiance),
- *             envmap (filename, scale): simulated as uniform light of the map's mean radiance
- *             (weighted by solid angle), with a warning that its directional structure is
- *             ignored.
+ *             envmap (filename, scale, to_world): the scene's one environment, sampled by its
+ *             map (idmr/environment.h; a constant is a 1 × 1 map).
  *   texture   bitmap (top level with an id, or inline).
  *   include   <include filename=...>: the fragment's elements are read in place.
  *   ignored   integrator, sampler, rfilter, other film settings, unknown properties.

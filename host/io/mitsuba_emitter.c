@@ -1,14 +1,14 @@
 /* mitsuba_emitter.c — <emitter> elements → lights: point, spot, directional, area (inside a
  * shape, or declared with an id for shapes to <ref>), constant (radiance) and envmap (filename,
- * scale). An environment is simulated as uniform light of its mean radiance (an envmap's being
- * the map's mean weighted by solid angle), with a warning that its directional structure is
- * ignored. */
+ * scale, to_world): the scene's one environment map (scene_add_environment; a constant is a
+ * 1 × 1 map). */
 #include "io/mitsuba_loader.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/error.h"
 #include "io/image.h"
 
 /* Mitsuba's default spot cutoff angle (degrees, documented in both manuals). */
@@ -91,52 +91,54 @@ int mitsuba_emitter_area(loader *ld, xmlNodePtr node, idmr_light *light)
     return mitsuba_prop_color(ld, node, "radiance", 1.0f, light->emission, NULL);
 }
 
-/* The mean radiance over the sphere of an equirectangular map: rows weighted by sin θ. */
-static void envmap_mean(const float *rgb, int width, int height, double scale, float mean[3])
+/* The linear part of an emitter's to_world, row-major. */
+static int emitter_rotation(xmlNodePtr node, double rotation[9])
 {
-    double sum[3] = {0, 0, 0}, weight = 0;
-    for (int y = 0; y < height; y++) {
-        double w = sin(M_PI * (y + 0.5) / height);
-        for (int x = 0; x < width; x++)
-            for (int c = 0; c < 3; c++)
-                sum[c] += w * rgb[3 * ((size_t)y * width + x) + c];
-        weight += w * width;
-    }
-    for (int c = 0; c < 3; c++)
-        mean[c] = weight > 0 ? (float)(scale * sum[c] / weight) : 0.0f;
+    xform to_world;
+    if (mitsuba_prop_transform(node, "to_world", &to_world))
+        return -1;
+    for (int row = 0; row < 3; row++)
+        for (int col = 0; col < 3; col++)
+            rotation[3 * row + col] = to_world.m[4 * row + col];
+    return 0;
 }
 
-/* constant (radiance) and envmap (filename, scale): an environment light of uniform radiance,
- * an envmap's being the map's mean. */
-static int emitter_environment(loader *ld, xmlNodePtr node, const char *type, idmr_light *light)
+/* constant (radiance: a 1 × 1 map) and envmap (filename, scale, to_world): the scene's
+ * environment light. */
+static int emitter_environment(loader *ld, xmlNodePtr node, const char *type)
 {
-    light->kind = IDMR_LIGHT_ENVIRONMENT;
-    if (strcmp(type, "constant") == 0)
-        return mitsuba_prop_color(ld, node, "radiance", 1.0f, light->emission, NULL);
-    const char *file;
-    double scale;
-    if (mitsuba_prop_string(node, "filename", NULL, &file) ||
-        mitsuba_prop_float(node, "scale", 1.0, &scale))
-        return -1;
-    if (!file)
-        return mitsuba_fail(node, "an envmap needs a filename");
-    char *path = mitsuba_resolve_path(ld, node, file);
-    int width, height;
-    float *rgb;
-    int status = image_read_rgb(path, &width, &height, &rgb);
+    double to_world[9];
+    int width = 1, height = 1;
+    float *rgb = xmalloc(3 * sizeof *rgb);
+    char *path = NULL;
+    if (strcmp(type, "constant") == 0) {
+        static const double identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+        memcpy(to_world, identity, sizeof to_world);
+        if (mitsuba_prop_color(ld, node, "radiance", 1.0f, rgb, NULL)) {
+            free(rgb);
+            return -1;
+        }
+    } else {
+        const char *file;
+        double scale;
+        free(rgb);
+        rgb = NULL;
+        if (mitsuba_prop_string(node, "filename", NULL, &file) ||
+            mitsuba_prop_float(node, "scale", 1.0, &scale) || emitter_rotation(node, to_world))
+            return -1;
+        if (!file)
+            return mitsuba_fail(node, "an envmap needs a filename");
+        path = mitsuba_resolve_path(ld, node, file);
+        if (image_read_rgb(path, &width, &height, &rgb)) {
+            free(path);
+            return mitsuba_fail_prefix(node);
+        }
+        for (size_t i = 0; i < 3 * (size_t)width * height; i++)
+            rgb[i] = (float)(rgb[i] * scale);
+    }
+    int index = scene_add_environment(ld->s, path, width, height, rgb, to_world);
     free(path);
-    if (status)
-        return mitsuba_fail_prefix(node);
-    envmap_mean(rgb, width, height, scale, light->emission);
-    free(rgb);
-    if (!ld->environment_warned)
-        mitsuba_warn_at(node,
-                        "envmap emitter: simulated as uniform light of its mean radiance (%.3g, "
-                        "%.3g, %.3g) from all directions; the map's directional structure is "
-                        "ignored",
-                        light->emission[0], light->emission[1], light->emission[2]);
-    ld->environment_warned = 1;
-    return 0;
+    return index < 0 ? mitsuba_fail_prefix(node) : 0;
 }
 
 /* A declared area emitter: checked here, registered for <ref> from shapes, added with each
@@ -165,7 +167,7 @@ int mitsuba_load_emitter(loader *ld, xmlNodePtr node)
     else if (strcmp(type, "directional") == 0)
         status = emitter_directional(ld, node, &light);
     else if (strcmp(type, "envmap") == 0 || strcmp(type, "constant") == 0)
-        status = emitter_environment(ld, node, type, &light);
+        return emitter_environment(ld, node, type);
     else
         return mitsuba_fail(node, "unsupported emitter type '%s'", type);
     if (status)

@@ -60,7 +60,6 @@ typedef struct loader {
     size_t id_count;
     int major_version;    /* 0 for Mitsuba 0.x files, else 3 */
     int default_material; /* the shared diffuse 0.5, or -1 until needed */
-    int environment_warned;
 } loader;
 
 /* Messages (mitsuba_messages.c): "file:line: <tag type=.. name=.. id=..>: what". */

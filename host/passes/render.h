@@ -18,7 +18,8 @@
  *     slightly rough);
  *   - geometric normals (no shading-normal interpolation): curved meshes show their facets;
  *   - textured reflectance by the texture's mean colour (textures are not looked up);
- *   - an envmap by its mean radiance, seen and lit uniformly;
+ *   - an environment by its map (idmr/environment.h): photons drawn by its luminance, seen by
+ *     camera paths that leave the scene;
  *   - photon paths store at most 8 photons (non-specular surfaces) and end after 32 surface
  *     interactions; camera paths follow at most --max-depth surface interactions (default 64),
  *     with Russian roulette from the 16th (kernels/lib/paths.h).

@@ -6,9 +6,9 @@
  *   SPOT         intensity on the axis `direction`; full inside cos_falloff_start (the beam
  *                width), smooth falloff to zero at cos_cutoff (the cutoff angle)
  *   DIRECTIONAL  irradiance [W/m²] travelling along `direction`
- *   ENVIRONMENT  radiance [W/(m² sr)] arriving from every direction: Mitsuba's `constant`, and
- *                its `envmap` by the map's mean radiance (the map's directional structure is
- *                not simulated)
+ *   ENVIRONMENT  radiance [W/(m² sr)] arriving from every direction, by the scene's
+ *                environment map (Mitsuba's `envmap`; `constant` is a 1 × 1 map: see
+ *                idmr/environment.h); `emission` holds the map's mean radiance (reports)
  * `emission` holds radiance, intensity or irradiance by kind; `power` is the total emitted
  * power (luminance-weighted), used to choose lights in proportion to power. An area light's
  * triangles are chosen by area through its stretch of the emitter CDF, which starts at
@@ -51,7 +51,8 @@ IDMR_OFFSET_ASSERT(idmr_light, cdf_offset, 64);
  * sphere), 2π (1 - cos_cutoff) (a spot's cutoff cone; samples outside its smooth falloff are
  * rejected, which is how the falloff lowers the power), π R² (a directional light's disc over
  * the bounding sphere of radius R) and 4π × π R² (an environment: every direction, each through
- * that disc). A photon of light l, chosen with probability p_l among N photons, carries
+ * that disc; the kernels sample an environment by its map instead, idmr/environment.h). A
+ * photon of light l, chosen with probability p_l among N photons, carries
  * emission × factor / (p_l N); summed over the photons that are not rejected this is the
  * light's power in expectation (exactly, for every kind but the spot). */
 IDMR_INLINE float idmr_light_sample_factor(unsigned int kind, float area, float cos_cutoff,
@@ -71,6 +72,13 @@ IDMR_INLINE float idmr_light_sample_factor(unsigned int kind, float area, float 
     default: /* IDMR_LIGHT_ENVIRONMENT */
         return 4.0f * pi * disc;
     }
+}
+
+/* Rec. 709 / sRGB luminance of linear RGB: lights are chosen, and environment maps sampled, by
+ * luminous power. */
+IDMR_INLINE float idmr_luminance(float r, float g, float b)
+{
+    return 0.2126f * r + 0.7152f * g + 0.0722f * b;
 }
 
 #endif

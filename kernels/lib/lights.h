@@ -4,6 +4,7 @@
 #ifndef IDMR_KERNEL_LIGHTS_H
 #define IDMR_KERNEL_LIGHTS_H
 
+#include "idmr/environment.h"
 #include "idmr/light.h"
 #include "idmr/sppm_layout.h"
 #include "lib/features.h"
@@ -27,15 +28,65 @@ inline void sample_area_point(const scene_view *scene, global const idmr_light *
 }
 #endif
 
+#if HAS_FEATURE(IDMR_FEATURE_ENVIRONMENT)
+/* The rows of a 3x3 row-major matrix at m applied to v. */
+inline float3 environment_rotate(global const float *m, float3 v)
+{
+    return (float3)(m[0] * v.x + m[1] * v.y + m[2] * v.z, m[3] * v.x + m[4] * v.y + m[5] * v.z,
+                    m[6] * v.x + m[7] * v.y + m[8] * v.z);
+}
+
+/* The radiance of the environment map (idmr/environment.h) arriving from world direction d
+ * (pointing to the environment). */
+inline float3 environment_lookup(global const float *env, float3 d)
+{
+    uint width = (uint)env[IDMR_ENV_WIDTH], height = (uint)env[IDMR_ENV_HEIGHT];
+    float3 in_map = normalize(environment_rotate(env + IDMR_ENV_TO_MAP, d));
+    float u = atan2(in_map.x, -in_map.z) * (0.5f / PI_F);
+    u = u < 0.0f ? u + 1.0f : u;
+    float v = acos(clamp(in_map.y, -1.0f, 1.0f)) * (1.0f / PI_F);
+    uint x = min((uint)(u * (float)width), width - 1);
+    uint y = min((uint)(v * (float)height), height - 1);
+    return vload3(y * width + x, env + idmr_env_radiance(width, height));
+}
+
+/* A world direction towards the environment, drawn with density Y(L(ω)) / ∫ Y(L) dω: a pixel
+ * by the map's CDFs, then uniformly in solid angle within it. *weight gets L(ω) / pdf(ω). */
+inline float3 environment_sample(global const float *env, idmr_rng *rng, float3 *weight)
+{
+    uint width = (uint)env[IDMR_ENV_WIDTH], height = (uint)env[IDMR_ENV_HEIGHT];
+    uint y = sample_cdf(env + idmr_env_marginal(), height, idmr_rng_float(rng));
+    uint x = sample_cdf(env + idmr_env_conditional(height) + y * width, width,
+                        idmr_rng_float(rng));
+    float phi = 2.0f * PI_F * ((float)x + idmr_rng_float(rng)) / (float)width;
+    float cos_top = cos(PI_F * (float)y / (float)height);
+    float cos_bottom = cos(PI_F * (float)(y + 1) / (float)height);
+    float cos_theta = mix(cos_top, cos_bottom, idmr_rng_float(rng));
+    float sin_theta = sqrt(fmax(0.0f, 1.0f - cos_theta * cos_theta));
+    float3 in_map = (float3)(sin(phi) * sin_theta, cos_theta, -cos(phi) * sin_theta);
+    float3 radiance = vload3(y * width + x, env + idmr_env_radiance(width, height));
+    float luminance = idmr_luminance(radiance.x, radiance.y, radiance.z);
+    *weight = luminance > 0.0f ? radiance * (env[IDMR_ENV_INTEGRAL] / luminance) : (float3)(0.0f);
+    return normalize(environment_rotate(env + IDMR_ENV_TO_WORLD, in_map));
+}
+#endif
+
 /* Emission of one photon path: a light chosen in proportion to power, then a position and a
- * direction by the light's kind. Returns false if the sample is rejected (outside a spot's
- * smooth falloff), in which case the path stays empty. *light_index is the light chosen. */
+ * direction by the light's kind. *emitted gets what the photon carries before the division by
+ * the light's probability and the photon count (photon_initial_flux): emission × the light's
+ * sample factor (idmr_light_sample_factor), or for an environment the sampled direction's
+ * radiance / its density × the bounding disc's area. Returns false if the sample is rejected
+ * (outside a spot's smooth falloff), in which case the path stays empty. *light_index is the
+ * light chosen. */
 inline bool emit(const scene_view *scene, const idmr_sppm_params *params, idmr_rng *rng,
-                 float3 *origin, float3 *direction, uint *light_index)
+                 float3 *origin, float3 *direction, uint *light_index, float3 *emitted)
 {
     uint index = sample_cdf(scene->light_cdf, params->light_count, idmr_rng_float(rng));
     *light_index = index;
     global const idmr_light *light = scene->lights + index;
+    *emitted = vload3(0, light->emission) *
+               idmr_light_sample_factor(light->kind, light->area, light->cos_cutoff,
+                                        params->scene_radius);
 #if HAS_FEATURE(IDMR_FEATURE_AREA)
     if (light->kind == IDMR_LIGHT_AREA) {
         float3 p, n;
@@ -70,12 +121,18 @@ inline bool emit(const scene_view *scene, const idmr_sppm_params *params, idmr_r
 #if HAS_FEATURE(IDMR_FEATURE_DIRECTIONAL) || HAS_FEATURE(IDMR_FEATURE_ENVIRONMENT)
     if (light->kind == IDMR_LIGHT_DIRECTIONAL || light->kind == IDMR_LIGHT_ENVIRONMENT) {
         /* Parallel light from a disc covering the scene's bounding sphere, outside it; an
-         * environment's direction is uniform over the sphere. */
-        float3 d = light->kind == IDMR_LIGHT_DIRECTIONAL ? vload3(0, light->direction)
-                                                         : sample_sphere(rng);
+         * environment's direction drawn from its map. */
+        float3 d = vload3(0, light->direction);
+        float scene_radius = params->scene_radius;
+#if HAS_FEATURE(IDMR_FEATURE_ENVIRONMENT)
+        if (light->kind == IDMR_LIGHT_ENVIRONMENT) {
+            float3 radiance_over_pdf;
+            d = -environment_sample(scene->environment, rng, &radiance_over_pdf);
+            *emitted = radiance_over_pdf * (PI_F * scene_radius * scene_radius);
+        }
+#endif
         float3 t, b;
         frame_around(d, &t, &b);
-        float scene_radius = params->scene_radius;
         float r = scene_radius * sqrt(idmr_rng_float(rng));
         float phi = 2.0f * PI_F * idmr_rng_float(rng);
         *origin = vload3(0, params->scene_center) - 1.01f * scene_radius * d + r * cos(phi) * t +
@@ -133,19 +190,15 @@ inline bool shadow_light_sample(const scene_view *scene, const idmr_sppm_params 
     return *reach > 0.0f;
 }
 
-/* The flux a photon of light `light_index` starts with: emission × the light's sample factor
- * (idmr_light_sample_factor) / (p_light × photons), with p_light the light's probability in the
- * power CDF, as emit() chose it. */
+/* The flux a photon of light `light_index` starts with: what emit() said it emitted /
+ * (p_light × photons), with p_light the light's probability in the power CDF, as emit() chose
+ * it. */
 inline float3 photon_initial_flux(const scene_view *scene, const idmr_sppm_params *params,
-                                  uint light_index)
+                                  uint light_index, float3 emitted)
 {
-    global const idmr_light *light = scene->lights + light_index;
     float probability =
         scene->light_cdf[light_index] - (light_index ? scene->light_cdf[light_index - 1] : 0.0f);
-    return vload3(0, light->emission) *
-           (idmr_light_sample_factor(light->kind, light->area, light->cos_cutoff,
-                                     params->scene_radius) /
-            (probability * (float)params->path_count));
+    return emitted / (probability * (float)params->path_count);
 }
 
 /* Radiance leaving emitter surface `triangle` towards direction -d: an area light's emission
@@ -166,16 +219,16 @@ inline float3 surface_emission(const scene_view *scene, uint light_count, uint t
     return radiance;
 }
 
-/* Radiance arriving from outside the scene (environment lights; zero without them). */
-inline float3 environment_radiance(const scene_view *scene, uint light_count)
+/* Radiance arriving from outside the scene along -d (d: the direction of a ray that left it):
+ * the environment map's, zero without one. */
+inline float3 environment_radiance(const scene_view *scene, uint light_count, float3 d)
 {
-    float3 radiance = (float3)(0.0f);
 #if HAS_FEATURE(IDMR_FEATURE_ENVIRONMENT)
     for (uint i = 0; i < light_count; i++)
         if (scene->lights[i].kind == IDMR_LIGHT_ENVIRONMENT)
-            radiance += vload3(0, scene->lights[i].emission);
+            return environment_lookup(scene->environment, d);
 #endif
-    return radiance;
+    return (float3)(0.0f);
 }
 
 #endif

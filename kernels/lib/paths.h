@@ -99,7 +99,7 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
         idmr_hit hit = traverse_closest(scene->nodes, scene->leaves, origin, d, 0.0f, INFINITY);
         if (hit.triangle == IDMR_NO_HIT) {
 #if PASS_RENDER
-            radiance += throughput * environment_radiance(scene, params->light_count);
+            radiance += throughput * environment_radiance(scene, params->light_count, d);
 #endif
             break;
         }
@@ -157,12 +157,12 @@ inline uint photon_path(const scene_view *scene, const idmr_sppm_params *params,
                         global photon_record *slot)
 {
     idmr_rng rng = idmr_rng_init(params->seed, params->iteration, PHOTON_STREAM, path);
-    float3 origin, d;
+    float3 origin, d, emitted;
     uint light_index;
-    if (!emit(scene, params, &rng, &origin, &d, &light_index))
+    if (!emit(scene, params, &rng, &origin, &d, &light_index, &emitted))
         return 0;
 #if PASS_RENDER
-    float3 flux = photon_initial_flux(scene, params, light_index);
+    float3 flux = photon_initial_flux(scene, params, light_index, emitted);
 #endif
     uint stored = 0;
     for (int bounce = 0; bounce < IDMR_PHOTON_BOUNCES && stored < IDMR_PATH_VERTICES; bounce++) {

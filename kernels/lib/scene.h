@@ -11,6 +11,7 @@
  *   light_cdf              per light: cumulative power, last entry 1
  *   emitter_cdf            per area light, its triangles' cumulative area (in light order)
  *   emitter_triangles      3 float4 per emitter_cdf entry: v0, v1 - v0, v2 - v0
+ *   environment            the environment map and its CDFs (idmr/environment.h)
  * Triangles are numbered scene-globally (the traversal returns that index). */
 #ifndef IDMR_KERNEL_SCENE_H
 #define IDMR_KERNEL_SCENE_H
@@ -25,7 +26,7 @@
         global const uint *triangle_materials,                                               \
         global const idmr_material *materials, global const idmr_light *lights,              \
         global const float *light_cdf, global const float *emitter_cdf,                      \
-        global const float4 *emitter_triangles
+        global const float4 *emitter_triangles, global const float *environment
 
 typedef struct scene_view {
     global const idmr_bvh_node *nodes;
@@ -38,12 +39,13 @@ typedef struct scene_view {
     global const float *light_cdf;
     global const float *emitter_cdf;
     global const float4 *emitter_triangles;
+    global const float *environment;
 } scene_view;
 
 /* The scene_view of a kernel that takes SCENE_BUFFERS. */
 #define SCENE_VIEW()                                                                         \
     ((scene_view){nodes, leaves, triangle_normals, triangle_shading, triangle_materials,     \
-                  materials, lights, light_cdf, emitter_cdf, emitter_triangles})
+                  materials, lights, light_cdf, emitter_cdf, emitter_triangles, environment})
 
 /* The material of scene triangle t. */
 inline global const idmr_material *triangle_material(const scene_view *scene, uint t)
