@@ -19,6 +19,7 @@ extern "C" {
 #include "core/error.h"
 #include "core/files.h"
 #include "io/mesh_io.h"
+#include "io/mesh_text.h"
 }
 
 // OpenMesh reports every non-manifold face it has to split (and every face the decimater's
@@ -80,23 +81,10 @@ int check_readable(const char *path)
     return status;
 }
 
-} // namespace
-
-extern "C" int mesh_io_read(const char *path, mesh_data *out)
+// Reads the formats idmr leaves to OpenMesh (PLY, STL, OM) into `out`.
+int read_openmesh(const char *path, mesh_data *out)
 {
-    return mesh_io_read_oriented(path, out, 0, nullptr);
-}
-
-extern "C" int mesh_io_read_oriented(const char *path, mesh_data *out, int orient,
-                                     uint32_t *flipped)
-{
-    if (flipped)
-        *flipped = 0;
-    std::memset(out, 0, sizeof *out);
-    if (check_readable(path) != 0)
-        return -1;
     mesh_io_silence_openmesh_logs();
-
     TriMesh mesh;
     mesh.request_vertex_texcoords2D();
     mesh.request_vertex_normals();
@@ -131,22 +119,6 @@ extern "C" int mesh_io_read_oriented(const char *path, mesh_data *out, int orien
     for (auto f : mesh.faces())
         for (auto v : mesh.fv_range(f))
             out->indices[corner++] = (uint32_t)v.idx();
-    if (orient && options.check(OpenMesh::IO::Options::VertexNormal)) {
-        for (uint32_t t = 0; t < out->triangle_count; t++) {
-            uint32_t *ix = &out->indices[3 * (size_t)t];
-            TriMesh::Point a = mesh.point(TriMesh::VertexHandle((int)ix[0]));
-            TriMesh::Point b = mesh.point(TriMesh::VertexHandle((int)ix[1]));
-            TriMesh::Point c = mesh.point(TriMesh::VertexHandle((int)ix[2]));
-            TriMesh::Normal sum = mesh.normal(TriMesh::VertexHandle((int)ix[0])) +
-                                  mesh.normal(TriMesh::VertexHandle((int)ix[1])) +
-                                  mesh.normal(TriMesh::VertexHandle((int)ix[2]));
-            if (OpenMesh::dot(OpenMesh::cross(b - a, c - a), sum) < 0) {
-                std::swap(ix[1], ix[2]);
-                if (flipped)
-                    (*flipped)++;
-            }
-        }
-    }
     if (options.check(OpenMesh::IO::Options::VertexNormal)) {
         out->normals = (float *)xmalloc(3 * sizeof(float) * out->vertex_count);
         for (auto v : mesh.vertices()) {
@@ -162,6 +134,66 @@ extern "C" int mesh_io_read_oriented(const char *path, mesh_data *out, int orien
             out->texcoords[2 * (size_t)v.idx()] = uv[0];
             out->texcoords[2 * (size_t)v.idx() + 1] = uv[1];
         }
+    }
+    return 0;
+}
+
+// Winds every triangle so that its geometric normal agrees with the sum of its vertex
+// normals; returns how many it turned.
+uint32_t orient_by_normals(mesh_data *m)
+{
+    uint32_t turned = 0;
+    for (uint32_t t = 0; t < m->triangle_count; t++) {
+        uint32_t *ix = &m->indices[3 * (size_t)t];
+        TriMesh::Point p[3];
+        TriMesh::Normal sum(0, 0, 0);
+        for (int c = 0; c < 3; c++) {
+            const float *v = &m->positions[3 * (size_t)ix[c]];
+            const float *n = &m->normals[3 * (size_t)ix[c]];
+            p[c] = TriMesh::Point(v[0], v[1], v[2]);
+            sum += TriMesh::Normal(n[0], n[1], n[2]);
+        }
+        if (OpenMesh::dot(OpenMesh::cross(p[1] - p[0], p[2] - p[0]), sum) < 0) {
+            std::swap(ix[1], ix[2]);
+            turned++;
+        }
+    }
+    return turned;
+}
+
+bool has_extension(const char *path, const char *extension)
+{
+    size_t length = std::strlen(path), wanted = std::strlen(extension);
+    return length > wanted && strcasecmp(path + length - wanted, extension) == 0;
+}
+
+} // namespace
+
+extern "C" int mesh_io_read(const char *path, mesh_data *out)
+{
+    return mesh_io_read_oriented(path, out, 0, nullptr);
+}
+
+extern "C" int mesh_io_read_oriented(const char *path, mesh_data *out, int orient,
+                                     uint32_t *flipped)
+{
+    if (flipped)
+        *flipped = 0;
+    std::memset(out, 0, sizeof *out);
+    if (check_readable(path) != 0)
+        return -1;
+    int status = has_extension(path, ".obj")   ? mesh_text_read_obj(path, out)
+                 : has_extension(path, ".off") ? mesh_text_read_off(path, out)
+                                               : read_openmesh(path, out);
+    if (status) {
+        mesh_data_free(out);
+        std::memset(out, 0, sizeof *out);
+        return -1;
+    }
+    if (orient && out->normals) {
+        uint32_t turned = orient_by_normals(out);
+        if (flipped)
+            *flipped = turned;
     }
     return 0;
 }

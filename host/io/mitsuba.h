@@ -12,8 +12,8 @@
  *             of -x: right = -to_world(+x), up = to_world(+y), forward = to_world(+z),
  *             re-orthonormalised (a mirroring <scale x="-1"/> therefore mirrors the image, as in
  *             Mitsuba). No sensor: a warning, and has_camera stays 0.
- *   shape     obj, ply, off, stl (through OpenMesh), rectangle, cube, disk, sphere (tessellated,
- *             host/io/shapes.h); to_world, flip_normals; a bsdf by <ref> or inline (none: diffuse
+ *   shape     obj, off (io/mesh_text.h), ply, stl (through OpenMesh), rectangle, cube, disk,
+ *             sphere (tessellated, host/io/shapes.h); to_world, flip_normals; a bsdf by <ref> or inline (none: diffuse
  *             0.5, as Mitsuba); an area emitter inline or by <ref>.
  *   bsdf      diffuse, dielectric, thindielectric, roughdielectric (as smooth, warned),
  *             conductor, roughconductor, plastic, roughplastic, twosided, mask (opacity
