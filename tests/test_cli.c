@@ -443,6 +443,15 @@ static const refusal REFUSALS[] = {
     {"bin/idmr render data/cornell/scene.xml -o /tmp/x --exposure 100", "--exposure"},
     {"bin/idmr render data/cornell/scene.xml -o /tmp/idmr-no-such-dir/", "names a directory"},
     {"bin/idmr render data/cornell/scene.xml -o /tmp/idmr-no-such-dir/.exr", "names a directory"},
+    /* Outputs never touch inputs: not the scene's directory, not one above it, not a file the
+     * scene reads (the living room's sky map). */
+    {"bin/idmr importance data/cornell/scene.xml -o data/cornell", "which the scene reads"},
+    {"bin/idmr importance data/cornell/scene.xml -o data/cornell/meshes/..",
+     "which the scene reads"},
+    {"bin/idmr importance data/cornell/scene.xml -o data", "holds 'data/cornell/scene.xml'"},
+    {"bin/idmr render ../shared/data/scenes/living-room/scene.xml -o "
+     "'../shared/data/scenes/living-room/textures/Sky 19.exr'",
+     "which the scene reads"},
 };
 
 /* state: the refusal. */

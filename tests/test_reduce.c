@@ -204,7 +204,7 @@ static void test_outdir_scene_own_directory(void **state)
         char outdir[4200];
         snprintf(outdir, sizeof outdir, spellings[i], copy);
         o.force = 1;
-        expect_input_error(s, outdir, &o, "scene's own directory");
+        expect_input_error(s, outdir, &o, "which the scene reads");
         o.force = 0; /* refused either way */
         expect_input_error(s, outdir, &o, "");
     }

@@ -66,7 +66,9 @@ int command_importance(int argc, char **argv)
     scene *s = mitsuba_load(arguments.scene);
     if (!s)
         return fail();
-    int status = pass_setup_run(s, arguments.device_index, run_pass, &job);
+    int status = scene_check_output_directory(s, job.output);
+    if (!status)
+        status = pass_setup_run(s, arguments.device_index, run_pass, &job);
     code = status ? fail() : 0;
     if (!status)
         print_summary(&job);

@@ -115,7 +115,11 @@ int command_render(int argc, char **argv)
     scene *s = mitsuba_load(arguments.scene);
     if (!s)
         return fail();
-    int status = job.paths.directory[0] ? files_make_directory(job.paths.directory) : 0;
+    int status = scene_check_output_file(s, job.paths.exr) ||
+                 scene_check_output_file(s, job.paths.png) ||
+                 scene_check_output_file(s, job.paths.json);
+    if (!status && job.paths.directory[0])
+        status = files_make_directory(job.paths.directory);
     if (!status)
         status = pass_setup_run(s, arguments.device_index, run_pass, &job);
     code = status ? fail() : 0;

@@ -140,6 +140,15 @@ int scene_add_environment(scene *s, const char *file, int width, int height, flo
 /* Solid angle of a pixel in row `row` of an equirectangular map of width × height. */
 double scene_environment_pixel_solid_angle(int width, int height, int row);
 
+/* Outputs never touch inputs. The files a scene reads are its file, the XML file of each
+ * shape, each mesh file, texture and the environment map. scene_check_output_directory()
+ * refuses a directory that is, or lies above, one of them (the scene's own directory, however
+ * spelled, or any of its parents); scene_check_output_file() refuses a path that is one of
+ * them. Both compare realpaths; a path that does not exist yet passes. 0, or -1 with the error
+ * set (IDMR_EXIT_INPUT) naming the output and the input. */
+int scene_check_output_directory(const scene *s, const char *dir);
+int scene_check_output_file(const scene *s, const char *path);
+
 /* Numbers triangles, completes area lights, computes bbox and feature bits. Returns 0, or -1
  * with the error set (for example a scene with more than 2^32 - 1 triangles). */
 int scene_finalize(scene *s);

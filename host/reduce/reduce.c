@@ -209,7 +209,7 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
 {
     reduce_state st = {.device = d, .scene = s, .outdir = outdir, .options = o,
                        .count = s->mesh_count};
-    int status = check_options(&st) || reduce_outdir_prepare(outdir, s->dir, o->force) ||
+    int status = check_options(&st) || reduce_outdir_prepare(outdir, s, o->force) ||
                  run_importance(&st) || plan_budget(&st) || reduce_decimation(&st) ||
                  write_reduced_scene(&st) || write_report(&st);
     state_free(&st);

@@ -1,6 +1,7 @@
 /* reduce_outdir.c — the output directory of `idmr reduce` (see reduce_stages.h): created if
- * missing, refused when it holds something and --force was not given, and never the scene's own
- * directory, however it is spelled (inputs are never written). */
+ * missing, refused when it holds something and --force was not given, and never a directory
+ * that holds a file the scene reads (the scene's own directory, however it is spelled, or one
+ * above it: inputs are never written). */
 #include <dirent.h>
 #include <limits.h>
 #include <stdio.h>
@@ -27,21 +28,10 @@ static int directory_has_entries(const char *dir)
     return entries;
 }
 
-/* Whether outdir (if it exists) is the directory scene_dir names. */
-static int is_scene_directory(const char *outdir, const char *scene_dir)
+int reduce_outdir_prepare(const char *outdir, const scene *s, int force)
 {
-    char scene_real[PATH_MAX], out_real[PATH_MAX];
-    return realpath(scene_dir, scene_real) && realpath(outdir, out_real) &&
-           strcmp(scene_real, out_real) == 0;
-}
-
-int reduce_outdir_prepare(const char *outdir, const char *scene_dir, int force)
-{
-    if (is_scene_directory(outdir, scene_dir))
-        return error_set(IDMR_EXIT_INPUT,
-                         "output directory '%s' is the scene's own directory: choose another "
-                         "(inputs are never overwritten)",
-                         outdir);
+    if (scene_check_output_directory(s, outdir))
+        return -1;
     if (!force && directory_has_entries(outdir))
         return error_set(IDMR_EXIT_INPUT,
                          "output directory '%s' exists and is not empty (use --force to write "

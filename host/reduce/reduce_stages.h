@@ -51,8 +51,9 @@ typedef struct reduce_state {
 int reduce_mesh_pinned(const reduce_options *o, const scene_mesh *mesh);
 
 /* OUTDIR: created if missing, with OUTDIR/meshes; an existing non-empty one needs force; never
- * the scene's own directory (inputs are never written). Returns 0, or -1 with the error set. */
-int reduce_outdir_prepare(const char *outdir, const char *scene_dir, int force);
+ * a directory holding a file the scene reads (scene_check_output_directory: inputs are never
+ * written). Returns 0, or -1 with the error set. */
+int reduce_outdir_prepare(const char *outdir, const scene *s, int force);
 
 /* Decimates the meshes the plan decimates, in parallel, largest first, then runs the
  * compensation rounds. Returns 0, or -1 with the error set. */
