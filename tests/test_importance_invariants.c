@@ -7,7 +7,8 @@
  *   determinism  integer accumulation and counter-based random numbers: bit-identical sums for
  *                every work-group size (one case per size) and with the 32-bit-atomics
  *                fallback; another seed, other sums
- *   scale        each mesh's share of the importance is the same at scale 1e-3 and 1e4
+ *   scale        each mesh's share of the importance is the same at scale 1e-8, 1e-3, 1e4 and
+ *                1e8 (coordinates up to 5.6e10, near SCENE_COORDINATE_LIMIT)
  *
  * Each scene runs once per device; each test checks one formula on its runs. */
 #include "importance_common.h"
@@ -311,11 +312,23 @@ static scene *cornell_large(void)
     return scaled_cornell(1e4f);
 }
 
-/* Unscaled, by 1e-3 and by 1e4: 2 iterations of 20k paths at 64 x 64 hit points. */
-static imp_case scaled[3] = {
+static scene *cornell_tiny(void)
+{
+    return scaled_cornell(1e-8f);
+}
+
+static scene *cornell_huge(void)
+{
+    return scaled_cornell(1e8f);
+}
+
+/* Unscaled, by 1e-3, 1e4, 1e-8 and 1e8: 2 iterations of 20k paths at 64 x 64 hit points. */
+static imp_case scaled[5] = {
     {.make = cornell_unscaled, .iterations = 2, .photons = 20000, .resolution = 0.25f},
     {.make = cornell_small, .iterations = 2, .photons = 20000, .resolution = 0.25f},
     {.make = cornell_large, .iterations = 2, .photons = 20000, .resolution = 0.25f},
+    {.make = cornell_tiny, .iterations = 2, .photons = 20000, .resolution = 0.25f},
+    {.make = cornell_huge, .iterations = 2, .photons = 20000, .resolution = 0.25f},
 };
 
 /* Each mesh's share of the total importance (camera = 0) or camera importance (camera = 1). */
@@ -371,6 +384,18 @@ static void test_large_scale_keeps_importance_shares(void **state)
     expect_same_shares(2, 0, 0.01, 0.001);
 }
 
+static void test_tiny_scale_keeps_importance_shares(void **state)
+{
+    expect_same_shares(3, 1, 1e-4, 0.0);
+    expect_same_shares(3, 0, 0.01, 0.001);
+}
+
+static void test_huge_scale_keeps_importance_shares(void **state)
+{
+    expect_same_shares(4, 1, 1e-4, 0.0);
+    expect_same_shares(4, 0, 0.01, 0.001);
+}
+
 static int group_teardown(void **state)
 {
     importance_result_free(&cornell_base);
@@ -400,6 +425,8 @@ int main(void)
         cmocka_unit_test(test_small_scale_keeps_importance_shares),
         cmocka_unit_test(test_large_scale_keeps_camera_shares),
         cmocka_unit_test(test_large_scale_keeps_importance_shares),
+        cmocka_unit_test(test_tiny_scale_keeps_importance_shares),
+        cmocka_unit_test(test_huge_scale_keeps_importance_shares),
     };
     return DEVICE_TEST_RUN("importance invariants", tests, NULL, group_teardown) != 0;
 }

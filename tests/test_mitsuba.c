@@ -995,6 +995,11 @@ static const error_case error_cases[] = {
      "    <bsdf type=\"twosided\"><bsdf type=\"blendbsdf\"/></bsdf>\n"
      "  </shape>\n",
      3, "<bsdf type=\"blendbsdf\">", "unsupported bsdf type", NULL},
+    {"error_coordinates_too_large", "3.0.0",
+     "  <shape type=\"cube\" id=\"big\">\n"
+     "    <transform name=\"to_world\"><scale value=\"2e38\"/></transform>\n"
+     "  </shape>\n",
+     2, "mesh 'big'", "beyond the 1e+11", NULL},
     {"error_second_environment", "3.0.0",
      "  <emitter type=\"constant\"/>\n  <emitter type=\"constant\"/>\n", 3,
      "<emitter type=\"constant\">", "at most one", NULL},

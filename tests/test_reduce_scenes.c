@@ -5,7 +5,9 @@
  *
  *   quadric      every decimated mesh gets the same factor (up to rounding); no importance files
  *   compensation vertices a mesh cannot give up are taken from the others, meeting the target
- *   file names   two mesh names that make the same PLY name get distinct files */
+ *   file names   two mesh names that make the same PLY name get distinct files
+ *   no area      a mesh whose points coincide, and one whose points lie on a line, are kept as
+ *                they are (decimated, they became PLYs without faces no reader loads) */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -176,6 +178,56 @@ static void test_compensation(void **state)
     remove_tree(in_dir);
 }
 
+/* DIR/name: `triangles` triangles whose corners all lie on the line through (0.1, 0.2, 0.3)
+ * along (step, 2 step, 0): step 0 makes every point coincide. */
+static void write_degenerate_obj(const char *dir, const char *name, int triangles, float step)
+{
+    char path[4200];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    for (int v = 0; v < 3 * triangles; v++)
+        fprintf(f, "v %g %g 0.3\n", 0.1f + step * (float)v, 0.2f + 2 * step * (float)v);
+    for (int t = 0; t < triangles; t++)
+        fprintf(f, "f %d %d %d\n", 3 * t + 1, 3 * t + 2, 3 * t + 3);
+    assert_int_equal(fclose(f), 0);
+}
+
+/* Meshes without area beside the knot: pinned, written as they were, and the reduced scene
+ * loads (reduction_run loads it). */
+static void test_meshes_without_area_are_kept(void **state)
+{
+    char in_dir[64], scene_path[4200];
+    temp_dir(in_dir, sizeof in_dir);
+    write_degenerate_obj(in_dir, "dot.obj", 30, 0.0f);
+    write_degenerate_obj(in_dir, "line.obj", 30, 0.01f);
+    write_cornell_plus(in_dir,
+                       "    <shape type=\"obj\" id=\"dot\">\n"
+                       "        <string name=\"filename\" value=\"dot.obj\"/>\n"
+                       "    </shape>\n"
+                       "    <shape type=\"obj\" id=\"line\">\n"
+                       "        <string name=\"filename\" value=\"line.obj\"/>\n"
+                       "    </shape>\n",
+                       scene_path, sizeof scene_path);
+    scene *s = test_load_scene(scene_path);
+    reduce_options o;
+    small_options(&o);
+    o.method = REDUCE_QUADRIC;
+    o.target = 0.1;
+    reduction r;
+    reduction_run(&r, s, &o);
+    const char *names[] = {"dot", "line"};
+    for (int i = 0; i < 2; i++) {
+        const cJSON *entry = mesh_entry(r.report, names[i]);
+        assert_true(cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(entry, "pinned")));
+        assert_true(number(entry, "vertices_after") == number(entry, "vertices_before"));
+        assert_int_equal(test_find_mesh(r.out, names[i])->triangle_count, 30);
+    }
+    reduction_free(&r);
+    scene_free(s);
+    remove_tree(in_dir);
+}
+
 /* Two meshes whose names make the same file name ("knot x" and "knot_x") get two files. */
 static void test_file_name_collision(void **state)
 {
@@ -218,6 +270,7 @@ int main(void)
         cmocka_unit_test(test_quadric),
         cmocka_unit_test(test_compensation),
         cmocka_unit_test(test_file_name_collision),
+        cmocka_unit_test(test_meshes_without_area_are_kept),
     };
     return DEVICE_TEST_RUN("reduce_scenes", tests, NULL, NULL) != 0;
 }

@@ -402,6 +402,13 @@ int scene_finalize(scene *s)
                 if (!isfinite(x))
                     return error_set(IDMR_EXIT_INPUT, "%s: mesh '%s': vertex %u is not finite",
                                      s->file, m->name, v);
+                if (fabsf(x) > SCENE_COORDINATE_LIMIT)
+                    return error_set(IDMR_EXIT_INPUT,
+                                     "%s:%d: mesh '%s': vertex %u has coordinate %g, beyond "
+                                     "the %g up to which idmr's 32-bit float arithmetic is "
+                                     "scale-invariant: scale the scene down",
+                                     m->xml_file ? m->xml_file : s->file, m->xml_line, m->name,
+                                     v, x, SCENE_COORDINATE_LIMIT);
                 s->bbox_min[k] = fminf(s->bbox_min[k], x);
                 s->bbox_max[k] = fmaxf(s->bbox_max[k], x);
             }

@@ -149,8 +149,15 @@ double scene_environment_pixel_solid_angle(int width, int height, int row);
 int scene_check_output_directory(const scene *s, const char *dir);
 int scene_check_output_file(const scene *s, const char *path);
 
+/* The largest coordinate magnitude a scene may have. The importance pass is scale-invariant up
+ * to it (test_importance_invariants: the Cornell box scaled to coordinates of 5.6e10); from
+ * about 1e12 on its 32-bit float arithmetic loses light importance, from 1e15 camera
+ * importance, and beyond 1e38 the BVH builder's binning overflows (Embree aborts). */
+#define SCENE_COORDINATE_LIMIT 1e11f
+
 /* Numbers triangles, completes area lights, computes bbox and feature bits. Returns 0, or -1
- * with the error set (for example a scene with more than 2^32 - 1 triangles). */
+ * with the error set (for example a scene with more than 2^32 - 1 triangles, or a coordinate
+ * beyond SCENE_COORDINATE_LIMIT). */
 int scene_finalize(scene *s);
 
 /* Area of triangle t of mesh m, from the cross product in double: accurate for slivers, and

@@ -68,7 +68,17 @@ static int is_kept(const reduce_options *o, const char *name)
     return 0;
 }
 
+/* Whether every triangle of the mesh is degenerate (zero area): welded, it has no surface to
+ * decimate, and its collapses would leave a mesh without faces that no reader loads. */
+static int has_no_area(const scene_mesh *mesh)
+{
+    for (uint32_t t = 0; t < mesh->triangle_count; t++)
+        if (scene_mesh_triangle_area(mesh, t) > 0.0)
+            return 0;
+    return 1;
+}
+
 int reduce_mesh_pinned(const reduce_options *o, const scene_mesh *mesh)
 {
-    return mesh->light >= 0 || is_kept(o, mesh->name);
+    return mesh->light >= 0 || is_kept(o, mesh->name) || has_no_area(mesh);
 }

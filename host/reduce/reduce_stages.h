@@ -47,7 +47,8 @@ typedef struct reduce_state {
     double seconds_importance, seconds_budget, seconds_decimation, seconds_write;
 } reduce_state;
 
-/* Emitters and meshes named with --keep are never decimated. */
+/* Emitters, meshes named with --keep and meshes without area (every triangle degenerate: all
+ * its points coincide or lie on a line) are never decimated. */
 int reduce_mesh_pinned(const reduce_options *o, const scene_mesh *mesh);
 
 /* OUTDIR: created if missing, with OUTDIR/meshes; an existing non-empty one needs force; never
