@@ -958,6 +958,33 @@ static void test_include(void **state)
     scene_free(s);
 }
 
+/* Fragments that include the next one 4 times, 12 levels deep (4^12 reads, which used to run
+ * without end, memory growing): an error once MITSUBA_MAX_INCLUDES are read, naming the file
+ * and line of the include that passed it. Every level's fragment holds a cube, so the meshes
+ * read up to there (named cube, cube.2, ...) stress the unique naming too. */
+static void test_include_fan_out_is_bounded(void **state)
+{
+    char name[32], text[512];
+    for (int level = 0; level < 12; level++) {
+        snprintf(name, sizeof name, "fan%d.xml", level);
+        snprintf(text, sizeof text,
+                 "<scene version=\"3.0.0\">\n  <shape type=\"cube\"/>\n"
+                 "  <include filename=\"fan%d.xml\"/>\n  <include filename=\"fan%d.xml\"/>\n"
+                 "  <include filename=\"fan%d.xml\"/>\n  <include filename=\"fan%d.xml\"/>\n"
+                 "</scene>\n",
+                 level + 1, level + 1, level + 1, level + 1);
+        write_file(name, text);
+    }
+    write_file("fan12.xml", "<scene version=\"3.0.0\"/>\n");
+    error_clear();
+    scene *s = mitsuba_load(write_scene("3.0.0", "  <include filename=\"fan0.xml\"/>\n"));
+    assert_null(s);
+    if (!strstr(error_message(), "more than 4096 includes") || !strstr(error_message(), "fan") ||
+        !strstr(error_message(), "<include>"))
+        fail_msg("message '%s' lacks the limit, the file or the element", error_message());
+    assert_int_equal(error_code(), IDMR_EXIT_INPUT);
+}
+
 /* ---------------------------------------------------------------------------------------- */
 /* Errors: the message names scene.xml, the line and the element, and says what is wrong     */
 
@@ -1265,6 +1292,7 @@ int main(void)
         cmocka_unit_test(test_constant_environment),
         cmocka_unit_test(test_default_substitution),
         cmocka_unit_test(test_include),
+        cmocka_unit_test(test_include_fan_out_is_bounded),
         cmocka_unit_test(test_error_missing_scene_file),
         cmocka_unit_test(test_real_cbox),
         cmocka_unit_test(test_real_glass_of_water_without_mesh000),

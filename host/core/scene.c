@@ -45,6 +45,7 @@ void scene_free(scene *s)
         free(s->textures[i].rgb);
     }
     free(s->meshes);
+    free(s->mesh_names);
     free(s->materials);
     free(s->material_info);
     free(s->lights);
@@ -56,12 +57,41 @@ void scene_free(scene *s)
     free(s);
 }
 
+/* FNV-1a of a name. */
+static size_t name_hash(const char *name)
+{
+    uint64_t h = 1469598103934665603ull;
+    for (const unsigned char *c = (const unsigned char *)name; *c; c++)
+        h = (h ^ *c) * 1099511628211ull;
+    return (size_t)(h ^ (h >> 32));
+}
+
+/* The slot of mesh_names that holds `name`, or the empty slot where it would go. */
+static size_t name_slot(const scene *s, const char *name)
+{
+    size_t mask = s->mesh_name_capacity - 1, slot = name_hash(name) & mask;
+    while (s->mesh_names[slot] && strcmp(s->meshes[s->mesh_names[slot] - 1].name, name) != 0)
+        slot = (slot + 1) & mask;
+    return slot;
+}
+
 static int mesh_name_taken(const scene *s, const char *name)
 {
-    for (size_t i = 0; i < s->mesh_count; i++)
-        if (strcmp(s->meshes[i].name, name) == 0)
-            return 1;
-    return 0;
+    return s->mesh_name_capacity && s->mesh_names[name_slot(s, name)] != 0;
+}
+
+/* Indexes mesh `index` by its name, growing the index to keep it at most half full. */
+static void index_mesh_name(scene *s, size_t index)
+{
+    if (2 * (s->mesh_count + 1) > s->mesh_name_capacity) {
+        free(s->mesh_names);
+        s->mesh_name_capacity = s->mesh_name_capacity ? 2 * s->mesh_name_capacity : 64;
+        s->mesh_names = xcalloc(s->mesh_name_capacity, sizeof *s->mesh_names);
+        for (size_t i = 0; i < s->mesh_count; i++)
+            if (i != index)
+                s->mesh_names[name_slot(s, s->meshes[i].name)] = i + 1;
+    }
+    s->mesh_names[name_slot(s, s->meshes[index].name)] = index + 1;
 }
 
 /* "name", or "name.2", "name.3", ... when taken. */
@@ -96,6 +126,7 @@ scene_mesh *scene_add_mesh(scene *s, const char *name, const char *shape_type, c
     m->indices = indices;
     m->texcoords = texcoords;
     m->light = -1;
+    index_mesh_name(s, s->mesh_count - 1);
     return m;
 }
 

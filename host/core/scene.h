@@ -80,6 +80,8 @@ typedef struct scene {
 
     scene_mesh *meshes;
     size_t mesh_count;
+    size_t *mesh_names;         /* hash index of the mesh names: mesh index + 1, 0 empty */
+    size_t mesh_name_capacity;  /* a power of two, at least twice mesh_count */
 
     idmr_material *materials;
     scene_material_info *material_info;

@@ -105,6 +105,10 @@ static int load_include(loader *ld, xmlNodePtr node, int include_depth)
     const char *written;
     if (include_depth >= MITSUBA_MAX_INCLUDE_DEPTH)
         return mitsuba_fail(node, "includes nested too deeply");
+    if (++ld->include_count > MITSUBA_MAX_INCLUDES)
+        return mitsuba_fail(node, "more than %d includes read for one scene (fragments that "
+                                  "include others several times, level after level?)",
+                            MITSUBA_MAX_INCLUDES);
     if (mitsuba_require_attr(node, "filename", &written))
         return -1;
     char *path = mitsuba_resolve_path(ld, node, written);

@@ -60,6 +60,7 @@ typedef struct loader {
     size_t id_count;
     int major_version;    /* 0 for Mitsuba 0.x files, else 3 */
     int default_material; /* the shared diffuse 0.5, or -1 until needed */
+    size_t include_count; /* <include> elements read so far */
 } loader;
 
 /* Messages (mitsuba_messages.c): "file:line: <tag type=.. name=.. id=..>: what". */

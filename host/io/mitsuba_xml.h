@@ -10,8 +10,11 @@
 
 #include <libxml/tree.h>
 
-/* <include> elements nest at most this deep (the loader and the writer follow the same). */
+/* <include> elements nest at most this deep (the loader and the writer follow the same), and a
+ * scene reads at most this many (each is read where it stands: a few includes per level over a
+ * dozen levels would otherwise be read millions of times). */
 #define MITSUBA_MAX_INCLUDE_DEPTH 16
+#define MITSUBA_MAX_INCLUDES 4096
 
 /* The raw document (no substitution or renaming), read with the options the loader uses, so
  * that line numbers agree with scene_mesh.xml_line: network off, blanks kept, big line numbers.
