@@ -143,27 +143,37 @@ static void write_confetti(const char *dir)
     assert_int_equal(fclose(f), 0);
 }
 
+/* The Cornell box plus `extra` (written in in_dir), loaded into *s and reduced by the quadric
+ * method to `target` into r. */
+static void reduce_cornell_plus(const char *in_dir, const char *extra, double target, scene **s,
+                                reduction *r)
+{
+    char scene_path[4200];
+    write_cornell_plus(in_dir, extra, scene_path, sizeof scene_path);
+    *s = test_load_scene(scene_path);
+    reduce_options o;
+    small_options(&o);
+    o.method = REDUCE_QUADRIC;
+    o.target = target;
+    reduction_run(r, *s, &o);
+}
+
 /* The confetti beside the knot, reduced with uniform factors: the confetti keeps all 600
  * vertices, and the compensation rounds take them from the knot, so the total still meets the
  * target exactly. */
 static void test_compensation(void **state)
 {
-    char in_dir[64], scene_path[4200];
+    char in_dir[64];
     temp_dir(in_dir, sizeof in_dir);
     write_confetti(in_dir);
-    write_cornell_plus(in_dir,
-                       "    <shape type=\"obj\" id=\"confetti\">\n"
-                       "        <string name=\"filename\" value=\"confetti.obj\"/>\n"
-                       "        <ref id=\"white\"/>\n"
-                       "    </shape>\n",
-                       scene_path, sizeof scene_path);
-    scene *s = test_load_scene(scene_path);
-    reduce_options o;
-    small_options(&o);
-    o.method = REDUCE_QUADRIC;
-    o.target = 0.2;
+    scene *s;
     reduction r;
-    reduction_run(&r, s, &o);
+    reduce_cornell_plus(in_dir,
+                        "    <shape type=\"obj\" id=\"confetti\">\n"
+                        "        <string name=\"filename\" value=\"confetti.obj\"/>\n"
+                        "        <ref id=\"white\"/>\n"
+                        "    </shape>\n",
+                        0.2, &s, &r);
     const cJSON *confetti = mesh_entry(r.report, "confetti");
     print_message("  confetti %g -> %g vertices; total %g for %g requested, %g compensation "
                   "rounds\n",
@@ -197,25 +207,20 @@ static void write_degenerate_obj(const char *dir, const char *name, int triangle
  * loads (reduction_run loads it). */
 static void test_meshes_without_area_are_kept(void **state)
 {
-    char in_dir[64], scene_path[4200];
+    char in_dir[64];
     temp_dir(in_dir, sizeof in_dir);
     write_degenerate_obj(in_dir, "dot.obj", 30, 0.0f);
     write_degenerate_obj(in_dir, "line.obj", 30, 0.01f);
-    write_cornell_plus(in_dir,
-                       "    <shape type=\"obj\" id=\"dot\">\n"
-                       "        <string name=\"filename\" value=\"dot.obj\"/>\n"
-                       "    </shape>\n"
-                       "    <shape type=\"obj\" id=\"line\">\n"
-                       "        <string name=\"filename\" value=\"line.obj\"/>\n"
-                       "    </shape>\n",
-                       scene_path, sizeof scene_path);
-    scene *s = test_load_scene(scene_path);
-    reduce_options o;
-    small_options(&o);
-    o.method = REDUCE_QUADRIC;
-    o.target = 0.1;
+    scene *s;
     reduction r;
-    reduction_run(&r, s, &o);
+    reduce_cornell_plus(in_dir,
+                        "    <shape type=\"obj\" id=\"dot\">\n"
+                        "        <string name=\"filename\" value=\"dot.obj\"/>\n"
+                        "    </shape>\n"
+                        "    <shape type=\"obj\" id=\"line\">\n"
+                        "        <string name=\"filename\" value=\"line.obj\"/>\n"
+                        "    </shape>\n",
+                        0.1, &s, &r);
     const char *names[] = {"dot", "line"};
     for (int i = 0; i < 2; i++) {
         const cJSON *entry = mesh_entry(r.report, names[i]);

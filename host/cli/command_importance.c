@@ -1,12 +1,15 @@
 /* command_importance.c — `idmr importance SCENE -o DIR [options]`: the importance pass on the
- * scene (passes/importance.h) and its outputs in DIR (passes/importance_outputs.h), then one
- * summary line on stderr. Options: the importance pass's (options.h). */
+ * scene (passes/importance.h) and its outputs in DIR (passes/importance_outputs.h), written
+ * into a staging directory published as DIR when all succeeded (core/files.h: nothing
+ * half-written on failure or interrupt), then one summary line on stderr. Options: the
+ * importance pass's (options.h). */
 #include <stdio.h>
 #include <string.h>
 
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "cli/pass_setup.h"
+#include "core/files.h"
 #include "io/mitsuba.h"
 #include "passes/importance.h"
 #include "passes/importance_outputs.h"
@@ -15,6 +18,7 @@
 typedef struct importance_cli_job {
     importance_options options;
     const char *output; /* DIR */
+    char staging[2048]; /* where the outputs are written, published as DIR at the end */
     importance_result result;
 } importance_cli_job;
 
@@ -34,7 +38,7 @@ static int run_pass(device *d, const scene *s, const bvh *b, void *context)
     importance_weights weights = importance_weights_of(&job->options);
     double **values = importance_vertex_values(&job->result, s, &weights);
     int status =
-        importance_write_outputs(job->output, report, s, &job->options, &job->result, values);
+        importance_write_outputs(job->staging, report, s, &job->options, &job->result, values);
     importance_vertex_values_free(values, s);
     cJSON_Delete(report);
     return status;
@@ -66,9 +70,12 @@ int command_importance(int argc, char **argv)
     scene *s = mitsuba_load(arguments.scene);
     if (!s)
         return fail();
-    int status = scene_check_output_directory(s, job.output);
+    int status = scene_check_output_directory(s, job.output) ||
+                 files_stage_begin(job.output, job.staging, sizeof job.staging);
     if (!status)
         status = pass_setup_run(s, arguments.device_index, run_pass, &job);
+    if (job.staging[0])
+        status = files_stage_end(job.staging, job.output, !status) || status ? -1 : 0;
     code = status ? fail() : 0;
     if (!status)
         print_summary(&job);

@@ -69,11 +69,13 @@ static enum option_parse parse_option(int c, void *context, pass_arguments *argu
     return parse_sppm_option(c, &job->options.sppm, &arguments->device_index);
 }
 
-/* The render and its outputs: this command's calls into passes/. */
+/* The render and its outputs: this command's calls into passes/. The image's directory is made
+ * only once the render is done, so an interrupted render leaves no empty one behind. */
 static int run_pass(device *d, const scene *s, const bvh *b, void *context)
 {
     render_cli_job *job = context;
     if (render_run(d, s, b, &job->options, &job->result) ||
+        (job->paths.directory[0] && files_make_directory(job->paths.directory)) ||
         render_write_images(&job->result, job->paths.exr, job->paths.png, job->exposure))
         return -1;
     cJSON *report = render_report_json(s, d, &job->options, &job->result);
@@ -118,8 +120,6 @@ int command_render(int argc, char **argv)
     int status = scene_check_output_file(s, job.paths.exr) ||
                  scene_check_output_file(s, job.paths.png) ||
                  scene_check_output_file(s, job.paths.json);
-    if (!status && job.paths.directory[0])
-        status = files_make_directory(job.paths.directory);
     if (!status)
         status = pass_setup_run(s, arguments.device_index, run_pass, &job);
     code = status ? fail() : 0;

@@ -26,6 +26,20 @@ int files_write_atomic(const char *path, const void *bytes, size_t size);
  * error set naming the file that could not be read or written. */
 int files_copy_atomic(const char *source, const char *path);
 
+/* An output directory written as a unit. files_stage_begin() makes a staging directory beside
+ * `final` (its parent created if missing), named final.partial-XXXXXX, into `staging` (size
+ * bytes), and arranges for it to be removed if the process is interrupted (SIGINT, SIGTERM,
+ * SIGHUP) before files_stage_end(). The run writes every file there. files_stage_end() with
+ * success publishes it: renamed to `final` when final is missing or empty (one step: a reader
+ * sees all of it or none), else (a non-empty final, written into with --force) each file moved
+ * in by rename(), replacing one of the same name; without success it removes the staging
+ * directory. Either way nothing half-written is left. 0, or -1 with the error set. */
+int files_stage_begin(const char *final, char *staging, size_t size);
+int files_stage_end(const char *staging, const char *final, int success);
+
+/* Removes a file or a directory tree (not following links). 0, or -1 with errno set. */
+int files_remove_tree(const char *path);
+
 /* Creates `dir` (and parents) if missing; an existing non-directory is an error. Returns 0, or
  * -1 with the error set naming the directory. */
 int files_make_directory(const char *dir);

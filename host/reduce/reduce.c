@@ -150,42 +150,47 @@ static int write_reduced_scene(reduce_state *st)
             continue;
         char path[PATH_MAX];
         name_ply(st, m);
-        snprintf(path, sizeof path, "%s/%s", st->outdir, st->ply[m]);
+        snprintf(path, sizeof path, "%s/%s", st->staging, st->ply[m]);
         status = mesh_io_write_ply(path, &st->output[m].mesh, NULL, NULL, NULL);
         replacements[st->meshes_written++] = (mitsuba_replacement){
             s->meshes[m].xml_file, s->meshes[m].xml_line, st->ply[m], s->meshes[m].flat_normals};
     }
     if (!status)
-        status = mitsuba_write_reduced(s->file, st->outdir, replacements, st->meshes_written,
+        status = mitsuba_write_reduced(s->file, st->staging, replacements, st->meshes_written,
                                        st->options->bundle);
     free(replacements);
     st->seconds_write = monotonic_seconds() - start;
     return status;
 }
 
-/* report.json (with the importance outputs for method importance) and the closing line. */
+/* report.json (with the importance outputs for method importance). */
 static int write_report(reduce_state *st)
 {
     const reduce_options *o = st->options;
     cJSON *report = reduce_report_json(st);
     int status;
     if (reduce_method_uses_importance(o->method)) {
-        status = importance_write_outputs(st->outdir, report, st->scene, &o->importance,
+        status = importance_write_outputs(st->staging, report, st->scene, &o->importance,
                                           &st->importance, st->vertex_importance);
     } else {
         char path[PATH_MAX];
-        snprintf(path, sizeof path, "%s/report.json", st->outdir);
+        snprintf(path, sizeof path, "%s/report.json", st->staging);
         status = json_write(report, path);
     }
     cJSON_Delete(report);
-    if (!status)
-        fprintf(stderr,
+    return status;
+}
+
+/* The closing line. */
+static void print_summary(const reduce_state *st)
+{
+    const reduce_options *o = st->options;
+    fprintf(stderr,
                 "idmr: %llu -> %llu vertices (target %.4g: %llu), %zu of %zu meshes rewritten; "
                 "reduced scene in %s/scene.xml\n",
                 (unsigned long long)st->plan.total_before, (unsigned long long)st->vertices_after,
                 o->target, (unsigned long long)st->plan.total_requested, st->meshes_written,
                 st->count, st->outdir);
-    return status;
 }
 
 /* ---- pipeline ---- */
@@ -209,9 +214,12 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
 {
     reduce_state st = {.device = d, .scene = s, .outdir = outdir, .options = o,
                        .count = s->mesh_count};
-    int status = check_options(&st) || reduce_outdir_prepare(outdir, s, o->force) ||
-                 run_importance(&st) || plan_budget(&st) || reduce_decimation(&st) ||
-                 write_reduced_scene(&st) || write_report(&st);
+    int status = check_options(&st) || reduce_outdir_prepare(&st) || run_importance(&st) ||
+                 plan_budget(&st) || reduce_decimation(&st) || write_reduced_scene(&st) ||
+                 write_report(&st);
+    status = reduce_outdir_finish(&st, !status);
+    if (!status)
+        print_summary(&st);
     state_free(&st);
     return status ? -1 : 0;
 }

@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "core/error.h"
 #include "core/files.h"
@@ -28,18 +29,30 @@ static int directory_has_entries(const char *dir)
     return entries;
 }
 
-int reduce_outdir_prepare(const char *outdir, const scene *s, int force)
+int reduce_outdir_prepare(reduce_state *st)
 {
-    if (scene_check_output_directory(s, outdir))
+    const char *outdir = st->outdir;
+    if (scene_check_output_directory(st->scene, outdir))
         return -1;
-    if (!force && directory_has_entries(outdir))
+    struct stat info;
+    if (stat(outdir, &info) == 0 && !S_ISDIR(info.st_mode))
+        return error_set(IDMR_EXIT_INPUT, "output directory '%s' exists and is not a directory",
+                         outdir);
+    if (!st->options->force && directory_has_entries(outdir))
         return error_set(IDMR_EXIT_INPUT,
                          "output directory '%s' exists and is not empty (use --force to write "
                          "into it)",
                          outdir);
-    if (files_make_directory(outdir))
+    if (files_stage_begin(outdir, st->staging, sizeof st->staging))
         return -1;
     char meshes[PATH_MAX];
-    snprintf(meshes, sizeof meshes, "%s/meshes", outdir);
+    snprintf(meshes, sizeof meshes, "%s/meshes", st->staging);
     return files_make_directory(meshes);
+}
+
+int reduce_outdir_finish(reduce_state *st, int success)
+{
+    if (!st->staging[0])
+        return success ? 0 : -1;
+    return files_stage_end(st->staging, st->outdir, success) || !success ? -1 : 0;
 }

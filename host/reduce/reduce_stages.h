@@ -5,7 +5,9 @@
  * reusing what the earlier ones left there, and stops at the first that fails:
  *
  *   options      --target in (0, 1], every --keep name a mesh of the scene (reduce.c)
- *   outdir       OUTDIR created, empty unless forced, not the scene's own (reduce_outdir.c)
+ *   outdir       OUTDIR checked (empty unless forced, holding no input) and its staging
+ *                directory made beside it, where every later stage writes; published as OUTDIR
+ *                when all succeeded, removed otherwise or on an interrupt (reduce_outdir.c)
  *   importance   the importance pass (method importance only) and per-vertex importance of
  *                every mesh, computed once for the decimation and the importance outputs:
  *                importance, vertex_importance (reduce.c)
@@ -27,7 +29,8 @@
 typedef struct reduce_state {
     device *device;
     scene *scene;
-    const char *outdir;
+    const char *outdir;   /* OUTDIR as given: what messages name */
+    char staging[2048];   /* where the stages write (files_stage_begin) */
     const reduce_options *options;
     size_t count; /* meshes in the scene */
 
@@ -51,10 +54,13 @@ typedef struct reduce_state {
  * its points coincide or lie on a line) are never decimated. */
 int reduce_mesh_pinned(const reduce_options *o, const scene_mesh *mesh);
 
-/* OUTDIR: created if missing, with OUTDIR/meshes; an existing non-empty one needs force; never
- * a directory holding a file the scene reads (scene_check_output_directory: inputs are never
- * written). Returns 0, or -1 with the error set. */
-int reduce_outdir_prepare(const char *outdir, const scene *s, int force);
+/* OUTDIR checked: an existing non-empty one needs force; never a directory holding a file the
+ * scene reads (scene_check_output_directory: inputs are never written). Then the staging
+ * directory beside it, with its meshes/, into st->staging. Returns 0, or -1 with the error
+ * set. reduce_outdir_finish() publishes the staging directory as OUTDIR when `success`, else
+ * removes it. */
+int reduce_outdir_prepare(reduce_state *st);
+int reduce_outdir_finish(reduce_state *st, int success);
 
 /* Decimates the meshes the plan decimates, in parallel, largest first, then runs the
  * compensation rounds. Returns 0, or -1 with the error set. */
