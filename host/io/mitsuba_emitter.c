@@ -109,11 +109,12 @@ static int emitter_environment(loader *ld, xmlNodePtr node, const char *type)
 {
     double to_world[9];
     int width = 1, height = 1;
-    float *rgb = xmalloc(3 * sizeof *rgb);
+    float *rgb = NULL;
     char *path = NULL;
     if (strcmp(type, "constant") == 0) {
         static const double identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
         memcpy(to_world, identity, sizeof to_world);
+        rgb = xmalloc(3 * sizeof *rgb);
         if (mitsuba_prop_color(ld, node, "radiance", 1.0f, rgb, NULL)) {
             free(rgb);
             return -1;
@@ -121,8 +122,6 @@ static int emitter_environment(loader *ld, xmlNodePtr node, const char *type)
     } else {
         const char *file;
         double scale;
-        free(rgb);
-        rgb = NULL;
         if (mitsuba_prop_string(node, "filename", NULL, &file) ||
             mitsuba_prop_float(node, "scale", 1.0, &scale) || emitter_rotation(node, to_world))
             return -1;
