@@ -76,7 +76,7 @@ int files_copy_atomic(const char *source, const char *path)
     FILE *out = fdopen(fd, "wb");
     if (!out)
         close(fd);
-    static char buffer[1 << 16];
+    char buffer[1 << 16];
     size_t n;
     int ok = out != NULL;
     while (ok && (n = fread(buffer, 1, sizeof buffer, in)) > 0)

@@ -252,71 +252,58 @@ int scene_add_environment(scene *s, const char *file, int width, int height, flo
     return scene_add_light(s, &light);
 }
 
-/* The files the scene reads, one at a time: the i-th, or NULL past the last (some entries
- * may be NULL: a shape without a file). */
-static const char *scene_input(const scene *s, size_t i, int *done)
+/* Whether the input file `input` (may be NULL) is `real` or, with `below`, lies under it. */
+static int input_at(const char *input, const char *real, int below)
 {
-    *done = 0;
-    if (i == 0)
-        return s->file;
-    i--;
-    if (i < 2 * s->mesh_count)
-        return i % 2 ? s->meshes[i / 2].xml_file : s->meshes[i / 2].file;
-    i -= 2 * s->mesh_count;
-    if (i < s->texture_count)
-        return s->textures[i].file;
-    i -= s->texture_count;
-    if (i == 0)
-        return s->environment.file;
-    *done = 1;
-    return NULL;
+    char input_real[PATH_MAX];
+    if (!input || !realpath(input, input_real))
+        return 0;
+    size_t length = strlen(real);
+    if (!below)
+        return strcmp(input_real, real) == 0;
+    return strncmp(input_real, real, length) == 0 &&
+           (input_real[length] == '/' || strcmp(real, "/") == 0);
 }
 
-/* The first input whose realpath is `real` (files) or lies below `real` (directories). */
-static const char *scene_input_at(const scene *s, const char *real, int below)
+/* The first file the scene reads that is at `output` (see input_at), or NULL; NULL too when
+ * output does not exist. */
+static const char *input_at_output(const scene *s, const char *output, int below)
 {
-    size_t length = strlen(real);
-    int done = 0;
-    for (size_t i = 0; !done; i++) {
-        const char *input = scene_input(s, i, &done);
-        char input_real[PATH_MAX];
-        if (!input || !realpath(input, input_real))
-            continue;
-        int hit = below ? strncmp(input_real, real, length) == 0 &&
-                              (input_real[length] == '/' || strcmp(real, "/") == 0)
-                        : strcmp(input_real, real) == 0;
-        if (hit)
-            return input;
+    char real[PATH_MAX];
+    if (!realpath(output, real))
+        return NULL;
+    if (input_at(s->file, real, below))
+        return s->file;
+    for (size_t i = 0; i < s->mesh_count; i++) {
+        if (input_at(s->meshes[i].file, real, below))
+            return s->meshes[i].file;
+        if (input_at(s->meshes[i].xml_file, real, below))
+            return s->meshes[i].xml_file;
     }
-    return NULL;
+    for (size_t i = 0; i < s->texture_count; i++)
+        if (input_at(s->textures[i].file, real, below))
+            return s->textures[i].file;
+    return input_at(s->environment.file, real, below) ? s->environment.file : NULL;
 }
 
 int scene_check_output_directory(const scene *s, const char *dir)
 {
-    char real[PATH_MAX];
-    if (!realpath(dir, real))
-        return 0;
-    const char *input = scene_input_at(s, real, 1);
-    if (input)
-        return error_set(IDMR_EXIT_INPUT,
-                         "output directory '%s' holds '%s', which the scene reads: choose "
-                         "another (inputs are never overwritten)",
-                         dir, input);
-    return 0;
+    const char *input = input_at_output(s, dir, 1);
+    return input ? error_set(IDMR_EXIT_INPUT,
+                             "output directory '%s' holds '%s', which the scene reads: choose "
+                             "another (inputs are never overwritten)",
+                             dir, input)
+                 : 0;
 }
 
 int scene_check_output_file(const scene *s, const char *path)
 {
-    char real[PATH_MAX];
-    if (!realpath(path, real))
-        return 0;
-    const char *input = scene_input_at(s, real, 0);
-    if (input)
-        return error_set(IDMR_EXIT_INPUT,
-                         "output '%s' is '%s', which the scene reads: choose another (inputs "
-                         "are never overwritten)",
-                         path, input);
-    return 0;
+    const char *input = input_at_output(s, path, 0);
+    return input ? error_set(IDMR_EXIT_INPUT,
+                             "output '%s' is '%s', which the scene reads: choose another "
+                             "(inputs are never overwritten)",
+                             path, input)
+                 : 0;
 }
 
 static void triangle_vertices(const scene_mesh *m, uint32_t t, const float *v[3])

@@ -101,8 +101,6 @@ int read_openmesh(const char *path, mesh_data *out)
                          "cannot read mesh '%s': OpenMesh could not parse it (unknown "
                          "extension or malformed file)",
                          path);
-    if (mesh.n_faces() == 0)
-        return error_set(IDMR_EXIT_INPUT, "mesh '%s' has no faces", path);
     if (mesh.n_vertices() > UINT32_MAX || mesh.n_faces() > UINT32_MAX / 3)
         return error_set(IDMR_EXIT_INPUT, "mesh '%s' is too large for 32-bit indices", path);
 
@@ -185,9 +183,10 @@ extern "C" int mesh_io_read_oriented(const char *path, mesh_data *out, int orien
     int status = has_extension(path, ".obj")   ? mesh_text_read_obj(path, out)
                  : has_extension(path, ".off") ? mesh_text_read_off(path, out)
                                                : read_openmesh(path, out);
+    if (status == 0 && out->triangle_count == 0)
+        status = error_set(IDMR_EXIT_INPUT, "mesh '%s' has no faces", path);
     if (status) {
         mesh_data_free(out);
-        std::memset(out, 0, sizeof *out);
         return -1;
     }
     if (orient && out->normals) {

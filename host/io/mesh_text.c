@@ -221,8 +221,6 @@ static uint64_t corner_hash(const int64_t *corner)
 static int obj_build(obj_reader *r, mesh_data *out)
 {
     size_t corners = r->corners.count / 3;
-    if (corners == 0)
-        return error_set(IDMR_EXIT_INPUT, "mesh '%s' has no faces", r->cursor.path);
     if (corners / 3 > UINT32_MAX / 3)
         return error_set(IDMR_EXIT_INPUT, "mesh '%s' is too large for 32-bit indices",
                          r->cursor.path);
@@ -439,8 +437,6 @@ static int off_read(FILE *f, const char *path, mesh_data *out)
         }
     }
     free(line);
-    if (status == 0 && triangles.count == 0)
-        status = error_set(IDMR_EXIT_INPUT, "mesh '%s' has no faces", path);
     if (status == 0 && triangles.count / 3 > UINT32_MAX / 3)
         status = error_set(IDMR_EXIT_INPUT, "mesh '%s' is too large for 32-bit indices", path);
     if (status == 0) {

@@ -17,7 +17,8 @@
  * Errors name the file and line (set with error.h, IDMR_EXIT_INPUT): a number that is not
  * finite or not a number, an index of 0 or one that names an element not defined before it, a
  * face with fewer than 3 corners, an OFF file that holds fewer vertices or faces than its
- * header says, no faces at all, more than 2^32 - 1 vertices or triangles. */
+ * header says, more than 2^32 - 1 vertices or triangles. (A file without faces reads as an
+ * empty mesh; mesh_io_read() says so, for every format.) */
 #ifndef IDMR_MESH_TEXT_H
 #define IDMR_MESH_TEXT_H
 

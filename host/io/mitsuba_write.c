@@ -283,19 +283,16 @@ static char *unique_output_name(const writer *w, const char *dir, const char *pa
     return xstrdup(name);
 }
 
-/* Whether `real` is a file the scene reads: one of its documents, or a path one of them names. */
+/* Whether `real` is a file the scene reads: one of its documents, or a path one of them names
+ * (an edit's value is the realpath of what exists). */
 static int is_scene_input(const writer *w, const char *real)
 {
     for (size_t i = 0; i < w->doc_count; i++)
         if (strcmp(w->docs[i].real, real) == 0)
             return 1;
-    for (size_t i = 0; i < w->edit_count; i++) {
-        char *named = mitsuba_path_real(w->edits[i].value);
-        int same = named && strcmp(named, real) == 0;
-        free(named);
-        if (same)
+    for (size_t i = 0; i < w->edit_count; i++)
+        if (strcmp(w->edits[i].value, real) == 0)
             return 1;
-    }
     return 0;
 }
 

@@ -220,13 +220,12 @@ inline float3 surface_emission(const scene_view *scene, uint light_count, uint t
 }
 
 /* Radiance arriving from outside the scene along -d (d: the direction of a ray that left it):
- * the environment map's, zero without one. */
-inline float3 environment_radiance(const scene_view *scene, uint light_count, float3 d)
+ * the environment map's, zero without one (its buffer's header then says width 0). */
+inline float3 environment_radiance(const scene_view *scene, float3 d)
 {
 #if HAS_FEATURE(IDMR_FEATURE_ENVIRONMENT)
-    for (uint i = 0; i < light_count; i++)
-        if (scene->lights[i].kind == IDMR_LIGHT_ENVIRONMENT)
-            return environment_lookup(scene->environment, d);
+    if (scene->environment[IDMR_ENV_WIDTH] > 0.0f)
+        return environment_lookup(scene->environment, d);
 #endif
     return (float3)(0.0f);
 }

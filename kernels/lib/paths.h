@@ -99,7 +99,7 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
         idmr_hit hit = traverse_closest(scene->nodes, scene->leaves, origin, d, 0.0f, INFINITY);
         if (hit.triangle == IDMR_NO_HIT) {
 #if PASS_RENDER
-            radiance += throughput * environment_radiance(scene, params->light_count, d);
+            radiance += throughput * environment_radiance(scene, d);
 #endif
             break;
         }
