@@ -1,5 +1,6 @@
 # idmr — build, test, bench.
 #   make [config=release|debug|sanitize] [all|kernels|test|bench|demo|deps|clean]
+#   make fuzz [FUZZ_SECONDS=60]
 #
 # bin/idmr is the CLI. Every host source outside host/cli/ goes into build/$(config)/libidmr.a,
 # which the test and bench programs (tests/test_*.c, tests/bench_*.c) link as well.
@@ -28,14 +29,25 @@ ifeq ($(config),release)
   CFLAGS += -O2
   CXXFLAGS += -O2
 else ifeq ($(config),debug)
-  CFLAGS += -O0
-  CXXFLAGS += -O0
+  CFLAGS += -O0 -DIDMR_CHECK_FINITE
+  CXXFLAGS += -O0 -DIDMR_CHECK_FINITE
 else ifeq ($(config),sanitize)
-  CFLAGS += -O1 -fsanitize=address,undefined -fno-omit-frame-pointer
-  CXXFLAGS += -O1 -fsanitize=address,undefined -fno-omit-frame-pointer
+  CFLAGS += -O1 -fsanitize=address,undefined -fno-omit-frame-pointer -DIDMR_CHECK_FINITE
+  CXXFLAGS += -O1 -fsanitize=address,undefined -fno-omit-frame-pointer -DIDMR_CHECK_FINITE
   LDFLAGS += -fsanitize=address,undefined
+  # UB stops the program (UBSan only prints by default); leaks in PoCL and LLVM are not ours.
+  export UBSAN_OPTIONS := halt_on_error=1:print_stacktrace=1
+  export LSAN_OPTIONS := suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0
+else ifeq ($(config),fuzz)
+  # The libFuzzer targets (make fuzz): clang, coverage in every host object, ASan and UBSan.
+  CC := clang
+  CXX := clang++
+  FUZZ_FLAGS := -O1 -fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer
+  CFLAGS += $(FUZZ_FLAGS)
+  CXXFLAGS += $(FUZZ_FLAGS) -Wno-unknown-warning-option
+  LDFLAGS += -fsanitize=address,undefined -fsanitize-link-c++-runtime
 else
-  $(error config must be release, debug or sanitize)
+  $(error config must be release, debug, sanitize or fuzz)
 endif
 
 LIB_SOURCES := $(filter-out host/cli/%,$(wildcard host/*/*.c host/*/*.cc))
@@ -44,7 +56,7 @@ CLI_OBJECTS := $(patsubst host/%,$(BUILD)/host/%.o,$(wildcard host/cli/*.c))
 TEST_PROGRAMS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/test_*.c))
 BENCH_PROGRAMS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/bench_*.c))
 
-.PHONY: all deps kernels test bench demo clean FORCE
+.PHONY: all deps kernels test bench demo fuzz fuzz-targets clean FORCE
 all: bin/idmr kernels
 
 # ---- dependencies and the flags they give ----
@@ -143,6 +155,30 @@ test: bin/idmr kernels $(TEST_PROGRAMS)
 bench: bin/idmr kernels $(BENCH_PROGRAMS)
 	@set -e; for b in $(BENCH_PROGRAMS); do $$b; done
 	@scripts/bench-reduction-quality
+
+# libFuzzer targets (tests/fuzz/): the scene loader with its includes and meshes, and each mesh
+# reader. `make fuzz` installs clang if missing, builds them in build/fuzz and runs each for
+# FUZZ_SECONDS (scripts/run-fuzz.sh); test_fuzz_inputs replays their seeds and regressions.
+FUZZ_SECONDS ?= 60
+FUZZ_MESH_PROGRAMS := $(BUILD)/tests/fuzz_obj $(BUILD)/tests/fuzz_off $(BUILD)/tests/fuzz_ply \
+                      $(BUILD)/tests/fuzz_stl
+FUZZ_PROGRAMS := $(BUILD)/tests/fuzz_scene $(FUZZ_MESH_PROGRAMS)
+fuzz:
+	@scripts/install-deps.sh --fuzz
+	@$(MAKE) --no-print-directory config=fuzz fuzz-targets
+	@scripts/run-fuzz.sh $(FUZZ_SECONDS) $(subst $(BUILD),build/fuzz,$(FUZZ_PROGRAMS))
+
+fuzz-targets: $(FUZZ_PROGRAMS)
+
+$(BUILD)/tests/fuzz_scene: tests/fuzz/fuzz_scene.c tests/fuzz/fuzz_inputs.h $(BUILD)/libidmr.a $(FLAGS)
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) -Itests $(CFLAGS) -fsanitize=fuzzer $(LDFLAGS) -o $@ $< $(BUILD)/libidmr.a $(LDLIBS)
+
+$(FUZZ_MESH_PROGRAMS): $(BUILD)/tests/fuzz_%: tests/fuzz/fuzz_mesh.c tests/fuzz/fuzz_inputs.h \
+                                            $(BUILD)/libidmr.a $(FLAGS)
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) -Itests -DFUZZ_MESH_EXTENSION='".$*"' $(CFLAGS) -fsanitize=fuzzer $(LDFLAGS) \
+	    -o $@ $< $(BUILD)/libidmr.a $(LDLIBS)
 
 demo: bin/idmr kernels
 	@scripts/demo.sh

@@ -53,7 +53,7 @@ kernel void grid_count(idmr_sppm_params params, global const idmr_hit_point *hit
                        volatile global uint *cell_counts)
 {
     uint i = get_global_id(0);
-    if (i < params.width * params.height && hit_points[i].valid)
+    if (i < params.width * params.height && hit_points[i].offset > 0.0f)
         atomic_inc(cell_counts + grid_bucket(hit_points + i, &params));
 }
 
@@ -97,7 +97,7 @@ kernel void grid_scatter(idmr_sppm_params params, global const idmr_hit_point *h
                          volatile global uint *cell_cursor, global uint *grid_points)
 {
     uint i = get_global_id(0);
-    if (i < params.width * params.height && hit_points[i].valid)
+    if (i < params.width * params.height && hit_points[i].offset > 0.0f)
         grid_points[atomic_inc(cell_cursor + grid_bucket(hit_points + i, &params))] = i;
 }
 
@@ -147,7 +147,7 @@ kernel void shadow_rays(idmr_sppm_params params, idmr_camera camera, SCENE_BUFFE
                         volatile global fixed_word *shadow_importance)
 {
     uint pixel = get_global_id(0);
-    if (pixel >= params.width * params.height || !hit_points[pixel].valid)
+    if (pixel >= params.width * params.height || !(hit_points[pixel].offset > 0.0f))
         return;
     scene_view scene = SCENE_VIEW();
     idmr_rng rng =

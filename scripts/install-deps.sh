@@ -7,6 +7,7 @@
 #   scripts/install-deps.sh --python   also the Python tools of the evaluation, into .venv/ in
 #                                      the repository (Mitsuba 3, the second renderer; NVIDIA's
 #                                      FLIP evaluator), at the versions pinned below
+#   scripts/install-deps.sh --fuzz     also clang and its libFuzzer runtime (make fuzz)
 set -eu
 cd "$(dirname "$0")/.."
 
@@ -16,6 +17,10 @@ libmeshoptimizer-dev
 python3-matplotlib python3-numpy python3-venv"
 
 PYTHON_PACKAGES="mitsuba==3.9.1 drjit==1.5.0 flip-evaluator==1.7 numpy==2.4.6"
+
+if [ "${1:-}" = "--fuzz" ]; then
+    PACKAGES="$PACKAGES clang libclang-rt-14-dev"
+fi
 
 missing=""
 for p in $PACKAGES; do

@@ -79,6 +79,7 @@ static inline scene_mesh *imp_add_mesh_data(scene *s, const char *name, const ch
 {
     scene_mesh *m = scene_add_mesh(s, name, type, NULL, 0, mesh->vertex_count, mesh->positions,
                                    mesh->triangle_count, mesh->indices, mesh->texcoords);
+    free(mesh->normals); /* shaded flat, as these scenes were worked out */
     m->material = material;
     return m;
 }
@@ -196,7 +197,7 @@ static inline double imp_expected_first_radius(const scene *s, const idmr_hit_po
     double *distance = malloc((count ? count : 1) * sizeof *distance);
     size_t valid = 0;
     for (size_t i = 0; i < count; i++)
-        if (hit_points[i].valid) {
+        if (hit_points[i].offset > 0.0f) {
             double d2 = 0;
             for (int k = 0; k < 3; k++)
                 d2 += pow((double)hit_points[i].position[k] - s->camera.origin[k], 2);

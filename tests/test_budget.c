@@ -476,6 +476,30 @@ static void test_many_meshes(void **state)
     free(meshes);
 }
 
+/* 10,000 meshes whose importance spans 1e-30 to 1e30 (a factor 10^60, evenly in the exponent):
+ * the water-filling stays exact (check_properties), every factor finite; the most important
+ * meshes keep everything, the least get the floor. */
+static void test_many_meshes_extreme_importance(void **state)
+{
+    enum { COUNT = 10000 };
+    budget_mesh *meshes = calloc(COUNT, sizeof *meshes);
+    idmr_rng rng = idmr_rng_init(4242, 0, 0, 0);
+    for (size_t i = 0; i < COUNT; i++) {
+        meshes[i].name = "extreme";
+        meshes[i].vertices = 100 + idmr_rng_next(&rng) % 100000;
+        meshes[i].importance = pow(10.0, -30.0 + 60.0 * (double)i / (COUNT - 1));
+    }
+    budget_plan plan;
+    assert_int_equal(budget_distribute(meshes, COUNT, 0.1, 50, &plan), 0);
+    check_properties(meshes, COUNT, 0.1, 50, &plan);
+    for (size_t i = 0; i < COUNT; i++)
+        assert_true(isfinite(plan.factor[i]));
+    assert_int_equal(plan.target[COUNT - 1], meshes[COUNT - 1].vertices);
+    assert_int_equal(plan.target[0], 50);
+    budget_plan_free(&plan);
+    free(meshes);
+}
+
 int main(void)
 {
     enum { WORKED = sizeof worked_cases / sizeof *worked_cases };
@@ -490,6 +514,7 @@ int main(void)
         cmocka_unit_test(test_missing_arrays),
         cmocka_unit_test(test_random_scenes),
         cmocka_unit_test(test_many_meshes),
+        cmocka_unit_test(test_many_meshes_extreme_importance),
     };
     enum { OTHERS = sizeof others / sizeof *others };
     struct CMUnitTest tests[WORKED + OTHERS];

@@ -343,6 +343,46 @@ static void test_quadric_spike(void **state)
     mesh_data_free(&spike);
 }
 
+/* A flat 9 x 9 grid turned into a tilted plane: in floats its faces' normals differ by
+ * rounding, so the normal check sees dot products a hair above or below |a||b|. A limit of
+ * 0.01° (far above that rounding, far below any real turn) must let every method reach what it
+ * reaches with no limit (179°): the plane never turns. */
+static void test_normal_limit_tilted_plane_rounding(void **state)
+{
+    mesh_data plane;
+    make_grid(9, 0.0, &plane);
+    const double a = 0.37, b = 1.13; /* about x, then about z */
+    for (uint32_t v = 0; v < plane.vertex_count; v++) {
+        float *p = &plane.positions[3 * v];
+        double x = p[0], y = p[1] * cos(a), z = p[1] * sin(a);
+        p[0] = (float)(x * cos(b) - y * sin(b));
+        p[1] = (float)(x * sin(b) + y * cos(b));
+        p[2] = (float)z;
+    }
+    double importance[81];
+    for (int v = 0; v < 81; v++)
+        importance[v] = 1.0 + (v % 7);
+    const decimate_method methods[] = {DECIMATE_IMPORTANCE, DECIMATE_QUADRIC, DECIMATE_COMBINED};
+    for (size_t m = 0; m < 3; m++) {
+        uint32_t reached[2];
+        const double limits[2] = {179.0, 0.01};
+        for (int l = 0; l < 2; l++) {
+            decimate_output out;
+            decimate_input in = input_of("tilted", &plane, importance, 20);
+            in.max_normal_angle = limits[l];
+            assert_int_equal(decimate_mesh(&in, methods[m], &out), 0);
+            reached[l] = out.mesh.vertex_count;
+            assert_int_equal(degenerate_faces(&out.mesh), 0);
+            decimate_output_free(&out);
+        }
+        print_message("  method %zu: %u vertices at 179°, %u at 0.01°\n", m, reached[0],
+                      reached[1]);
+        assert_int_equal(reached[1], reached[0]);
+        assert_true(reached[0] < 81);
+    }
+    mesh_data_free(&plane);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -353,6 +393,7 @@ int main(void)
         cmocka_unit_test(test_quadric_sphere_outward),
         cmocka_unit_test(test_quadric_each_collapse),
         cmocka_unit_test(test_quadric_spike),
+        cmocka_unit_test(test_normal_limit_tilted_plane_rounding),
     };
     return cmocka_run_group_tests_name("decimate_normal_limit", tests, NULL, NULL);
 }

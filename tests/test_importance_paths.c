@@ -40,7 +40,7 @@ static void test_most_pixels_hold_hit_points(void **state)
     const importance_snapshot *snap = &imp_run_state(state)->snapshot;
     unsigned int pixels = snap->core.params.width * snap->core.params.height, valid = 0;
     for (unsigned int i = 0; i < pixels; i++)
-        valid += snap->core.hit_points[i].valid != 0;
+        valid += snap->core.hit_points[i].offset > 0.0f;
     print_message("  %u of %u pixels hold a hit point\n", valid, pixels);
     assert_true(valid > pixels / 2);
 }
@@ -52,7 +52,7 @@ static idmr_hit_point *valid_hit_points(const importance_snapshot *snap, unsigne
     idmr_hit_point *valid = malloc(pixels * sizeof *valid);
     *count = 0;
     for (unsigned int i = 0; i < pixels; i++)
-        if (snap->core.hit_points[i].valid)
+        if (snap->core.hit_points[i].offset > 0.0f)
             valid[(*count)++] = snap->core.hit_points[i];
     return valid;
 }

@@ -431,6 +431,48 @@ static void test_no_sensor_warns(void **state)
     scene_free(s);
 }
 
+/* A property no reader asks for, a property without a name and an element where nothing reads
+ * it each warn with file and line; the same warning for many shapes comes once with a count;
+ * a valid Mitsuba property idmr has no use for passes in silence; the scene still loads. */
+static void test_unread_properties_warn(void **state)
+{
+    char *log;
+    scene *s = load_capturing_stderr(
+        write_scene("3.0.0",
+                    "  <emitter type=\"point\">\n"                           /* line 2 */
+                    "    <rgb name=\"Radiance2\" value=\"1\"/>\n"            /* 3 */
+                    "    <float value=\"3\"/>\n"                             /* 4 */
+                    "    <shape type=\"cube\"/>\n"                           /* 5 */
+                    "  </emitter>\n"
+                    "  <bsdf type=\"roughplastic\" id=\"p\">\n"              /* 7 */
+                    "    <boolean name=\"nonlinear\" value=\"true\"/>\n"     /* 8 */
+                    "  </bsdf>\n"
+                    "  <shape type=\"cube\"><float name=\"raduis\" value=\"1\"/></shape>\n"
+                    "  <shape type=\"cube\"><float name=\"raduis\" value=\"1\"/></shape>\n"
+                    "  <shape type=\"cube\"><float name=\"raduis\" value=\"1\"/>"
+                    "<ref id=\"p\"/></shape>\n"),
+        &log);
+    assert_non_null(s);
+    const char *expected[] = {
+        "scene.xml:3: <rgb name=\"Radiance2\">: ignored: not a property idmr reads in <emitter "
+        "type=\"point\">",
+        "scene.xml:4: <float>: ignored: a property needs a name attribute",
+        "scene.xml:5: <shape type=\"cube\">: ignored: idmr reads no such element in <emitter "
+        "type=\"point\">",
+        "scene.xml:10: <float name=\"raduis\">: ignored: not a property idmr reads in <shape "
+        "type=\"cube\">",
+        "scene.xml:10: <float name=\"raduis\"> in <shape type=\"cube\">: the warning came 3 "
+        "times in all",
+    };
+    for (size_t i = 0; i < sizeof expected / sizeof *expected; i++)
+        if (!strstr(log, expected[i]))
+            fail_msg("no '%s' in:\n%s", expected[i], log);
+    if (strstr(log, "nonlinear") || strstr(log, "scene.xml:11:") || strstr(log, "scene.xml:12:"))
+        fail_msg("a valid property or a repeat was warned about:\n%s", log);
+    free(log);
+    scene_free(s);
+}
+
 /* ---------------------------------------------------------------------------------------- */
 /* Shapes                                                                                   */
 
@@ -1276,6 +1318,7 @@ int main(void)
         cmocka_unit_test(test_camera_frame_axis_x),
         cmocka_unit_test(test_camera_old_dialect_defaults),
         cmocka_unit_test(test_no_sensor_warns),
+        cmocka_unit_test(test_unread_properties_warn),
         cmocka_unit_test(test_shape_rectangle),
         cmocka_unit_test(test_shape_mirrored_builtin),
         cmocka_unit_test(test_obj_oriented_by_its_normals),

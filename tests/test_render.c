@@ -545,7 +545,7 @@ static void test_glass_ball_caustic(void **state)
     size_t focus_count = 0, around_count = 0;
     for (size_t p = 0; p < (size_t)r.sppm.width * r.sppm.height; p++) {
         const idmr_hit_point *hp = &snap.core.hit_points[p];
-        if (!hp->valid || fabsf(hp->position[2]) > 1e-3f)
+        if (!(hp->offset > 0.0f) || fabsf(hp->position[2]) > 1e-3f)
             continue;
         double rho = hypot(hp->position[0], hp->position[1]);
         if (rho < 0.08) {

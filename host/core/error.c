@@ -1,6 +1,7 @@
 /* error.c — thread-local error message, warnings and checked allocation (see error.h). */
 #include "core/error.h"
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -54,6 +55,14 @@ static void print_line(const char *prefix, const char *fmt, va_list args)
     fputs(prefix, stderr);
     vfprintf(stderr, fmt, args);
     fputc('\n', stderr);
+}
+
+void check_finite(double value, const char *what, const char *file, int line)
+{
+    if (isfinite(value))
+        return;
+    fprintf(stderr, "idmr: internal error: %s is %g (%s:%d)\n", what, value, file, line);
+    abort();
 }
 
 void warn(const char *fmt, ...)

@@ -30,12 +30,24 @@ void error_clear(void);
 void warn(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 void warn_silence(int silent);
 
-/* Allocation that ends the process with a message when memory runs out. */
+/* CHECK_FINITE(value, what): in debug and sanitize builds (the Makefile defines
+ * IDMR_CHECK_FINITE there), the first intermediate that is NaN or infinite stops the process with
+ * a message naming it and the line; release builds compile the check away. Placed where the
+ * numbers of a pass meet: importance sums and amounts, the gather radius, pixel estimates,
+ * decimation factors and collapse costs. */
+#ifdef IDMR_CHECK_FINITE
+#define CHECK_FINITE(value, what) check_finite((double)(value), what, __FILE__, __LINE__)
+#else
+#define CHECK_FINITE(value, what) ((void)0)
+#endif
+void check_finite(double value, const char *what, const char *file, int line);
+
+/* Allocation that ends the process with a message when memory runs out (never NULL). */
 #include <stddef.h>
-void *xmalloc(size_t size);
-void *xcalloc(size_t count, size_t size);
-void *xrealloc(void *ptr, size_t size);
-char *xstrdup(const char *s);
+void *xmalloc(size_t size) __attribute__((returns_nonnull, malloc));
+void *xcalloc(size_t count, size_t size) __attribute__((returns_nonnull, malloc));
+void *xrealloc(void *ptr, size_t size) __attribute__((returns_nonnull));
+char *xstrdup(const char *s) __attribute__((returns_nonnull, malloc));
 
 /* Verbose log ("idmr: ..." on stderr), printed only after log_set_verbose(1) (the -v flag). */
 void log_verbose(const char *fmt, ...) __attribute__((format(printf, 1, 2)));

@@ -8,14 +8,16 @@
 #include "core/error.h"
 #include "idmr/environment.h"
 #include "idmr/normal_packing.h"
+#include "idmr/ray.h"
 
-float device_scene_ray_epsilon(const scene *s)
+/* The triangle's share of the offset of rays leaving triangle (a, b, c) (idmr/ray.h): from the
+ * largest coordinate magnitude of its vertices (the kernels add the arriving ray's origin). */
+static float triangle_ray_offset(const float *a, const float *b, const float *c)
 {
-    double largest = 0;
+    float largest = 0.0f;
     for (int k = 0; k < 3; k++)
-        largest = fmax(largest, fmax(fabs(s->bbox_min[k]), fabs(s->bbox_max[k])));
-    double epsilon = 1e-6 * largest + 1e-7 * scene_diagonal(s);
-    return epsilon > 0 ? (float)epsilon : 1e-30f;
+        largest = fmaxf(largest, fmaxf(fabsf(a[k]), fmaxf(fabsf(b[k]), fabsf(c[k]))));
+    return fmaxf(IDMR_RAY_OFFSET_MIN, IDMR_RAY_OFFSET_SCALE * largest);
 }
 
 /* Triangle t's shading normals: its corners' vertex normals packed (idmr/normal_packing.h)
@@ -57,7 +59,7 @@ static void triangle_data(const scene *s, float *normals, uint32_t *shading,
             float *out = &normals[4 * ((size_t)mesh->first_triangle + t)];
             for (int k = 0; k < 3; k++)
                 out[k] = length > 0 ? (float)(n[k] / length) : 0.0f;
-            out[3] = (float)(0.5 * length);
+            out[3] = triangle_ray_offset(a, b, c);
             shading_corners(mesh, t, &shading[4 * ((size_t)mesh->first_triangle + t)]);
             material_of[mesh->first_triangle + t] = mesh->material;
         }
@@ -277,7 +279,6 @@ int device_scene_upload(device *d, const scene *s, const bvh *b, device_scene *o
     for (int k = 0; k < 3; k++)
         out->center[k] = 0.5f * (s->bbox_min[k] + s->bbox_max[k]);
     out->radius = (float)(0.5 * scene_diagonal(s));
-    out->ray_epsilon = device_scene_ray_epsilon(s);
     out->light_count = (unsigned int)s->light_count;
     out->bvh_bytes = bvh_device_bytes(b);
     out->bytes = out->bvh_bytes + device_scene_geometry_bytes(s);

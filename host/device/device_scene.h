@@ -2,7 +2,8 @@
  * (kernels/lib/scene.h, kernels/lib/traverse.h), in the order kernels take them (SCENE_BUFFERS):
  *
  *   nodes, leaves            the BVH (idmr/bvh_layout.h)
- *   triangle_normals         float4 per scene triangle: unit winding normal, w = area
+ *   triangle_normals         float4 per scene triangle: unit winding normal, w = the offset
+ *                            of rays leaving it, from its vertices (idmr/ray.h)
  *   triangle_shading         uint4 per scene triangle: its corners' shading normals packed
  *                            (idmr/normal_packing.h), w = 1; all zero: shaded flat
  *   triangle_materials       uint per scene triangle
@@ -12,7 +13,7 @@
  *                            stretch ends at 1), in light order
  *   emitter_triangles        3 float4 per emitter_cdf entry: v0, v1 - v0, v2 - v0
  *   environment              the environment map and its sampling CDFs (idmr/environment.h)
- * Also the scene's bounding sphere and the secondary-ray offset. */
+ * Also the scene's bounding sphere. */
 #ifndef IDMR_DEVICE_SCENE_H
 #define IDMR_DEVICE_SCENE_H
 
@@ -35,7 +36,6 @@ typedef struct device_scene {
     unsigned int light_count;
     float center[3];
     float radius;      /* bounding sphere of the scene box */
-    float ray_epsilon; /* origin offset of secondary rays */
     uint64_t bytes;    /* device memory of all the above */
     uint64_t bvh_bytes; /* of which the BVH (nodes and leaves) */
 } device_scene;
@@ -56,10 +56,5 @@ void device_scene_release(device_scene *ds);
  * (named `kernel_name` in errors). Returns 0, or -1 with the error set. */
 int device_scene_set_args(const device_scene *ds, cl_kernel kernel, const char *kernel_name,
                           unsigned int first);
-
-/* Secondary-ray offset for a scene: 1e-6 of the largest coordinate magnitude plus 1e-7 of the
- * scene diagonal, so it scales with the scene and stays above float rounding of positions far
- * from the origin. */
-float device_scene_ray_epsilon(const scene *s);
 
 #endif

@@ -20,6 +20,7 @@ extern "C" {
 #include "core/files.h"
 #include "io/mesh_io.h"
 #include "io/mesh_text.h"
+#include "io/ply_check.h"
 }
 
 // OpenMesh reports every non-manifold face it has to split (and every face the decimater's
@@ -41,31 +42,13 @@ namespace {
 
 typedef OpenMesh::TriMesh_ArrayKernelT<> TriMesh;
 
-
-// A PLY file (by its extension) must start with "ply" and close its header with a line
-// "end_header" within its first 64 KiB: OpenMesh's reader loops forever on a file cut off
-// inside its header.
-int check_ply_header(const char *path, FILE *f)
+bool has_extension(const char *path, const char *extension)
 {
-    size_t length = std::strlen(path);
-    if (length < 4 || strcasecmp(path + length - 4, ".ply") != 0)
-        return 0;
-    std::vector<char> head(65537);
-    size_t got = std::fread(head.data(), 1, head.size() - 1, f);
-    head[got] = '\0';
-    if (std::strncmp(head.data(), "ply", 3) != 0 || (head[3] != '\n' && head[3] != '\r'))
-        return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': not a PLY file (it does not "
-                         "start with the line \"ply\")", path);
-    for (const char *line = head.data(); line; line = std::strchr(line, '\n')) {
-        line += *line == '\n';
-        if (std::strncmp(line, "end_header", 10) == 0 &&
-            (line[10] == '\n' || line[10] == '\r' || line[10] == '\0'))
-            return 0;
-    }
-    return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': its PLY header has no "
-                     "\"end_header\" line (a truncated file?)", path);
+    size_t length = std::strlen(path), wanted = std::strlen(extension);
+    return length > wanted && strcasecmp(path + length - wanted, extension) == 0;
 }
 
+// A regular file that can be opened; a PLY file also well formed (io/ply_check.h).
 int check_readable(const char *path)
 {
     struct stat info;
@@ -73,12 +56,7 @@ int check_readable(const char *path)
         return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': %s", path, strerror(errno));
     if (!S_ISREG(info.st_mode))
         return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': not a regular file", path);
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': %s", path, strerror(errno));
-    int status = check_ply_header(path, f);
-    fclose(f);
-    return status;
+    return has_extension(path, ".ply") ? ply_check(path) : 0;
 }
 
 // Reads the formats idmr leaves to OpenMesh (PLY, STL, OM) into `out`.
@@ -157,12 +135,6 @@ uint32_t orient_by_normals(mesh_data *m)
         }
     }
     return turned;
-}
-
-bool has_extension(const char *path, const char *extension)
-{
-    size_t length = std::strlen(path), wanted = std::strlen(extension);
-    return length > wanted && strcasecmp(path + length - wanted, extension) == 0;
 }
 
 } // namespace

@@ -2,7 +2,8 @@
  *
  * OBJ and OFF are read by idmr's own strict readers (io/mesh_text.h: errors with file and
  * line, one vertex per distinct OBJ (v, vt, vn) corner); every other format OpenMesh reads (PLY
- * ascii/binary, STL, OM) by OpenMesh, which builds a half-edge mesh: a vertex where the surface
+ * ascii/binary, after io/ply_check.h has proven it well formed; STL, OM) by OpenMesh, which
+ * builds a half-edge mesh: a vertex where the surface
  * is not manifold is split into copies, so vertex_count may exceed the file's. Polygons are
  * fan-triangulated. Positions are as stored in the file (object space). */
 #ifndef IDMR_MESH_IO_H

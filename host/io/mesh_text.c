@@ -130,12 +130,12 @@ static int obj_corner(obj_reader *r, const char *token, size_t length, int64_t c
     size_t counts[3] = {r->positions.count / 3, r->texcoords.count / 2, r->normals.count / 3};
     const char *field = token, *end = token + length;
     for (int k = 0; k < 3; k++) {
-        const char *slash = memchr(field, '/', (size_t)(end - field));
-        const char *field_end = slash ? slash : end;
-        if (field > end) {
+        if (field > end) { /* fewer fields than three: past the token's end */
             corner[k] = -1;
             continue;
         }
+        const char *slash = memchr(field, '/', (size_t)(end - field));
+        const char *field_end = slash ? slash : end;
         if (obj_index(r, field, field_end, counts[k], kinds[k], &corner[k]))
             return -1;
         field = field_end + 1;

@@ -217,6 +217,7 @@ static int bsdf_wrapper(loader *ld, xmlNodePtr node, int depth, bsdf_parsed *out
         }
         if (!mitsuba_is_tag(candidate, "bsdf"))
             continue;
+        mitsuba_mark_read(child);
         if (!inner_count++)
             inner = candidate;
     }

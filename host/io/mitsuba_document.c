@@ -140,6 +140,8 @@ static int load_element(loader *ld, xmlNodePtr child, int include_depth)
 {
     if (mitsuba_is_tag(child, "default") || mitsuba_is_tag(child, "integrator"))
         return 0;
+    if (!mitsuba_is_tag(child, "include") && !mitsuba_is_tag(child, "sensor"))
+        mitsuba_mark_read(child); /* a sensor is marked if it is the one used */
     if (mitsuba_is_tag(child, "sensor"))
         return mitsuba_load_sensor(ld, child);
     if (mitsuba_is_tag(child, "bsdf") || mitsuba_is_tag(child, "texture"))
@@ -187,6 +189,8 @@ scene *mitsuba_load(const char *path)
     }
     if (status == 0 && !ld.s->has_camera)
         warn("%s: no <sensor>: the scene has no camera", path);
+    if (status == 0)
+        mitsuba_warn_unread(ld.docs, ld.doc_count);
     if (status == 0)
         status = scene_finalize(ld.s);
     loader_free(&ld);

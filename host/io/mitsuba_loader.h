@@ -8,6 +8,7 @@
  *   mitsuba_document.c   reading and preparing documents, includes, the top-level walk,
  *                        mitsuba_load()
  *   mitsuba_messages.c   errors and warnings that name file, line and element
+ *   mitsuba_unread.c     warnings for properties and elements no reader asked for
  *   mitsuba_values.c     numbers and typed properties (<float name= value=> and friends)
  *   mitsuba_transform.c  <transform> properties
  *   mitsuba_ids.c        the id table behind <ref id=...>
@@ -62,6 +63,14 @@ typedef struct loader {
     int default_material; /* the shared diffuse 0.5, or -1 until needed */
     size_t include_count; /* <include> elements read so far */
 } loader;
+
+/* What was not read (mitsuba_unread.c). Marks node (may be NULL) as read by some reader;
+ * mitsuba_prop_find() does it for what it finds, a reader that picks a nested plugin by hand
+ * calls it. */
+void mitsuba_mark_read(xmlNodePtr node);
+/* After a load: a warning for each property or nested element of a plugin that was read
+ * which no reader marked and that is not a known Mitsuba property idmr has no use for. */
+void mitsuba_warn_unread(xmlDocPtr *docs, size_t doc_count);
 
 /* Messages (mitsuba_messages.c): "file:line: <tag type=.. name=.. id=..>: what". */
 const char *mitsuba_node_file(xmlNodePtr node);

@@ -96,11 +96,11 @@ char *mitsuba_path_relative(const char *from_dir, const char *target)
         b++;
     size_t size = 3 * ups + strlen(b) + 2;
     char *out = xmalloc(size), *end = out;
-    for (size_t i = 0; i < ups; i++)
-        end += sprintf(end, "../");
-    sprintf(end, "%s", b);
+    for (size_t i = 0; i < ups; i++, end += 3)
+        memcpy(end, "../", 3);
+    strcpy(end, b);
     if (!out[0])
-        sprintf(out, ".");
+        strcpy(out, ".");
     else if (end > out && !*end && end[-1] == '/')
         end[-1] = '\0';
     return out;

@@ -67,6 +67,7 @@ static int sensor_film(xmlNodePtr sensor, long *width, long *height)
     {
         if (!mitsuba_is_tag(film, "film"))
             continue;
+        mitsuba_mark_read(film);
         if (mitsuba_prop_int(film, "width", MITSUBA_FILM_WIDTH, width) ||
             mitsuba_prop_int(film, "height", MITSUBA_FILM_HEIGHT, height))
             return -1;
@@ -144,6 +145,7 @@ int mitsuba_load_sensor(loader *ld, xmlNodePtr node)
         mitsuba_warn_at(node, "only the first sensor is used: ignored");
         return 0;
     }
+    mitsuba_mark_read(node);
     if (strcmp(type, "thinlens") == 0)
         mitsuba_warn_at(node, "thinlens sensor treated as a pinhole (no depth of field)");
     if (sensor_fov(node, &fov, axis) || mitsuba_prop_transform(node, "to_world", &to_world) ||

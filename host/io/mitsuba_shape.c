@@ -137,6 +137,9 @@ static int shape_find_parts(loader *ld, xmlNodePtr node, shape_parts *parts)
     {
         xmlNodePtr target = child;
         mitsuba_id *entry = NULL;
+        if (mitsuba_is_tag(child, "ref") || mitsuba_is_tag(child, "bsdf") ||
+            mitsuba_is_tag(child, "emitter"))
+            mitsuba_mark_read(child);
         if (mitsuba_is_tag(child, "ref")) {
             if (!(entry = mitsuba_ref_resolve(ld, child)))
                 return -1;

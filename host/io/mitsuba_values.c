@@ -143,8 +143,10 @@ xmlNodePtr mitsuba_prop_find(xmlNodePtr plugin, const char *name)
     MITSUBA_FOR_EACH_ELEMENT(child, plugin)
     {
         const char *child_name = mitsuba_attr(child, "name");
-        if (child_name && strcmp(child_name, name) == 0)
+        if (child_name && strcmp(child_name, name) == 0) {
+            mitsuba_mark_read(child);
             return child;
+        }
     }
     return NULL;
 }

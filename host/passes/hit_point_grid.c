@@ -1,6 +1,7 @@
 /* hit_point_grid.c — the hash grid over an iteration's hit points (see hit_point_grid.h). */
 #include "passes/hit_point_grid.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -72,8 +73,11 @@ void hit_point_grid_place(const hit_point_grid *g, const scene *s, double radius
                           idmr_sppm_params *params)
 {
     params->radius = (float)sqrt(radius2);
-    params->cell_size = 2.0f * params->radius * 1.0001f;
-    params->cell_count = g->cells;
+    double farthest = 0; /* the largest coordinate a gather ball reaches */
     for (int k = 0; k < 3; k++)
-        params->grid_origin[k] = s->bbox_min[k] - params->radius;
+        farthest = fmax(farthest, fmax(fabs(s->bbox_min[k]), fabs(s->bbox_max[k])));
+    farthest += params->radius;
+    double cell_size = fmax(2.0 * params->radius * 1.0001, farthest / HIT_POINT_GRID_MAX_CELL);
+    params->cell_size = (float)cell_size * (1.0f + FLT_EPSILON);
+    params->cell_count = g->cells;
 }

@@ -3,8 +3,10 @@
  * scatter of hit point indices by cell. Part of the SPPM core (passes/sppm.h).
  *
  * The cells are 2r (and a little more) wide for the gather radius r, so a gather ball touches
- * at most 2 x 2 x 2 of them; buckets are a power of two, at least twice the hit points, at
- * least 1024. */
+ * at most 2 x 2 x 2 of them, and they are counted in 64 bits from the world origin: where the
+ * scene reaches farther than HIT_POINT_GRID_MAX_CELL cells of that size (a small radius in a
+ * vast scene), the cells grow to keep every cell number in range. Buckets are a power of two,
+ * at least twice the hit points, at least 1024. */
 #ifndef IDMR_HIT_POINT_GRID_H
 #define IDMR_HIT_POINT_GRID_H
 
@@ -13,6 +15,9 @@
 #include "core/scene.h"
 #include "device/device.h"
 #include "idmr/sppm_layout.h"
+
+/* The largest cell number along an axis: 2^60 (a 64-bit cell number with room to spare). */
+#define HIT_POINT_GRID_MAX_CELL 1152921504606846976.0
 
 typedef struct hit_point_grid {
     cl_kernel count, scan_chunks, scan_chunk_sums, scan_apply, scatter;
@@ -27,7 +32,7 @@ int hit_point_grid_create(device *d, cl_program program, unsigned int hit_points
                           hit_point_grid *g);
 void hit_point_grid_release(hit_point_grid *g);
 
-/* Sets params' radius, cell size, grid origin and cell count for gather radius² `radius2`. */
+/* Sets params' radius, cell size and cell count for gather radius² `radius2` in scene s. */
 void hit_point_grid_place(const hit_point_grid *g, const scene *s, double radius2,
                           idmr_sppm_params *params);
 

@@ -147,6 +147,7 @@ static int add_accumulator(sppm *core, importance_pass *p, int k)
                              "limit in one iteration; use fewer photons per iteration",
                              KIND_NAMES[k], t);
         sums[t] += (double)p->scratch[t] / IDMR_FIXED_SCALE;
+        CHECK_FINITE(sums[t], KIND_NAMES[k]);
     }
     return device_clear(core->dev, p->accumulators[k], p->words * sizeof(cl_ulong),
                         KIND_NAMES[k]);
@@ -362,8 +363,10 @@ void importance_mesh_vertices(const importance_result *r, const scene *s, size_t
             area[v] += a;
         }
     }
-    for (uint32_t v = 0; v < mesh->vertex_count; v++)
+    for (uint32_t v = 0; v < mesh->vertex_count; v++) {
         vertex_importance[v] = area[v] > 0 ? vertex_importance[v] / area[v] : 0.0;
+        CHECK_FINITE(vertex_importance[v], "vertex importance");
+    }
     free(area);
 }
 

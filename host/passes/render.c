@@ -129,6 +129,7 @@ static int collect(sppm *core, void *state, unsigned int n, int *stop, char *det
                                  i % params->width, i / params->width);
             double e = p->hits[i].emitted[c];
             p->sum[3 * i + c] += (isfinite(e) ? e : 0.0) + (double)u * per_unit;
+            CHECK_FINITE(p->sum[3 * i + c], "pixel radiance");
         }
     double elapsed = core->summary->seconds.camera + core->summary->seconds.photon +
                      core->summary->seconds.grid + core->summary->seconds.gather +

@@ -44,7 +44,7 @@ double sppm_initial_radius2(const scene *s, unsigned int width, const idmr_hit_p
     float *distance = xmalloc((count ? count : 1) * sizeof *distance);
     size_t valid = 0;
     for (size_t i = 0; i < count; i++) {
-        if (!hit_points[i].valid)
+        if (!(hit_points[i].offset > 0.0f))
             continue;
         double d2 = 0;
         for (int k = 0; k < 3; k++) {
@@ -199,7 +199,6 @@ static void params_begin(sppm *core)
     params->triangle_count = (unsigned int)core->scene->triangle_count;
     memcpy(params->scene_center, core->uploaded.center, sizeof params->scene_center);
     params->scene_radius = core->uploaded.radius;
-    params->ray_epsilon = core->uploaded.ray_epsilon;
     params->camera_depth = core->options->max_depth;
 }
 
@@ -216,7 +215,7 @@ static int first_iteration(sppm *core, double *radius2)
                  device_read(core->dev, core->path_length, paths * sizeof *lengths, lengths,
                              "photon path lengths");
     for (size_t i = 0; i < core->pixels && !status; i++)
-        core->summary->hit_points += hit_points[i].valid;
+        core->summary->hit_points += hit_points[i].offset > 0.0f;
     for (size_t i = 0; i < paths && !status; i++)
         core->summary->photon_records += lengths[i];
     double pinned = core->options->radius;
@@ -309,6 +308,7 @@ static int run_iterations(sppm *core, sppm_pass *pass, sppm_snapshot *snapshot)
         summary->iterations = n + 1;
         progress_update(&bar, n + 1, detail);
         radius2 = sppm_next_radius2(radius2, n, o->alpha);
+        CHECK_FINITE(radius2, "gather radius²");
         if (o->time_limit > 0 && monotonic_seconds() - start >= o->time_limit)
             stop = 1;
     }

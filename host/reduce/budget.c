@@ -268,6 +268,7 @@ static void finish_plan(const budget_mesh *meshes, size_t count, budget_plan *pl
         planned += plan->target[i];
         plan->decimate[i] = plan->target[i] < v;
         plan->factor[i] = plan->decimate[i] ? (double)plan->target[i] / (double)v : 1.0;
+        CHECK_FINITE(plan->factor[i], "decimation factor");
     }
     plan->total_planned = planned;
 }

@@ -29,6 +29,9 @@
 #include <cstdint>
 
 extern "C" {
+extern "C" {
+#include "core/error.h"
+}
 #include "reduce/decimate.h"
 }
 
@@ -58,6 +61,7 @@ template <class MeshT> class ModImportanceT : public OpenMesh::Decimater::ModBas
     float collapse_priority(const CollapseInfo &ci) override
     {
         double sum = ring_sum(ci.v0);
+        CHECK_FINITE(sum, "ring importance");
         return (float)std::min(sum, (double)FLT_MAX / 2);
     }
 
@@ -124,6 +128,7 @@ template <class MeshT> class ModWeightedQuadricT : public OpenMesh::Decimater::M
         q += quadric(ci.v1);
         const typename MeshT::Point &p = ci.p1;
         double error = q(OpenMesh::Vec3d(p[0], p[1], p[2]));
+        CHECK_FINITE(error, "weighted quadric error");
         return (float)std::min(std::max(error, 0.0), (double)FLT_MAX / 2);
     }
 

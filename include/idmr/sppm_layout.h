@@ -35,7 +35,7 @@ typedef struct idmr_hit_point {
     float position[3];
     unsigned int pixel;
     float normal[3]; /* geometric, facing the camera path that arrived */
-    unsigned int valid;
+    float offset;    /* > 0: a ray leaving it starts this far off (idmr/ray.h); 0: no hit point */
 } idmr_hit_point;
 
 IDMR_STATIC_ASSERT(sizeof(idmr_hit_point) == 32, "idmr_hit_point must be 32 bytes");
@@ -52,21 +52,17 @@ typedef struct idmr_sppm_params {
     unsigned int cell_count; /* hash-grid buckets (a power of two) */
     unsigned int triangle_count;
 
-    float grid_origin[3];
-    float radius; /* gather radius this iteration */
+    float radius;              /* gather radius this iteration */
+    float cell_size;           /* hash-grid cell edge: at least 2 radius (hit_point_grid.h) */
+    float fixed_scale;         /* renderer: fixed-point units per unit of pixel radiance */
+    unsigned int camera_depth; /* camera path: surface interactions at most */
 
     float scene_center[3];
     float scene_radius; /* bounding sphere: directional lights start outside it */
-
-    float ray_epsilon; /* origin offset of secondary rays, along the normal */
-    float cell_size;
-    float fixed_scale; /* renderer: fixed-point units per unit of pixel radiance */
-    unsigned int camera_depth; /* camera path: surface interactions at most */
 } idmr_sppm_params;
 
-IDMR_STATIC_ASSERT(sizeof(idmr_sppm_params) == 80, "idmr_sppm_params is 80 bytes");
-IDMR_OFFSET_ASSERT(idmr_sppm_params, grid_origin, 32);
+IDMR_STATIC_ASSERT(sizeof(idmr_sppm_params) == 64, "idmr_sppm_params is 64 bytes");
+IDMR_OFFSET_ASSERT(idmr_sppm_params, radius, 32);
 IDMR_OFFSET_ASSERT(idmr_sppm_params, scene_center, 48);
-IDMR_OFFSET_ASSERT(idmr_sppm_params, ray_epsilon, 64);
 
 #endif

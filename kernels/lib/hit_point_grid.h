@@ -16,16 +16,19 @@
 
 #include "idmr/sppm_layout.h"
 
-/* The cell of point p (saturated: a point far outside the grid cannot overflow an int). */
-inline int3 grid_cell(float3 p, const idmr_sppm_params *params)
+/* The cell of point p: its coordinates over the cell size, rounded down, in 64 bits, counted
+ * from the world origin (where positions have their finest floats). The host sizes the cells so
+ * that no point of the scene is more than 2^60 cells out (hit_point_grid.c): the conversion
+ * never saturates, and distinct cells never merge. */
+inline long3 grid_cell(float3 p, const idmr_sppm_params *params)
 {
-    return convert_int3_sat_rtn((p - vload3(0, params->grid_origin)) / params->cell_size);
+    return convert_long3_sat_rtn(p / params->cell_size);
 }
 
-inline uint grid_hash(int3 c, uint cell_count)
+inline uint grid_hash(long3 c, uint cell_count)
 {
-    return (((uint)c.x * 73856093u) ^ ((uint)c.y * 19349663u) ^ ((uint)c.z * 83492791u)) &
-           (cell_count - 1u);
+    ulong h = ((ulong)c.x * 73856093ul) ^ ((ulong)c.y * 19349663ul) ^ ((ulong)c.z * 83492791ul);
+    return (uint)(h ^ (h >> 32)) & (cell_count - 1u);
 }
 
 /* The bucket of hit point hp (valid ones only are sorted into the grid). */
@@ -54,22 +57,25 @@ inline void exclusive_scan(global uint *values, uint count)
 }
 
 /* The distinct buckets of the cells that the ball of radius params->radius around p touches,
- * into buckets[8]; returns how many. */
+ * into buckets[8]; returns how many. Along each axis the ball reaches the cell of p - r and that
+ * of p + r and none between: a cell is wider than the ball, and where floats are coarser than
+ * a cell, p - r and p + r round to the same or to neighbouring floats (rounding is monotonic,
+ * so a hit point between them lies in one of their two cells). */
 inline uint grid_buckets_near(float3 p, const idmr_sppm_params *params, uint buckets[8])
 {
     float r = params->radius;
-    int3 lo = grid_cell(p - r, params), hi = grid_cell(p + r, params);
+    long3 lo = grid_cell(p - r, params), hi = grid_cell(p + r, params);
     uint count = 0;
-    for (int z = lo.z; z <= hi.z; z++)
-        for (int y = lo.y; y <= hi.y; y++)
-            for (int x = lo.x; x <= hi.x; x++) {
-                uint h = grid_hash((int3)(x, y, z), params->cell_count);
-                bool seen = false;
-                for (uint k = 0; k < count; k++)
-                    seen = seen || buckets[k] == h;
-                if (!seen && count < 8u)
-                    buckets[count++] = h;
-            }
+    for (uint corner = 0; corner < 8u; corner++) {
+        long3 c = (long3)(corner & 1u ? hi.x : lo.x, corner & 2u ? hi.y : lo.y,
+                          corner & 4u ? hi.z : lo.z);
+        uint h = grid_hash(c, params->cell_count);
+        bool seen = false;
+        for (uint k = 0; k < count; k++)
+            seen = seen || buckets[k] == h;
+        if (!seen)
+            buckets[count++] = h;
+    }
     return count;
 }
 

@@ -13,9 +13,9 @@
 
 #if HAS_FEATURE(IDMR_FEATURE_AREA)
 /* A point of area light `light`, uniform over its area (a triangle chosen by area, then a point
- * in it), and that triangle's unit front normal. */
+ * in it), that triangle's unit front normal, and the offset of a ray leaving it (idmr/ray.h). */
 inline void sample_area_point(const scene_view *scene, global const idmr_light *light,
-                              idmr_rng *rng, float3 *p, float3 *n)
+                              idmr_rng *rng, float3 *p, float3 *n, float *offset)
 {
     uint t = light->cdf_offset + sample_cdf(scene->emitter_cdf + light->cdf_offset,
                                             light->triangle_count, idmr_rng_float(rng));
@@ -25,6 +25,9 @@ inline void sample_area_point(const scene_view *scene, global const idmr_light *
     float su = sqrt(idmr_rng_float(rng)), v = idmr_rng_float(rng);
     *p = v0 + (1.0f - v) * su * e1 + v * su * e2;
     *n = normalize(cross(e1, e2));
+    float3 largest = fmax(fabs(v0), fmax(fabs(v0 + e1), fabs(v0 + e2)));
+    *offset = fmax(IDMR_RAY_OFFSET_MIN,
+                   IDMR_RAY_OFFSET_SCALE * fmax(largest.x, fmax(largest.y, largest.z)));
 }
 #endif
 
@@ -90,8 +93,9 @@ inline bool emit(const scene_view *scene, const idmr_sppm_params *params, idmr_r
 #if HAS_FEATURE(IDMR_FEATURE_AREA)
     if (light->kind == IDMR_LIGHT_AREA) {
         float3 p, n;
-        sample_area_point(scene, light, rng, &p, &n);
-        *origin = offset_origin(p, n, params->ray_epsilon);
+        float offset;
+        sample_area_point(scene, light, rng, &p, &n, &offset);
+        *origin = offset_origin(p, n, offset);
         *direction = sample_cosine(n, rng);
         return true;
     }
@@ -163,7 +167,8 @@ inline bool shadow_light_sample(const scene_view *scene, const idmr_sppm_params 
 #if HAS_FEATURE(IDMR_FEATURE_AREA)
     if (light->kind == IDMR_LIGHT_AREA) {
         float3 n;
-        sample_area_point(scene, light, rng, &target, &n);
+        float unused_offset;
+        sample_area_point(scene, light, rng, &target, &n, &unused_offset);
         *size = sqrt(light->area);
         *reach = dot(p - target, n) > 0.0f ? 1.0f : 0.0f; /* in front of the emitting side */
     }

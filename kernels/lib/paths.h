@@ -89,7 +89,7 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
     idmr_rng rng = idmr_rng_init(params->seed, params->iteration, CAMERA_STREAM, pixel);
     float3 origin = vload3(0, camera.origin);
     float3 d = camera_ray(camera, params, pixel, &rng);
-    idmr_hit_point hp = {{0.0f, 0.0f, 0.0f}, pixel, {0.0f, 0.0f, 0.0f}, 0u}; /* none yet */
+    idmr_hit_point hp = {{0.0f, 0.0f, 0.0f}, pixel, {0.0f, 0.0f, 0.0f}, 0.0f}; /* none yet */
 #if PASS_RENDER
     float3 throughput = (float3)(1.0f), radiance = (float3)(0.0f);
     idmr_render_hit rh = {{0.0f, 0.0f, 0.0f}, 0u, {0.0f, 0.0f, 0.0f}, 0u,
@@ -106,6 +106,7 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
         float3 n = scene->triangle_normals[hit.triangle].xyz;
         float3 ns = shading_normal(scene->triangle_shading, hit, n);
         float3 p = origin + hit.t * d;
+        float offset = surface_offset(scene, hit.triangle, origin);
         global const idmr_material *m = triangle_material(scene, hit.triangle);
 #if PASS_IMPORTANCE && IDMR_ACCUMULATE_IMPORTANCE && IDMR_CAMERA_IMPORTANCE
         fixed_add(records, hit.triangle,
@@ -120,7 +121,7 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
         if (!material_is_specular(m)) {
             vstore3(p, 0, hp.position);
             vstore3(n_side, 0, hp.normal);
-            hp.valid = 1u;
+            hp.offset = offset;
 #if PASS_RENDER
             vstore3(throughput, 0, rh.throughput);
             rh.material = scene->triangle_materials[hit.triangle];
@@ -142,7 +143,7 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
         }
 #endif
         d = scatter_specular(m, d, n, ns, &rng);
-        origin = offset_origin(p, dot(d, n_side) > 0.0f ? n_side : -n_side, params->ray_epsilon);
+        origin = offset_origin(p, dot(d, n_side) > 0.0f ? n_side : -n_side, offset);
 #endif
     }
     hit_points[pixel] = hp;
@@ -172,6 +173,7 @@ inline uint photon_path(const scene_view *scene, const idmr_sppm_params *params,
         float3 n = scene->triangle_normals[hit.triangle].xyz;
         float3 ns = shading_normal(scene->triangle_shading, hit, n);
         float3 p = origin + hit.t * d;
+        float offset = surface_offset(scene, hit.triangle, origin);
         float3 n_side = dot(d, n) < 0.0f ? n : -n;
         global const idmr_material *m = triangle_material(scene, hit.triangle);
 #if PASS_IMPORTANCE
@@ -199,7 +201,7 @@ inline uint photon_path(const scene_view *scene, const idmr_sppm_params *params,
 #if PASS_RENDER
         flux *= weight;
 #endif
-        origin = offset_origin(p, dot(d, n_side) > 0.0f ? n_side : -n_side, params->ray_epsilon);
+        origin = offset_origin(p, dot(d, n_side) > 0.0f ? n_side : -n_side, offset);
     }
     return stored;
 }

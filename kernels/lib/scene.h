@@ -4,7 +4,8 @@
  * functions:
  *
  *   nodes, leaves          the BVH (idmr/bvh_layout.h)
- *   triangle_normals       float4 per scene triangle: unit winding normal, w = area
+ *   triangle_normals       float4 per scene triangle: unit winding normal, w = the offset
+ *                          of rays leaving it (idmr/ray.h)
  *   triangle_shading       uint4 per scene triangle: corner shading normals (lib/shading.h)
  *   triangle_materials     uint per scene triangle: index into materials
  *   materials, lights      idmr_material[], idmr_light[]
@@ -19,6 +20,7 @@
 #include "idmr/bvh_layout.h"
 #include "idmr/light.h"
 #include "idmr/material.h"
+#include "idmr/ray.h"
 
 #define SCENE_BUFFERS                                                                        \
     global const idmr_bvh_node *nodes, global const idmr_triangle4 *leaves,                  \
@@ -53,11 +55,19 @@ inline global const idmr_material *triangle_material(const scene_view *scene, ui
     return scene->materials + scene->triangle_materials[t];
 }
 
-/* Offsets a surface point to the side `side` (a unit normal) points to, so that a ray leaving
- * it does not hit the same surface again. */
-inline float3 offset_origin(float3 p, float3 side, float epsilon)
+/* How far a ray leaving the surface of `triangle` at a point reached from `ray_origin` starts
+ * off it (idmr/ray.h). */
+inline float surface_offset(const scene_view *scene, uint triangle, float3 ray_origin)
 {
-    return p + side * epsilon;
+    float3 a = fabs(ray_origin);
+    return fmax(scene->triangle_normals[triangle].w,
+                IDMR_RAY_OFFSET_SCALE * fmax(a.x, fmax(a.y, a.z)));
+}
+
+/* Moves surface point p `offset` to the side `side` (a unit normal) points to. */
+inline float3 offset_origin(float3 p, float3 side, float offset)
+{
+    return p + side * offset;
 }
 
 #endif

@@ -40,7 +40,7 @@ inline float shadow_occluder_weight(const scene_view *scene, const idmr_sppm_par
     float cos_receiver = dot(d, n);
     if (!(cos_receiver > 0.0f))
         return 0.0f; /* the light is on the other side of the receiving surface */
-    float3 origin = offset_origin(p, n, params->ray_epsilon);
+    float3 origin = offset_origin(p, n, hp->offset);
     float tmax = isinf(distance) ? INFINITY : distance * (1.0f - 1e-4f); /* short of the light */
     idmr_hit hit = traverse_closest(scene->nodes, scene->leaves, origin, d, 0.0f, tmax);
     if (hit.triangle == IDMR_NO_HIT)

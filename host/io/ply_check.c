@@ -1,0 +1,316 @@
+/* ply_check.c — reads a PLY file once, without keeping anything, to prove it well formed before
+ * OpenMesh reads it (see ply_check.h for what is checked and why). */
+#include "io/ply_check.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/types.h>
+
+#include "core/error.h"
+
+#define PLY_HEADER_MAX (1 << 16) /* bytes of header read at most */
+#define PLY_PROPERTIES_MAX 64    /* per element */
+#define PLY_ELEMENTS_MAX 64
+
+typedef enum ply_type {
+    PLY_INT8, PLY_UINT8, PLY_INT16, PLY_UINT16, PLY_INT32, PLY_UINT32, PLY_FLOAT32, PLY_FLOAT64,
+    PLY_TYPE_NONE
+} ply_type;
+
+static const struct {
+    const char *name, *alias;
+    int size;
+} ply_types[] = {
+    [PLY_INT8] = {"char", "int8", 1},      [PLY_UINT8] = {"uchar", "uint8", 1},
+    [PLY_INT16] = {"short", "int16", 2},   [PLY_UINT16] = {"ushort", "uint16", 2},
+    [PLY_INT32] = {"int", "int32", 4},     [PLY_UINT32] = {"uint", "uint32", 4},
+    [PLY_FLOAT32] = {"float", "float32", 4}, [PLY_FLOAT64] = {"double", "float64", 8},
+};
+
+static ply_type type_named(const char *name)
+{
+    for (int t = 0; t < PLY_TYPE_NONE; t++)
+        if (strcmp(name, ply_types[t].name) == 0 || strcmp(name, ply_types[t].alias) == 0)
+            return (ply_type)t;
+    return PLY_TYPE_NONE;
+}
+
+typedef struct ply_property {
+    ply_type type;
+    ply_type count_type; /* PLY_TYPE_NONE unless a list */
+    int is_face_indices; /* the face element's vertex_indices (or vertex_index) list */
+} ply_property;
+
+typedef struct ply_element {
+    char name[64];
+    uint64_t count;
+    ply_property properties[PLY_PROPERTIES_MAX];
+    int property_count;
+} ply_element;
+
+typedef enum ply_format { PLY_ASCII, PLY_BINARY_LE, PLY_BINARY_BE } ply_format;
+
+typedef struct ply_reader {
+    const char *path;
+    FILE *f;
+    ply_format format;
+    ply_element elements[PLY_ELEMENTS_MAX];
+    int element_count;
+    long line; /* ascii: the line of the body being read */
+    uint64_t vertices; /* the vertex element's count; UINT64_MAX without one */
+} ply_reader;
+
+/* An error about header line `number`; returns -1. */
+static int header_fail(const ply_reader *r, long number, const char *what)
+{
+    return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': PLY header line %ld: %s", r->path,
+                     number, what);
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* The header                                                                               */
+
+/* One header line (no newline), number `number`: what it declares into r, or an error. Sets
+ * *done at "end_header". */
+static int header_line(ply_reader *r, char *line, long number, int *seen_format, int *done)
+{
+    char *words[8];
+    int count = 0;
+    for (const char *p = line; *p; p++)
+        if ((unsigned char)*p < 0x20 && *p != '\t')
+            return header_fail(r, number, "a control character");
+    for (char *w = strtok(line, " \t"); w && count < 8; w = strtok(NULL, " \t"))
+        words[count++] = w;
+    if (count == 0 || strcmp(words[0], "comment") == 0 || strcmp(words[0], "obj_info") == 0)
+        return 0;
+    if (strcmp(words[0], "end_header") == 0) {
+        *done = 1;
+        return *seen_format ? 0 : header_fail(r, number, "no \"format\" line before \"end_header\"");
+    }
+    if (strcmp(words[0], "format") == 0) {
+        if (count != 3 || strcmp(words[2], "1.0") != 0)
+            return header_fail(r, number, "expected \"format ascii|binary_little_endian|binary_big_endian 1.0\"");
+        if (strcmp(words[1], "ascii") == 0)
+            r->format = PLY_ASCII;
+        else if (strcmp(words[1], "binary_little_endian") == 0)
+            r->format = PLY_BINARY_LE;
+        else if (strcmp(words[1], "binary_big_endian") == 0)
+            r->format = PLY_BINARY_BE;
+        else
+            return header_fail(r, number, "unknown PLY format");
+        *seen_format = 1;
+        return 0;
+    }
+    if (strcmp(words[0], "element") == 0) {
+        char *end;
+        errno = 0;
+        unsigned long long n = count == 3 && isdigit((unsigned char)words[2][0])
+                                   ? strtoull(words[2], &end, 10)
+                                   : 0;
+        if (count != 3 || !isdigit((unsigned char)words[2][0]) || *end || errno ||
+            n > UINT32_MAX)
+            return header_fail(r, number, "expected \"element NAME COUNT\" with a count below 2^32");
+        if (r->element_count == PLY_ELEMENTS_MAX)
+            return header_fail(r, number, "too many elements");
+        ply_element *e = &r->elements[r->element_count++];
+        memset(e, 0, sizeof *e);
+        snprintf(e->name, sizeof e->name, "%s", words[1]);
+        e->count = n;
+        if (strcmp(e->name, "vertex") == 0)
+            r->vertices = n;
+        return 0;
+    }
+    if (strcmp(words[0], "property") == 0) {
+        if (r->element_count == 0)
+            return header_fail(r, number, "a property before any element");
+        ply_element *e = &r->elements[r->element_count - 1];
+        if (e->property_count == PLY_PROPERTIES_MAX)
+            return header_fail(r, number, "too many properties");
+        ply_property *p = &e->properties[e->property_count++];
+        int list = count >= 2 && strcmp(words[1], "list") == 0;
+        if (list) {
+            p->count_type = count == 5 ? type_named(words[2]) : PLY_TYPE_NONE;
+            p->type = count == 5 ? type_named(words[3]) : PLY_TYPE_NONE;
+            if (count != 5 || p->count_type == PLY_TYPE_NONE || p->type == PLY_TYPE_NONE ||
+                p->count_type >= PLY_FLOAT32)
+                return header_fail(r, number, "expected \"property list COUNT_TYPE TYPE NAME\" (an integer "
+                               "count type)");
+            p->is_face_indices = strcmp(e->name, "face") == 0 &&
+                                 (strcmp(words[4], "vertex_indices") == 0 ||
+                                  strcmp(words[4], "vertex_index") == 0);
+            return 0;
+        }
+        p->count_type = PLY_TYPE_NONE;
+        p->type = count == 3 ? type_named(words[1]) : PLY_TYPE_NONE;
+        if (p->type == PLY_TYPE_NONE)
+            return header_fail(r, number, "expected \"property TYPE NAME\"");
+        return 0;
+    }
+    return header_fail(r, number, "unknown PLY header line");
+}
+
+static int read_header(ply_reader *r)
+{
+    char *line = NULL;
+    size_t capacity = 0, bytes = 0;
+    long number = 0;
+    int seen_format = 0, done = 0, status = 0;
+    ssize_t length;
+    while (status == 0 && !done) {
+        length = getline(&line, &capacity, r->f);
+        if (length <= 0 || line[length - 1] != '\n') {
+            status = error_set(IDMR_EXIT_INPUT,
+                               number == 0 ? "cannot read mesh '%s': not a PLY file (it does not "
+                                             "start with the line \"ply\")"
+                                           : "cannot read mesh '%s': its PLY header has no "
+                                             "\"end_header\" line (a truncated file?)",
+                               r->path);
+            break;
+        }
+        number++;
+        bytes += (size_t)length;
+        if (bytes > PLY_HEADER_MAX) {
+            status = error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': a PLY header over 64 KiB",
+                               r->path);
+            break;
+        }
+        line[--length] = '\0';
+        if (length > 0 && line[length - 1] == '\r')
+            line[--length] = '\0';
+        if (memchr(line, '\0', (size_t)length)) /* a NUL inside the line */
+            status = header_fail(r, number, "a control character");
+        else if (number == 1 && strcmp(line, "ply") != 0)
+            status = error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': not a PLY file (it does "
+                               "not start with the line \"ply\")", r->path);
+        else if (number > 1)
+            status = header_line(r, line, number, &seen_format, &done);
+    }
+    free(line);
+    r->line = number + 1;
+    return status;
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* The body                                                                                 */
+
+/* The next ascii token into token (size bytes); 0 at the end of the file. */
+static int next_token(ply_reader *r, char *token, size_t size)
+{
+    int c;
+    while ((c = getc(r->f)) != EOF && isspace(c))
+        r->line += c == '\n';
+    if (c == EOF)
+        return 0;
+    size_t n = 0;
+    for (; c != EOF && !isspace(c); c = getc(r->f))
+        if (n + 1 < size)
+            token[n++] = (char)c;
+    if (c == '\n')
+        ungetc(c, r->f);
+    token[n] = '\0';
+    return 1;
+}
+
+/* Reads one value of `type` into *value. Integers must fit the type, floats must be finite. */
+static int read_value(ply_reader *r, ply_type type, const ply_element *e, uint64_t index,
+                      double *value)
+{
+    char where[160];
+    snprintf(where, sizeof where, "element '%s' %llu", e->name, (unsigned long long)index);
+    if (r->format == PLY_ASCII) {
+        char token[64];
+        if (!next_token(r, token, sizeof token))
+            return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': the file ends inside %s "
+                             "(the header promises more)", r->path, where);
+        char *end;
+        errno = 0;
+        if (type < PLY_FLOAT32) /* an integer as OpenMesh reads one: digits only */
+            *value = (double)strtoll(token, &end, 10);
+        else
+            *value = strtod(token, &end);
+        if (*end || end == token || errno == ERANGE || !isfinite(*value))
+            return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': line %ld: %s: '%s' is not "
+                             "a %s", r->path, r->line, where, token,
+                             type < PLY_FLOAT32 ? "whole number" : "finite number");
+    } else {
+        unsigned char bytes[8];
+        int size = ply_types[type].size;
+        if (fread(bytes, 1, (size_t)size, r->f) != (size_t)size)
+            return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': the file ends inside %s "
+                             "(the header promises more)", r->path, where);
+        if (r->format == PLY_BINARY_BE)
+            for (int i = 0; i < size / 2; i++) {
+                unsigned char t = bytes[i];
+                bytes[i] = bytes[size - 1 - i];
+                bytes[size - 1 - i] = t;
+            }
+        int8_t i8; uint8_t u8; int16_t i16; uint16_t u16; int32_t i32; uint32_t u32; float f32;
+        double f64;
+        switch (type) {
+        case PLY_INT8: memcpy(&i8, bytes, 1); *value = i8; break;
+        case PLY_UINT8: memcpy(&u8, bytes, 1); *value = u8; break;
+        case PLY_INT16: memcpy(&i16, bytes, 2); *value = i16; break;
+        case PLY_UINT16: memcpy(&u16, bytes, 2); *value = u16; break;
+        case PLY_INT32: memcpy(&i32, bytes, 4); *value = i32; break;
+        case PLY_UINT32: memcpy(&u32, bytes, 4); *value = u32; break;
+        case PLY_FLOAT32: memcpy(&f32, bytes, 4); *value = f32; break;
+        default: memcpy(&f64, bytes, 8); *value = f64; break;
+        }
+        if (!isfinite(*value))
+            return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': %s: a value that is not "
+                             "a finite number", r->path, where);
+        return 0;
+    }
+    static const double low[] = {-128, 0, -32768, 0, -2147483648.0, 0},
+                        high[] = {127, 255, 32767, 65535, 2147483647.0, 4294967295.0};
+    if (type < PLY_FLOAT32 && (*value != floor(*value) || *value < low[type] ||
+                               *value > high[type]))
+        return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': line %ld: %s: %g is not a "
+                         "%s", r->path, r->line, where, *value, ply_types[type].name);
+    return 0;
+}
+
+static int read_element(ply_reader *r, const ply_element *e, uint64_t index)
+{
+    for (int k = 0; k < e->property_count; k++) {
+        const ply_property *p = &e->properties[k];
+        double value, count = 1;
+        if (p->count_type != PLY_TYPE_NONE && read_value(r, p->count_type, e, index, &count))
+            return -1;
+        if (p->is_face_indices && count < 3)
+            return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': face %llu has %g corners "
+                             "(a face needs 3)", r->path, (unsigned long long)index, count);
+        for (double i = 0; i < count; i++) {
+            if (read_value(r, p->type, e, index, &value))
+                return -1;
+            if (p->is_face_indices && (value < 0 || value >= (double)r->vertices))
+                return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': face %llu: vertex "
+                                 "index %.0f is out of range (%llu vertices)", r->path,
+                                 (unsigned long long)index, value,
+                                 (unsigned long long)r->vertices);
+        }
+    }
+    return 0;
+}
+
+int ply_check(const char *path)
+{
+    ply_reader r;
+    memset(&r, 0, sizeof r);
+    r.path = path;
+    r.vertices = UINT64_MAX;
+    r.f = fopen(path, "rb");
+    if (!r.f)
+        return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': %s", path, strerror(errno));
+    int status = read_header(&r);
+    for (int e = 0; status == 0 && e < r.element_count; e++)
+        for (uint64_t i = 0; status == 0 && i < r.elements[e].count; i++)
+            status = read_element(&r, &r.elements[e], i);
+    fclose(r.f);
+    return status;
+}

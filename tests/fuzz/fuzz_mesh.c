@@ -1,0 +1,27 @@
+/* fuzz_mesh.c — libFuzzer target: one mesh reader, chosen by FUZZ_MESH_EXTENSION (".obj" and
+ * ".off": idmr's own readers, host/io/mesh_text.c; ".ply" and ".stl": OpenMesh's, behind idmr's
+ * checks in host/io/mesh_io.cc). `make fuzz` builds it once per extension. */
+#include <stdlib.h>
+#include <unistd.h>
+
+#include "fuzz_inputs.h"
+
+#ifndef FUZZ_MESH_EXTENSION
+#error "build with -DFUZZ_MESH_EXTENSION='\".obj\"' (or .off, .ply)"
+#endif
+
+static char fuzz_dir[] = "/tmp/idmr-fuzz-mesh-XXXXXX";
+
+int LLVMFuzzerInitialize(int *argc, char ***argv)
+{
+    if (!mkdtemp(fuzz_dir))
+        abort();
+    warn_silence(1);
+    return 0;
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    fuzz_mesh_input(data, size, fuzz_dir, FUZZ_MESH_EXTENSION);
+    return 0;
+}
