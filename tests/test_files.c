@@ -109,6 +109,7 @@ static void test_stage_interrupt_leaves_nothing(void **state)
         assert_true(child >= 0);
         if (child == 0) {
             char staging[256];
+            signal(signals[i], SIG_DFL); /* a test run in the background starts ignoring SIGINT */
             if (files_stage_begin(final, staging, sizeof staging) ||
                 files_write_atomic(path_in(staging, "half.ply"), "h", 1))
                 _exit(3);
@@ -122,6 +123,29 @@ static void test_stage_interrupt_leaves_nothing(void **state)
         snprintf(final, sizeof final, "interrupted%d", i);
         assert_int_equal(has_entry_prefixed(final), 0);
     }
+}
+
+/* A signal the process started ignoring (nohup, a script's background job) stays ignored while
+ * an output is staged: the run goes on and publishes its output. */
+static void test_stage_keeps_ignored_signals_ignored(void **state)
+{
+    char final[128];
+    snprintf(final, sizeof final, "%s/under-nohup", temp_dir);
+    pid_t child = fork();
+    assert_true(child >= 0);
+    if (child == 0) {
+        char staging[256];
+        signal(SIGHUP, SIG_IGN);
+        if (files_stage_begin(final, staging, sizeof staging) ||
+            files_write_atomic(path_in(staging, "done.ply"), "d", 1))
+            _exit(3);
+        raise(SIGHUP);
+        _exit(files_stage_end(staging, final, 1) == 0 ? 0 : 5);
+    }
+    int status;
+    assert_int_equal(waitpid(child, &status, 0), child);
+    assert_true(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+    assert_true(exists(path_in(final, "done.ply")));
 }
 
 /* A copy onto its own source is refused, and the source stays as it was. */
@@ -148,6 +172,7 @@ int main(void)
         cmocka_unit_test(test_stage_merges_into_a_full_directory),
         cmocka_unit_test(test_stage_failure_leaves_nothing),
         cmocka_unit_test(test_stage_interrupt_leaves_nothing),
+        cmocka_unit_test(test_stage_keeps_ignored_signals_ignored),
         cmocka_unit_test(test_copy_refuses_its_source),
     };
     return cmocka_run_group_tests(tests, make_temp_dir, remove_temp_dir);

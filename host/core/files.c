@@ -153,6 +153,8 @@ static void remove_staging_and_die(int signal_number)
     raise(signal_number);
 }
 
+/* Catches the staged signals, except one the process was started ignoring (a run under nohup,
+ * or in the background of a script, keeps ignoring SIGINT and SIGHUP, as it should). */
 static void watch_signals(const char *staging)
 {
     snprintf(interrupted_staging, sizeof interrupted_staging, "%s", staging);
@@ -160,8 +162,11 @@ static void watch_signals(const char *staging)
     memset(&action, 0, sizeof action);
     action.sa_handler = remove_staging_and_die;
     sigemptyset(&action.sa_mask);
-    for (size_t i = 0; i < sizeof staged_signals / sizeof *staged_signals; i++)
-        sigaction(staged_signals[i], &action, &previous_actions[i]);
+    for (size_t i = 0; i < sizeof staged_signals / sizeof *staged_signals; i++) {
+        sigaction(staged_signals[i], NULL, &previous_actions[i]);
+        if (previous_actions[i].sa_handler != SIG_IGN)
+            sigaction(staged_signals[i], &action, NULL);
+    }
 }
 
 static void unwatch_signals(void)

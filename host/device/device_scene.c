@@ -220,7 +220,8 @@ static void arrays_build(const scene *s, upload_arrays *a)
     a->material_of = xcalloc(a->triangles, sizeof *a->material_of);
     triangle_data(s, a->normals, a->shading, a->material_of);
     a->light = xcalloc(a->lights, sizeof *a->light);
-    memcpy(a->light, s->lights, s->light_count * sizeof *a->light);
+    if (s->light_count) /* a scene without lights has no array to copy from */
+        memcpy(a->light, s->lights, s->light_count * sizeof *a->light);
     a->light_cdf = xcalloc(a->lights, sizeof *a->light_cdf);
     fill_light_cdf(s, a);
     a->emitter_cdf = xcalloc(a->emitters, sizeof *a->emitter_cdf);
