@@ -64,7 +64,6 @@ static const struct {
     {"sensor", "thinlens", "aperture_radius", 0, "a pinhole camera (thinlens is warned about)"},
     {"sensor", "*", "shutter_open", 0, "no motion blur"},
     {"sensor", "*", "shutter_close", 0, "no motion blur"},
-    {"sensor", "*", "srf", 0, "an RGB film"},
     {"sensor", "*", "principal_point_offset_x", 1, "the principal point is the film's centre"},
     {"sensor", "*", "principal_point_offset_y", 1, "the principal point is the film's centre"},
     {"film", "*", "<rfilter>", 0, "the pixel filter is the renderer's"},
