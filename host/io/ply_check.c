@@ -90,11 +90,13 @@ static int header_line(ply_reader *r, char *line, long number, int *seen_format,
         return 0;
     if (strcmp(words[0], "end_header") == 0) {
         *done = 1;
-        return *seen_format ? 0 : header_fail(r, number, "no \"format\" line before \"end_header\"");
+        return *seen_format ? 0
+                            : header_fail(r, number, "no \"format\" line before \"end_header\"");
     }
     if (strcmp(words[0], "format") == 0) {
         if (count != 3 || strcmp(words[2], "1.0") != 0)
-            return header_fail(r, number, "expected \"format ascii|binary_little_endian|binary_big_endian 1.0\"");
+            return header_fail(r, number, "expected \"format ascii|binary_little_endian|"
+                                          "binary_big_endian 1.0\"");
         if (strcmp(words[1], "ascii") == 0)
             r->format = PLY_ASCII;
         else if (strcmp(words[1], "binary_little_endian") == 0)
@@ -114,7 +116,8 @@ static int header_line(ply_reader *r, char *line, long number, int *seen_format,
                                    : 0;
         if (count != 3 || !isdigit((unsigned char)words[2][0]) || *end || errno ||
             n > UINT32_MAX)
-            return header_fail(r, number, "expected \"element NAME COUNT\" with a count below 2^32");
+            return header_fail(r, number,
+                               "expected \"element NAME COUNT\" with a count below 2^32");
         if (r->element_count == PLY_ELEMENTS_MAX)
             return header_fail(r, number, "too many elements");
         ply_element *e = &r->elements[r->element_count++];
@@ -138,8 +141,8 @@ static int header_line(ply_reader *r, char *line, long number, int *seen_format,
             p->type = count == 5 ? type_named(words[3]) : PLY_TYPE_NONE;
             if (count != 5 || p->count_type == PLY_TYPE_NONE || p->type == PLY_TYPE_NONE ||
                 p->count_type >= PLY_FLOAT32)
-                return header_fail(r, number, "expected \"property list COUNT_TYPE TYPE NAME\" (an integer "
-                               "count type)");
+                return header_fail(r, number, "expected \"property list COUNT_TYPE TYPE NAME\" "
+                                              "(an integer count type)");
             p->is_face_indices = strcmp(e->name, "face") == 0 &&
                                  (strcmp(words[4], "vertex_indices") == 0 ||
                                   strcmp(words[4], "vertex_index") == 0);
