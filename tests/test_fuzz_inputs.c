@@ -82,44 +82,20 @@ static size_t replay_directory(const char *kind, const char *target)
     return count;
 }
 
-static void test_scene_inputs(void **state)
+/* The seeds and regressions of one target (the test's state: its name). */
+static void test_target_inputs(void **state)
 {
-    replay_directory("corpus", "scene");
-    replay_directory("regressions", "scene");
+    replay_directory("corpus", *state);
+    replay_directory("regressions", *state);
 }
 
-static void test_obj_inputs(void **state)
-{
-    replay_directory("corpus", "obj");
-    replay_directory("regressions", "obj");
-}
-
-static void test_off_inputs(void **state)
-{
-    replay_directory("corpus", "off");
-    replay_directory("regressions", "off");
-}
-
-static void test_ply_inputs(void **state)
-{
-    replay_directory("corpus", "ply");
-    replay_directory("regressions", "ply");
-}
-
-static void test_stl_inputs(void **state)
-{
-    replay_directory("corpus", "stl");
-    replay_directory("regressions", "stl");
-}
+#define TARGET_TEST(name) {"test_" name "_inputs", test_target_inputs, NULL, NULL, (void *)name}
 
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_scene_inputs),
-        cmocka_unit_test(test_obj_inputs),
-        cmocka_unit_test(test_off_inputs),
-        cmocka_unit_test(test_ply_inputs),
-        cmocka_unit_test(test_stl_inputs),
+        TARGET_TEST("scene"), TARGET_TEST("obj"), TARGET_TEST("off"),
+        TARGET_TEST("ply"),   TARGET_TEST("stl"),
     };
     return cmocka_run_group_tests(tests, make_temp_dir, remove_temp_dir);
 }

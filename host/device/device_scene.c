@@ -10,8 +10,8 @@
 #include "idmr/normal_packing.h"
 #include "idmr/ray.h"
 
-/* The triangle's share of the offset of rays leaving triangle (a, b, c) (idmr/ray.h): from the
- * largest coordinate magnitude of its vertices (the kernels add the arriving ray's origin). */
+/* The offset of rays leaving triangle (a, b, c) (idmr/ray.h), from the largest coordinate
+ * magnitude of its vertices (for a ray that arrived, the kernels also weigh its origin). */
 static float triangle_ray_offset(const float *a, const float *b, const float *c)
 {
     float largest = 0.0f;
@@ -178,8 +178,9 @@ static void fill_light_cdf(const scene *s, upload_arrays *a)
         a->light_cdf[s->light_count - 1] = 1.0f;
 }
 
-/* Area light l's triangles from entry `at` on: v0, v1 - v0, v2 - v0, and the CDF of their
- * areas (each light's stretch ends at 1). Returns the entry after them. */
+/* Area light l's triangles from entry `at` on: v0 (w: the offset of rays leaving it),
+ * v1 - v0, v2 - v0, and the CDF of their areas (each light's stretch ends at 1). Returns the
+ * entry after them. */
 static size_t fill_emitter(const scene *s, idmr_light *l, size_t at, upload_arrays *a)
 {
     l->cdf_offset = (unsigned int)at;
@@ -197,6 +198,7 @@ static size_t fill_emitter(const scene *s, idmr_light *l, size_t at, upload_arra
             a->emitter_triangles[12 * at + 4 + k] = v1[k] - v0[k];
             a->emitter_triangles[12 * at + 8 + k] = v2[k] - v0[k];
         }
+        a->emitter_triangles[12 * at + 3] = triangle_ray_offset(v0, v1, v2);
         area_running += scene_mesh_triangle_area(mesh, first + t);
         a->emitter_cdf[at] = l->area > 0 ? (float)(area_running / l->area)
                                          : (float)(t + 1) / (float)l->triangle_count;

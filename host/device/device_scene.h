@@ -11,7 +11,8 @@
  *   light_cdf                float per light: cumulative power, last entry 1
  *   emitter_cdf              per area light, its triangles' cumulative area (each light's
  *                            stretch ends at 1), in light order
- *   emitter_triangles        3 float4 per emitter_cdf entry: v0, v1 - v0, v2 - v0
+ *   emitter_triangles        3 float4 per emitter_cdf entry: v0 (w = the offset of rays
+ *                            leaving it), v1 - v0, v2 - v0
  *   environment              the environment map and its sampling CDFs (idmr/environment.h)
  * Also the scene's bounding sphere. */
 #ifndef IDMR_DEVICE_SCENE_H

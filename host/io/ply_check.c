@@ -219,33 +219,44 @@ static int next_token(ply_reader *r, char *token, size_t size)
     return 1;
 }
 
+/* An error about value `index` of element e (with the body line where the file is ascii);
+ * returns -1. Formatted only when it happens: the body is read value by value. */
+static int value_fail(const ply_reader *r, const ply_element *e, uint64_t index,
+                      const char *what)
+{
+    if (r->format == PLY_ASCII)
+        return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': line %ld: element '%s' %llu: %s",
+                         r->path, r->line, e->name, (unsigned long long)index, what);
+    return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': element '%s' %llu: %s", r->path,
+                     e->name, (unsigned long long)index, what);
+}
+
 /* Reads one value of `type` into *value. Integers must fit the type, floats must be finite. */
 static int read_value(ply_reader *r, ply_type type, const ply_element *e, uint64_t index,
                       double *value)
 {
-    char where[160];
-    snprintf(where, sizeof where, "element '%s' %llu", e->name, (unsigned long long)index);
+    static const char *const ends = "the file ends here (the header promises more)";
+    char what[128];
     if (r->format == PLY_ASCII) {
         char token[64];
         if (!next_token(r, token, sizeof token))
-            return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': the file ends inside %s "
-                             "(the header promises more)", r->path, where);
+            return value_fail(r, e, index, ends);
         char *end;
         errno = 0;
         if (type < PLY_FLOAT32) /* an integer as OpenMesh reads one: digits only */
             *value = (double)strtoll(token, &end, 10);
         else
             *value = strtod(token, &end);
-        if (*end || end == token || errno == ERANGE || !isfinite(*value))
-            return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': line %ld: %s: '%s' is not "
-                             "a %s", r->path, r->line, where, token,
-                             type < PLY_FLOAT32 ? "whole number" : "finite number");
+        if (*end || end == token || errno == ERANGE || !isfinite(*value)) {
+            snprintf(what, sizeof what, "'%s' is not a %s", token,
+                     type < PLY_FLOAT32 ? "whole number" : "finite number");
+            return value_fail(r, e, index, what);
+        }
     } else {
         unsigned char bytes[8];
         int size = ply_types[type].size;
         if (fread(bytes, 1, (size_t)size, r->f) != (size_t)size)
-            return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': the file ends inside %s "
-                             "(the header promises more)", r->path, where);
+            return value_fail(r, e, index, ends);
         if (r->format == PLY_BINARY_BE)
             for (int i = 0; i < size / 2; i++) {
                 unsigned char t = bytes[i];
@@ -264,17 +275,15 @@ static int read_value(ply_reader *r, ply_type type, const ply_element *e, uint64
         case PLY_FLOAT32: memcpy(&f32, bytes, 4); *value = f32; break;
         default: memcpy(&f64, bytes, 8); *value = f64; break;
         }
-        if (!isfinite(*value))
-            return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': %s: a value that is not "
-                             "a finite number", r->path, where);
-        return 0;
+        return isfinite(*value) ? 0 : value_fail(r, e, index, "a value that is not finite");
     }
     static const double low[] = {-128, 0, -32768, 0, -2147483648.0, 0},
                         high[] = {127, 255, 32767, 65535, 2147483647.0, 4294967295.0};
     if (type < PLY_FLOAT32 && (*value != floor(*value) || *value < low[type] ||
-                               *value > high[type]))
-        return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': line %ld: %s: %g is not a "
-                         "%s", r->path, r->line, where, *value, ply_types[type].name);
+                               *value > high[type])) {
+        snprintf(what, sizeof what, "%g is not a %s", *value, ply_types[type].name);
+        return value_fail(r, e, index, what);
+    }
     return 0;
 }
 

@@ -29,9 +29,7 @@
 #include <cstdint>
 
 extern "C" {
-extern "C" {
 #include "core/error.h"
-}
 #include "reduce/decimate.h"
 }
 

@@ -186,11 +186,11 @@ static void print_summary(const reduce_state *st)
 {
     const reduce_options *o = st->options;
     fprintf(stderr,
-                "idmr: %llu -> %llu vertices (target %.4g: %llu), %zu of %zu meshes rewritten; "
-                "reduced scene in %s/scene.xml\n",
-                (unsigned long long)st->plan.total_before, (unsigned long long)st->vertices_after,
-                o->target, (unsigned long long)st->plan.total_requested, st->meshes_written,
-                st->count, st->outdir);
+            "idmr: %llu -> %llu vertices (target %.4g: %llu), %zu of %zu meshes rewritten; "
+            "reduced scene in %s/scene.xml\n",
+            (unsigned long long)st->plan.total_before, (unsigned long long)st->vertices_after,
+            o->target, (unsigned long long)st->plan.total_requested, st->meshes_written,
+            st->count, st->outdir);
 }
 
 /* ---- pipeline ---- */

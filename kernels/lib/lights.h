@@ -19,15 +19,14 @@ inline void sample_area_point(const scene_view *scene, global const idmr_light *
 {
     uint t = light->cdf_offset + sample_cdf(scene->emitter_cdf + light->cdf_offset,
                                             light->triangle_count, idmr_rng_float(rng));
-    float3 v0 = scene->emitter_triangles[3 * t].xyz;
+    float4 v0_offset = scene->emitter_triangles[3 * t];
+    float3 v0 = v0_offset.xyz;
     float3 e1 = scene->emitter_triangles[3 * t + 1].xyz;
     float3 e2 = scene->emitter_triangles[3 * t + 2].xyz;
     float su = sqrt(idmr_rng_float(rng)), v = idmr_rng_float(rng);
     *p = v0 + (1.0f - v) * su * e1 + v * su * e2;
     *n = normalize(cross(e1, e2));
-    float3 largest = fmax(fabs(v0), fmax(fabs(v0 + e1), fabs(v0 + e2)));
-    *offset = fmax(IDMR_RAY_OFFSET_MIN,
-                   IDMR_RAY_OFFSET_SCALE * fmax(largest.x, fmax(largest.y, largest.z)));
+    *offset = v0_offset.w;
 }
 #endif
 

@@ -11,7 +11,8 @@
  *   materials, lights      idmr_material[], idmr_light[]
  *   light_cdf              per light: cumulative power, last entry 1
  *   emitter_cdf            per area light, its triangles' cumulative area (in light order)
- *   emitter_triangles      3 float4 per emitter_cdf entry: v0, v1 - v0, v2 - v0
+ *   emitter_triangles      3 float4 per emitter_cdf entry: v0 (w = the offset of rays
+ *                          leaving it), v1 - v0, v2 - v0
  *   environment            the environment map and its CDFs (idmr/environment.h)
  * Triangles are numbered scene-globally (the traversal returns that index). */
 #ifndef IDMR_KERNEL_SCENE_H
