@@ -23,9 +23,9 @@
 #include "idmr/rng.h"
 #include "reduce/budget.h"
 
-/* Builds meshes from parallel arrays (pinned may be NULL). */
+/* Builds meshes from parallel arrays (pinned and own_floor may be NULL). */
 static budget_mesh *make_meshes(size_t count, const uint64_t *vertices, const double *importance,
-                                const int *pinned)
+                                const int *pinned, const uint64_t *own_floor)
 {
     budget_mesh *meshes = calloc(count ? count : 1, sizeof *meshes);
     for (size_t i = 0; i < count; i++) {
@@ -33,6 +33,7 @@ static budget_mesh *make_meshes(size_t count, const uint64_t *vertices, const do
         meshes[i].vertices = vertices[i];
         meshes[i].importance = importance[i];
         meshes[i].pinned = pinned ? pinned[i] : 0;
+        meshes[i].floor = own_floor ? own_floor[i] : 0;
     }
     return meshes;
 }
@@ -41,7 +42,8 @@ static budget_mesh *make_meshes(size_t count, const uint64_t *vertices, const do
 
 #define MAX_CASE_MESHES 4
 
-/* One plan worked out on paper: the meshes, D, the floor, and the targets and rounds expected. */
+/* One plan worked out on paper: the meshes, D, the floor, and the targets and rounds expected;
+ * own_floor (the meshes' own floors) is last so most rows leave it zero. */
 typedef struct worked_case {
     const char *name;
     size_t count;
@@ -52,65 +54,83 @@ typedef struct worked_case {
     uint64_t min_vertices;
     uint64_t expected[MAX_CASE_MESHES];
     unsigned int rounds;
+    uint64_t own_floor[MAX_CASE_MESHES];
 } worked_case;
 
 static const worked_case worked_cases[] = {
     /* v = (100, 100, 200), I = (1, 1, 2), D = 0.6: V_D = 240, V_d = 100 + 100 + 400 = 600,
      * d' = (1, 1, 2) · 240/600 = (0.4, 0.4, 0.8) → targets (40, 40, 160), one round. Note that
      * importance proportional to v does not give equal factors: d_i follows the importance sum. */
-    {"worked: proportional", 3, {100, 100, 200}, {1, 1, 2}, {0}, 0.6, 0, {40, 40, 160}, 1},
+    {"worked: proportional", 3, {100, 100, 200}, {1, 1, 2}, {0}, 0.6, 0, {40, 40, 160}, 1, {0}},
     /* v = (100, 100), I = (9, 1), D = 0.6: V_D = 120, d' = 120/(900 + 100) · (9, 1) = (1.08, 0.12)
      * → the first clamps to 1 (100 vertices); round 2: 120 - 100 = 20 left, d = 20/100 = 0.2. */
-    {"worked: one clamp", 2, {100, 100}, {9, 1}, {0}, 0.6, 0, {100, 20}, 2},
+    {"worked: one clamp", 2, {100, 100}, {9, 1}, {0}, 0.6, 0, {100, 20}, 2, {0}},
     /* v = (100, 100, 100), I = (10, 5, 1), D = 0.8: V_D = 240, V_d = 1600,
      * d' = 240/1600 · (10, 5, 1) = (1.5, 0.75, 0.15) → clamp the first; 140 left,
      * d' = 140/600 · (5, 1) = (1.1667, 0.2333) → clamp the second; 40 left → third 0.4. */
-    {"worked: clamp chain", 3, {100, 100, 100}, {10, 5, 1}, {0}, 0.8, 0, {100, 100, 40}, 3},
+    {"worked: clamp chain", 3, {100, 100, 100}, {10, 5, 1}, {0}, 0.8, 0, {100, 100, 40}, 3, {0}},
     /* Largest remainder: v = 4 × 100, I = (8, 4, 2, 1), D = 0.5: V_D = 200, V_d = 1500,
      * d' = 200/1500 · (8, 4, 2, 1) = (1.067, 0.533, 0.267, 0.133) → clamp the first; 100 left,
      * d' = 100/700 · (4, 2, 1) → counts (57.14, 28.57, 14.29): floors 57 + 28 + 14 = 99, the one
      * vertex left goes to the largest remainder (.57, the second). */
     {"worked: largest remainder", 4, {100, 100, 100, 100}, {8, 4, 2, 1}, {0}, 0.5, 0,
-     {100, 57, 29, 14}, 2},
+     {100, 57, 29, 14}, 2, {0}},
     /* One mesh holds all importance, floor 10: v = (1000, 100, 100), I = (1, 0, 0), D = 0.5:
      * V_D = 600; d' = (0.6, 0, 0) → counts (600, 0, 0): the two below the floor are raised to 10
      * and fixed; round 2: 580 left → first 580/1000 = 0.58. */
     {"worked: importance in one mesh", 3, {1000, 100, 100}, {1, 0, 0}, {0}, 0.5, 10,
-     {580, 10, 10}, 2},
+     {580, 10, 10}, 2, {0}},
     /* Ceiling and floor in the same round, ceiling larger: v = 3 × 100, I = (10, 1, 0), floor 20,
      * D = 0.5: V_D = 150, d' = 150/1100 · (10, 1, 0) → counts (136.4, 13.6, 0): excess 36.4 over
      * the ceiling, deficit 6.4 + 20 = 26.4 under the floor → fix the first at 100. Round 2: 50
      * left, d' = 50/100 · (1, 0) → (50, 0): the third goes to its floor 20. Round 3: 30 left →
      * second 30. */
     {"worked: ceiling before floor", 3, {100, 100, 100}, {10, 1, 0}, {0}, 0.5, 20,
-     {100, 30, 20}, 3},
+     {100, 30, 20}, 3, {0}},
     /* Floor larger than ceiling: v = 3 × 100, I = (3, 1, 0), floor 30, D = 0.5: V_D = 150,
      * d' = 150/400 · (3, 1, 0) → counts (112.5, 37.5, 0): excess 12.5, deficit 30 → fix the third
      * at 30. Round 2: 120 left, d' = 120/400 · (3, 1) = (0.9, 0.3) → (90, 30), in bounds; Σ = 150.
      * (Clamping the first at 100 instead would leave 50 for two meshes whose floors need 60.) */
-    {"worked: floor before ceiling", 3, {100, 100, 100}, {3, 1, 0}, {0}, 0.5, 30, {90, 30, 30}, 2},
+    {"worked: floor before ceiling", 3, {100, 100, 100}, {3, 1, 0}, {0}, 0.5, 30, {90, 30, 30}, 2,
+     {0}},
     /* Pinned meshes keep everything and their importance takes nothing: v = 3 × 100, the first
      * pinned with I = 1000, I = (1, 4) for the others, D = 0.5: V_D = 150, 100 fixed, 50 left,
      * d' = 50/500 · (1, 4) = (0.1, 0.4). */
-    {"worked: pinned", 3, {100, 100, 100}, {1000, 1, 4}, {1, 0, 0}, 0.5, 0, {100, 10, 40}, 1},
+    {"worked: pinned", 3, {100, 100, 100}, {1000, 1, 4}, {1, 0, 0}, 0.5, 0, {100, 10, 40}, 1, {0}},
     /* A mesh with v <= min_vertices is not decimated: v = (50, 1000, 1000), floor 50, I = 1 each,
      * D = 0.4: V_D = 820, 50 fixed, 770 left over 2000 → d = 0.385. */
-    {"worked: small mesh kept", 3, {50, 1000, 1000}, {1, 1, 1}, {0}, 0.4, 50, {50, 385, 385}, 1},
+    {"worked: small mesh kept", 3, {50, 1000, 1000}, {1, 1, 1}, {0}, 0.4, 50, {50, 385, 385}, 1,
+     {0}},
     /* Zero-importance meshes share what the important ones leave: v = (100, 100, 300),
      * I = (1, 0, 0), D = 0.8: V_D = 400, d' = (4, 0, 0) → clamp the first at 100; round 2: 300
      * left over zero importance → equal factors 300/400 = 0.75 → (75, 225). No fallback. */
     {"worked: zero importance shares the leftover", 3, {100, 100, 300}, {1, 0, 0}, {0}, 0.8, 0,
-     {100, 75, 225}, 2},
+     {100, 75, 225}, 2, {0}},
     /* A mesh with 0 vertices: target 0, factor 1, not decimated. v = (0, 100), I = (5, 1),
      * D = 0.5: V_D = 50, the empty mesh is fixed (0 <= min_vertices) → second 50. */
-    {"worked: empty mesh", 2, {0, 100}, {5, 1}, {0}, 0.5, 0, {0, 50}, 1},
+    {"worked: empty mesh", 2, {0, 100}, {5, 1}, {0}, 0.5, 0, {0, 50}, 1, {0}},
     /* Only empty meshes: nothing to plan, no NaN. */
-    {"worked: only empty meshes", 2, {0, 0}, {5, 1}, {0}, 0.3, 0, {0, 0}, 0},
+    {"worked: only empty meshes", 2, {0, 0}, {5, 1}, {0}, 0.3, 0, {0, 0}, 0, {0}},
     /* D == 1: nothing decimated whatever the importance. */
     {"worked: fraction one", 4, {100, 5000, 7, 300}, {0, 1e9, 3, 0.5}, {0}, 1.0, 10,
-     {100, 5000, 7, 300}, 0},
+     {100, 5000, 7, 300}, 0, {0}},
     /* Exactly at the floors is feasible: v = (1000, 1000), floor 100, D = 0.1 → (100, 100). */
-    {"worked: exactly at the floors", 2, {1000, 1000}, {1, 1000}, {0}, 0.1, 100, {100, 100}, 0},
+    {"worked: exactly at the floors", 2, {1000, 1000}, {1, 1000}, {0}, 0.1, 100, {100, 100}, 0,
+     {0}},
+    /* A mesh's own floor (what a decimation found it cannot go below) gives the budget it cannot
+     * use to the others by importance: v = 3 × 100, I = (1, 1, 2), own floors (60, 0, 0), D = 0.5:
+     * V_D = 150, d' = 150/400 · (1, 1, 2) → counts (37.5, 37.5, 75): the first is under its
+     * floor → fixed at 60. Round 2: 90 left, d' = 90/300 · (1, 2) = (0.3, 0.6) → (30, 60). */
+    {"worked: own floor", 3, {100, 100, 100}, {1, 1, 2}, {0}, 0.5, 0, {60, 30, 60}, 2,
+     {60, 0, 0}},
+    /* An own floor at the mesh's count fixes it like a pinned mesh: v = (100, 100), own floors
+     * (100, 0), D = 0.75: V_D = 150, 100 fixed → second 50. */
+    {"worked: own floor at the count", 2, {100, 100}, {5, 1}, {0}, 0.75, 0, {100, 50}, 1,
+     {100, 0}},
+    /* Own floors above min_vertices count in the infeasible plan: v = (100, 100), min 10, own
+     * floors (40, 0), D = 0.2: V_D = 40 <= 40 + 10 → every mesh at its floor: (40, 10). */
+    {"worked: own floors infeasible", 2, {100, 100}, {1, 1}, {0}, 0.2, 10, {40, 10}, 0,
+     {40, 0}},
 };
 
 /* Plans a worked case and checks the targets against the expected ones and the totals against
@@ -118,7 +138,8 @@ static const worked_case worked_cases[] = {
 static void test_worked_case(void **state)
 {
     const worked_case *c = *state;
-    budget_mesh *meshes = make_meshes(c->count, c->vertices, c->importance, c->pinned);
+    budget_mesh *meshes =
+        make_meshes(c->count, c->vertices, c->importance, c->pinned, c->own_floor);
     budget_plan plan;
     assert_int_equal(budget_distribute(meshes, c->count, c->fraction, c->min_vertices, &plan), 0);
     uint64_t sum = 0, before = 0;
@@ -211,7 +232,7 @@ static char *plan_capturing_stderr(double second, budget_plan *plan)
     const uint64_t vertices[] = {100, 300, 50};
     const double importance[] = {0, second, 7};
     const int pinned[] = {0, 0, 1};
-    budget_mesh *meshes = make_meshes(3, vertices, importance, pinned);
+    budget_mesh *meshes = make_meshes(3, vertices, importance, pinned, NULL);
     distribute_call call = {meshes, 3, 0.5, 0, {0}, 0};
     warn_silence(0);
     char *text = capture_stderr(run_distribute, &call);
@@ -261,7 +282,7 @@ static void test_tiny_fraction_infeasible(void **state)
     v[0] = 1000, importance[0] = 5, pinned[0] = 1;
     for (int i = 1; i < 11; i++)
         v[i] = 10000, importance[i] = i;
-    budget_mesh *meshes = make_meshes(11, v, importance, pinned);
+    budget_mesh *meshes = make_meshes(11, v, importance, pinned, NULL);
     budget_plan plan;
     assert_int_equal(budget_distribute(meshes, 11, 1e-6, 100, &plan), 0);
     assert_int_equal(plan.total_before, 101000);
@@ -297,7 +318,7 @@ static void expect_input_error(const budget_mesh *meshes, size_t count, double f
 
 static void test_bad_fraction(void **state)
 {
-    const budget_mesh meshes[2] = {{"dragon", 100, 1.0, 0}, {"bunny", 100, 2.0, 0}};
+    const budget_mesh meshes[2] = {{"dragon", 100, 1.0, 0, 0}, {"bunny", 100, 2.0, 0, 0}};
     const double fractions[] = {0.0, -0.5, 1.5, NAN, INFINITY};
     for (size_t i = 0; i < sizeof fractions / sizeof *fractions; i++)
         expect_input_error(meshes, 2, fractions[i], "outside (0, 1]");
@@ -313,22 +334,22 @@ static void test_bad_importance(void **state)
                  {-1.0, "'bunny' (index 1) has importance -1"},
                  {INFINITY, "'bunny'"}};
     for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
-        const budget_mesh meshes[2] = {{"dragon", 100, 1.0, 0},
-                                       {"bunny", 100, cases[i].importance, 0}};
+        const budget_mesh meshes[2] = {{"dragon", 100, 1.0, 0, 0},
+                                       {"bunny", 100, cases[i].importance, 0, 0}};
         expect_input_error(meshes, 2, 0.5, cases[i].fragment);
     }
 }
 
 static void test_vertex_overflow(void **state)
 {
-    const budget_mesh meshes[2] = {{"dragon", UINT64_MAX / 2 + 1, 1.0, 0},
-                                   {"bunny", UINT64_MAX / 2 + 1, 2.0, 0}};
+    const budget_mesh meshes[2] = {{"dragon", UINT64_MAX / 2 + 1, 1.0, 0, 0},
+                                   {"bunny", UINT64_MAX / 2 + 1, 2.0, 0, 0}};
     expect_input_error(meshes, 2, 0.5, "overflows");
 }
 
 static void test_missing_arrays(void **state)
 {
-    const budget_mesh meshes[2] = {{"dragon", 100, 1.0, 0}, {"bunny", 100, 2.0, 0}};
+    const budget_mesh meshes[2] = {{"dragon", 100, 1.0, 0, 0}, {"bunny", 100, 2.0, 0, 0}};
     expect_input_error(NULL, 2, 0.5, "no mesh array");
     error_clear();
     assert_int_equal(budget_distribute(meshes, 2, 0.5, 0, NULL), -1);
@@ -337,14 +358,15 @@ static void test_missing_arrays(void **state)
 
 /* ---- random scenes ---- */
 
-/* Checks every property of a plan that does not need a hand-worked answer:
+/* Checks every property of a plan that does not need a hand-worked answer (f_i = the larger of
+ * min_vertices and the mesh's own floor):
  * - totals: V_D = round(D Σ v), Σ target == total_planned, == V_D if feasible, else every free
- *   mesh at its floor;
- * - per mesh: fixed meshes untouched; free ones within [floor, v]; factor = target / v in
- *   [0, 1], decimate == (target < v);
+ *   mesh at its floor f_i;
+ * - per mesh: fixed meshes (pinned, v <= f_i) untouched; free ones within [f_i, v];
+ *   factor = target / v in [0, 1], decimate == (target < v);
  * - the plan is the clamp solution up to whole vertices: one λ with |t_i - λ v_i w_i| <= 1 for
  *   meshes strictly inside their bounds, λ v_i w_i >= v_i - 1 at the ceiling and
- *   λ v_i w_i <= floor + 1 at the floor (w = importance, or 1 under the uniform fallback);
+ *   λ v_i w_i <= f_i + 1 at the floor (w = importance, or 1 under the uniform fallback);
  *   zero-importance meshes are above their floor only when every important mesh is at its
  *   ceiling. */
 static void check_properties(const budget_mesh *meshes, size_t count, double fraction,
@@ -353,11 +375,12 @@ static void check_properties(const budget_mesh *meshes, size_t count, double fra
     uint64_t total = 0, fixed = 0, floors = 0, planned = 0;
     double free_importance = 0.0;
     for (size_t i = 0; i < count; i++) {
+        uint64_t floor = meshes[i].floor > min_vertices ? meshes[i].floor : min_vertices;
         total += meshes[i].vertices;
-        if (meshes[i].pinned || meshes[i].vertices <= min_vertices)
+        if (meshes[i].pinned || meshes[i].vertices <= floor)
             fixed += meshes[i].vertices;
         else
-            floors += min_vertices, free_importance += meshes[i].importance;
+            floors += floor, free_importance += meshes[i].importance;
     }
     uint64_t requested = (uint64_t)llround(fraction * (double)total);
     assert_int_equal(plan->total_before, total);
@@ -370,6 +393,7 @@ static void check_properties(const budget_mesh *meshes, size_t count, double fra
     int zero_above_floor = 0, important_below_ceiling = 0;
     for (size_t i = 0; i < count; i++) {
         uint64_t v = meshes[i].vertices, t = plan->target[i];
+        uint64_t floor = meshes[i].floor > min_vertices ? meshes[i].floor : min_vertices;
         planned += t;
         assert_true(plan->factor[i] >= 0.0 && plan->factor[i] <= 1.0);
         assert_int_equal(plan->decimate[i], t < v);
@@ -377,23 +401,23 @@ static void check_properties(const budget_mesh *meshes, size_t count, double fra
             assert_true(fabs(plan->factor[i] - (double)t / (double)v) < 1e-12);
         else
             assert_true(plan->factor[i] == 1.0);
-        if (meshes[i].pinned || v <= min_vertices) {
+        if (meshes[i].pinned || v <= floor) {
             assert_int_equal(t, v);
             continue;
         }
-        assert_true(t >= min_vertices && t <= v);
+        assert_true(t >= floor && t <= v);
         if (!feasible) {
-            assert_int_equal(t, min_vertices);
+            assert_int_equal(t, floor);
             continue;
         }
         double w = uniform ? 1.0 : meshes[i].importance;
         if (w == 0.0) {
-            zero_above_floor |= t > min_vertices;
+            zero_above_floor |= t > floor;
             continue;
         }
         important_below_ceiling |= t < v;
         double weight = (double)v * w;
-        if (t > min_vertices) /* not held up by the floor: λ v w >= t - 1 */
+        if (t > floor) /* not held up by the floor: λ v w >= t - 1 */
             lambda_low = fmax(lambda_low, ((double)t - 1.0) / weight);
         if (t < v) /* not held down by the ceiling: λ v w <= t + 1 */
             lambda_high = fmin(lambda_high, ((double)t + 1.0) / weight);
@@ -408,7 +432,8 @@ static void check_properties(const budget_mesh *meshes, size_t count, double fra
 }
 
 /* Random meshes from `rng`: 1 to 10^6 vertices, a quarter without importance, the rest with
- * importance over twelve decades (steep: I_i = (i + 1)^3 instead), one in ten pinned. */
+ * importance over twelve decades (steep: I_i = (i + 1)^3 instead), one in ten pinned, one in
+ * five with an own floor up to a fifth of its count. */
 static void random_scene(idmr_rng *rng, budget_mesh *meshes, size_t count, int steep)
 {
     for (size_t i = 0; i < count; i++) {
@@ -422,6 +447,9 @@ static void random_scene(idmr_rng *rng, budget_mesh *meshes, size_t count, int s
         else
             meshes[i].importance = pow(10.0, 12.0 * idmr_rng_float(rng) - 6.0);
         meshes[i].pinned = idmr_rng_float(rng) < 0.1;
+        meshes[i].floor = idmr_rng_float(rng) < 0.2
+                              ? (uint64_t)(0.2 * idmr_rng_float(rng) * (double)meshes[i].vertices)
+                              : 0;
     }
 }
 

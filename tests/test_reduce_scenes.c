@@ -1,10 +1,13 @@
 /* test_reduce_scenes.c — `idmr reduce` end to end through reduce_run() (host/reduce/reduce.c) on
  * scenes the tests write: the Cornell box with more meshes to decimate, and a scene of two knots.
- * One case a test; the helpers are in reduce_common.h. The quadric method throughout: no
- * importance pass needed.
+ * One case a test; the helpers are in reduce_common.h. The quadric method, with no importance
+ * pass, except where the importance is what is tested.
  *
  *   quadric      every decimated mesh gets the same factor (up to rounding); no importance files
- *   compensation vertices a mesh cannot give up are taken from the others, meeting the target
+ *   compensation vertices a mesh cannot give up are taken from the others, meeting the target;
+ *                with importance, by importance (the plan of Eq. 3 with that mesh's floor)
+ *   locks        under a budget no mesh can meet, an unseen open mesh loses its boundary lock,
+ *                a seen one keeps some (it keeps covering what it covered)
  *   file names   two mesh names that make the same PLY name get distinct files
  *   no area      a mesh whose points coincide, and one whose points lie on a line, are kept as
  *                they are (decimated, they became PLYs without faces no reader loads) */
@@ -143,20 +146,31 @@ static void write_confetti(const char *dir)
     assert_int_equal(fclose(f), 0);
 }
 
-/* The Cornell box plus `extra` (written in in_dir), loaded into *s and reduced by the quadric
- * method to `target` into r. */
-static void reduce_cornell_plus(const char *in_dir, const char *extra, double target, scene **s,
-                                reduction *r)
+/* The Cornell box plus `extra` (written in in_dir), loaded into *s and reduced by `method` to
+ * `target` into r; keep_knot keeps the knot as it is (--keep knot: its 48,000 vertices need no
+ * decimating where the test is about the other meshes). */
+static void reduce_cornell_plus(const char *in_dir, const char *extra, reduce_method method,
+                                double target, int keep_knot, scene **s, reduction *r)
 {
     char scene_path[4200];
     write_cornell_plus(in_dir, extra, scene_path, sizeof scene_path);
     *s = test_load_scene(scene_path);
     reduce_options o;
     small_options(&o);
-    o.method = REDUCE_QUADRIC;
+    o.method = method;
     o.target = target;
+    const char *keep[] = {"knot"};
+    if (keep_knot) {
+        o.keep = keep;
+        o.keep_count = 1;
+    }
     reduction_run(r, *s, &o);
 }
+
+static const char CONFETTI_SHAPE[] = "    <shape type=\"obj\" id=\"confetti\">\n"
+                                     "        <string name=\"filename\" value=\"confetti.obj\"/>\n"
+                                     "        <ref id=\"white\"/>\n"
+                                     "    </shape>\n";
 
 /* The confetti beside the knot, reduced with uniform factors: the confetti keeps all 600
  * vertices, and the compensation rounds take them from the knot, so the total still meets the
@@ -168,12 +182,7 @@ static void test_compensation(void **state)
     write_confetti(in_dir);
     scene *s;
     reduction r;
-    reduce_cornell_plus(in_dir,
-                        "    <shape type=\"obj\" id=\"confetti\">\n"
-                        "        <string name=\"filename\" value=\"confetti.obj\"/>\n"
-                        "        <ref id=\"white\"/>\n"
-                        "    </shape>\n",
-                        0.2, &s, &r);
+    reduce_cornell_plus(in_dir, CONFETTI_SHAPE, REDUCE_QUADRIC, 0.2, 0, &s, &r);
     const cJSON *confetti = mesh_entry(r.report, "confetti");
     print_message("  confetti %g -> %g vertices; total %g for %g requested, %g compensation "
                   "rounds\n",
@@ -183,6 +192,135 @@ static void test_compensation(void **state)
     assert_true(number(confetti, "vertices_after") == 600);
     assert_true(number(r.report, "compensation_rounds") >= 1);
     assert_true(number(r.report, "vertices_after") == number(r.report, "vertices_requested"));
+    reduction_free(&r);
+    scene_free(s);
+    remove_tree(in_dir);
+}
+
+/* The confetti and two spheres of 994 vertices (a large one near the light, a small one at the
+ * back) beside the knot (kept), reduced by importance-quadric (importance budgets, Eq. 3) to
+ * D = 0.97, which leaves the spheres and the confetti about 1,070 vertices: the confetti keeps
+ * its 600 (its floor, in the report), and what it cannot give is taken from the spheres by
+ * importance: both keep the same multiple of their importance (λ I_i within a vertex of
+ * rounding), and the total meets the target exactly. */
+static void test_compensation_by_importance(void **state)
+{
+    char in_dir[64], extra[8192];
+    temp_dir(in_dir, sizeof in_dir);
+    write_confetti(in_dir);
+    snprintf(extra, sizeof extra,
+             "%s    <shape type=\"sphere\" id=\"large\">\n"
+             "        <point name=\"center\" x=\"0.3\" y=\"0.6\" z=\"0\"/>\n"
+             "        <float name=\"radius\" value=\"0.2\"/>\n"
+             "        <ref id=\"white\"/>\n"
+             "    </shape>\n"
+             "    <shape type=\"sphere\" id=\"small\">\n"
+             "        <point name=\"center\" x=\"-0.5\" y=\"0.5\" z=\"-0.5\"/>\n"
+             "        <float name=\"radius\" value=\"0.15\"/>\n"
+             "        <ref id=\"white\"/>\n"
+             "    </shape>\n",
+             CONFETTI_SHAPE);
+    scene *s;
+    reduction r;
+    reduce_cornell_plus(in_dir, extra, REDUCE_IMPORTANCE_QUADRIC, 0.97, 1, &s, &r);
+    const cJSON *confetti = mesh_entry(r.report, "confetti");
+    assert_true(number(confetti, "vertices_after") == 600);
+    assert_true(number(confetti, "vertices_floor") == 600);
+    const char *spheres[] = {"large", "small"};
+    double ratio[2];
+    for (int k = 0; k < 2; k++) {
+        const cJSON *entry = mesh_entry(r.report, spheres[k]);
+        double target = number(entry, "vertices_target");
+        ratio[k] = target / number(entry, "importance_sum");
+        print_message("  %s: importance %g, target %g, kept %g\n", spheres[k],
+                      number(entry, "importance_sum"), target, number(entry, "vertices_after"));
+    }
+    for (int k = 0; k < 2; k++) {
+        const cJSON *entry = mesh_entry(r.report, spheres[k]);
+        double target = number(entry, "vertices_target");
+        assert_true(target > 16 && target < number(entry, "vertices_before"));
+        assert_true(number(entry, "vertices_after") <= target);
+    }
+    /* The two targets are λ I_i up to the rounding to whole vertices. */
+    const cJSON *small = mesh_entry(r.report, "small");
+    assert_true(fabs(ratio[0] - ratio[1]) * number(small, "importance_sum") <= 1.0);
+    assert_true(number(r.report, "compensation_rounds") >= 1);
+    assert_true(number(r.report, "vertices_after") == number(r.report, "vertices_requested"));
+    reduction_free(&r);
+    scene_free(s);
+    remove_tree(in_dir);
+}
+
+/* DIR/name: a flat plate of 30 × 30 cells with 3 × 3 square holes (4 × 4 cells each), `size`
+ * wide, centred at (x, y, z) in a plane of constant z, its front towards +z. Under any boundary
+ * lock every hole keeps its four corners (40 vertices with the plate's), without one it keeps at
+ * least three. */
+static void write_plate_obj(const char *dir, const char *name, double size, double x, double y,
+                            double z)
+{
+    char path[4200];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    const int cells = 30;
+    for (int j = 0; j <= cells; j++)
+        for (int i = 0; i <= cells; i++)
+            fprintf(f, "v %.9g %.9g %.9g\n", x + size * ((double)i / cells - 0.5),
+                    y + size * ((double)j / cells - 0.5), z);
+    for (int j = 0; j < cells; j++)
+        for (int i = 0; i < cells; i++) {
+            if (i % 10 >= 3 && i % 10 < 7 && j % 10 >= 3 && j % 10 < 7)
+                continue;
+            int a = j * (cells + 1) + i + 1, b = a + 1, c = a + cells + 1, d = c + 1;
+            fprintf(f, "f %d %d %d\nf %d %d %d\n", a, b, d, a, d, c);
+        }
+    assert_int_equal(fclose(f), 0);
+}
+
+/* A budget no mesh can meet (the confetti alone keeps more than requested), by the combined
+ * method: every stuck mesh has its locks relaxed, but only the plate nobody sees (behind the back
+ * wall) loses its boundary lock entirely; the plate the camera sees keeps one (at most 25 %), so
+ * it keeps covering what it covered. The report says by how much the request is missed. */
+static void test_locks_yield_where_unseen(void **state)
+{
+    char in_dir[64];
+    temp_dir(in_dir, sizeof in_dir);
+    write_confetti(in_dir);
+    write_plate_obj(in_dir, "seen.obj", 1.2, 0.0, 0.2, -0.8);
+    write_plate_obj(in_dir, "unseen.obj", 1.2, 0.0, 0.0, -3.0);
+    char extra[8192];
+    snprintf(extra, sizeof extra,
+             "%s    <shape type=\"obj\" id=\"seen\">\n"
+             "        <string name=\"filename\" value=\"seen.obj\"/>\n"
+             "        <ref id=\"white\"/>\n"
+             "    </shape>\n"
+             "    <shape type=\"obj\" id=\"unseen\">\n"
+             "        <string name=\"filename\" value=\"unseen.obj\"/>\n"
+             "        <ref id=\"white\"/>\n"
+             "    </shape>\n",
+             CONFETTI_SHAPE);
+    scene *s;
+    reduction r;
+    warn_silence(1);
+    reduce_cornell_plus(in_dir, extra, REDUCE_COMBINED, 0.005, 1, &s, &r);
+    warn_silence(0);
+    const cJSON *seen = mesh_entry(r.report, "seen"), *unseen = mesh_entry(r.report, "unseen");
+    const cJSON *seen_lock = cJSON_GetObjectItemCaseSensitive(seen, "boundary_tolerance");
+    const cJSON *unseen_lock = cJSON_GetObjectItemCaseSensitive(unseen, "boundary_tolerance");
+    print_message("  seen plate: importance %g, %g -> %g vertices, lock %s; unseen: importance "
+                  "%g, %g -> %g, lock %s; total %g for %g requested\n",
+                  number(seen, "importance_sum"), number(seen, "vertices_before"),
+                  number(seen, "vertices_after"), cJSON_IsNumber(seen_lock) ? "kept" : "off",
+                  number(unseen, "importance_sum"), number(unseen, "vertices_before"),
+                  number(unseen, "vertices_after"), cJSON_IsNumber(unseen_lock) ? "kept" : "off",
+                  number(r.report, "vertices_after"), number(r.report, "vertices_requested"));
+    assert_true(number(seen, "importance_sum") > 0);
+    assert_true(number(unseen, "importance_sum") == 0);
+    assert_true(cJSON_IsNumber(seen_lock) && seen_lock->valuedouble <= 0.25);
+    assert_true(cJSON_IsNull(unseen_lock));
+    assert_true(number(unseen, "vertices_after") < number(seen, "vertices_after"));
+    assert_true(number(r.report, "vertices_after") > number(r.report, "vertices_requested"));
+    assert_true(number(mesh_entry(r.report, "confetti"), "vertices_floor") == 600);
     reduction_free(&r);
     scene_free(s);
     remove_tree(in_dir);
@@ -220,7 +358,7 @@ static void test_meshes_without_area_are_kept(void **state)
                         "    <shape type=\"obj\" id=\"line\">\n"
                         "        <string name=\"filename\" value=\"line.obj\"/>\n"
                         "    </shape>\n",
-                        0.1, &s, &r);
+                        REDUCE_QUADRIC, 0.1, 0, &s, &r);
     const char *names[] = {"dot", "line"};
     for (int i = 0; i < 2; i++) {
         const cJSON *entry = mesh_entry(r.report, names[i]);
@@ -274,6 +412,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_quadric),
         cmocka_unit_test(test_compensation),
+        cmocka_unit_test(test_compensation_by_importance),
+        cmocka_unit_test(test_locks_yield_where_unseen),
         cmocka_unit_test(test_file_name_collision),
         cmocka_unit_test(test_meshes_without_area_are_kept),
     };

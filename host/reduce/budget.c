@@ -1,11 +1,11 @@
 /* budget.c — decimation factors across meshes (paper Eq. 3); the semantics are in budget.h.
  *
- * Working data: the free meshes (not pinned, more than min_vertices vertices) are listed in
- * free_meshes.index[] (free_index[] in the steps); the first active_count entries of active[]
- * are those still being scaled, each with its weight (importance / maximum importance, or 1 for
- * equal factors) and its real-valued planned count x = λ · weight · v. A mesh leaves active[]
- * when it is fixed at its ceiling v or its floor min_vertices; settled is the sum of the targets
- * of every mesh no longer active.
+ * Working data: the free meshes (not pinned, more vertices than their floor) are listed in
+ * free_meshes.index[] (free_index[] in the steps), with their floors f_i in floor_of[] (indexed
+ * by mesh); the first active_count entries of active[] are those still being scaled, each with
+ * its weight (importance / maximum importance, or 1 for equal factors) and its real-valued
+ * planned count x = λ · weight · v. A mesh leaves active[] when it is fixed at its ceiling v or
+ * its floor f_i; settled is the sum of the targets of every mesh no longer active.
  *
  * budget_distribute(): check the arguments, V_D, the free meshes, then either nothing to do,
  * every free mesh at its floor (infeasible), or weights → solve_factors() → round_targets();
@@ -52,12 +52,11 @@ void budget_plan_free(budget_plan *plan)
  * the real-valued planned count of every free mesh. */
 static void solve_factors(const budget_mesh *meshes, const size_t *free_index, size_t free_count,
                           double *weight, double *x, uint64_t requested, uint64_t settled,
-                          uint64_t floor_count, budget_plan *plan)
+                          const uint64_t *floor_of, budget_plan *plan)
 {
     size_t *active = xmalloc(free_count * sizeof *active);
     memcpy(active, free_index, free_count * sizeof *active);
     size_t active_count = free_count;
-    double floor_value = (double)floor_count;
 
     while (active_count > 0) {
         double budget = settled < requested ? (double)(requested - settled) : 0.0;
@@ -82,8 +81,8 @@ static void solve_factors(const budget_mesh *meshes, const size_t *free_index, s
             x[i] = lambda * weight[i] * ceiling;
             if (x[i] > ceiling)
                 excess += x[i] - ceiling;
-            else if (x[i] < floor_value)
-                deficit += floor_value - x[i];
+            else if (x[i] < (double)floor_of[i])
+                deficit += (double)floor_of[i] - x[i];
         }
         if (excess == 0.0 && deficit == 0.0)
             break;
@@ -99,9 +98,9 @@ static void solve_factors(const budget_mesh *meshes, const size_t *free_index, s
             if (fix_ceiling && x[i] > ceiling) {
                 x[i] = ceiling;
                 settled += meshes[i].vertices;
-            } else if (fix_floor && x[i] < floor_value) {
-                x[i] = floor_value;
-                settled += floor_count;
+            } else if (fix_floor && x[i] < (double)floor_of[i]) {
+                x[i] = (double)floor_of[i];
+                settled += floor_of[i];
             } else {
                 active[kept++] = i;
             }
@@ -114,7 +113,7 @@ static void solve_factors(const budget_mesh *meshes, const size_t *free_index, s
 /* Turns the real-valued counts x[] of the free meshes into integer targets whose sum, with
  * `settled` (the fixed meshes), is `requested` when the bounds allow it. */
 static void round_targets(const budget_mesh *meshes, const size_t *free_index, size_t free_count,
-                          const double *x, uint64_t floor_count, uint64_t requested,
+                          const double *x, const uint64_t *floor_of, uint64_t requested,
                           uint64_t settled, uint64_t *target)
 {
     budget_share *shares = xmalloc(free_count * sizeof *shares);
@@ -124,8 +123,8 @@ static void round_targets(const budget_mesh *meshes, const size_t *free_index, s
         uint64_t ceiling = meshes[i].vertices;
         double whole = floor(x[i]);
         uint64_t t;
-        if (!(whole >= (double)floor_count))
-            t = floor_count;
+        if (!(whole >= (double)floor_of[i]))
+            t = floor_of[i];
         else if (whole >= (double)ceiling)
             t = ceiling;
         else
@@ -152,7 +151,7 @@ static void round_targets(const budget_mesh *meshes, const size_t *free_index, s
     for (int pass = 0; pass < 2 && planned > requested; pass++) {
         for (size_t k = free_count; k-- > 0 && planned > requested;) {
             size_t i = shares[k].mesh;
-            uint64_t room = target[i] - floor_count;
+            uint64_t room = target[i] - floor_of[i];
             uint64_t take = pass == 0 ? (room > 0) : (room < planned - requested ? room : planned - requested);
             target[i] -= take;
             planned -= take;
@@ -161,11 +160,14 @@ static void round_targets(const budget_mesh *meshes, const size_t *free_index, s
     free(shares);
 }
 
-/* The free meshes (not pinned, more than min_vertices vertices): their indices, the vertices of
- * the fixed ones (settled) and the largest free importance. */
+/* The free meshes (not pinned, more vertices than their floor): their indices, their floors
+ * (floor_of, indexed by mesh), the sum of those floors, the vertices of the fixed ones (settled)
+ * and the largest free importance. */
 typedef struct free_meshes {
     size_t *index;
+    uint64_t *floor_of;
     size_t count;
+    uint64_t floors;
     uint64_t settled;
     double max_importance;
 } free_meshes;
@@ -208,13 +210,17 @@ static uint64_t requested_vertices(double target_fraction, uint64_t total)
 static free_meshes collect_free_meshes(const budget_mesh *meshes, size_t count,
                                        uint64_t min_vertices)
 {
-    free_meshes free_set = {xmalloc(count * sizeof *free_set.index), 0, 0, 0.0};
+    free_meshes free_set = {xmalloc((count + 1) * sizeof *free_set.index),
+                            xcalloc(count + 1, sizeof *free_set.floor_of), 0, 0, 0, 0.0};
     for (size_t i = 0; i < count; i++) {
-        if (meshes[i].pinned || meshes[i].vertices <= min_vertices) {
+        uint64_t floor = meshes[i].floor > min_vertices ? meshes[i].floor : min_vertices;
+        if (meshes[i].pinned || meshes[i].vertices <= floor) {
             free_set.settled += meshes[i].vertices;
             continue;
         }
         free_set.index[free_set.count++] = i;
+        free_set.floor_of[i] = floor;
+        free_set.floors += floor; /* each below its mesh's count: no overflow */
         if (meshes[i].importance > free_set.max_importance)
             free_set.max_importance = meshes[i].importance;
     }
@@ -245,15 +251,14 @@ static void free_weights(const budget_mesh *meshes, const free_meshes *free_set,
 /* The targets of the free meshes when the budget is feasible: clamp-and-renormalise factors,
  * then whole vertices by the largest remainder. */
 static void plan_free_meshes(const budget_mesh *meshes, size_t count, const free_meshes *free_set,
-                             uint64_t total, uint64_t requested, uint64_t min_vertices,
-                             budget_plan *plan)
+                             uint64_t total, uint64_t requested, budget_plan *plan)
 {
     double *weight = xmalloc(count * sizeof *weight);
     double *x = xmalloc(count * sizeof *x);
     free_weights(meshes, free_set, total, requested, weight, plan);
     solve_factors(meshes, free_set->index, free_set->count, weight, x, requested,
-                  free_set->settled, min_vertices, plan);
-    round_targets(meshes, free_set->index, free_set->count, x, min_vertices, requested,
+                  free_set->settled, free_set->floor_of, plan);
+    round_targets(meshes, free_set->index, free_set->count, x, free_set->floor_of, requested,
                   free_set->settled, plan->target);
     free(x);
     free(weight);
@@ -292,18 +297,17 @@ int budget_distribute(const budget_mesh *meshes, size_t count, double target_fra
         plan->target[i] = meshes[i].vertices;
 
     free_meshes free_set = collect_free_meshes(meshes, count, min_vertices);
-    /* Each free mesh has more than min_vertices vertices, so this cannot overflow. */
-    uint64_t floors = (uint64_t)free_set.count * min_vertices;
     if (requested == total || free_set.count == 0) {
         /* Nothing to decimate: every mesh keeps its vertices. */
-    } else if (free_set.settled + floors >= requested) {
+    } else if (free_set.settled + free_set.floors >= requested) {
         /* Infeasible (or exactly at the floors): every free mesh at its floor. */
         for (size_t k = 0; k < free_set.count; k++)
-            plan->target[free_set.index[k]] = min_vertices;
+            plan->target[free_set.index[k]] = free_set.floor_of[free_set.index[k]];
     } else {
-        plan_free_meshes(meshes, count, &free_set, total, requested, min_vertices, plan);
+        plan_free_meshes(meshes, count, &free_set, total, requested, plan);
     }
     free(free_set.index);
+    free(free_set.floor_of);
 
     finish_plan(meshes, count, plan);
     log_verbose("budget: %zu meshes, %zu free, %llu of %llu vertices requested, %llu planned "

@@ -7,8 +7,12 @@
  *   V_D = round(D · Σ v_i)                                        the requested total
  *
  *   Fixed meshes keep all their vertices and their count is taken from the budget: pinned ones
- *   (emitters, meshes the user keeps) and those with v_i <= min_vertices (this includes empty
- *   meshes). The other meshes are free; each has the floor min_vertices and the ceiling v_i.
+ *   (emitters, meshes the user keeps), those with v_i <= min_vertices (this includes empty
+ *   meshes) and those whose own floor is v_i or more. The other meshes are free; each has the
+ *   floor f_i = max(min_vertices, its own floor) and the ceiling v_i. A mesh's own floor is
+ *   what the caller knows it cannot go below (the reduction learns it from a decimation that
+ *   ran out of legal collapses), so the budget such a mesh cannot use goes to the others, by
+ *   importance.
  *
  *   Continuous factors (Eq. 3 with clamping, "clamp and renormalise"): the free meshes start
  *   with d_i = I_i and are scaled by one factor so that Σ v_i d_i = V_D - Σ fixed (the
@@ -17,7 +21,7 @@
  *   mesh is out of bounds. When a round has meshes out of bounds on both sides, only one side
  *   is fixed: the one with the larger total violation (both if equal). Fixing that side is
  *   always right (the others move back towards their bounds), so the result is the unique
- *   d_i = clamp(λ I_i, floor_i / v_i, 1) with Σ v_i d_i equal to the remaining budget, and
+ *   d_i = clamp(λ I_i, f_i / v_i, 1) with Σ v_i d_i equal to the remaining budget, and
  *   there are at most as many rounds as free meshes. With min_vertices == 0 this is exactly
  *   the paper's procedure (only clamps at 1).
  *
@@ -30,7 +34,7 @@
  *   Integer targets: the remaining budget is split over the free meshes by the largest
  *   remainder method (each gets floor(v_i d_i); the leftover vertices go one each to the
  *   largest fractional parts, ties to the lower index), so Σ target == V_D exactly whenever
- *   that is feasible, i.e. Σ fixed + Σ floors <= V_D (V_D <= Σ v_i always holds). When it is
+ *   that is feasible, i.e. Σ fixed + Σ f_i <= V_D (V_D <= Σ v_i always holds). When it is
  *   not (D near 0 with large pinned meshes), every free mesh is planned at its floor, the
  *   closest possible plan, and total_planned > total_requested says by how much it misses;
  *   no warning is printed (the caller reports it).
@@ -50,6 +54,7 @@ typedef struct budget_mesh {
     uint64_t vertices; /* v_i */
     double importance; /* unnormalised importance sum of the mesh (>= 0, finite) */
     int pinned;        /* never decimated: emitters, meshes the user keeps (--keep NAME) */
+    uint64_t floor;    /* vertices the mesh cannot go below (0: only min_vertices applies) */
 } budget_mesh;
 
 typedef struct budget_plan {
@@ -64,7 +69,8 @@ typedef struct budget_plan {
 } budget_plan;
 
 /* Plans the vertex targets of `count` meshes for the scene fraction target_fraction (D, in
- * (0, 1]) with the per-mesh floor min_vertices (see above). meshes may be NULL if count is 0.
+ * (0, 1]) with the floor min_vertices for every mesh and each mesh's own (see above). meshes
+ * may be NULL if count is 0.
  * Returns 0 with *plan filled (free it with budget_plan_free()), or -1 with the error set
  * (IDMR_EXIT_INPUT) for bad arguments: D outside (0, 1] or NaN, an importance that is NaN,
  * infinite or negative, a vertex total that overflows 64 bits. On failure *plan is zeroed. */

@@ -87,7 +87,7 @@ static int plan_budget(reduce_state *st)
     const scene *s = st->scene;
     double start = monotonic_seconds();
     st->input = xcalloc(st->count + 1, sizeof *st->input);
-    budget_mesh *budget = xcalloc(st->count + 1, sizeof *budget);
+    budget_mesh *budget = st->budget = xcalloc(st->count + 1, sizeof *budget);
     importance_weights weights = importance_weights_of(&o->importance);
     for (size_t m = 0; m < st->count; m++) {
         st->input[m] = decimation_input(st, m);
@@ -110,7 +110,6 @@ static int plan_budget(reduce_state *st)
         for (size_t m = 0; m < st->count; m++)
             if (!budget[m].pinned && budget[m].vertices > o->min_vertices)
                 st->plan.decimate[m] = 1;
-    free(budget);
     st->seconds_budget = monotonic_seconds() - start;
     return status;
 }
@@ -204,6 +203,7 @@ static void state_free(reduce_state *st)
         free(st->ply ? st->ply[m] : NULL);
     }
     free(st->input);
+    free(st->budget);
     free(st->output);
     free(st->ply);
     budget_plan_free(&st->plan);

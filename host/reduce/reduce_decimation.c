@@ -1,16 +1,28 @@
 /* reduce_decimation.c — the decimation stage of `idmr reduce` (see reduce_stages.h): the meshes
- * the plan decimates, in parallel, largest first; then up to COMPENSATION_ROUNDS rounds that take
- * what meshes could not give up (too few legal collapses) from the meshes that met their targets
- * and have room above the floor (min_vertices), in proportion to that room. A round lowers those
- * meshes' targets in st->plan and decimates them again from their inputs. When no mesh has room
- * left and the total is still above the request, the meshes that missed their targets most, as
- * many as cover the excess, have their locks relaxed one step and are decimated again: first
- * their attribute seams are freed (decimate.h, "Attributes"; only meshes with attributes have
- * that step), then, with the combined method, their boundary lock goes from 1 % to 5 %, 25 % and
- * none (LOCK_STEPS): textures and creases, then outlines, give way only as far as the budget
- * demands.
- * Where that leaves the total below the request (the meshes that compensated gave for meshes
- * that then reached their targets after all), the shortfall goes back to those meshes. */
+ * the plan decimates, in parallel, largest first; then, while the scene keeps more vertices than
+ * requested, rounds that learn and re-plan:
+ *
+ *   compensation   a mesh that ran out of legal collapses above its target has found its floor
+ *                  (what it kept): the plan of Eq. 3 is made again with that floor (budget.h), so
+ *                  the vertices it could not give up are taken from the other meshes by
+ *                  importance, the least important giving most; the meshes whose targets moved
+ *                  are decimated again from their inputs (up to COMPENSATION_ROUNDS rounds)
+ *   relaxing       when the floors leave no room (the plan changes nothing), the locks of meshes
+ *                  stuck at their floors are relaxed one step (LOCK_STEPS): first their attribute
+ *                  seams are freed (decimate.h, "Attributes"; only meshes with attributes have
+ *                  that step), then, with the combined method, their boundary lock goes from 1 %
+ *                  to 5 %, 25 % and none. The least important meshes (importance per vertex) go
+ *                  first, only as many as their floors could cover the excess, so textures and
+ *                  creases, then outlines, give way only as far as the budget demands and where
+ *                  the image shows least. A mesh that carries importance (at least SEEN_SHARE of
+ *                  the scene's mean per vertex) never loses its boundary lock entirely: a
+ *                  visible wall keeps covering what it covered, and the scene keeps more than
+ *                  requested instead, with a warning. A relaxed mesh's floor is forgotten and
+ *                  the plan made again.
+ *
+ * A plan made again may also raise targets (a relaxed mesh now gives more than planned): every
+ * mesh whose target changed is decimated again, so the total meets the request wherever the
+ * floors allow. */
 #include <math.h>
 #include <stdlib.h>
 #include <unistd.h>
@@ -19,7 +31,16 @@
 #include "core/progress.h"
 #include "reduce/reduce_stages.h"
 
-#define COMPENSATION_ROUNDS 3
+#define COMPENSATION_ROUNDS 4
+
+/* A mesh carries importance when its importance per vertex is at least this share of the
+ * scene's mean (the weighted quadric's floor, decimate_modules.hh, is the same share); its
+ * boundary lock is relaxed no further than SEEN_LOCK_LIMIT. The living room at D = 0.03, where
+ * no lock can hold the request: 25 % keeps 4,977 vertices for 3,586 asked (quadric, without
+ * locks, 4,746) at 0.62x quadric's reduction error; 5 % keeps 6,747 at 0.30x; no limit let one
+ * wall collapse across the view (1.01x). */
+#define SEEN_SHARE 0.01
+#define SEEN_LOCK_LIMIT 0.25
 
 /* The locks of a mesh, step by step: its attribute seams, then (combined) the boundary lock's
  * tolerance (decimate.h, seams_free and boundary_tolerance). */
@@ -32,8 +53,8 @@ static const lock_step LOCK_STEPS[] = {
     {1, INFINITY},
 };
 #define LOCK_STEP_COUNT (sizeof LOCK_STEPS / sizeof *LOCK_STEPS)
-/* Rounds of relaxing: each moves the meshes that missed most one step, only as many as cover
- * the excess, so meshes take turns; three turns per step. */
+/* Rounds of relaxing: each moves the stuck meshes furthest above their share one step, only as
+ * many as cover the excess, so meshes take turns; three turns per step. */
 #define RELAX_ROUNDS (3 * (LOCK_STEP_COUNT - 1))
 
 /* Decimates the meshes flagged in `redo` to st->plan.target, replacing earlier outputs. */
@@ -68,68 +89,116 @@ static int decimate_selected(reduce_state *st, decimate_method method, unsigned 
     return status;
 }
 
-/* Whether mesh m is decimated, met its target and has room above the floor. */
-static int can_give_more(const reduce_state *st, size_t m, uint64_t floor_vertices)
+/* Vertices mesh m kept (its input's count when it is not decimated). */
+static uint64_t kept_by(const reduce_state *st, size_t m)
 {
-    uint64_t target = st->plan.target[m];
-    return st->plan.decimate[m] && st->output[m].mesh.vertex_count <= target &&
-           target > floor_vertices;
+    return st->plan.decimate[m] ? st->output[m].mesh.vertex_count
+                                : st->scene->meshes[m].vertex_count;
 }
 
-/* Lowers the targets of the decimated meshes that met theirs by `excess` vertices in all, in
- * proportion to their room above the floor, and flags them in `redo`. False if none has room. */
-static int compensate(reduce_state *st, uint64_t excess, uint64_t floor_vertices,
-                      unsigned char *redo)
+/* Vertices of the reduced scene. */
+static uint64_t vertices_after(const reduce_state *st)
 {
-    uint64_t room = 0;
+    uint64_t after = 0;
+    for (size_t m = 0; m < st->count; m++)
+        after += kept_by(st, m);
+    return after;
+}
+
+/* The plan of Eq. 3 made again with the floors in st->budget; flags in `redo` the meshes whose
+ * target moved (and whose output does not already hold the new count), among them any that the
+ * first plan kept whole at its ceiling and this one puts below it. A mesh stays decimated once it
+ * was (its output exists), even where its floor now fixes it at its count. Returns how many
+ * meshes were flagged, or -1 with the error set. */
+static long replan(reduce_state *st, unsigned char *redo)
+{
+    budget_plan plan;
+    if (budget_distribute(st->budget, st->count, st->options->target, st->options->min_vertices,
+                          &plan))
+        return -1;
+    long changed = 0;
     for (size_t m = 0; m < st->count; m++) {
         redo[m] = 0;
-        if (can_give_more(st, m, floor_vertices))
-            room += st->plan.target[m] - floor_vertices;
+        if (!st->plan.decimate[m]) {
+            if (!plan.decimate[m])
+                continue;
+            st->plan.decimate[m] = 1; /* kept whole so far (at its ceiling), now below it */
+        }
+        uint64_t target = plan.target[m];
+        if (target != st->plan.target[m] && target != st->output[m].mesh.vertex_count) {
+            redo[m] = 1;
+            changed++;
+        }
+        st->plan.target[m] = target;
+        st->plan.factor[m] = (double)target / (double)st->scene->meshes[m].vertex_count;
     }
-    if (room == 0)
-        return 0;
-    uint64_t taken = 0;
-    for (size_t m = 0; m < st->count && taken < excess; m++) {
-        if (!can_give_more(st, m, floor_vertices))
-            continue;
-        uint64_t target = st->plan.target[m];
-        uint64_t share = (uint64_t)ceil((double)excess * (target - floor_vertices) / room);
-        if (share > target - floor_vertices)
-            share = target - floor_vertices;
-        if (share > excess - taken)
-            share = excess - taken;
-        if (share == 0)
-            continue;
-        st->plan.target[m] = target - share;
-        st->plan.factor[m] = (double)st->plan.target[m] / st->scene->meshes[m].vertex_count;
-        taken += share;
-        redo[m] = 1;
-    }
-    return taken > 0;
+    budget_plan_free(&plan);
+    return changed;
 }
 
-/* Vertices mesh m keeps above its target (0 when it met it or is not decimated). */
-static uint64_t missed_by(const reduce_state *st, size_t m)
+/* Records as its floor what each decimated mesh kept above its target (it ran out of legal
+ * collapses there). Returns how many meshes missed. */
+static size_t learn_floors(reduce_state *st)
 {
-    uint64_t after = st->output[m].mesh.vertex_count, target = st->plan.target[m];
-    return st->plan.decimate[m] && after > target ? after - target : 0;
+    size_t missed = 0;
+    for (size_t m = 0; m < st->count; m++) {
+        uint64_t kept = kept_by(st, m);
+        if (st->plan.decimate[m] && kept > st->plan.target[m]) {
+            st->budget[m].floor = kept;
+            missed++;
+        }
+    }
+    return missed;
+}
+
+/* Importance per vertex of mesh m (the budget's, so the quadric method's equal weights too). */
+static double importance_density(const reduce_state *st, size_t m)
+{
+    uint64_t vertices = st->budget[m].vertices;
+    return vertices ? st->budget[m].importance / (double)vertices : 0.0;
+}
+
+/* The scene's mean importance per vertex over the meshes that may be decimated. */
+static double mean_density(const reduce_state *st)
+{
+    double importance = 0.0, vertices = 0.0;
+    for (size_t m = 0; m < st->count; m++)
+        if (st->plan.decimate[m]) {
+            importance += st->budget[m].importance;
+            vertices += (double)st->budget[m].vertices;
+        }
+    return vertices > 0.0 ? importance / vertices : 0.0;
+}
+
+/* Vertices mesh m keeps above its share in the first plan (before any floor was learned): how
+ * far its locks hold it above what Eq. 3 gives it. */
+static uint64_t missed_by(const reduce_state *st, size_t m, const uint64_t *first_target)
+{
+    uint64_t kept = kept_by(st, m);
+    return st->plan.decimate[m] && kept > first_target[m] ? kept - first_target[m] : 0;
 }
 
 /* Whether step s (> 0) of the ladder changes anything for mesh m: freeing seams only where the
- * mesh has attributes, a boundary tolerance only under the combined method. */
-static int lock_step_applies(const reduce_state *st, size_t m, size_t s, decimate_method method)
+ * mesh has attributes, a boundary tolerance only under the combined method, and no lock at all
+ * only for a mesh that carries no importance (below SEEN_SHARE of `mean`, the scene's mean
+ * importance per vertex). */
+static int lock_step_applies(const reduce_state *st, size_t m, size_t s, decimate_method method,
+                             double mean)
 {
     const decimate_input *in = &st->input[m];
     int frees_seams = LOCK_STEPS[s].seams_free != LOCK_STEPS[s - 1].seams_free;
     int moves_boundary =
         LOCK_STEPS[s].boundary_tolerance != LOCK_STEPS[s - 1].boundary_tolerance;
+    if (moves_boundary && LOCK_STEPS[s].boundary_tolerance > SEEN_LOCK_LIMIT &&
+        importance_density(st, m) >= SEEN_SHARE * mean)
+        return 0;
     return (frees_seams && (in->texcoords || in->normals)) ||
            (moves_boundary && method == DECIMATE_COMBINED);
 }
 
 /* The next step of mesh m's locks that changes anything, or LOCK_STEP_COUNT when none is left. */
-static size_t next_lock_step(const reduce_state *st, size_t m, decimate_method method)
+static size_t next_lock_step(const reduce_state *st, size_t m, decimate_method method,
+                             double mean)
 {
     const decimate_input *in = &st->input[m];
     double tolerance =
@@ -138,18 +207,28 @@ static size_t next_lock_step(const reduce_state *st, size_t m, decimate_method m
     while (step < LOCK_STEP_COUNT && LOCK_STEPS[step].seams_free <= in->seams_free &&
            LOCK_STEPS[step].boundary_tolerance <= tolerance)
         step++;
-    while (step < LOCK_STEP_COUNT && !lock_step_applies(st, m, step, method))
+    while (step < LOCK_STEP_COUNT && !lock_step_applies(st, m, step, method, mean))
         step++;
     return step;
 }
 
-/* Relaxes the locks one step for the meshes that missed their targets, those that missed most
- * first, until their misses cover `excess`, and flags them in `redo`; counts the meshes whose
- * seams are freed in st->seams_freed and those whose boundary lock is relaxed for the first
- * time in st->locks_relaxed. False if none could be relaxed. */
-static int relax_locks(reduce_state *st, uint64_t excess, decimate_method method,
-                       unsigned char *redo)
+/* Whether mesh m is stuck at its floor (decimated, a learned floor above its first share) and
+ * has a lock step left. */
+static int can_relax(const reduce_state *st, size_t m, decimate_method method, double mean,
+                     const uint64_t *first_target)
 {
+    return st->budget[m].floor > 0 && missed_by(st, m, first_target) > 0 &&
+           next_lock_step(st, m, method, mean) < LOCK_STEP_COUNT;
+}
+
+/* Relaxes the locks one step for the stuck meshes, those that sit furthest above their first
+ * share first, until those distances cover `excess`; forgets their floors and flags them in
+ * `redo`. Counts the meshes whose seams are freed in st->seams_freed and those whose boundary
+ * lock is relaxed for the first time in st->locks_relaxed. False if none could be relaxed. */
+static int relax_locks(reduce_state *st, uint64_t excess, decimate_method method,
+                       const uint64_t *first_target, unsigned char *redo)
+{
+    double mean = mean_density(st);
     uint64_t covered = 0;
     int any = 0;
     for (size_t m = 0; m < st->count; m++)
@@ -157,13 +236,13 @@ static int relax_locks(reduce_state *st, uint64_t excess, decimate_method method
     while (covered < excess) {
         size_t worst = st->count;
         for (size_t m = 0; m < st->count; m++)
-            if (!redo[m] && missed_by(st, m) > 0 &&
-                next_lock_step(st, m, method) < LOCK_STEP_COUNT &&
-                (worst == st->count || missed_by(st, m) > missed_by(st, worst)))
+            if (!redo[m] && can_relax(st, m, method, mean, first_target) &&
+                (worst == st->count ||
+                 missed_by(st, m, first_target) > missed_by(st, worst, first_target)))
                 worst = m;
         if (worst == st->count)
             break;
-        size_t step = next_lock_step(st, worst, method);
+        size_t step = next_lock_step(st, worst, method, mean);
         decimate_input *in = &st->input[worst];
         if (LOCK_STEPS[step].seams_free && !in->seams_free)
             st->seams_freed++;
@@ -173,64 +252,29 @@ static int relax_locks(reduce_state *st, uint64_t excess, decimate_method method
             st->locks_relaxed++;
         in->seams_free = LOCK_STEPS[step].seams_free;
         in->boundary_tolerance = LOCK_STEPS[step].boundary_tolerance;
-        covered += missed_by(st, worst);
+        covered += missed_by(st, worst, first_target);
+        st->budget[worst].floor = 0;
         redo[worst] = 1;
         any = 1;
     }
     return any;
 }
 
-/* Whether mesh m gave up vertices for others (its target is below the planned one) and met its
- * target, so that a higher target keeps more (a mesh that missed a lowered target would not). */
-static int can_take_back(const reduce_state *st, size_t m, const uint64_t *planned)
+/* One warning when the scene keeps more than requested. */
+static void warn_missed(const reduce_state *st)
 {
-    return st->plan.decimate[m] && st->plan.target[m] < planned[m] &&
-           st->output[m].mesh.vertex_count <= st->plan.target[m];
-}
-
-/* After relaxed locks let meshes reach their targets, the meshes that gave up vertices for them
- * (compensation) may have given too many: hands the shortfall back to those that can take it,
- * in proportion to what they gave, up to their planned targets (`planned`), and flags them in
- * `redo`. False if there is nothing to hand back. */
-static int give_back(reduce_state *st, uint64_t shortfall, const uint64_t *planned,
-                     unsigned char *redo)
-{
-    uint64_t given = 0;
-    for (size_t m = 0; m < st->count; m++) {
-        redo[m] = 0;
-        if (can_take_back(st, m, planned))
-            given += planned[m] - st->plan.target[m];
-    }
-    if (given == 0 || shortfall == 0)
-        return 0;
-    uint64_t returned = 0;
-    for (size_t m = 0; m < st->count && returned < shortfall; m++) {
-        if (!can_take_back(st, m, planned))
-            continue;
-        uint64_t room = planned[m] - st->plan.target[m];
-        uint64_t share = (uint64_t)floor((double)shortfall * room / given);
-        if (share > room)
-            share = room;
-        if (share > shortfall - returned)
-            share = shortfall - returned;
-        if (share == 0)
-            continue;
-        st->plan.target[m] += share;
-        st->plan.factor[m] = (double)st->plan.target[m] / st->scene->meshes[m].vertex_count;
-        returned += share;
-        redo[m] = 1;
-    }
-    return returned > 0;
-}
-
-/* Vertices of the reduced scene: the decimated meshes' outputs and the others as they are. */
-static uint64_t vertices_after(const reduce_state *st)
-{
-    uint64_t after = 0;
+    uint64_t requested = st->plan.total_requested;
+    if (st->vertices_after <= requested)
+        return;
+    size_t stuck = 0;
     for (size_t m = 0; m < st->count; m++)
-        after += st->plan.decimate[m] ? st->output[m].mesh.vertex_count
-                                      : st->scene->meshes[m].vertex_count;
-    return after;
+        stuck += st->plan.decimate[m] && st->budget[m].floor > 0;
+    warn("the reduced scene keeps %llu vertices, %llu more than the %llu requested: %zu meshes "
+         "cannot lose more without tearing open their outlines, seams or pieces (report.json: "
+         "per mesh vertices_floor)",
+         (unsigned long long)st->vertices_after,
+         (unsigned long long)(st->vertices_after - requested), (unsigned long long)requested,
+         stuck);
 }
 
 int reduce_decimation(reduce_state *st)
@@ -243,13 +287,13 @@ int reduce_decimation(reduce_state *st)
     unsigned char *redo = xcalloc(st->count + 1, 1);
     for (size_t m = 0; m < st->count; m++)
         redo[m] = (unsigned char)st->plan.decimate[m];
-    progress bar;
-    unsigned int rounds = 0, last = COMPENSATION_ROUNDS + RELAX_ROUNDS;
-    progress_begin(&bar, "decimation", last + 2, o->importance.sppm.progress);
-    uint64_t *planned = xcalloc(st->count + 1, sizeof *planned);
+    uint64_t *first_target = xcalloc(st->count + 1, sizeof *first_target);
     for (size_t m = 0; m < st->count; m++)
-        planned[m] = st->plan.target[m];
-    int status = 0, relaxed = 0;
+        first_target[m] = st->plan.target[m];
+    progress bar;
+    unsigned int last = COMPENSATION_ROUNDS + RELAX_ROUNDS;
+    progress_begin(&bar, "decimation", last + 1, o->importance.sppm.progress);
+    int status = 0;
     for (unsigned int round = 0; !status && round <= last; round++) {
         status = decimate_selected(st, method, threads, redo);
         progress_update(&bar, round + 1, NULL);
@@ -257,25 +301,31 @@ int reduce_decimation(reduce_state *st)
         uint64_t requested = st->plan.total_requested;
         if (status || st->vertices_after <= requested || round == last)
             break;
-        if (rounds < COMPENSATION_ROUNDS &&
-            compensate(st, st->vertices_after - requested, o->min_vertices, redo)) {
-            st->compensation_rounds = ++rounds;
-            continue;
+        learn_floors(st);
+        long changed = 0;
+        if (st->compensation_rounds < COMPENSATION_ROUNDS) {
+            changed = replan(st, redo);
+            if (changed > 0)
+                st->compensation_rounds++;
         }
-        if (!relax_locks(st, st->vertices_after - requested, method, redo))
-            break;
-        relaxed = 1;
+        if (changed == 0) {
+            if (!relax_locks(st, st->vertices_after - requested, method, first_target, redo))
+                break;
+            unsigned char *moved = xcalloc(st->count + 1, 1);
+            changed = replan(st, moved);
+            for (size_t m = 0; m < st->count; m++)
+                redo[m] |= moved[m];
+            free(moved);
+        }
+        if (changed < 0)
+            status = -1;
     }
-    uint64_t requested = st->plan.total_requested;
-    if (!status && relaxed && st->vertices_after < requested &&
-        give_back(st, requested - st->vertices_after, planned, redo)) {
-        status = decimate_selected(st, method, threads, redo);
-        st->vertices_after = vertices_after(st);
-    }
-    progress_update(&bar, last + 2, NULL);
-    free(planned);
+    progress_update(&bar, last + 1, NULL);
     progress_end(&bar);
+    free(first_target);
     free(redo);
+    if (!status)
+        warn_missed(st);
     st->seconds_decimation = monotonic_seconds() - start;
     return status;
 }

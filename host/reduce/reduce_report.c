@@ -66,6 +66,8 @@ static void add_mesh(cJSON *meshes, const reduce_state *st, size_t m)
                             decimated ? out->mesh.vertex_count : in->vertex_count);
     cJSON_AddNumberToObject(mesh, "triangles_after",
                             decimated ? out->mesh.triangle_count : in->triangle_count);
+    if (decimated && st->budget[m].floor > 0)
+        cJSON_AddNumberToObject(mesh, "vertices_floor", (double)st->budget[m].floor);
     if (decimated && st->options->method == REDUCE_COMBINED) {
         double set = st->input[m].boundary_tolerance;
         double tolerance = set > 0 ? set : DECIMATE_BOUNDARY_TOLERANCE;

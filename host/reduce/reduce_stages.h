@@ -12,7 +12,8 @@
  *                every mesh, computed once for the decimation and the importance outputs:
  *                importance, vertex_importance (reduce.c)
  *   budget       decimation inputs and the plan of Eq. 3: input, plan (reduce.c)
- *   decimation   the planned meshes, then compensation rounds: output, compensation_rounds,
+ *   decimation   the planned meshes, then rounds that plan again with the floors meshes
+ *                reached and relax locks: output, budget floors, compensation_rounds,
  *                vertices_after (reduce_decimation.c)
  *   write        meshes/NAME.ply and scene.xml: ply, meshes_written (reduce.c)
  *   report       report.json (with the importance outputs) and the closing line (reduce.c; the
@@ -37,8 +38,10 @@ typedef struct reduce_state {
     importance_result importance;  /* importance: per scene triangle */
     double **vertex_importance;    /* importance: per mesh, per vertex; NULL without the pass */
     decimate_input *input;         /* budget: what each mesh is decimated from */
-    budget_plan plan;              /* budget: targets and factors; the decimation lowers targets
-                                      in compensation rounds */
+    budget_mesh *budget;           /* budget: what the plan was made from; the decimation adds
+                                      the floors it learns */
+    budget_plan plan;              /* budget: targets and factors; the decimation plans again
+                                      with the floors it learns */
     decimate_output *output;       /* decimation: per mesh the plan decimates */
     unsigned int compensation_rounds;
     unsigned int locks_relaxed;     /* decimation: meshes whose boundary lock was relaxed */
@@ -62,8 +65,9 @@ int reduce_mesh_pinned(const reduce_options *o, const scene_mesh *mesh);
 int reduce_outdir_prepare(reduce_state *st);
 int reduce_outdir_finish(reduce_state *st, int success);
 
-/* Decimates the meshes the plan decimates, in parallel, largest first, then runs the
- * compensation rounds. Returns 0, or -1 with the error set. */
+/* Decimates the meshes the plan decimates, in parallel, largest first, then plans again with the
+ * floors meshes reached and relaxes locks where the request cannot be met otherwise. Returns 0,
+ * or -1 with the error set. */
 int reduce_decimation(reduce_state *st);
 
 /* report.json's content: the importance report's keys (method importance) or the scene name,
