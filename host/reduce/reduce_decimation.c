@@ -11,14 +11,15 @@
  *                  stuck at their floors are relaxed one step (LOCK_STEPS): first their attribute
  *                  seams are freed (decimate.h, "Attributes"; only meshes with attributes have
  *                  that step), then, with the combined method, their boundary lock goes from 1 %
- *                  to 5 %, 25 % and none. The least important meshes (importance per vertex) go
- *                  first, only as many as their floors could cover the excess, so textures and
- *                  creases, then outlines, give way only as far as the budget demands and where
- *                  the image shows least. A mesh that carries importance (at least SEEN_SHARE of
- *                  the scene's mean per vertex) never loses its boundary lock entirely: a
- *                  visible wall keeps covering what it covered, and the scene keeps more than
- *                  requested instead, with a warning. A relaxed mesh's floor is forgotten and
- *                  the plan made again.
+ *                  to 5 %, 25 % and none. The meshes whose floors sit furthest above their share
+ *                  in the first plan (Eq. 3, which already gives the important ones more) go
+ *                  first, only as many as those distances cover the excess, so textures and
+ *                  creases, then outlines, give way only as far as the budget demands. A mesh
+ *                  that carries importance (at least SEEN_SHARE of the scene's mean per vertex)
+ *                  never has its boundary lock relaxed beyond SEEN_LOCK_LIMIT: a visible wall
+ *                  keeps covering what it covered, and the scene keeps more than requested
+ *                  instead, with a warning. A relaxed mesh's floor is forgotten and the plan
+ *                  made again.
  *
  * A plan made again may also raise targets (a relaxed mesh now gives more than planned): every
  * mesh whose target changed is decimated again, so the total meets the request wherever the
@@ -36,9 +37,10 @@
 /* A mesh carries importance when its importance per vertex is at least this share of the
  * scene's mean (the weighted quadric's floor, decimate_modules.hh, is the same share); its
  * boundary lock is relaxed no further than SEEN_LOCK_LIMIT. The living room at D = 0.03, where
- * no lock can hold the request: 25 % keeps 4,977 vertices for 3,586 asked (quadric, without
- * locks, 4,746) at 0.62x quadric's reduction error; 5 % keeps 6,747 at 0.30x; no limit let one
- * wall collapse across the view (1.01x). */
+ * no lock can hold the request: 25 % keeps 4,995 vertices for 3,586 asked (quadric, without
+ * locks, 4,746) at 0.21x quadric's reduction error; without the limit one wall collapsed
+ * across the view (1.01x); 5 % kept 6,747, far above the request (measured while the least
+ * important meshes were relaxed first). */
 #define SEEN_SHARE 0.01
 #define SEEN_LOCK_LIMIT 0.25
 
@@ -137,18 +139,14 @@ static long replan(reduce_state *st, unsigned char *redo)
 }
 
 /* Records as its floor what each decimated mesh kept above its target (it ran out of legal
- * collapses there). Returns how many meshes missed. */
-static size_t learn_floors(reduce_state *st)
+ * collapses there). */
+static void learn_floors(reduce_state *st)
 {
-    size_t missed = 0;
     for (size_t m = 0; m < st->count; m++) {
         uint64_t kept = kept_by(st, m);
-        if (st->plan.decimate[m] && kept > st->plan.target[m]) {
+        if (st->plan.decimate[m] && kept > st->plan.target[m])
             st->budget[m].floor = kept;
-            missed++;
-        }
     }
-    return missed;
 }
 
 /* Importance per vertex of mesh m (the budget's, so the quadric method's equal weights too). */
@@ -179,9 +177,9 @@ static uint64_t missed_by(const reduce_state *st, size_t m, const uint64_t *firs
 }
 
 /* Whether step s (> 0) of the ladder changes anything for mesh m: freeing seams only where the
- * mesh has attributes, a boundary tolerance only under the combined method, and no lock at all
- * only for a mesh that carries no importance (below SEEN_SHARE of `mean`, the scene's mean
- * importance per vertex). */
+ * mesh has attributes, a boundary tolerance only under the combined method, and one above
+ * SEEN_LOCK_LIMIT only for a mesh that carries no importance (below SEEN_SHARE of `mean`, the
+ * scene's mean importance per vertex). */
 static int lock_step_applies(const reduce_state *st, size_t m, size_t s, decimate_method method,
                              double mean)
 {
