@@ -1,5 +1,5 @@
 # idmr — build, test, bench.
-#   make [config=release|debug|sanitize] [all|kernels|test|bench|demo|deps|clean]
+#   make [config=release|debug|sanitize] [all|kernels|test|bench|demo|report|deps|clean]
 #   make fuzz [FUZZ_SECONDS=60]
 #
 # bin/idmr is the CLI. Every host source outside host/cli/ goes into build/$(config)/libidmr.a,
@@ -56,7 +56,7 @@ CLI_OBJECTS := $(patsubst host/%,$(BUILD)/host/%.o,$(wildcard host/cli/*.c))
 TEST_PROGRAMS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/test_*.c))
 BENCH_PROGRAMS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/bench_*.c))
 
-.PHONY: all deps kernels test bench demo fuzz fuzz-targets clean FORCE
+.PHONY: all deps kernels test bench demo report fuzz fuzz-targets clean FORCE
 all: bin/idmr kernels
 
 # ---- dependencies and the flags they give ----
@@ -182,6 +182,12 @@ $(FUZZ_MESH_PROGRAMS): $(BUILD)/tests/fuzz_%: tests/fuzz/fuzz_mesh.c tests/fuzz/
 
 demo: bin/idmr kernels
 	@scripts/demo.sh
+
+# What accuracy costs in time on the shipped scene (scripts/report): out/report/report.md, its
+# points.csv and plots; about 15 minutes on 2 cores. Made anew each time.
+report: bin/idmr kernels
+	@rm -rf out/report
+	@scripts/report data/cornell/scene.xml -o out/report
 
 clean:
 	rm -rf build bin

@@ -436,6 +436,15 @@ static const refusal REFUSALS[] = {
     {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x --target 0.5 --method median", "'median'"},
     {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x --target 0.5 --max-normal-angle 0",
      "--max-normal-angle"},
+    {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x --target 0.5 --factor-tolerance -1",
+     "--factor-tolerance"},
+    {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x --target 0.5 --ranking-tolerance x",
+     "--ranking-tolerance"},
+    {"bin/idmr importance data/cornell/scene.xml -o /tmp/x --factor-tolerance 0.1",
+     "unknown option --factor-tolerance"},
+    {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x --target 0.5 --method quadric "
+     "--simulation /tmp/x.bin",
+     "--simulation is for the methods with importance"},
     {"bin/idmr render data/cornell/scene.xml", "-o IMAGE is required"},
     {"bin/idmr render data/cornell/scene.xml -o /tmp/x --iterations 0", "--iterations"},
     {"bin/idmr render data/cornell/scene.xml -o /tmp/x --gamma 2", "importance pass option"},
@@ -514,6 +523,131 @@ static void test_importance_quadric_collapses_differ(void **state)
     run_result r = run("cmp -s %s/out/meshes/knot.ply %s/hybrid/meshes/knot.ply", dir, dir);
     assert_int_equal(r.status, 1); /* cmp: the files differ */
     run_free(&r);
+}
+
+/* The stop rule on the decimation factors (reduce/factor_stop.h): rule/ with a loose ranking
+ * tolerance, so that it stops well before its cap of 60 iterations, and all/ with the rule off
+ * (--factor-tolerance 0), which runs every one of its 12. */
+static shared_runs stop_rules = {
+    .prefix = "idmr-cli-stop",
+    .commands = {"bin/idmr reduce data/cornell/scene.xml --target 0.1 -o %s/rule --iterations 60 "
+                 "--ranking-tolerance 0.1 --photons 20000 --resolution 0.25 --quiet",
+                 "bin/idmr reduce data/cornell/scene.xml --target 0.1 -o %s/all --iterations 12 "
+                 "--factor-tolerance 0 --photons 20000 --resolution 0.25 --quiet"}};
+
+/* The checkpoint changes are null at the first and numbers after it. */
+static void check_checkpoints(const cJSON *rule, unsigned int iterations)
+{
+    const cJSON *list = item(rule, "checkpoints");
+    assert_int_equal(cJSON_GetArraySize(list), iterations / 5);
+    int k = 0;
+    const cJSON *c;
+    cJSON_ArrayForEach(c, list)
+    {
+        assert_int_equal((int)number(c, "iteration"), 5 * (k + 1));
+        assert_true(k == 0 ? cJSON_IsNull(item(c, "factor_change"))
+                           : cJSON_IsNumber(item(c, "factor_change")));
+        assert_true(k == 0 ? cJSON_IsNull(item(c, "ranking_change"))
+                           : cJSON_IsNumber(item(c, "ranking_change")));
+        k++;
+    }
+}
+
+static void test_reduce_stops_once_factors_settle(void **state)
+{
+    cJSON *report = shared_runs_json(&stop_rules, "rule/report.json");
+    const cJSON *rule = item(report, "stop_rule");
+    unsigned int iterations = (unsigned int)number(report, "iterations");
+    print_message("the rule stopped after %u of 60 iterations\n", iterations);
+    assert_true(iterations >= 15 && iterations < 60 && iterations % 5 == 0);
+    assert_true(number(rule, "stopped_at_iteration") == iterations);
+    assert_true(number(rule, "factor_tolerance") == 0.01);
+    assert_true(number(rule, "ranking_tolerance") == 0.1);
+    check_checkpoints(rule, iterations);
+    /* The two checkpoints it stopped on were calm. */
+    const cJSON *list = item(rule, "checkpoints");
+    int n = cJSON_GetArraySize(list);
+    for (int k = n - 2; k < n; k++) {
+        assert_true(number(cJSON_GetArrayItem(list, k), "factor_change") < 0.01);
+        assert_true(number(cJSON_GetArrayItem(list, k), "ranking_change") < 0.1);
+    }
+    assert_true(number(report, "vertices_after") == number(report, "vertices_requested"));
+    cJSON_Delete(report);
+}
+
+static void test_reduce_factor_tolerance_zero_runs_all(void **state)
+{
+    cJSON *report = shared_runs_json(&stop_rules, "all/report.json");
+    const cJSON *rule = item(report, "stop_rule");
+    assert_int_equal((int)number(report, "iterations"), 12);
+    assert_true(cJSON_IsNull(item(rule, "stopped_at_iteration")));
+    check_checkpoints(rule, 12);
+    cJSON_Delete(report);
+}
+
+/* A simulation saved by `idmr importance` (sim/simulation.bin) and the same pass run by
+ * `idmr reduce` (pass/: same seed, options and iterations; the stop rule off). */
+#define SIMULATION_PASS "--iterations 6 --photons 20000 --resolution 0.25 --quiet"
+static shared_runs simulations = {
+    .prefix = "idmr-cli-simulation",
+    .commands = {"bin/idmr importance data/cornell/scene.xml -o %s/sim " SIMULATION_PASS,
+                 "bin/idmr reduce data/cornell/scene.xml --target 0.1 -o %s/pass "
+                 "--factor-tolerance 0 " SIMULATION_PASS}};
+
+/* Reduced from the saved simulation, the scene is the one the pass itself gives, byte for
+ * byte; weighted by another γ, it is not. */
+static void test_reduce_from_saved_simulation(void **state)
+{
+    const char *dir = shared_runs_dir(&simulations);
+    run_result r = run("bin/idmr reduce data/cornell/scene.xml --target 0.1 -o %s/saved "
+                       "--simulation %s/sim/simulation.bin --quiet && cmp %s/pass/meshes/knot.ply "
+                       "%s/saved/meshes/knot.ply",
+                       dir, dir, dir, dir);
+    assert_succeeded(&r);
+    run_free(&r);
+    r = run("bin/idmr reduce data/cornell/scene.xml --target 0.1 -o %s/gamma --simulation "
+            "%s/sim/simulation.bin --gamma 4 --quiet && cmp -s %s/pass/meshes/knot.ply "
+            "%s/gamma/meshes/knot.ply",
+            dir, dir, dir, dir);
+    assert_int_equal(r.status, 1); /* cmp: the files differ */
+    run_free(&r);
+    cJSON *report = shared_runs_json(&simulations, "saved/report.json");
+    assert_non_null(strstr(string(report, "simulation"), "sim/simulation.bin"));
+    assert_int_equal((int)number(report, "iterations"), 6);
+    cJSON_Delete(report);
+}
+
+/* A damaged file, another scene, a weight the simulation has no sums for: exit 2, named. */
+static void test_reduce_refuses_unusable_simulation(void **state)
+{
+    const char *dir = shared_runs_dir(&simulations);
+    const struct {
+        const char *prepare, *scene, *options, *expect;
+    } cases[] = {
+        {"head -c 1000 %s/sim/simulation.bin > %s/short.bin", "data/cornell/scene.xml",
+         "--simulation %s/short.bin", "truncated or damaged"},
+        {"cp %s/sim/report.json %s/report.bin", "data/cornell/scene.xml",
+         "--simulation %s/report.bin", "not a simulation file"},
+        {"true %s %s", "../shared/data/scenes/cbox-mitsuba/cbox.xml",
+         "--simulation %s/sim/simulation.bin", "another scene"},
+        {"bin/idmr importance data/cornell/scene.xml -o %s/dark --shadow-weight 0 --iterations 1 "
+         "--photons 1000 --resolution 0.1 --quiet # %s",
+         "data/cornell/scene.xml", "--simulation %s/dark/simulation.bin",
+         "no shadow importance"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        run_result prepared = run(cases[i].prepare, dir, dir);
+        assert_succeeded(&prepared);
+        run_free(&prepared);
+        char options[512];
+        snprintf(options, sizeof options, cases[i].options, dir);
+        run_result r = run("bin/idmr reduce %s --target 0.1 -o %s/refused %s", cases[i].scene,
+                           dir, options);
+        if (r.status != 2 || !strstr(r.err, cases[i].expect) || !strstr(r.err, dir))
+            fail_msg("'%s': exit %d, '%s' (expected 2, the file and '%s')", r.command, r.status,
+                     r.err, cases[i].expect);
+        run_free(&r);
+    }
 }
 
 /* ---- render and compare ---- */
@@ -623,6 +757,8 @@ static int remove_shared_runs(void **state)
 {
     cJSON_Delete(cornell_info_json);
     shared_runs_remove(&reductions);
+    shared_runs_remove(&stop_rules);
+    shared_runs_remove(&simulations);
     shared_runs_remove(&renders);
     return 0;
 }
@@ -648,6 +784,10 @@ int main(void)
         cmocka_unit_test(test_reduced_scene_loads_with_reported_vertices),
         cmocka_unit_test(test_importance_quadric_meets_same_total),
         cmocka_unit_test(test_importance_quadric_collapses_differ),
+        cmocka_unit_test(test_reduce_stops_once_factors_settle),
+        cmocka_unit_test(test_reduce_factor_tolerance_zero_runs_all),
+        cmocka_unit_test(test_reduce_from_saved_simulation),
+        cmocka_unit_test(test_reduce_refuses_unusable_simulation),
         cmocka_unit_test(test_render_prints_summary),
         cmocka_unit_test(test_render_report_figures),
         cmocka_unit_test(test_render_geometry_memory_is_infos),

@@ -1,8 +1,9 @@
 /* command_importance.c — `idmr importance SCENE -o DIR [options]`: the importance pass on the
  * scene (passes/importance.h) and its outputs in DIR (passes/importance_outputs.h), written
  * into a staging directory published as DIR when all succeeded (core/files.h: nothing
- * half-written on failure or interrupt), then one summary line on stderr. Options: the
- * importance pass's (options.h). */
+ * half-written on failure or interrupt), with the simulation itself (simulation.bin,
+ * passes/importance_file.h: `idmr reduce --simulation` reuses it), then one summary line on
+ * stderr. Options: the importance pass's (options.h). */
 #include <stdio.h>
 #include <string.h>
 
@@ -12,6 +13,7 @@
 #include "core/files.h"
 #include "io/mitsuba.h"
 #include "passes/importance.h"
+#include "passes/importance_file.h"
 #include "passes/importance_outputs.h"
 
 /* What the pass runs with, and what it gives back. */
@@ -37,8 +39,11 @@ static int run_pass(device *d, const scene *s, const bvh *b, void *context)
     cJSON *report = importance_report_json(s, d, &job->options, &job->result);
     importance_weights weights = importance_weights_of(&job->options);
     double **values = importance_vertex_values(&job->result, s, &weights);
+    char simulation[4096];
+    snprintf(simulation, sizeof simulation, "%s/simulation.bin", job->staging);
     int status =
-        importance_write_outputs(job->staging, report, s, &job->options, &job->result, values);
+        importance_write_outputs(job->staging, report, s, &job->options, &job->result, values) ||
+        importance_file_write(simulation, s, &job->options, &job->result);
     importance_vertex_values_free(values, s);
     cJSON_Delete(report);
     return status;
@@ -49,7 +54,7 @@ static void print_summary(const importance_cli_job *job)
     const importance_result *r = &job->result;
     fprintf(stderr,
             "idmr: %u iterations of %u photon paths in %.1f s; outputs in %s/ (report.json, "
-            "importance.png, importance/*.ply, convergence.csv)\n",
+            "importance.png, importance/*.ply, convergence.csv, simulation.bin)\n",
             r->sppm.iterations, r->sppm.photons, r->sppm.seconds.total, job->output);
 }
 

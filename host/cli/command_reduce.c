@@ -47,6 +47,15 @@ static enum option_parse parse_option(int c, void *context, pass_arguments *argu
         return OPTION_TAKEN;
     case OPT_THREADS:
         return option_result(parse_unsigned("--threads", optarg, 1, 1024, &o->threads));
+    case OPT_FACTOR_TOLERANCE:
+        return option_result(
+            parse_double("--factor-tolerance", optarg, 0, 2, &o->factor_tolerance));
+    case OPT_SIMULATION:
+        o->simulation = optarg;
+        return OPTION_TAKEN;
+    case OPT_RANKING_TOLERANCE:
+        return option_result(
+            parse_double("--ranking-tolerance", optarg, 0, 2, &o->ranking_tolerance));
     default:
         return parse_importance_option(c, &o->importance, &arguments->device_index);
     }
@@ -81,6 +90,9 @@ int command_reduce(int argc, char **argv)
         {"force", no_argument, NULL, OPT_FORCE},
         {"bundle", no_argument, NULL, OPT_BUNDLE},
         {"threads", required_argument, NULL, OPT_THREADS},
+        {"factor-tolerance", required_argument, NULL, OPT_FACTOR_TOLERANCE},
+        {"ranking-tolerance", required_argument, NULL, OPT_RANKING_TOLERANCE},
+        {"simulation", required_argument, NULL, OPT_SIMULATION},
         {0, 0, 0, 0}};
     reduce_cli_request request = {.have_target = 0};
     reduce_options_default(&request.options);
@@ -90,6 +102,10 @@ int command_reduce(int argc, char **argv)
     int code = parse_pass_arguments(argc, argv, table, parse_option, &request, &arguments);
     if (!code && (!arguments.output || !request.have_target))
         code = usage_error("reduce: --target D and -o OUTDIR are required");
+    if (!code && request.options.simulation &&
+        !reduce_method_uses_importance(request.options.method))
+        code = usage_error("reduce: --simulation is for the methods with importance, not '%s'",
+                           reduce_method_name(request.options.method));
     if (!code)
         code = run_reduce(&arguments, &request.options);
     free((void *)request.options.keep);

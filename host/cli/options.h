@@ -39,6 +39,9 @@ enum option_id {
     OPT_EXPOSURE,
     OPT_MAX_DEPTH,
     OPT_BUNDLE,
+    OPT_FACTOR_TOLERANCE,
+    OPT_RANKING_TOLERANCE,
+    OPT_SIMULATION,
 };
 
 /* Options of the SPPM core, shared by `importance`, `reduce` and `render` (-o among them). */

@@ -216,7 +216,12 @@ static int collect(sppm *core, void *state, unsigned int n, int *stop, char *det
     double tolerance = p->options->tolerance;
     p->calm = tolerance > 0 && r->convergence[n] < tolerance ? p->calm + 1 : 0;
     *stop = p->calm >= STOP_AFTER_CALM_ITERATIONS;
-    return 0;
+    const importance_options *o = p->options;
+    if (*stop || !o->checkpoint)
+        return 0;
+    r->sppm.iterations = n + 1; /* the core counts this iteration only after collect() */
+    size_t used = strlen(detail);
+    return o->checkpoint(o->checkpoint_context, r, stop, detail + used, detail_size - used);
 }
 
 static int snapshot(sppm *core, void *state)

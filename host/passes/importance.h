@@ -31,7 +31,9 @@
  *
  * Convergence after iteration n: Δ_n = Σ_T (I_n(T) - I_{n-1}(T))² / Σ_T I_n(T)², with I_n the
  * per-triangle importance after n iterations; Δ_1 = 1. It is scale-free. With
- * a tolerance E > 0 the pass stops once Δ stays below E for 3 iterations in a row. */
+ * a tolerance E > 0 the pass stops once Δ stays below E for 3 iterations in a row. A caller
+ * can add its own rule (the checkpoint hook below: `idmr reduce` stops once the decimation
+ * factors settle, reduce/factor_stop.h). */
 #ifndef IDMR_IMPORTANCE_H
 #define IDMR_IMPORTANCE_H
 
@@ -56,6 +58,8 @@ typedef struct importance_snapshot {
 
 void importance_snapshot_free(importance_snapshot *snapshot);
 
+typedef struct importance_result importance_result;
+
 typedef struct importance_options {
     sppm_options sppm;       /* iterations default to 100 */
     float gamma;             /* hit point importance factor γ (default 1) */
@@ -63,9 +67,15 @@ typedef struct importance_options {
     double tolerance;        /* stop once Δ stays below it; 0: run all iterations */
     int accumulate_importance; /* 1; 0 compiles the importance accumulation out (benchmark) */
     importance_snapshot *snapshot; /* when not NULL, receives the last iteration's buffers */
+    /* When set, called after every iteration with the sums so far (r->sppm.iterations is the
+     * count run): it may set *stop to end the pass there, and put a few words for the progress
+     * line into detail. Returns 0, or -1 with the error set (the pass then fails). */
+    int (*checkpoint)(void *context, const importance_result *r, int *stop, char *detail,
+                      size_t detail_size);
+    void *checkpoint_context;
 } importance_options;
 
-typedef struct importance_result {
+struct importance_result {
     size_t triangle_count;
     double *camera;          /* per scene triangle, summed over iterations, in weight units */
     double *light;
@@ -76,7 +86,7 @@ typedef struct importance_result {
     uint64_t gathered;       /* hit points found by photon vertices, first iteration */
     double path_seconds;     /* the path walk, part of sppm.seconds.gather */
     sppm_summary sppm;       /* iterations, radii, image size, photons, bytes, timings */
-} importance_result;
+};
 
 void importance_options_default(importance_options *o);
 

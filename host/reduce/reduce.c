@@ -13,6 +13,7 @@
 #include "core/progress.h"
 #include "io/mesh_io.h"
 #include "io/mitsuba_write.h"
+#include "passes/importance_file.h"
 #include "passes/importance_outputs.h"
 #include "reduce/reduce_stages.h"
 
@@ -36,24 +37,168 @@ static int check_options(const reduce_state *st)
     return 0;
 }
 
-/* Method importance: the importance pass (on a BVH built for it), and each mesh's per-vertex
- * importance, computed once for the decimation and the importance outputs. */
-static int run_importance(reduce_state *st)
+/* Mesh m as the plan of Eq. 3 sees it: its vertices as the scene holds them (so the totals
+ * match what `idmr info` says of the input and of the reduced scene), and its importance sum
+ * from `r` (methods with the importance pass), or equal importance for all, which gives the
+ * uniform D of the quadric baseline. */
+static budget_mesh budget_entry(const reduce_state *st, const importance_result *r, size_t m)
 {
     const reduce_options *o = st->options;
     const scene *s = st->scene;
+    importance_weights weights = importance_weights_of(&o->importance);
+    budget_mesh entry = {.name = s->meshes[m].name,
+                         .vertices = s->meshes[m].vertex_count,
+                         .pinned = reduce_mesh_pinned(o, &s->meshes[m]),
+                         .importance = 1.0};
+    if (reduce_method_uses_importance(o->method))
+        entry.importance = importance_mesh_sums(r, s, m, &weights).amount;
+    return entry;
+}
+
+/* Whether mesh m can be decimated at all: not pinned, above --min-vertices. */
+static int decimatable(const reduce_state *st, size_t m)
+{
+    const scene_mesh *mesh = &st->scene->meshes[m];
+    return !reduce_mesh_pinned(st->options, mesh) &&
+           mesh->vertex_count > st->options->min_vertices;
+}
+
+/* The ranking change is taken over at most this many vertices (an even spread of them). */
+#define RANKING_SAMPLE (1u << 20)
+
+/* The stop rule while the pass runs (factor_stop.h). */
+typedef struct checkpoint_state {
+    reduce_state *st;
+    factor_stop rule;
+    budget_mesh *budget;
+    uint64_t *previous_target; /* the last checkpoint's plan; NULL before the first */
+    double *previous_ranking, *ranking; /* per-vertex importance of the sampled vertices */
+    size_t sampled, stride;
+    double *vertex_scratch; /* one mesh's per-vertex importance */
+} checkpoint_state;
+
+/* The sampled vertices' importance now, into c->ranking. */
+static void sample_vertex_importance(checkpoint_state *c, const importance_result *r)
+{
+    const scene *s = c->st->scene;
+    importance_weights weights = importance_weights_of(&c->st->options->importance);
+    size_t global = 0, k = 0;
+    for (size_t m = 0; m < c->st->count; m++) {
+        if (!decimatable(c->st, m))
+            continue;
+        importance_mesh_vertices(r, s, m, &weights, c->vertex_scratch);
+        for (uint32_t v = 0; v < s->meshes[m].vertex_count; v++, global++)
+            if (global % c->stride == 0 && k < c->sampled)
+                c->ranking[k++] = c->vertex_scratch[v];
+    }
+}
+
+/* Every FACTOR_STOP_EVERY iterations: the plan from the importance so far against the last
+ * checkpoint's, recorded in the state; stops the pass when the rule says so. */
+static int checkpoint(void *context, const importance_result *r, int *stop, char *detail,
+                      size_t detail_size)
+{
+    checkpoint_state *c = context;
+    reduce_state *st = c->st;
+    unsigned int iteration = r->sppm.iterations;
+    if (iteration % FACTOR_STOP_EVERY)
+        return 0;
+    double total_importance = 0;
+    for (size_t m = 0; m < st->count; m++) {
+        c->budget[m] = budget_entry(st, r, m);
+        total_importance += c->budget[m].pinned ? 0.0 : c->budget[m].importance;
+    }
+    factor_checkpoint *record = &st->checkpoints[st->checkpoint_count++];
+    *record = (factor_checkpoint){iteration, -1.0, -1.0};
+    /* No importance yet: no plan to compare (and the budget's warning is for the real plan). */
+    if (!(total_importance > 0)) {
+        factor_stop_update(&c->rule, -1.0, -1.0);
+        return 0;
+    }
+    budget_plan plan;
+    if (budget_distribute(c->budget, st->count, st->options->target, st->options->min_vertices,
+                          &plan))
+        return -1;
+    sample_vertex_importance(c, r);
+    if (c->previous_target) {
+        record->factor_change = factor_change(c->previous_target, plan.target, st->count);
+        record->ranking_change = ranking_change(c->previous_ranking, c->ranking, c->sampled);
+        snprintf(detail, detail_size, ", factors %.1e, ranking %.1e", record->factor_change,
+                 record->ranking_change);
+    } else {
+        c->previous_target = xcalloc(st->count + 1, sizeof *c->previous_target);
+    }
+    memcpy(c->previous_target, plan.target, st->count * sizeof *plan.target);
+    double *swap = c->previous_ranking;
+    c->previous_ranking = c->ranking;
+    c->ranking = swap;
+    budget_plan_free(&plan);
+    if (factor_stop_update(&c->rule, record->factor_change, record->ranking_change)) {
+        *stop = 1;
+        st->stopped_at = iteration;
+    }
+    return 0;
+}
+
+/* The importance pass with the stop rule on the decimation factors, on a BVH built for it. */
+static int importance_with_stop_rule(reduce_state *st)
+{
+    const reduce_options *o = st->options;
+    const scene *s = st->scene;
+    /* The ranking matters where the collapses follow the vertex importance. */
+    int ranked = reduce_method_collapses(o->method) != DECIMATE_QUADRIC;
+    checkpoint_state c = {.st = st,
+                          .rule = {.tolerance = o->factor_tolerance,
+                                   .ranking_tolerance = ranked ? o->ranking_tolerance : 0.0},
+                          .stride = 1};
+    size_t largest = 0, candidates = 0;
+    for (size_t m = 0; m < st->count; m++)
+        if (decimatable(st, m)) {
+            candidates += s->meshes[m].vertex_count;
+            if (s->meshes[m].vertex_count > largest)
+                largest = s->meshes[m].vertex_count;
+        }
+    c.stride = candidates > RANKING_SAMPLE ? (candidates + RANKING_SAMPLE - 1) / RANKING_SAMPLE
+                                           : 1;
+    c.sampled = (candidates + c.stride - 1) / c.stride;
+    c.budget = xcalloc(st->count + 1, sizeof *c.budget);
+    c.ranking = xcalloc(c.sampled + 1, sizeof *c.ranking);
+    c.previous_ranking = xcalloc(c.sampled + 1, sizeof *c.previous_ranking);
+    c.vertex_scratch = xcalloc(largest + 1, sizeof *c.vertex_scratch);
+    st->checkpoints = xcalloc(o->importance.sppm.iterations / FACTOR_STOP_EVERY + 1,
+                              sizeof *st->checkpoints);
+    importance_options options = o->importance;
+    options.checkpoint = checkpoint;
+    options.checkpoint_context = &c;
+    bvh b;
+    int status = bvh_build(s, &b);
+    if (!status) {
+        status = importance_run(st->device, s, &b, &options, &st->importance);
+        bvh_free(&b);
+    }
+    free(c.budget);
+    free(c.previous_target);
+    free(c.ranking);
+    free(c.previous_ranking);
+    free(c.vertex_scratch);
+    return status;
+}
+
+/* Methods with importance: the importance pass (or the saved one --simulation names), and each
+ * mesh's per-vertex importance, computed once for the decimation and the importance outputs. */
+static int run_importance(reduce_state *st)
+{
+    const reduce_options *o = st->options;
     double start = monotonic_seconds();
     int status = 0;
     if (reduce_method_uses_importance(o->method)) {
         importance_weights weights = importance_weights_of(&o->importance);
-        bvh b;
-        status = bvh_build(s, &b);
-        if (!status) {
-            status = importance_run(st->device, s, &b, &o->importance, &st->importance);
-            bvh_free(&b);
-        }
+        status = o->simulation ? importance_file_read(o->simulation, st->scene, &o->importance,
+                                                      &st->importance)
+                               : importance_with_stop_rule(st);
         if (!status)
-            st->vertex_importance = importance_vertex_values(&st->importance, s, &weights);
+            st->vertex_importance = importance_vertex_values(&st->importance, st->scene,
+                                                             &weights);
     }
     st->seconds_importance = monotonic_seconds() - start;
     return status;
@@ -84,23 +229,12 @@ static decimate_input decimation_input(const reduce_state *st, size_t m)
 static int plan_budget(reduce_state *st)
 {
     const reduce_options *o = st->options;
-    const scene *s = st->scene;
     double start = monotonic_seconds();
     st->input = xcalloc(st->count + 1, sizeof *st->input);
     budget_mesh *budget = st->budget = xcalloc(st->count + 1, sizeof *budget);
-    importance_weights weights = importance_weights_of(&o->importance);
     for (size_t m = 0; m < st->count; m++) {
         st->input[m] = decimation_input(st, m);
-        budget[m].name = s->meshes[m].name;
-        /* Counted as the scene holds them, so the totals match what `idmr info` says of the
-         * input and of the reduced scene. */
-        budget[m].vertices = s->meshes[m].vertex_count;
-        budget[m].pinned = reduce_mesh_pinned(o, &s->meshes[m]);
-        if (reduce_method_uses_importance(o->method)) {
-            budget[m].importance = importance_mesh_sums(&st->importance, s, m, &weights).amount;
-        } else {
-            budget[m].importance = 1.0; /* equal factors: the uniform D of the baseline */
-        }
+        budget[m] = budget_entry(st, &st->importance, m);
     }
     int status = budget_distribute(budget, st->count, o->target, o->min_vertices, &st->plan);
     /* Nothing to remove (D = 1): every mesh that could be decimated is still rewritten, as its
@@ -108,7 +242,7 @@ static int plan_budget(reduce_state *st)
      * another renderer must show it as the input). */
     if (!status && st->plan.total_requested == st->plan.total_before)
         for (size_t m = 0; m < st->count; m++)
-            if (!budget[m].pinned && budget[m].vertices > o->min_vertices)
+            if (decimatable(st, m))
                 st->plan.decimate[m] = 1;
     st->seconds_budget = monotonic_seconds() - start;
     return status;
@@ -202,6 +336,7 @@ static void state_free(reduce_state *st)
             decimate_output_free(&st->output[m]);
         free(st->ply ? st->ply[m] : NULL);
     }
+    free(st->checkpoints);
     free(st->input);
     free(st->budget);
     free(st->output);

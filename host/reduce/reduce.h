@@ -20,7 +20,8 @@
  * every file it names is copied under OUTDIR (io/mitsuba_write.h).
  *
  * Files: reduce.c (the pipeline and its option, importance, budget and writing stages),
- * reduce_outdir.c, reduce_decimation.c (with the compensation rounds), reduce_report.c; the
+ * factor_stop.c (when the importance pass has learnt enough), reduce_outdir.c,
+ * reduce_decimation.c (with the compensation rounds), reduce_report.c; the
  * stages share the reduce_state of reduce_stages.h. */
 #ifndef IDMR_REDUCE_H
 #define IDMR_REDUCE_H
@@ -41,6 +42,14 @@ typedef struct reduce_options {
     importance_options importance;
     double target;           /* D: fraction of all vertices to keep, (0, 1] */
     reduce_method method;
+    double factor_tolerance; /* stop the importance pass once the decimation factors move less
+                                than this share of the budget (factor_stop.h; default 0.01,
+                                0: run every iteration) */
+    double ranking_tolerance; /* ... and, for collapses by importance, the per-vertex importance
+                                 ranks change less than this (1 - Spearman's rho; default
+                                 0.05, 0: not part of the rule) */
+    const char *simulation;  /* when set, no importance pass: this saved one is read
+                                (passes/importance_file.h) and weighted by the options */
     unsigned long min_vertices; /* default 16 */
     double max_normal_angle; /* degrees, default 60 */
     const char **keep;       /* mesh names never decimated */

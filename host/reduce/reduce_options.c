@@ -12,6 +12,8 @@ void reduce_options_default(reduce_options *o)
     importance_options_default(&o->importance);
     o->target = 0.1;
     o->method = REDUCE_COMBINED;
+    o->factor_tolerance = FACTOR_STOP_TOLERANCE;
+    o->ranking_tolerance = FACTOR_STOP_RANKING_TOLERANCE;
     o->min_vertices = 16;
     o->max_normal_angle = 60.0;
 }

@@ -92,6 +92,39 @@ static void add_mesh(cJSON *meshes, const reduce_state *st, size_t m)
     cJSON_AddBoolToObject(mesh, "pinned", reduce_mesh_pinned(st->options, in));
 }
 
+/* The stop rule on the decimation factors (factor_stop.h): its settings, where it stopped the
+ * pass (null: it did not) and its checkpoints (changes null at the first, or with no importance
+ * yet to plan from). */
+static void add_stop_rule(cJSON *root, const reduce_state *st)
+{
+    cJSON *rule = cJSON_AddObjectToObject(root, "stop_rule");
+    cJSON_AddNumberToObject(rule, "factor_tolerance", st->options->factor_tolerance);
+    cJSON_AddNumberToObject(rule, "ranking_tolerance",
+                            reduce_method_collapses(st->options->method) != DECIMATE_QUADRIC
+                                ? st->options->ranking_tolerance
+                                : 0.0);
+    cJSON_AddNumberToObject(rule, "checkpoint_every", FACTOR_STOP_EVERY);
+    cJSON_AddNumberToObject(rule, "calm_checkpoints", FACTOR_STOP_CALM);
+    if (st->stopped_at)
+        cJSON_AddNumberToObject(rule, "stopped_at_iteration", st->stopped_at);
+    else
+        cJSON_AddNullToObject(rule, "stopped_at_iteration");
+    cJSON *list = cJSON_AddArrayToObject(rule, "checkpoints");
+    for (size_t k = 0; k < st->checkpoint_count; k++) {
+        const factor_checkpoint *c = &st->checkpoints[k];
+        cJSON *item = cJSON_CreateObject();
+        cJSON_AddNumberToObject(item, "iteration", c->iteration);
+        if (c->factor_change >= 0) {
+            cJSON_AddNumberToObject(item, "factor_change", c->factor_change);
+            cJSON_AddNumberToObject(item, "ranking_change", c->ranking_change);
+        } else {
+            cJSON_AddNullToObject(item, "factor_change");
+            cJSON_AddNullToObject(item, "ranking_change");
+        }
+        cJSON_AddItemToArray(list, item);
+    }
+}
+
 cJSON *reduce_report_json(const reduce_state *st)
 {
     const reduce_options *o = st->options;
@@ -100,6 +133,10 @@ cJSON *reduce_report_json(const reduce_state *st)
                                                &st->importance)
                       : report_without_importance(st->scene);
     add_totals(root, st);
+    if (o->simulation)
+        cJSON_AddStringToObject(root, "simulation", o->simulation);
+    else if (reduce_method_uses_importance(o->method))
+        add_stop_rule(root, st);
     add_seconds(cJSON_GetObjectItem(root, "seconds"), st);
     cJSON *meshes = cJSON_GetObjectItem(root, "meshes");
     for (size_t m = 0; m < st->scene->mesh_count; m++)

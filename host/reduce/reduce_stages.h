@@ -8,9 +8,11 @@
  *   outdir       OUTDIR checked (empty unless forced, holding no input) and its staging
  *                directory made beside it, where every later stage writes; published as OUTDIR
  *                when all succeeded, removed otherwise or on an interrupt (reduce_outdir.c)
- *   importance   the importance pass (method importance only) and per-vertex importance of
- *                every mesh, computed once for the decimation and the importance outputs:
- *                importance, vertex_importance (reduce.c)
+ *   importance   the importance pass (methods with importance), stopped once the decimation
+ *                factors settle (factor_stop.h), or the saved pass --simulation names
+ *                (passes/importance_file.h), and per-vertex importance of every mesh,
+ *                computed once for the decimation and the importance outputs: importance,
+ *                checkpoints, stopped_at, vertex_importance (reduce.c)
  *   budget       decimation inputs and the plan of Eq. 3: input, plan (reduce.c)
  *   decimation   the planned meshes, then rounds that plan again with the floors meshes
  *                reached and relax locks: output, budget floors, compensation_rounds,
@@ -25,7 +27,14 @@
 #include <cjson/cJSON.h>
 
 #include "reduce/budget.h"
+#include "reduce/factor_stop.h"
 #include "reduce/reduce.h"
+
+/* One checkpoint of the stop rule (factor_stop.h); the changes are negative at the first. */
+typedef struct factor_checkpoint {
+    unsigned int iteration;
+    double factor_change, ranking_change;
+} factor_checkpoint;
 
 typedef struct reduce_state {
     device *device;
@@ -36,6 +45,10 @@ typedef struct reduce_state {
     size_t count; /* meshes in the scene */
 
     importance_result importance;  /* importance: per scene triangle */
+    factor_checkpoint *checkpoints; /* importance: the stop rule's checkpoints (factor_stop.h) */
+    size_t checkpoint_count;
+    unsigned int stopped_at;       /* importance: the iteration the stop rule ended the pass
+                                      after; 0 when it ran to --iterations or --tolerance */
     double **vertex_importance;    /* importance: per mesh, per vertex; NULL without the pass */
     decimate_input *input;         /* budget: what each mesh is decimated from */
     budget_mesh *budget;           /* budget: what the plan was made from; the decimation adds

@@ -1,0 +1,43 @@
+/* importance_file.h — an importance pass saved and read back: DIR/simulation.bin of
+ * `idmr importance`, read by `idmr reduce --simulation FILE`. It holds the per-triangle sums
+ * before any weight (importance.h: camera, light, shadow), so γ, σ, the target and the method
+ * can all be varied over one simulation.
+ *
+ * Layout, in the writer's byte order (the magic is read back only in the same order):
+ *   char[8]  "IDMRSIM1"
+ *   uint64   scene fingerprint, triangles
+ *   uint32   iterations, photons per iteration, hit-point image width, height,
+ *            kinds (bit 0: camera importance accumulated, γ > 0; bit 1: shadow rays, σ > 0),
+ *            seed
+ *   uint64   hit points, photon records, gathered (first iteration)
+ *   double   gather radius [iterations], convergence Δ [iterations]
+ *   double   camera [triangles], light [triangles], shadow [triangles]
+ *   uint32   the triangle seen through each pixel centre [width × height]
+ * The fingerprint is FNV-1a over every mesh's positions and indices, in scene order, and the
+ * bytes of the scene's XML file (its camera, lights and materials; not those of files it
+ * includes): a simulation is never applied to another scene or a changed one. */
+#ifndef IDMR_IMPORTANCE_FILE_H
+#define IDMR_IMPORTANCE_FILE_H
+
+#include <stdint.h>
+
+#include "core/scene.h"
+#include "passes/importance.h"
+
+/* The scene's fingerprint (above). 0, or -1 with the error set (the XML cannot be read). */
+int importance_file_fingerprint(const scene *s, uint64_t *fingerprint);
+
+/* Writes the pass `r` (run with the options `o`) to `path`, atomically. 0, or -1 with the error
+ * set. */
+int importance_file_write(const char *path, const scene *s, const importance_options *o,
+                          const importance_result *r);
+
+/* Reads `path` into `r` (free it with importance_result_free(), also on failure) for scene `s`,
+ * to be weighted by the options `o`. Errors, naming the file: not a simulation file, truncated
+ * or too long, another scene (fingerprint or triangle count), or a weight the simulation
+ * cannot serve (γ > 0 without camera importance, σ > 0 without shadow rays). 0, or -1 with the
+ * error set (IDMR_EXIT_INPUT). */
+int importance_file_read(const char *path, const scene *s, const importance_options *o,
+                         importance_result *r);
+
+#endif
