@@ -184,7 +184,7 @@ demo: bin/idmr kernels
 	@scripts/demo.sh
 
 # What accuracy costs in time on the shipped scene (scripts/report): out/report/report.md, its
-# points.csv and plots; about 15 minutes on 2 cores. Made anew each time.
+# points.csv and plots; about 9 minutes on 2 cores. Made anew each time.
 report: bin/idmr kernels
 	@rm -rf out/report
 	@scripts/report data/cornell/scene.xml -o out/report
