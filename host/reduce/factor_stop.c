@@ -28,43 +28,36 @@ static int by_value(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* Ranks 1..n of values into rank, ties their mean rank. */
-static void mean_ranks(const double *values, size_t n, ranked *scratch, double *rank)
+void mean_ranks(const double *values, size_t n, double *ranks)
 {
+    ranked *sorted = xmalloc((n ? n : 1) * sizeof *sorted);
     for (size_t i = 0; i < n; i++)
-        scratch[i] = (ranked){values[i], i};
-    qsort(scratch, n, sizeof *scratch, by_value);
+        sorted[i] = (ranked){values[i], i};
+    qsort(sorted, n, sizeof *sorted, by_value);
     for (size_t i = 0; i < n;) {
         size_t j = i + 1;
-        while (j < n && scratch[j].value == scratch[i].value)
+        while (j < n && sorted[j].value == sorted[i].value)
             j++;
         double mean = 0.5 * (double)(i + 1 + j); /* mean of ranks i+1 .. j */
         for (size_t k = i; k < j; k++)
-            rank[scratch[k].index] = mean;
+            ranks[sorted[k].index] = mean;
         i = j;
     }
+    free(sorted);
 }
 
-double ranking_change(const double *before, const double *after, size_t n)
+double ranking_change(const double *ranks_before, const double *ranks_after, size_t n)
 {
     if (n < 2)
         return 0.0;
-    ranked *scratch = xmalloc(n * sizeof *scratch);
-    double *rank_before = xmalloc(n * sizeof *rank_before);
-    double *rank_after = xmalloc(n * sizeof *rank_after);
-    mean_ranks(before, n, scratch, rank_before);
-    mean_ranks(after, n, scratch, rank_after);
     /* Pearson's correlation of the ranks (exact with ties), about the mean rank (n + 1) / 2. */
     double centre = 0.5 * ((double)n + 1), covariance = 0, var_before = 0, var_after = 0;
     for (size_t i = 0; i < n; i++) {
-        double x = rank_before[i] - centre, y = rank_after[i] - centre;
+        double x = ranks_before[i] - centre, y = ranks_after[i] - centre;
         covariance += x * y;
         var_before += x * x;
         var_after += y * y;
     }
-    free(scratch);
-    free(rank_before);
-    free(rank_after);
     if (!(var_before > 0) || !(var_after > 0))
         return 0.0;
     double rho = covariance / sqrt(var_before * var_after);

@@ -36,9 +36,13 @@
  * the earlier plan keeps no vertex. */
 double factor_change(const uint64_t *before, const uint64_t *after, size_t count);
 
-/* The ranking change above between two value lists of length n: 1 − Spearman's ρ, in [0, 2].
- * 0 when n < 2 or when either list is constant (no order to change). */
-double ranking_change(const double *before, const double *after, size_t n);
+/* Ranks 1..n of `values` into `ranks`, ties at their mean rank. A checkpoint ranks its values
+ * once and keeps the ranks for the next one to compare with. */
+void mean_ranks(const double *values, size_t n, double *ranks);
+
+/* The ranking change above between two rank lists of length n (mean_ranks()): 1 − Spearman's
+ * ρ, in [0, 2]. 0 when n < 2 or when either list is all ties (no order to change). */
+double ranking_change(const double *ranks_before, const double *ranks_after, size_t n);
 
 /* The rule's state over the checkpoints of one pass. */
 typedef struct factor_stop {

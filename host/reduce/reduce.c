@@ -72,13 +72,15 @@ typedef struct checkpoint_state {
     factor_stop rule;
     budget_mesh *budget;
     uint64_t *previous_target; /* the last checkpoint's plan; NULL before the first */
-    double *previous_ranking, *ranking; /* per-vertex importance of the sampled vertices */
+    double *sampled_importance;         /* per-vertex importance of the sampled vertices */
+    double *previous_ranking, *ranking; /* their ranks (mean_ranks) at the last checkpoint, now */
     size_t sampled, stride;
     double *vertex_scratch; /* one mesh's per-vertex importance */
 } checkpoint_state;
 
-/* The sampled vertices' importance now, into c->ranking. */
-static void sample_vertex_importance(checkpoint_state *c, const importance_result *r)
+/* The sampled vertices' importance now, into c->sampled_importance, and its ranks into
+ * c->ranking. */
+static void rank_vertex_importance(checkpoint_state *c, const importance_result *r)
 {
     const scene *s = c->st->scene;
     importance_weights weights = importance_weights_of(&c->st->options->importance);
@@ -89,8 +91,9 @@ static void sample_vertex_importance(checkpoint_state *c, const importance_resul
         importance_mesh_vertices(r, s, m, &weights, c->vertex_scratch);
         for (uint32_t v = 0; v < s->meshes[m].vertex_count; v++, global++)
             if (global % c->stride == 0 && k < c->sampled)
-                c->ranking[k++] = c->vertex_scratch[v];
+                c->sampled_importance[k++] = c->vertex_scratch[v];
     }
+    mean_ranks(c->sampled_importance, c->sampled, c->ranking);
 }
 
 /* Every FACTOR_STOP_EVERY iterations: the plan from the importance so far against the last
@@ -119,7 +122,7 @@ static int checkpoint(void *context, const importance_result *r, int *stop, char
     if (budget_distribute(c->budget, st->count, st->options->target, st->options->min_vertices,
                           &plan))
         return -1;
-    sample_vertex_importance(c, r);
+    rank_vertex_importance(c, r);
     if (c->previous_target) {
         record->factor_change = factor_change(c->previous_target, plan.target, st->count);
         record->ranking_change = ranking_change(c->previous_ranking, c->ranking, c->sampled);
@@ -162,6 +165,7 @@ static int importance_with_stop_rule(reduce_state *st)
                                            : 1;
     c.sampled = (candidates + c.stride - 1) / c.stride;
     c.budget = xcalloc(st->count + 1, sizeof *c.budget);
+    c.sampled_importance = xcalloc(c.sampled + 1, sizeof *c.sampled_importance);
     c.ranking = xcalloc(c.sampled + 1, sizeof *c.ranking);
     c.previous_ranking = xcalloc(c.sampled + 1, sizeof *c.previous_ranking);
     c.vertex_scratch = xcalloc(largest + 1, sizeof *c.vertex_scratch);
@@ -178,6 +182,7 @@ static int importance_with_stop_rule(reduce_state *st)
     }
     free(c.budget);
     free(c.previous_target);
+    free(c.sampled_importance);
     free(c.ranking);
     free(c.previous_ranking);
     free(c.vertex_scratch);
