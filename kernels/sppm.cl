@@ -2,7 +2,8 @@
  * pass (IDMR_SPPM_PASS, lib/features.h). Entry points only: the work is in lib/.
  *
  *   camera_paths      one camera path per pixel (lib/paths.h): hit points, and what the pass
- *                     records (importance: camera importance; render: throughput and emission)
+ *                     records (importance: camera importance, then the light seen through
+ *                     specular surfaces; render: throughput and emission)
  *   photon_paths      one photon path per work-item into its slot of records (lib/paths.h)
  *   grid_count, scan_chunks, scan_chunk_sums, scan_apply, grid_scatter
  *                     the hash grid over the hit points by counting sort (lib/hit_point_grid.h)
@@ -28,14 +29,21 @@
 #define IDMR_SHADOW_IMPORTANCE 0 /* 1: the importance pass casts shadow rays */
 #endif
 
+#if PASS_IMPORTANCE
+#define SEEN_LIGHT_ARGUMENT , seen_light
+#else
+#define SEEN_LIGHT_ARGUMENT
+#endif
+
 kernel void camera_paths(idmr_sppm_params params, idmr_camera camera, SCENE_BUFFERS,
-                         global idmr_hit_point *hit_points, camera_records records)
+                         global idmr_hit_point *hit_points,
+                         camera_records records SEEN_LIGHT_PARAMETER)
 {
     uint pixel = get_global_id(0);
     if (pixel >= params.width * params.height)
         return;
     scene_view scene = SCENE_VIEW();
-    camera_path(&scene, &params, camera, pixel, hit_points, records);
+    camera_path(&scene, &params, camera, pixel, hit_points, records SEEN_LIGHT_ARGUMENT);
 }
 
 kernel void photon_paths(idmr_sppm_params params, SCENE_BUFFERS, global uint *path_length,

@@ -617,7 +617,8 @@ static void test_reduce_from_saved_simulation(void **state)
     cJSON_Delete(report);
 }
 
-/* A damaged file, another scene, a weight the simulation has no sums for: exit 2, named. */
+/* A damaged file, a file of version 1, another scene, a weight the simulation has no sums for:
+ * exit 2, named. */
 static void test_reduce_refuses_unusable_simulation(void **state)
 {
     const char *dir = shared_runs_dir(&simulations);
@@ -628,6 +629,8 @@ static void test_reduce_refuses_unusable_simulation(void **state)
          "--simulation %s/short.bin", "truncated or damaged"},
         {"cp %s/sim/report.json %s/report.bin", "data/cornell/scene.xml",
          "--simulation %s/report.bin", "not a simulation file"},
+        {"(printf IDMRSIM1; tail -c +9 %s/sim/simulation.bin) > %s/version1.bin",
+         "data/cornell/scene.xml", "--simulation %s/version1.bin", "older idmr"},
         {"true %s %s", "../shared/data/scenes/cbox-mitsuba/cbox.xml",
          "--simulation %s/sim/simulation.bin", "another scene"},
         {"bin/idmr importance data/cornell/scene.xml -o %s/dark --shadow-weight 0 --iterations 1 "

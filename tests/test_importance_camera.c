@@ -1,7 +1,8 @@
 /* test_importance_camera.c — the importance pass's camera pass (kernels/lib/paths.h,
  * host/passes/importance.c): Eq. 2 on the host, and per-triangle Eq. 2 sums and hit points on
  * the device against the same jittered camera rays recomputed on the host (a quad seen head-on,
- * a scene against Embree's rtcIntersect1, a view through a mirror).
+ * a scene against Embree's rtcIntersect1, a view through a mirror), and the light seen in a
+ * mirror against its formula (passes/importance.h, light(T)).
  *
  * Each device test checks one formula on a run made once per device (imp_run) of a scene
  * built in code; the Eq. 2 tests are host-only and run once. */
@@ -389,6 +390,71 @@ static void test_wall_adds_eq2_of_the_reflected_ray(void **state)
     expect_mirror_sum(2, 1);
 }
 
+/* ---- a light seen in the mirror ---- */
+
+#define SEEN_RADIANCE 2.0f
+
+/* The mirror scene with the wall an area light of radiance 2 facing the mirror: every camera
+ * path sees the light in the mirror. */
+static scene *seen_light_scene(void)
+{
+    scene *s = scene_create("seen-light.xml");
+    const float r2 = 0.70710678f;
+    imp_add_quad(s, "mirror", imp_mirror(s, "mirror"), V3(0, 0, -2), V3(0, 1, 0),
+                 V3(-r2, 0, r2));
+    scene_mesh *wall = imp_add_quad(s, "wall", imp_diffuse(s, "white", 0.8f, 0), V3(3, 0, -2),
+                                    V3(0, 0, 2), V3(0, 2, 0));
+    imp_area_light(s, wall, SEEN_RADIANCE);
+    imp_look_at(s, V3(0, 0, 0), V3(0, 0, -1), V3(0, 1, 0), 48, 40, 0.2f);
+    return test_finalize_scene(s);
+}
+
+static imp_case seen_light = {.make = seen_light_scene, .iterations = 1, .photons = 20000};
+
+/* The mirror's seen light: Σ over the pixels of Eq. 2 of the camera ray × the luminance it sees
+ * (the mirror's 0.9 × the light's 2), in units of 2^20 per the brightest luminance (2), within
+ * the rounding; the wall, which is not specular, gets none. */
+static void test_mirror_sums_the_light_it_shows(void **state)
+{
+    const imp_case *run = imp_run(&seen_light);
+    float n[3];
+    imp_triangle_normal(run->s, 0, n);
+    double expected = 0;
+    for (unsigned int p = 0; p < MIRROR_PIXELS; p++) {
+        float d[3], at[3], out[3];
+        mirror_ray(run, p, d, at, out);
+        expected += idmr_eq2_weight(n[0], n[1], n[2], d[0], d[1], d[2]) * 0.9 * SEEN_RADIANCE;
+    }
+    const uint64_t *fixed = run->snapshot.seen_light_fixed;
+    double unit = SEEN_RADIANCE * IMP_FIXED_UNIT; /* luminance per fixed-point unit */
+    assert_float_equal(run->snapshot.core.params.fixed_scale, 1.0 / unit, 1e-3);
+    double on_device = (double)(fixed[0] + fixed[1]) * unit;
+    print_message("  seen light %.4f, host %.4f\n", on_device, expected);
+    assert_true(expected > 0);
+    assert_true(fabs(on_device - expected) <= MIRROR_PIXELS * 0.5 * unit + 1e-4 * expected);
+    assert_true(fixed[2] == 0 && fixed[3] == 0);
+}
+
+/* The result's light importance is the photons' gathers plus the seen light as gathers:
+ * Y π² r² N / Φ per unit of luminance Y, Φ = π × area × radiance for the 4 x 4 light. */
+static void test_seen_light_counts_as_gathers(void **state)
+{
+    const imp_case *run = imp_run(&seen_light);
+    const idmr_sppm_params *params = &run->snapshot.core.params;
+    double r = params->radius, power = M_PI * 16.0 * SEEN_RADIANCE;
+    double gathers = M_PI * M_PI * r * r * params->path_count / power;
+    assert_true(r > 0);
+    for (size_t t = 0; t < 4; t++) {
+        double expected = (double)run->snapshot.light_fixed[t] * IMP_FIXED_UNIT +
+                          (double)run->snapshot.seen_light_fixed[t] * SEEN_RADIANCE *
+                              IMP_FIXED_UNIT * gathers;
+        assert_float_equal(run->r.light[t], expected, 1e-9 * expected + 1e-12);
+    }
+    assert_true(run->r.light[0] + run->r.light[1] >
+                (double)(run->snapshot.light_fixed[0] + run->snapshot.light_fixed[1]) *
+                    IMP_FIXED_UNIT);
+}
+
 int main(void)
 {
     const struct CMUnitTest host_tests[] = {
@@ -409,6 +475,8 @@ int main(void)
         cmocka_unit_test(test_mirror_hit_points_on_the_wall),
         cmocka_unit_test(test_mirror_adds_eq2_of_the_camera_ray),
         cmocka_unit_test(test_wall_adds_eq2_of_the_reflected_ray),
+        cmocka_unit_test(test_mirror_sums_the_light_it_shows),
+        cmocka_unit_test(test_seen_light_counts_as_gathers),
     };
     return DEVICE_TEST_MAIN("importance camera", host_tests, tests, NULL, imp_teardown);
 }

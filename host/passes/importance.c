@@ -40,16 +40,18 @@ importance_weights importance_weights_of(const importance_options *o)
     return w;
 }
 
-/* The three accumulators of the pass, in the order of importance_result's sums. */
-enum { CAMERA, LIGHT, SHADOW, KINDS };
+/* The accumulators of the pass: the three of importance_result's sums, in their order, and the
+ * light camera paths see through specular surfaces, which is added to light importance. */
+enum { CAMERA, LIGHT, SHADOW, SEEN_LIGHT, KINDS };
 static const char *const KIND_NAMES[KINDS] = {"camera importance", "light importance",
-                                              "shadow importance"};
+                                              "shadow importance", "seen light"};
 
 /* The pass's part while the core runs. */
 typedef struct importance_pass {
     const importance_options *options;
     importance_result *result;
     int shadows; /* σ > 0: shadow rays */
+    double total_power; /* Σ of the lights' luminous power (scene_finalize) */
     cl_kernel gather, path, shadow, centre_hits;
     cl_mem gathered, accumulators[KINDS];
     size_t words;     /* accumulator words: one per triangle (at least one) */
@@ -64,15 +66,38 @@ static double *sums_of(const importance_result *r, int k)
     return k == CAMERA ? r->camera : k == LIGHT ? r->light : r->shadow;
 }
 
+/* The largest luminance a camera path can see on an emitter: an area light's, the environment
+ * map's brightest texel (point, spot and directional lights cannot be seen). */
+static double brightest_visible_luminance(const scene *s)
+{
+    double brightest = 0;
+    for (size_t i = 0; i < s->light_count; i++)
+        if (s->lights[i].kind == IDMR_LIGHT_AREA) {
+            const float *e = s->lights[i].emission;
+            brightest = fmax(brightest, idmr_luminance(e[0], e[1], e[2]));
+        }
+    const scene_environment *env = &s->environment;
+    for (size_t i = 0; i < (size_t)env->width * (size_t)env->height; i++) {
+        const float *e = env->rgb + 3 * i;
+        brightest = fmax(brightest, idmr_luminance(e[0], e[1], e[2]));
+    }
+    return isfinite(brightest) ? brightest : 0;
+}
+
 static int prepare(sppm *core, void *state)
 {
     importance_pass *p = state;
+    /* Seen light in fixed point: the brightest emitter seen head-on through one specular
+     * surface is IDMR_FIXED_SCALE units, as the largest Eq. 2 weight is; 0: nothing to see. */
+    double brightest = brightest_visible_luminance(core->scene);
+    core->params.fixed_scale = brightest > 0 ? (float)(IDMR_FIXED_SCALE / brightest) : 0.0f;
     p->words = core->scene->triangle_count ? (size_t)core->scene->triangle_count : 1;
     const device_buffer_request buffers[] = {
         {&p->gathered, core->slots * sizeof(cl_uint), "gather counts"},
         {&p->accumulators[CAMERA], p->words * sizeof(cl_ulong), KIND_NAMES[CAMERA]},
         {&p->accumulators[LIGHT], p->words * sizeof(cl_ulong), KIND_NAMES[LIGHT]},
         {&p->accumulators[SHADOW], p->words * sizeof(cl_ulong), KIND_NAMES[SHADOW]},
+        {&p->accumulators[SEEN_LIGHT], p->words * sizeof(cl_ulong), KIND_NAMES[SEEN_LIGHT]},
     };
     p->scratch = xmalloc(p->words * sizeof *p->scratch);
     p->previous = xcalloc(p->words, sizeof *p->previous);
@@ -87,8 +112,9 @@ static int prepare(sppm *core, void *state)
         if (device_clear(core->dev, p->accumulators[k], p->words * sizeof(cl_ulong),
                          KIND_NAMES[k]))
             return -1;
-    return DEVICE_SET_ARG(core->camera_paths, "camera_paths", core->camera_pass_argument,
-                          p->accumulators[CAMERA]);
+    return DEVICE_SET_ARGS_FROM(core->camera_paths, "camera_paths", core->camera_pass_argument,
+                                DEVICE_ARG(p->accumulators[CAMERA]),
+                                DEVICE_ARG(p->accumulators[SEEN_LIGHT]));
 }
 
 /* One shadow ray per hit point (kernels/lib/shadows.h). */
@@ -132,11 +158,13 @@ static int gather(sppm *core, void *state)
     return 0;
 }
 
-/* Adds accumulator k to the result's sums (checking saturation) and clears it. */
-static int add_accumulator(sppm *core, importance_pass *p, int k)
+/* Adds accumulator k × scale (per fixed-point unit) to `sums`, checking saturation, and clears
+ * it; adds the total it added to *added where that is not NULL. */
+static int add_accumulator(sppm *core, importance_pass *p, int k, double *sums, double scale,
+                           double *added)
 {
+    double total = 0;
     size_t n = (size_t)core->scene->triangle_count;
-    double *sums = sums_of(p->result, k);
     if (n && device_read(core->dev, p->accumulators[k], n * sizeof *p->scratch, p->scratch,
                          KIND_NAMES[k]))
         return -1;
@@ -144,11 +172,15 @@ static int add_accumulator(sppm *core, importance_pass *p, int k)
         if (p->scratch[t] >= IDMR_FIXED_SATURATION)
             return error_set(IDMR_EXIT_FAILURE,
                              "%s of triangle %zu came within a factor 2 of the 64-bit fixed-point "
-                             "limit in one iteration; use fewer photons per iteration",
-                             KIND_NAMES[k], t);
-        sums[t] += (double)p->scratch[t] / IDMR_FIXED_SCALE;
+                             "limit in one iteration; use %s",
+                             KIND_NAMES[k], t,
+                             k == LIGHT ? "fewer photons per iteration" : "a smaller --resolution");
+        sums[t] += scale * (double)p->scratch[t];
+        total += scale * (double)p->scratch[t];
         CHECK_FINITE(sums[t], KIND_NAMES[k]);
     }
+    if (added)
+        *added += total;
     return device_clear(core->dev, p->accumulators[k], p->words * sizeof(cl_ulong),
                         KIND_NAMES[k]);
 }
@@ -201,14 +233,31 @@ static double convergence_change(importance_pass *p, const scene *s, unsigned in
     return magnitude > 0 ? change / magnitude : 0.0;
 }
 
+/* The gathers a unit of seen light counts as this iteration (importance.h): a white diffuse
+ * surface showing luminance Y receives irradiance π Y, and its hit point gathers that times
+ * π r² over the photon's share of the power, Φ / photons. */
+static double seen_light_gathers(const sppm *core, const importance_pass *p)
+{
+    double r = core->params.radius;
+    return p->total_power > 0 ? M_PI * M_PI * r * r * (double)core->params.path_count /
+                                    p->total_power
+                              : 0.0;
+}
+
 static int collect(sppm *core, void *state, unsigned int n, int *stop, char *detail,
                    size_t detail_size)
 {
     importance_pass *p = state;
     importance_result *r = p->result;
-    for (int k = 0; k < KINDS; k++)
-        if ((k != SHADOW || p->shadows) && add_accumulator(core, p, k))
+    for (int k = CAMERA; k <= SHADOW; k++)
+        if ((k != SHADOW || p->shadows) &&
+            add_accumulator(core, p, k, sums_of(r, k), 1.0 / IDMR_FIXED_SCALE, NULL))
             return -1;
+    if (core->params.fixed_scale > 0 &&
+        add_accumulator(core, p, SEEN_LIGHT, r->light,
+                        seen_light_gathers(core, p) / core->params.fixed_scale,
+                        &r->seen_light))
+        return -1;
     if (n == 0 && count_gathered(core, p))
         return -1;
     r->convergence[n] = convergence_change(p, core->scene, n + 1);
@@ -228,7 +277,8 @@ static int snapshot(sppm *core, void *state)
 {
     importance_pass *p = state;
     importance_snapshot *out = p->options->snapshot;
-    uint64_t **fixed[KINDS] = {&out->camera_fixed, &out->light_fixed, &out->shadow_fixed};
+    uint64_t **fixed[KINDS] = {&out->camera_fixed, &out->light_fixed, &out->shadow_fixed,
+                               &out->seen_light_fixed};
     free(out->gathered);
     out->gathered = xmalloc(core->slots * sizeof *out->gathered);
     if (device_read(core->dev, p->gathered, core->slots * sizeof *out->gathered, out->gathered,
@@ -287,6 +337,7 @@ void importance_snapshot_free(importance_snapshot *snapshot)
     free(snapshot->camera_fixed);
     free(snapshot->light_fixed);
     free(snapshot->shadow_fixed);
+    free(snapshot->seen_light_fixed);
     memset(snapshot, 0, sizeof *snapshot);
 }
 
@@ -308,7 +359,8 @@ int importance_run(device *d, const scene *s, const bvh *b, const importance_opt
     r->light = xcalloc(r->triangle_count + 1, sizeof *r->light);
     r->shadow = xcalloc(r->triangle_count + 1, sizeof *r->shadow);
     r->convergence = xcalloc(o->sppm.iterations + 1, sizeof *r->convergence);
-    importance_pass state = {.options = o, .result = r, .shadows = o->shadow_weight > 0};
+    importance_pass state = {
+        .options = o, .result = r, .shadows = o->shadow_weight > 0, .total_power = total_power};
     char defines[128];
     importance_defines(o->accumulate_importance, o->gamma > 0, state.shadows, defines,
                        sizeof defines);

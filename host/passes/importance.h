@@ -9,7 +9,16 @@
  * afterwards and a sweep over them needs no new simulation:
  *   camera(T)  Σ Eq. 2 weights of the camera path vertices on T
  *   light(T)   Σ over photon vertices on T of weight × (the number of hit points gathered by
- *              that vertex and the vertices after it on its path)
+ *              that vertex and the vertices after it on its path), plus the light the camera
+ *              sees through T: where a camera path reaches an emitter (an area light's front,
+ *              the environment) through mirrors and dielectrics — a glint, a window, a light
+ *              behind glass — no photon is gathered for that pixel, though the light that
+ *              reaches it runs along the specular triangles the path passed. Each of them
+ *              (the first 16) gets weight × the gathers that light is worth: as many as a
+ *              white diffuse surface showing the same luminance Y would gather, Y π² r² N / Φ
+ *              (irradiance π Y on a disc of the gather radius r, N photon paths carrying the
+ *              lights' luminous power Φ). It scales with r² like every gather, so it keeps its
+ *              share as the radius shrinks
  *   shadow(T)  Σ shadow weights of the shadow rays T stops (kernels/lib/shadows.h): the
  *              triangles that cast the shadows the camera sees, most where they outline a sharp
  *              one (only with shadow weight σ > 0)
@@ -54,6 +63,7 @@ typedef struct importance_snapshot {
     uint64_t *camera_fixed;         /* this iteration's accumulators, fixed point */
     uint64_t *light_fixed;
     uint64_t *shadow_fixed;         /* zero without shadow rays */
+    uint64_t *seen_light_fixed;     /* the light camera paths saw through specular surfaces */
 } importance_snapshot;
 
 void importance_snapshot_free(importance_snapshot *snapshot);
@@ -84,6 +94,8 @@ struct importance_result {
     uint32_t *pixel_triangle; /* per pixel of the hit-point image, the scene triangle seen
                                  through its centre (IDMR_NO_HIT: none): the importance image */
     uint64_t gathered;       /* hit points found by photon vertices, first iteration */
+    double seen_light;       /* the part of Σ_T light(T) that is light seen through specular
+                                surfaces, as gathers (above) */
     double path_seconds;     /* the path walk, part of sppm.seconds.gather */
     sppm_summary sppm;       /* iterations, radii, image size, photons, bytes, timings */
 };

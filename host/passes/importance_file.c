@@ -2,6 +2,7 @@
 #include "passes/importance_file.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -9,7 +10,9 @@
 #include "core/error.h"
 #include "core/files.h"
 
-static const char MAGIC[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '1'};
+static const char MAGIC[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '2'};
+/* Version 1's light sums left out the light seen through specular surfaces (importance.h). */
+static const char MAGIC_VERSION_1[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '1'};
 enum { KIND_CAMERA = 1, KIND_SHADOW = 2 };
 
 /* The fixed-size part after the magic. */
@@ -17,6 +20,7 @@ typedef struct simulation_header {
     uint64_t fingerprint, triangles;
     uint32_t iterations, photons, width, height, kinds, seed;
     uint64_t hit_points, photon_records, gathered;
+    double seen_light;
 } simulation_header;
 
 static uint64_t fnv1a(uint64_t hash, const void *bytes, size_t size)
@@ -79,7 +83,8 @@ int importance_file_write(const char *path, const scene *s, const importance_opt
                            .seed = o->sppm.seed,
                            .hit_points = r->sppm.hit_points,
                            .photon_records = r->sppm.photon_records,
-                           .gathered = r->gathered};
+                           .gathered = r->gathered,
+                           .seen_light = r->seen_light};
     if (importance_file_fingerprint(s, &h.fingerprint))
         return -1;
     size_t size = sizeof MAGIC + sizeof h + series_bytes(&h) + sums_bytes(&h) + pixels_bytes(&h);
@@ -145,6 +150,10 @@ static int check_header(const char *path, const simulation_header *h, size_t siz
                          path, s->file);
     if (h->iterations == 0)
         return error_set(IDMR_EXIT_INPUT, "--simulation: '%s' holds no iteration", path);
+    if (!(h->seen_light >= 0) || !isfinite(h->seen_light))
+        return error_set(IDMR_EXIT_INPUT,
+                         "--simulation: '%s' has a seen-light sum of %g (damaged)", path,
+                         h->seen_light);
     if (o->gamma > 0 && !(h->kinds & KIND_CAMERA))
         return error_set(IDMR_EXIT_INPUT,
                          "--simulation: '%s' was made with --gamma 0 and holds no camera "
@@ -177,7 +186,13 @@ int importance_file_read(const char *path, const scene *s, const importance_opti
         return -1;
     simulation_header h;
     int status = 0;
-    if (size < sizeof MAGIC + sizeof h || memcmp(bytes, MAGIC, sizeof MAGIC))
+    if (size >= sizeof MAGIC && !memcmp(bytes, MAGIC_VERSION_1, sizeof MAGIC))
+        status = error_set(IDMR_EXIT_INPUT,
+                           "--simulation: '%s' was written by an older idmr, whose light "
+                           "importance left out the light seen through glass and mirrors; run "
+                           "`idmr importance` again",
+                           path);
+    else if (size < sizeof MAGIC + sizeof h || memcmp(bytes, MAGIC, sizeof MAGIC))
         status = error_set(IDMR_EXIT_INPUT,
                            "--simulation: '%s' is not a simulation file of idmr (the "
                            "simulation.bin that `idmr importance` writes)",
@@ -203,6 +218,7 @@ int importance_file_read(const char *path, const scene *s, const importance_opti
         r->sppm.hit_points = h.hit_points;
         r->sppm.photon_records = h.photon_records;
         r->gathered = h.gathered;
+        r->seen_light = h.seen_light;
     }
     free(bytes);
     return status;

@@ -4,12 +4,13 @@
  * can all be varied over one simulation.
  *
  * Layout, in the writer's byte order (the magic is read back only in the same order):
- *   char[8]  "IDMRSIM1"
+ *   char[8]  "IDMRSIM2" (version 1, whose light sums lacked the seen light, is refused)
  *   uint64   scene fingerprint, triangles
  *   uint32   iterations, photons per iteration, hit-point image width, height,
  *            kinds (bit 0: camera importance accumulated, γ > 0; bit 1: shadow rays, σ > 0),
  *            seed
  *   uint64   hit points, photon records, gathered (first iteration)
+ *   double   seen light (importance_result.seen_light)
  *   double   gather radius [iterations], convergence Δ [iterations]
  *   double   camera [triangles], light [triangles], shadow [triangles]
  *   uint32   the triangle seen through each pixel centre [width × height]

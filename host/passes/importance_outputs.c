@@ -53,6 +53,10 @@ cJSON *importance_report_json(const scene *s, const device *d, const importance_
     cJSON_AddNumberToObject(first, "hit_points", (double)run->hit_points);
     cJSON_AddNumberToObject(first, "photon_vertices", (double)run->photon_records);
     cJSON_AddNumberToObject(first, "gathered", (double)r->gathered);
+    double light = 0;
+    for (size_t t = 0; t < r->triangle_count; t++)
+        light += r->light[t];
+    cJSON_AddNumberToObject(root, "seen_light_share", light > 0 ? r->seen_light / light : 0.0);
 
     cJSON *seconds = cJSON_AddObjectToObject(root, "seconds");
     cJSON_AddNumberToObject(seconds, "build", run->seconds.build);

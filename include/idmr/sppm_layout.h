@@ -54,7 +54,8 @@ typedef struct idmr_sppm_params {
 
     float radius;              /* gather radius this iteration */
     float cell_size;           /* hash-grid cell edge: at least 2 radius (hit_point_grid.h) */
-    float fixed_scale;         /* renderer: fixed-point units per unit of pixel radiance */
+    float fixed_scale;         /* fixed-point units per unit of pixel radiance (render), of
+                                  luminance seen through specular surfaces (importance) */
     unsigned int camera_depth; /* camera path: surface interactions at most */
 
     float scene_center[3];

@@ -6,7 +6,14 @@
  *                 chooses reflection or refraction) to the first non-specular surface, where it
  *                 leaves a hit point; at most params->camera_depth surface interactions.
  *     importance  adds the Eq. 2 weight 1 - |n·d| of every surface it hits to that triangle's
- *                 camera importance (unless IDMR_CAMERA_IMPORTANCE or IDMR_ACCUMULATE_IMPORTANCE is 0)
+ *                 camera importance (unless IDMR_CAMERA_IMPORTANCE or IDMR_ACCUMULATE_IMPORTANCE
+ *                 is 0);
+ *                 where it reaches an emitter (an area light's front, the environment) through
+ *                 mirrors and dielectrics, it adds Eq. 2 weight × the luminance it sees there
+ *                 (the emission × the mirrors' colours) to the seen-light sum of every specular
+ *                 triangle on the way, the first IDMR_SEEN_LIGHT_CHAIN of them: the light a
+ *                 camera sees in a glint or through glass, which no photon gather records
+ *                 (importance.h turns it into gathers)
  *     render      carries the specular throughput (a mirror's colour), adds the emission it
  *                 sees (an area light's front, the environment once it leaves the scene) and
  *                 ends at the back of a one-sided surface (black, no hit point); from
@@ -53,6 +60,7 @@
 #define PHOTON_STREAM IDMR_STREAM_IMPORTANCE_PHOTON
 typedef volatile global fixed_word *camera_records;
 typedef idmr_photon_vertex photon_record;
+#define IDMR_SEEN_LIGHT_CHAIN 16 /* specular triangles credited with the light a path sees */
 #else
 #define CAMERA_STREAM IDMR_STREAM_RENDER_CAMERA
 #define PHOTON_STREAM IDMR_STREAM_RENDER_PHOTON
@@ -81,15 +89,47 @@ inline float3 camera_ray(idmr_camera camera, const idmr_sppm_params *params, uin
     return normalize(vload3(0, d));
 }
 
+#if PASS_IMPORTANCE
+/* The specular triangles a camera path has passed (the first IDMR_SEEN_LIGHT_CHAIN), their
+ * Eq. 2 weights, and the mirrors' colour so far. */
+typedef struct specular_chain {
+    uint triangles[IDMR_SEEN_LIGHT_CHAIN];
+    float weights[IDMR_SEEN_LIGHT_CHAIN];
+    uint length;
+    float3 colour;
+} specular_chain;
+
+/* Adds weight × the luminance of `emitted` (× the chain's colour) to the seen-light sum of every
+ * triangle of the chain, in params->fixed_scale units per unit of luminance. */
+inline void credit_seen_light(const idmr_sppm_params *params, const specular_chain *chain,
+                              float3 emitted, volatile global fixed_word *seen_light)
+{
+    float3 seen = chain->colour * emitted;
+    float units = idmr_luminance(seen.x, seen.y, seen.z) * params->fixed_scale;
+    if (!(units > 0.0f))
+        return;
+    for (uint k = 0; k < chain->length; k++)
+        fixed_add(seen_light, chain->triangles[k], (ulong)(chain->weights[k] * units + 0.5f));
+}
+#define SEEN_LIGHT_PARAMETER , volatile global fixed_word *seen_light
+#else
+#define SEEN_LIGHT_PARAMETER
+#endif
+
 /* Traces pixel `pixel`'s camera path and writes its hit point and what the pass records. */
 inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
                         idmr_camera camera, uint pixel, global idmr_hit_point *hit_points,
-                        camera_records records)
+                        camera_records records SEEN_LIGHT_PARAMETER)
 {
     idmr_rng rng = idmr_rng_init(params->seed, params->iteration, CAMERA_STREAM, pixel);
     float3 origin = vload3(0, camera.origin);
     float3 d = camera_ray(camera, params, pixel, &rng);
     idmr_hit_point hp = {{0.0f, 0.0f, 0.0f}, pixel, {0.0f, 0.0f, 0.0f}, 0.0f}; /* none yet */
+#if PASS_IMPORTANCE && IDMR_ACCUMULATE_IMPORTANCE
+    specular_chain chain;
+    chain.length = 0;
+    chain.colour = (float3)(1.0f);
+#endif
 #if PASS_RENDER
     float3 throughput = (float3)(1.0f), radiance = (float3)(0.0f);
     idmr_render_hit rh = {{0.0f, 0.0f, 0.0f}, 0u, {0.0f, 0.0f, 0.0f}, 0u,
@@ -100,6 +140,8 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
         if (hit.triangle == IDMR_NO_HIT) {
 #if PASS_RENDER
             radiance += throughput * environment_radiance(scene, d);
+#elif IDMR_ACCUMULATE_IMPORTANCE
+            credit_seen_light(params, &chain, environment_radiance(scene, d), seen_light);
 #endif
             break;
         }
@@ -116,6 +158,11 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
         radiance += throughput * surface_emission(scene, params->light_count, hit.triangle, d, n);
         if (!side_reflects(m, d, n))
             break;
+#elif IDMR_ACCUMULATE_IMPORTANCE
+        if (chain.length > 0)
+            credit_seen_light(params, &chain,
+                              surface_emission(scene, params->light_count, hit.triangle, d, n),
+                              seen_light);
 #endif
         float3 n_side = dot(d, n) < 0.0f ? n : -n;
         if (!material_is_specular(m)) {
@@ -132,6 +179,14 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
             break;
         }
 #if HAS_FEATURE(IDMR_FEATURES_SPECULAR)
+#if PASS_IMPORTANCE && IDMR_ACCUMULATE_IMPORTANCE
+        if (chain.length < IDMR_SEEN_LIGHT_CHAIN) {
+            chain.triangles[chain.length] = hit.triangle;
+            chain.weights[chain.length++] = idmr_eq2_weight(n.x, n.y, n.z, d.x, d.y, d.z);
+        }
+        if (m->kind == IDMR_MATERIAL_MIRROR)
+            chain.colour *= vload3(0, m->specular);
+#endif
 #if PASS_RENDER
         if (m->kind == IDMR_MATERIAL_MIRROR)
             throughput *= vload3(0, m->specular);
