@@ -175,8 +175,9 @@ static int add_accumulator(sppm *core, importance_pass *p, int k, double *sums, 
                              "limit in one iteration; use %s",
                              KIND_NAMES[k], t,
                              k == LIGHT ? "fewer photons per iteration" : "a smaller --resolution");
-        sums[t] += scale * (double)p->scratch[t];
-        total += scale * (double)p->scratch[t];
+        double value = scale * (double)p->scratch[t];
+        sums[t] += value;
+        total += value;
         CHECK_FINITE(sums[t], KIND_NAMES[k]);
     }
     if (added)

@@ -141,7 +141,8 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
 #if PASS_RENDER
             radiance += throughput * environment_radiance(scene, d);
 #elif IDMR_ACCUMULATE_IMPORTANCE
-            credit_seen_light(params, &chain, environment_radiance(scene, d), seen_light);
+            if (chain.length > 0)
+                credit_seen_light(params, &chain, environment_radiance(scene, d), seen_light);
 #endif
             break;
         }
