@@ -506,6 +506,36 @@ static void test_reduced_scene_loads_with_reported_vertices(void **state)
     cJSON_Delete(report);
 }
 
+/* A glTF scene (Debian's assimp-testmodels): reduced by the default method into scene.glb, which
+ * loads with the vertices the report states and keeps every mesh instance. */
+static void test_reduce_gltf(void **state)
+{
+    const char *engine = "/usr/share/assimp/models/glTF2/2CylinderEngine-glTF-Binary/"
+                         "2CylinderEngine.glb";
+    char dir[64] = "/tmp/idmr-cli-gltf-XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    run_result r = run("bin/idmr reduce %s --target 0.2 -o %s/out --iterations 4 --photons 20000 "
+                       "--resolution 0.25 --quiet",
+                       engine, dir);
+    assert_succeeded(&r);
+    assert_non_null(strstr(r.err, "/out/scene.glb"));
+    char path[128];
+    snprintf(path, sizeof path, "%s/out/report.json", dir);
+    cJSON *report = json_of_file(path);
+    cJSON *info = json_of(run("bin/idmr info --json --no-bvh %s/out/scene.glb", dir));
+    assert_true(number(info, "vertices") == number(report, "vertices_after"));
+    assert_true(number(report, "vertices_after") < 0.25 * number(report, "vertices_before"));
+    cJSON *original = json_of(run("bin/idmr info --json --no-bvh %s", engine));
+    assert_int_equal(cJSON_GetArraySize(item(info, "meshes")),
+                     cJSON_GetArraySize(item(original, "meshes")));
+    cJSON_Delete(original);
+    cJSON_Delete(info);
+    cJSON_Delete(report);
+    run_free(&r);
+    r = run("rm -rf %s", dir);
+    run_free(&r);
+}
+
 /* importance-quadric: the same budget (same seed, same importance), other collapses. */
 static void test_importance_quadric_meets_same_total(void **state)
 {
@@ -785,6 +815,7 @@ int main(void)
         cmocka_unit_test(test_dark_scene),
         cmocka_unit_test(test_reduce_meets_requested_vertices),
         cmocka_unit_test(test_reduced_scene_loads_with_reported_vertices),
+        cmocka_unit_test(test_reduce_gltf),
         cmocka_unit_test(test_importance_quadric_meets_same_total),
         cmocka_unit_test(test_importance_quadric_collapses_differ),
         cmocka_unit_test(test_reduce_stops_once_factors_settle),

@@ -11,7 +11,7 @@
 #include "cli/options.h"
 #include "cli/pass_setup.h"
 #include "core/files.h"
-#include "io/mitsuba.h"
+#include "io/scene_load.h"
 #include "passes/importance.h"
 #include "passes/importance_file.h"
 #include "passes/importance_outputs.h"
@@ -72,7 +72,7 @@ int command_importance(int argc, char **argv)
     if (!arguments.output)
         return usage_error("importance: -o DIR is required");
     job.output = arguments.output;
-    scene *s = mitsuba_load(arguments.scene);
+    scene *s = scene_load(arguments.scene);
     if (!s)
         return fail();
     int status = scene_check_output_directory(s, job.output) ||

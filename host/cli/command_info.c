@@ -18,7 +18,7 @@
 #include "core/scene.h"
 #include "device/bvh.h"
 #include "device/device_scene.h"
-#include "io/mitsuba.h"
+#include "io/scene_load.h"
 
 static cJSON *meshes_json(const scene *s)
 {
@@ -142,7 +142,7 @@ static cJSON *info_json(const scene *s, const bvh *b)
  * set. */
 static cJSON *describe_scene(const char *path, int build_bvh)
 {
-    scene *s = mitsuba_load(path);
+    scene *s = scene_load(path);
     if (!s)
         return NULL;
     bvh b;

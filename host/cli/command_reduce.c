@@ -8,7 +8,7 @@
 #include "cli/options.h"
 #include "core/error.h"
 #include "device/device.h"
-#include "io/mitsuba.h"
+#include "io/scene_load.h"
 #include "reduce/reduce.h"
 
 /* The options, and whether --target was given (it has no default on the command line). */
@@ -36,6 +36,10 @@ static enum option_parse parse_option(int c, void *context, pass_arguments *argu
     case OPT_MAX_NORMAL_ANGLE:
         return option_result(
             parse_double("--max-normal-angle", optarg, 1, 180, &o->max_normal_angle));
+    case OPT_UV_WEIGHT:
+        return option_result(parse_double("--uv-weight", optarg, 0, 1e6, &o->uv_weight));
+    case OPT_NORMAL_WEIGHT:
+        return option_result(parse_double("--normal-weight", optarg, 0, 1e6, &o->normal_weight));
     case OPT_KEEP:
         o->keep[o->keep_count++] = optarg;
         return OPTION_TAKEN;
@@ -64,7 +68,7 @@ static enum option_parse parse_option(int c, void *context, pass_arguments *argu
 /* The reduction: this command's call into reduce/. */
 static int run_reduce(const pass_arguments *arguments, const reduce_options *o)
 {
-    scene *s = mitsuba_load(arguments->scene);
+    scene *s = scene_load(arguments->scene);
     if (!s)
         return fail();
     device d;
@@ -86,6 +90,8 @@ int command_reduce(int argc, char **argv)
         {"method", required_argument, NULL, OPT_METHOD},
         {"min-vertices", required_argument, NULL, OPT_MIN_VERTICES},
         {"max-normal-angle", required_argument, NULL, OPT_MAX_NORMAL_ANGLE},
+        {"uv-weight", required_argument, NULL, OPT_UV_WEIGHT},
+        {"normal-weight", required_argument, NULL, OPT_NORMAL_WEIGHT},
         {"keep", required_argument, NULL, OPT_KEEP},
         {"force", no_argument, NULL, OPT_FORCE},
         {"bundle", no_argument, NULL, OPT_BUNDLE},

@@ -13,7 +13,7 @@
 #include "core/error.h"
 #include "core/files.h"
 #include "core/json.h"
-#include "io/mitsuba.h"
+#include "io/scene_load.h"
 #include "passes/render.h"
 
 /* Where the render goes: the three files, and the directory to create ("" if none). */
@@ -114,7 +114,7 @@ int command_render(int argc, char **argv)
         return usage_error("render: -o IMAGE is required");
     if (render_paths_from(arguments.output, &job.paths))
         return IDMR_EXIT_INPUT;
-    scene *s = mitsuba_load(arguments.scene);
+    scene *s = scene_load(arguments.scene);
     if (!s)
         return fail();
     int status = scene_check_output_file(s, job.paths.exr) ||

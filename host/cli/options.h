@@ -31,6 +31,8 @@ enum option_id {
     OPT_METHOD,
     OPT_MIN_VERTICES,
     OPT_MAX_NORMAL_ANGLE,
+    OPT_UV_WEIGHT,
+    OPT_NORMAL_WEIGHT,
     OPT_KEEP,
     OPT_FORCE,
     OPT_THREADS,

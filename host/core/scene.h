@@ -24,8 +24,10 @@ typedef struct scene_mesh {
     char *name;       /* unique in the scene: the shape's id, else the file's stem, else type+n */
     char *shape_type; /* Mitsuba shape type: obj, ply, rectangle, cube, sphere, disk, ... */
     char *file;       /* resolved path of the mesh file; NULL for built-in shapes */
-    char *xml_file;   /* the XML file holding the <shape> element (the scene or an include) */
-    int xml_line;     /* line of the <shape> element in that file */
+    char *xml_file;   /* the XML file holding the <shape> element (the scene or an include);
+                         a glTF scene: the glTF file */
+    int xml_line;     /* line of the <shape> element in that file; a glTF scene: the number
+                         of the mesh instance (io/gltf.h) */
     uint32_t vertex_count;
     uint32_t triangle_count;
     float *positions;  /* world space, xyz per vertex */

@@ -186,6 +186,19 @@ void shapes_smooth_normals(mesh_data *mesh)
     free(sum);
 }
 
+mesh_data shapes_scene_mesh_view(const scene_mesh *m)
+{
+    mesh_data view;
+    memset(&view, 0, sizeof view);
+    view.vertex_count = m->vertex_count;
+    view.triangle_count = m->triangle_count;
+    view.positions = m->positions;
+    view.indices = m->indices;
+    view.texcoords = m->texcoords;
+    view.normals = m->normals;
+    return view;
+}
+
 int shapes_normals_flat(const mesh_data *mesh)
 {
     if (!mesh->normals)

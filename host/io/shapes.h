@@ -14,6 +14,7 @@
 #ifndef IDMR_SHAPES_H
 #define IDMR_SHAPES_H
 
+#include "core/scene.h"
 #include "io/mesh_io.h"
 #include "io/xform.h"
 
@@ -44,6 +45,10 @@ void shapes_transform(mesh_data *mesh, const xform *to_world);
  * 1998: independent of how a flat region is triangulated). Zero-area triangles add nothing; a
  * vertex only they touch gets a zero normal (the kernels then shade it flat). */
 void shapes_smooth_normals(mesh_data *mesh);
+
+/* The scene mesh's arrays (positions, indices, uv, normals) as a mesh_data that does not own
+ * them: never mesh_data_free() it. */
+mesh_data shapes_scene_mesh_view(const scene_mesh *m);
 
 /* Whether the mesh's normals shade it flat: at every corner of every triangle of non-zero area
  * the normal is within about 0.8 degrees of the triangle's geometric normal (cosine at least

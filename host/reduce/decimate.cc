@@ -66,6 +66,8 @@ bool add_modules(ReductionDecimater &decimater, Modules &modules, Mesh &mesh,
                                                           : DECIMATE_BOUNDARY_TOLERANCE);
         for (auto v : mesh.vertices())
             decimater.module(modules.weighted_quadric).importance(v) = importance[v.idx()];
+        decimater.module(modules.weighted_quadric)
+            .set_attributes(&attributes, in->uv_weight, in->normal_weight);
     } else {
         decimater.add(modules.quadric);
     }

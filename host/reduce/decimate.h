@@ -55,9 +55,22 @@
  * find a zero or backward shading normal (Mitsuba 3: NaN samples). Vertex counts (targets, the
  * counts reported) count a vertex once per wedge, as the output holds them.
  *
+ * The attribute error term (COMBINED): the legality rules keep seams and creases, but inside a
+ * wedge a collapse still replaces the removed corner's uv and normal by the kept one's, which
+ * slides the texture where the map is not affine and bends the shading where the surface
+ * curves. So the weighted quadric has an attribute part (Hoppe's attribute quadrics, per wedge):
+ * each face's linear interpolation of every attribute channel over its plane, and a collapse
+ * costs the squared distance between the kept corner's attributes and what the faces around the
+ * removed vertex showed at the kept position, in lengths: a uv difference of 1 as uv_weight ×
+ * the mesh's extent (its bounding box's longest side), a normal's as normal_weight × the extent
+ * (meshoptimizer's scale for attribute weights, whose users pick about 10-100 for uv and 0.5-1
+ * for normals), under the same importance and area weights as the geometry. Where the map is
+ * affine and the normals follow the planes (a textured wall), the term is zero. IMPORTANCE keeps
+ * the paper's order and QUADRIC stays OpenMesh's geometric baseline; both have no such term.
+ *
  * Files (C++, sharing decimate_openmesh.hh): decimate.cc (decimate_mesh, decimate_measure),
  * decimate_weld.cc (the welded rebuild), decimate_modules.hh (the modules),
- * decimate_attributes.hh (the wedges and their module), decimate_collapse.cc/.hh (the collapse loop), decimate_parallel.cc (decimate_many),
+ * decimate_attributes.hh (the wedges, their module and the attribute quadrics), decimate_collapse.cc/.hh (the collapse loop), decimate_parallel.cc (decimate_many),
  * decimate_stock.cc (decimate_stock_quadric). */
 #ifndef IDMR_DECIMATE_H
 #define IDMR_DECIMATE_H
@@ -92,12 +105,17 @@ typedef struct decimate_input {
                                   edge's length; 0: DECIMATE_BOUNDARY_TOLERANCE; infinite: no
                                   lock */
     int seams_free; /* attribute seams may be collapsed across (see "Attributes" above) */
+    double uv_weight;     /* COMBINED: the attribute error term's weight of texture coordinates
+                             and of normals (see "Attributes" above); 0: no term. reduce uses */
+    double normal_weight; /* DECIMATE_UV_WEIGHT and DECIMATE_NORMAL_WEIGHT unless told */
     int verify_heap;  /* tests: after every collapse, count heap entries whose stored priority or
                          target differs from a fresh evaluation (heap_violations) */
     int reheap_removed_ring_only; /* tests: re-score as OpenMesh's DecimaterT does */
 } decimate_input;
 
 #define DECIMATE_BOUNDARY_TOLERANCE 0.01 /* the boundary lock's default limit: 1 % */
+#define DECIMATE_UV_WEIGHT 10.0   /* a uv difference of 1 counts as 10 × the mesh's extent */
+#define DECIMATE_NORMAL_WEIGHT 0.5 /* a unit normal difference as 0.5 × the extent */
 #define DECIMATE_REMOVED 0xffffffffu /* output_index of a vertex that is not in the output */
 
 typedef struct decimate_output {

@@ -7,7 +7,9 @@
 //                    priority: the Garland–Heckbert quadric error of moving v0 onto v1, each
 //                    face's plane weighted by its area × (its importance + a floor), each open
 //                    boundary edge holding a plane through it across its face (so openings keep
-//                    their outline); v1 takes v0's quadric
+//                    their outline), and where the mesh has texture coordinates or normals,
+//                    their error under the same weights (AttributeQuadrics); v1 takes v0's
+//                    quadric
 //   ModNormalLimitT  binary: no remaining face around v0 may turn by more than the limit or become
 //                    degenerate
 //   ModBoundaryLockT binary (combined only): a boundary vertex goes only where the outline stays
@@ -27,11 +29,14 @@
 #include <cfloat>
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
 extern "C" {
 #include "core/error.h"
 #include "reduce/decimate.h"
 }
+
+#include "reduce/decimate_attributes.hh"
 
 namespace idmr_decimate {
 
@@ -78,6 +83,8 @@ template <class MeshT> class ModImportanceT : public OpenMesh::Decimater::ModBas
 // collapses by geometry, last. An open boundary edge contributes the plane through it
 // perpendicular to its face, weighted by boundary_weight × length² × (I(f) + floor): moving a
 // boundary vertex off the outline costs as much as a fold, so holes and openings keep their shape.
+// With attributes (set_attributes), each face's weight also goes to the attribute quadrics of its
+// corners' ids, whose error joins the cost (decimate_attributes.hh, AttributeQuadrics).
 template <class MeshT> class ModWeightedQuadricT : public OpenMesh::Decimater::ModBaseT<MeshT> {
   public:
     DECIMATING_MODULE(ModWeightedQuadricT, MeshT, WeightedQuadric);
@@ -98,11 +105,21 @@ template <class MeshT> class ModWeightedQuadricT : public OpenMesh::Decimater::M
 
     double &importance(VertexHandle v) { return Base::mesh().property(importance_, v); }
 
+    // The corners' attributes and their weights (decimate.h: uv_weight, normal_weight); without
+    // a table, or with both weights 0, the cost is geometric only.
+    void set_attributes(const AttributeTable *table, double uv_weight, double normal_weight)
+    {
+        table_ = table;
+        uv_weight_ = uv_weight;
+        normal_weight_ = normal_weight;
+    }
+
     void initialize() override
     {
         MeshT &mesh = Base::mesh();
         for (auto v : mesh.vertices())
             quadric(v).clear();
+        bool attributes = start_attribute_quadrics();
         double floor = importance_floor();
         for (auto f : mesh.faces()) {
             OpenMesh::Vec3d p[3];
@@ -113,10 +130,18 @@ template <class MeshT> class ModWeightedQuadricT : public OpenMesh::Decimater::M
                 continue;
             n /= twice_area;
             Quadric plane(n[0], n[1], n[2], -OpenMesh::dot(n, p[0]));
-            plane *= 0.5 * twice_area * face_importance;
+            double weight = 0.5 * twice_area * face_importance;
+            plane *= weight;
             for (auto v : mesh.fv_range(f))
                 quadric(v) += plane;
             add_boundary_planes(f, n, face_importance);
+            if (attributes) {
+                const CornerSet &set = mesh.property(table_->corners, f);
+                OpenMesh::Vec3d q[3];
+                for (int k = 0; k < 3; k++)
+                    q[k] = point(VertexHandle(set.vertex[k]));
+                attribute_quadrics_.add_face(q, set.id, weight);
+            }
         }
     }
 
@@ -125,14 +150,87 @@ template <class MeshT> class ModWeightedQuadricT : public OpenMesh::Decimater::M
         Quadric q = quadric(ci.v0);
         q += quadric(ci.v1);
         const typename MeshT::Point &p = ci.p1;
-        double error = q(OpenMesh::Vec3d(p[0], p[1], p[2]));
+        OpenMesh::Vec3d p1(p[0], p[1], p[2]);
+        double error = q(p1);
+        if (attributes_weighted_) {
+            ids_of(ci);
+            for (size_t k = 0; k < from_.size(); k++) {
+                error += attribute_quadrics_.error(from_[k], p1, to_[k]);
+                if (std::find(to_.begin(), to_.begin() + k, to_[k]) == to_.begin() + k)
+                    error += attribute_quadrics_.error(to_[k], p1, to_[k]);
+            }
+        }
         CHECK_FINITE(error, "weighted quadric error");
         return (float)std::min(std::max(error, 0.0), (double)FLT_MAX / 2);
     }
 
-    void postprocess_collapse(const CollapseInfo &ci) override { quadric(ci.v1) += quadric(ci.v0); }
+    void preprocess_collapse(const CollapseInfo &ci) override
+    {
+        if (attributes_weighted_)
+            ids_of(ci);
+    }
+
+    void postprocess_collapse(const CollapseInfo &ci) override
+    {
+        quadric(ci.v1) += quadric(ci.v0);
+        if (attributes_weighted_)
+            for (size_t k = 0; k < from_.size(); k++)
+                attribute_quadrics_.merge(from_[k], to_[k]);
+    }
 
   private:
+    // Sets up the attribute quadrics where the mesh has an attribute with a weight, a uv
+    // difference of 1 counting as uv_weight × the mesh's extent (its bounding box's longest
+    // side), a normal's as normal_weight × the extent. Returns whether it did.
+    bool start_attribute_quadrics()
+    {
+        attributes_weighted_ = table_ && table_->present() &&
+                               ((table_->uv_floats && uv_weight_ > 0) ||
+                                (table_->normal_floats && normal_weight_ > 0));
+        if (!attributes_weighted_)
+            return false;
+        MeshT &mesh = Base::mesh();
+        OpenMesh::Vec3d low(DBL_MAX, DBL_MAX, DBL_MAX), high = -low;
+        for (auto v : mesh.vertices()) {
+            OpenMesh::Vec3d q = point(v);
+            for (int k = 0; k < 3; k++) {
+                low[k] = std::min(low[k], q[k]);
+                high[k] = std::max(high[k], q[k]);
+            }
+        }
+        OpenMesh::Vec3d size = high - low;
+        double extent = std::max(size[0], std::max(size[1], size[2]));
+        if (!(extent > 0) || !std::isfinite(extent))
+            return attributes_weighted_ = false;
+        attribute_quadrics_.reset(*table_, table_->values.size() / table_->stride(),
+                                  uv_weight_ * extent, normal_weight_ * extent,
+                                  (low + high) * 0.5);
+        return true;
+    }
+
+    // The collapse's removed vertex's distinct attribute ids into from_, and each one's image at
+    // the kept vertex into to_.
+    void ids_of(const CollapseInfo &ci)
+    {
+        MeshT &mesh = Base::mesh();
+        CollapseMapping mapping = collapse_mapping(mesh, *table_, ci);
+        from_.clear();
+        to_.clear();
+        for (auto f : mesh.vf_range(ci.v0)) {
+            uint32_t id = corner_id(mesh.property(table_->corners, f), ci.v0.idx());
+            if (std::find(from_.begin(), from_.end(), id) != from_.end())
+                continue;
+            from_.push_back(id);
+            to_.push_back(mapping.to(id));
+        }
+    }
+
+    OpenMesh::Vec3d point(VertexHandle v)
+    {
+        const typename MeshT::Point &q = Base::mesh().point(v);
+        return OpenMesh::Vec3d(q[0], q[1], q[2]);
+    }
+
     Quadric &quadric(VertexHandle v) { return Base::mesh().property(quadric_, v); }
 
     // The face's corners into p[3]; returns its importance, the mean of its vertices'.
@@ -190,6 +288,11 @@ template <class MeshT> class ModWeightedQuadricT : public OpenMesh::Decimater::M
     }
 
     double floor_share_, boundary_weight_;
+    const AttributeTable *table_ = nullptr;
+    double uv_weight_ = 0, normal_weight_ = 0;
+    bool attributes_weighted_ = false;
+    AttributeQuadrics attribute_quadrics_;
+    std::vector<uint32_t> from_, to_; // ids_of()
     OpenMesh::VPropHandleT<Quadric> quadric_;
     OpenMesh::VPropHandleT<double> importance_;
 };

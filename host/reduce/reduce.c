@@ -7,12 +7,15 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "core/error.h"
 #include "core/json.h"
 #include "core/progress.h"
 #include "io/mesh_io.h"
+#include "io/gltf.h"
 #include "io/mitsuba_write.h"
+#include "io/scene_load.h"
 #include "passes/importance_file.h"
 #include "passes/importance_outputs.h"
 #include "reduce/reduce_stages.h"
@@ -226,6 +229,8 @@ static decimate_input decimation_input(const reduce_state *st, size_t m)
     in.normals = mesh->file_normals && !mesh->flat_normals ? mesh->normals : NULL;
     in.vertex_importance = st->vertex_importance ? st->vertex_importance[m] : NULL;
     in.max_normal_angle = st->options->max_normal_angle;
+    in.uv_weight = st->options->uv_weight;
+    in.normal_weight = st->options->normal_weight;
     return in;
 }
 
@@ -275,11 +280,35 @@ static void name_ply(reduce_state *st, size_t m)
         snprintf(st->ply[m], length, "meshes/%s.%u.ply", name, suffix);
 }
 
-/* OUTDIR/meshes/NAME.ply for every decimated mesh, then OUTDIR/scene.xml pointing to them. */
+/* A glTF scene: OUTDIR/scene.gltf or scene.glb with the decimated meshes in it (io/gltf.h). */
+static int write_reduced_gltf(reduce_state *st)
+{
+    const scene *s = st->scene;
+    gltf_replacement *replacements = xcalloc(st->count + 1, sizeof *replacements);
+    for (size_t m = 0; m < st->count; m++)
+        if (st->plan.decimate[m])
+            replacements[st->meshes_written++] =
+                (gltf_replacement){s->meshes[m].xml_line, &st->output[m].mesh};
+    int status = gltf_write_reduced(s->file, st->staging, replacements, st->meshes_written,
+                                    st->options->bundle);
+    free(replacements);
+    char meshes[PATH_MAX]; /* the staging directory's meshes/, which glTF does not use */
+    snprintf(meshes, sizeof meshes, "%s/meshes", st->staging);
+    rmdir(meshes);
+    return status;
+}
+
+/* OUTDIR/meshes/NAME.ply for every decimated mesh, then OUTDIR/scene.xml pointing to them; or,
+ * for a glTF scene, OUTDIR/scene.gltf (.glb). */
 static int write_reduced_scene(reduce_state *st)
 {
     const scene *s = st->scene;
     double start = monotonic_seconds();
+    if (scene_is_gltf(s)) {
+        int status = write_reduced_gltf(st);
+        st->seconds_write = monotonic_seconds() - start;
+        return status;
+    }
     st->ply = xcalloc(st->count + 1, sizeof *st->ply);
     mitsuba_replacement *replacements = xcalloc(st->count + 1, sizeof *replacements);
     int status = 0;
@@ -319,16 +348,22 @@ static int write_report(reduce_state *st)
     return status;
 }
 
+/* The reduced scene's file name in OUTDIR. */
+static const char *reduced_scene_name(const scene *s)
+{
+    return scene_is_gltf(s) ? gltf_output_name(s->file) : "scene.xml";
+}
+
 /* The closing line. */
 static void print_summary(const reduce_state *st)
 {
     const reduce_options *o = st->options;
     fprintf(stderr,
             "idmr: %llu -> %llu vertices (target %.4g: %llu), %zu of %zu meshes rewritten; "
-            "reduced scene in %s/scene.xml\n",
+            "reduced scene in %s/%s\n",
             (unsigned long long)st->plan.total_before, (unsigned long long)st->vertices_after,
             o->target, (unsigned long long)st->plan.total_requested, st->meshes_written,
-            st->count, st->outdir);
+            st->count, st->outdir, reduced_scene_name(st->scene));
 }
 
 /* ---- pipeline ---- */

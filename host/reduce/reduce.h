@@ -52,6 +52,8 @@ typedef struct reduce_options {
                                 (passes/importance_file.h) and weighted by the options */
     unsigned long min_vertices; /* default 16 */
     double max_normal_angle; /* degrees, default 60 */
+    double uv_weight;        /* combined: the attribute error term's weights (decimate.h; */
+    double normal_weight;    /* defaults DECIMATE_UV_WEIGHT, DECIMATE_NORMAL_WEIGHT; 0: none) */
     const char **keep;       /* mesh names never decimated */
     size_t keep_count;
     int force;               /* allow a non-empty OUTDIR */

@@ -16,6 +16,8 @@ void reduce_options_default(reduce_options *o)
     o->ranking_tolerance = FACTOR_STOP_RANKING_TOLERANCE;
     o->min_vertices = 16;
     o->max_normal_angle = 60.0;
+    o->uv_weight = DECIMATE_UV_WEIGHT;
+    o->normal_weight = DECIMATE_NORMAL_WEIGHT;
 }
 
 /* The methods, as --method names them, with how each chooses collapses. */

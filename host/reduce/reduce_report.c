@@ -23,6 +23,8 @@ static void add_totals(cJSON *root, const reduce_state *st)
     cJSON_AddNumberToObject(root, "target", o->target);
     cJSON_AddStringToObject(root, "method", reduce_method_name(o->method));
     cJSON_AddNumberToObject(root, "max_normal_angle", o->max_normal_angle);
+    cJSON_AddNumberToObject(root, "uv_weight", o->uv_weight);
+    cJSON_AddNumberToObject(root, "normal_weight", o->normal_weight);
     cJSON_AddNumberToObject(root, "min_vertices", (double)o->min_vertices);
     cJSON_AddNumberToObject(root, "vertices_before", (double)st->plan.total_before);
     cJSON_AddNumberToObject(root, "vertices_requested", (double)st->plan.total_requested);
@@ -87,7 +89,10 @@ static void add_mesh(cJSON *meshes, const reduce_state *st, size_t m)
         cJSON_AddNumberToObject(mesh, "vertices_uncollapsible", out->vertices_uncollapsible);
         cJSON_AddNumberToObject(mesh, "faces_patched", out->faces_patched);
         cJSON_AddNumberToObject(mesh, "faces_loose", out->faces_loose);
-        cJSON_AddStringToObject(mesh, "file", st->ply[m]);
+        if (st->ply && st->ply[m])
+            cJSON_AddStringToObject(mesh, "file", st->ply[m]);
+        else /* a glTF scene: the mesh is in the written file, by its instance number */
+            cJSON_AddNumberToObject(mesh, "gltf_instance", in->xml_line);
     }
     cJSON_AddBoolToObject(mesh, "pinned", reduce_mesh_pinned(st->options, in));
 }

@@ -1,0 +1,83 @@
+/* gltf.h — glTF 2.0 scenes (.gltf, .glb) in and out, through Assimp: the second scene format
+ * beside Mitsuba XML (io/mitsuba.h, the primary one).
+ *
+ * Reading (gltf_load): Assimp imports the file (triangulated, primitives sorted by type);
+ * every node that holds a triangle mesh gives one scene mesh per mesh it holds (an instance),
+ * in world space (the node's transforms applied, the winding turned where they mirror), named
+ * "<node>/<mesh>" and numbered in the order of a depth-first walk from the root: its xml_file is
+ * the glTF file and its xml_line that number, which the writer finds it by. What is mapped:
+ *
+ *   glTF                              idmr
+ *   POSITION, NORMAL, TEXCOORD_0      positions, shading normals, uv (no NORMAL: shaded flat,
+ *                                     as glTF says; v as Mitsuba reads it, 1 - Assimp's)
+ *   pbrMetallicRoughness:
+ *     transmission >= 0.5             dielectric, int_ior = KHR_materials_ior (1.5)
+ *     (KHR_materials_transmission)    (rough glass as smooth, as the Mitsuba loader does)
+ *     metallic >= 0.5                 conductor: base colour as specular, GGX alpha = rough²;
+ *                                     alpha < 0.001: a mirror
+ *     roughness >= 0.5                diffuse, base colour (and its texture)
+ *     otherwise                       roughplastic: base colour (and texture) diffuse, white
+ *                                     specular, alpha = roughness², int_ior as above
+ *   doubleSided                       two-sided
+ *   emissiveFactor (× strength)       an area light of that radiance on the mesh
+ *   baseColorTexture                  a texture (sRGB, linearised); embedded images are not
+ *                                     read (warned: the base colour factor is used)
+ *   KHR_lights_punctual point, spot,  point, spot (inner/outer cone), directional; intensity
+ *   directional                       (cd, lx) taken as W/sr, W/m² one for one, as glTF viewers
+ *                                     render it
+ *   no light, no emissive material    a uniform white environment, radiance 1 (warned)
+ *   camera (perspective, the first)   the pinhole camera: yfov, aspect ratio (film 1024 wide;
+ *                                     --resolution scales it); none: the whole scene framed
+ *                                     from +z with a 45° yfov (warned)
+ * Orthographic cameras, skins, morph targets and animations are not simulated (warned).
+ *
+ * Writing (gltf_write_reduced): the input is imported again the same way, each replaced
+ * instance gets a mesh of its own holding the reduced triangles in the node's local space
+ * (normals and uv with them; other vertex channels such as tangents and colours dropped, with
+ * a warning, since they no longer match), meshes no node uses any more are dropped, relative
+ * texture paths are rewritten relative to outdir (absolute where none exists; with bundle,
+ * copies under outdir/assets/), and Assimp
+ * exports outdir/scene.gltf (+ scene.bin) or outdir/scene.glb, as the input was (its glTF
+ * exporter always welds vertices equal in position and attributes, so a mesh whose reduction
+ * left two such copies is written with one: the textured box at --target 0.5, 14 of the 15
+ * vertices the report counts). outdir is
+ * the staging directory that `idmr reduce` publishes whole (reduce_stages.h), so no reader
+ * sees a half-written file. */
+#ifndef IDMR_GLTF_H
+#define IDMR_GLTF_H
+
+#include <stddef.h>
+
+#include "core/scene.h"
+#include "io/mesh_io.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Whether `path` names a glTF file (.gltf or .glb, any case). */
+int gltf_is_scene_file(const char *path);
+
+/* Loads `path` and returns the finalized scene, or NULL with the error set (IDMR_EXIT_INPUT)
+ * naming the file and Assimp's reason. */
+scene *gltf_load(const char *path);
+
+typedef struct gltf_replacement {
+    int instance;          /* scene_mesh.xml_line of the mesh */
+    const mesh_data *mesh; /* its reduced triangles, world space */
+} gltf_replacement;
+
+/* The reduced scene's name in outdir: "scene.glb" for a .glb input, else "scene.gltf". */
+const char *gltf_output_name(const char *scene_file);
+
+/* Writes outdir/gltf_output_name(scene_file) (see above); with `bundle`, every texture file is
+ * copied to outdir/assets/ and named there. Returns 0, or -1 with the error set naming the
+ * file. */
+int gltf_write_reduced(const char *scene_file, const char *outdir,
+                       const gltf_replacement *replacements, size_t count, int bundle);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,12 @@
+/* scene_load.c — a scene file of either format in (see scene_load.h). */
+#include "io/scene_load.h"
+
+#include "io/gltf.h"
+#include "io/mitsuba.h"
+
+scene *scene_load(const char *path)
+{
+    return gltf_is_scene_file(path) ? gltf_load(path) : mitsuba_load(path);
+}
+
+int scene_is_gltf(const scene *s) { return gltf_is_scene_file(s->file); }
