@@ -151,6 +151,7 @@ int base_texture(Loader &ld, const aiMaterial *m)
         int width, height;
         float *rgb;
         if (image_read_rgb(resolved, &width, &height, &rgb)) {
+            error_prefix("%s: base colour texture '%s'", ld.path, file.C_Str());
             free(resolved);
             return -2;
         }
@@ -628,7 +629,7 @@ extern "C" scene *gltf_load(const char *path)
         if (!status)
             warn_unsimulated(ld);
         if (!status && scene_finalize(ld.s))
-            status = error_prefix("%s: ", path);
+            status = error_prefix("%s", path);
         if (!status && !ld.s->has_camera)
             frame_scene(ld);
         if (status) {
