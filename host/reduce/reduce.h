@@ -3,6 +3,7 @@
  *
  *   OUTDIR/scene.xml         the input XML, decimated shapes pointing to meshes/<name>.ply
  *   OUTDIR/meshes/NAME.ply   the decimated meshes (world space)
+ *   (a glTF scene instead: OUTDIR/scene.gltf + scene.bin, or scene.glb, io/gltf.h)
  *   OUTDIR/report.json       the importance report's keys, plus target, method, per mesh
  *                            factor / vertices_before / vertices_after, per-stage seconds
  *   OUTDIR/importance.png, importance/, convergence.csv   (method importance)
