@@ -519,6 +519,9 @@ static void test_reduce_gltf(void **state)
                        engine, dir);
     assert_succeeded(&r);
     assert_non_null(strstr(r.err, "/out/scene.glb"));
+    char meshes[128]; /* a glTF output holds its meshes: no meshes/ folder */
+    snprintf(meshes, sizeof meshes, "%s/out/meshes", dir);
+    assert_int_equal(access(meshes, F_OK), -1);
     char path[128];
     snprintf(path, sizeof path, "%s/out/report.json", dir);
     cJSON *report = json_of_file(path);

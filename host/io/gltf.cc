@@ -660,13 +660,19 @@ extern "C" int gltf_write_reduced(const char *scene_file, const char *outdir,
         std::vector<Instance> instances;
         collect_instances(ai.get(), ai->mRootNode, aiMatrix4x4(), instances);
         std::vector<aiMesh *> added;
-        bool dropped = false;
+        std::vector<bool> replaced(instances.size(), false);
         for (size_t r = 0; r < count; r++) {
             int number = replacements[r].instance;
-            if (number < 0 || (size_t)number >= instances.size())
-                return error_set(IDMR_EXIT_INPUT, "%s: mesh instance %d is not in the file "
-                                 "(changed since it was read?)", scene_file, number);
-            Instance &instance = instances[number];
+            if (number < 0 || (size_t)number >= instances.size() || replaced[number])
+                return error_set(IDMR_EXIT_INPUT,
+                                 "%s: mesh instance %d is not in the file, or replaced twice "
+                                 "(the file changed since it was read?)",
+                                 scene_file, number);
+            replaced[number] = true;
+        }
+        bool dropped = false;
+        for (size_t r = 0; r < count; r++) {
+            Instance &instance = instances[replacements[r].instance];
             const aiMesh *original = ai->mMeshes[instance.node->mMeshes[instance.slot]];
             dropped = dropped || has_dropped_channels(original);
             added.push_back(local_mesh(original, instance.world, replacements[r].mesh));

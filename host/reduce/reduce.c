@@ -7,9 +7,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "core/error.h"
+#include "core/files.h"
 #include "core/json.h"
 #include "core/progress.h"
 #include "io/mesh_io.h"
@@ -292,9 +292,6 @@ static int write_reduced_gltf(reduce_state *st)
     int status = gltf_write_reduced(s->file, st->staging, replacements, st->meshes_written,
                                     st->options->bundle);
     free(replacements);
-    char meshes[PATH_MAX]; /* the staging directory's meshes/, which glTF does not use */
-    snprintf(meshes, sizeof meshes, "%s/meshes", st->staging);
-    rmdir(meshes);
     return status;
 }
 
@@ -309,9 +306,11 @@ static int write_reduced_scene(reduce_state *st)
         st->seconds_write = monotonic_seconds() - start;
         return status;
     }
+    char meshes[PATH_MAX];
+    snprintf(meshes, sizeof meshes, "%s/meshes", st->staging);
+    int status = files_make_directory(meshes);
     st->ply = xcalloc(st->count + 1, sizeof *st->ply);
     mitsuba_replacement *replacements = xcalloc(st->count + 1, sizeof *replacements);
-    int status = 0;
     for (size_t m = 0; m < st->count && !status; m++) {
         if (!st->plan.decimate[m])
             continue;

@@ -3,7 +3,6 @@
  * that holds a file the scene reads (the scene's own directory, however it is spelled, or one
  * above it: inputs are never written). */
 #include <dirent.h>
-#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -43,11 +42,7 @@ int reduce_outdir_prepare(reduce_state *st)
                          "output directory '%s' exists and is not empty (use --force to write "
                          "into it)",
                          outdir);
-    if (files_stage_begin(outdir, st->staging, sizeof st->staging))
-        return -1;
-    char meshes[PATH_MAX];
-    snprintf(meshes, sizeof meshes, "%s/meshes", st->staging);
-    return files_make_directory(meshes);
+    return files_stage_begin(outdir, st->staging, sizeof st->staging);
 }
 
 int reduce_outdir_finish(reduce_state *st, int success)

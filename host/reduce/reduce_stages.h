@@ -72,7 +72,7 @@ int reduce_mesh_pinned(const reduce_options *o, const scene_mesh *mesh);
 
 /* OUTDIR checked: an existing non-empty one needs force; never a directory holding a file the
  * scene reads (scene_check_output_directory: inputs are never written). Then the staging
- * directory beside it, with its meshes/, into st->staging. Returns 0, or -1 with the error
+ * directory beside it into st->staging. Returns 0, or -1 with the error
  * set. reduce_outdir_finish() publishes the staging directory as OUTDIR when `success`, else
  * removes it. */
 int reduce_outdir_prepare(reduce_state *st);
