@@ -5,7 +5,9 @@
  *
  *   importance   the Cornell box to D = 0.1: the files, the report's keys and figures, the
  *                reduced scene loads and holds the reported vertex count, ~10 % of the input;
- *                the emitter and the small meshes are untouched; the inputs unchanged
+ *                the emitter and the small meshes are untouched; the inputs unchanged; the
+ *                knot (a PLY without normals) written with the normals the original shades
+ *                with at each kept vertex, or without normals under recompute_normals
  *   outdir       an existing non-empty OUTDIR needs force; the scene's own directory never
  *   keep         keeping the knot leaves nothing to decimate; an unknown name is an error
  *   target       D outside (0, 1] is an error; D = 1 decimates nothing
@@ -113,6 +115,74 @@ static void check_in_place(const scene_mesh *in, const scene_mesh *out)
                         out->positions[3 * v + a] <= hi[a] + 1e-5f);
 }
 
+/* The PLY header of the reduced mesh NAME declares vertex normals. */
+static int ply_has_normals(const char *dir, const char *name)
+{
+    char path[4200];
+    size_t size;
+    snprintf(path, sizeof path, "%s/meshes/%s.ply", dir, name);
+    char *data = read_file(path, &size);
+    char *end = strstr(data, "end_header");
+    assert_non_null(end);
+    *end = 0;
+    int has = strstr(data, "property float nx") != NULL;
+    free(data);
+    return has;
+}
+
+static int compare_x(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+/* The input mesh's normals were computed by the loader (its file has none); every vertex of the
+ * reduced mesh is an input vertex (collapses keep the kept vertex's position) and carries, as
+ * its file's normal, the normal the loader computed there for the original. */
+static void assert_normals_carried(const scene_mesh *in, const scene_mesh *out)
+{
+    assert_false(in->file_normals);
+    assert_non_null(in->normals);
+    assert_true(out->file_normals);
+    assert_non_null(out->normals);
+    /* The input's points as (x, y, z, nx, ny, nz), sorted by x. */
+    float *points = malloc(6 * sizeof(float) * in->vertex_count);
+    for (uint32_t v = 0; v < in->vertex_count; v++) {
+        memcpy(&points[6 * v], &in->positions[3 * v], 3 * sizeof(float));
+        memcpy(&points[6 * v + 3], &in->normals[3 * v], 3 * sizeof(float));
+    }
+    qsort(points, in->vertex_count, 6 * sizeof(float), compare_x);
+    double worst = 0;
+    for (uint32_t v = 0; v < out->vertex_count; v++) {
+        const float *p = &out->positions[3 * v], *n = &out->normals[3 * v];
+        /* The nearest input point among those within 1e-5 in x. */
+        uint32_t lo = 0, hi = in->vertex_count;
+        while (lo < hi) {
+            uint32_t mid = lo + (hi - lo) / 2;
+            if (points[6 * mid] < p[0] - 1e-5f)
+                lo = mid + 1;
+            else
+                hi = mid;
+        }
+        double best = INFINITY;
+        const float *match = NULL;
+        for (uint32_t k = lo; k < in->vertex_count && points[6 * k] <= p[0] + 1e-5f; k++) {
+            const float *q = &points[6 * k];
+            double d = fabs(q[0] - p[0]) + fabs(q[1] - p[1]) + fabs(q[2] - p[2]);
+            if (d < best)
+                best = d, match = q;
+        }
+        assert_non_null(match);
+        assert_true(best < 1e-4);
+        for (int a = 0; a < 3; a++)
+            worst = fmax(worst, fabs(match[3 + a] - n[a]));
+    }
+    print_message("  normals carried: %u vertices, largest component difference %.2g\n",
+                  out->vertex_count, worst);
+    assert_true(worst < 1e-5);
+    free(points);
+}
+
 static void test_importance_cornell(void **state)
 {
     file_state xml, knot;
@@ -129,6 +199,10 @@ static void test_importance_cornell(void **state)
     assert_true(is_decimated(knot_entry));
     assert_true(number(knot_entry, "factor") < 0.2);
     check_in_place(test_find_mesh(s, "knot"), test_find_mesh(r.out, "knot"));
+    assert_true(ply_has_normals(r.dir, "knot"));
+    assert_normals_carried(test_find_mesh(s, "knot"), test_find_mesh(r.out, "knot"));
+    const cJSON *computed = cJSON_GetObjectItemCaseSensitive(r.report, "computed_normals");
+    assert_string_equal(cJSON_GetStringValue(computed), "carried");
     /* The emitter is untouched and pinned. */
     assert_same_mesh(test_find_mesh(s, "light"), test_find_mesh(r.out, "light"));
     assert_true(cJSON_IsTrue(
@@ -273,6 +347,27 @@ static void test_keep_unknown_name(void **state)
     expect_refused(&o, "no_such_mesh");
 }
 
+/* recompute_normals: the reduced knot's PLY has no normals, so the reader computes them from
+ * the reduced mesh (quadric: no importance pass needed). */
+static void test_recompute_normals(void **state)
+{
+    reduce_options o;
+    small_options(&o);
+    o.method = REDUCE_QUADRIC;
+    o.recompute_normals = 1;
+    scene *s = test_load_scene(CORNELL);
+    reduction r;
+    reduction_run(&r, s, &o);
+    assert_false(ply_has_normals(r.dir, "knot"));
+    const scene_mesh *knot = test_find_mesh(r.out, "knot");
+    assert_false(knot->file_normals);
+    assert_non_null(knot->normals); /* computed by the loader, as for the input */
+    const cJSON *computed = cJSON_GetObjectItemCaseSensitive(r.report, "computed_normals");
+    assert_string_equal(cJSON_GetStringValue(computed), "recomputed");
+    reduction_free(&r);
+    scene_free(s);
+}
+
 /* D outside (0, 1]: an error naming --target. */
 static void test_target_out_of_range(void **state)
 {
@@ -335,6 +430,7 @@ int main(void)
         cmocka_unit_test(test_outdir_scene_own_directory),
         cmocka_unit_test(test_keep_knot),
         cmocka_unit_test(test_keep_unknown_name),
+        cmocka_unit_test(test_recompute_normals),
         cmocka_unit_test(test_target_out_of_range),
         cmocka_unit_test(test_target_one),
     };

@@ -49,6 +49,9 @@ static enum option_parse parse_option(int c, void *context, pass_arguments *argu
     case OPT_BUNDLE:
         o->bundle = 1;
         return OPTION_TAKEN;
+    case OPT_RECOMPUTE_NORMALS:
+        o->recompute_normals = 1;
+        return OPTION_TAKEN;
     case OPT_THREADS:
         return option_result(parse_unsigned("--threads", optarg, 1, 1024, &o->threads));
     case OPT_FACTOR_TOLERANCE:
@@ -92,6 +95,7 @@ int command_reduce(int argc, char **argv)
         {"max-normal-angle", required_argument, NULL, OPT_MAX_NORMAL_ANGLE},
         {"uv-weight", required_argument, NULL, OPT_UV_WEIGHT},
         {"normal-weight", required_argument, NULL, OPT_NORMAL_WEIGHT},
+        {"recompute-normals", no_argument, NULL, OPT_RECOMPUTE_NORMALS},
         {"keep", required_argument, NULL, OPT_KEEP},
         {"force", no_argument, NULL, OPT_FORCE},
         {"bundle", no_argument, NULL, OPT_BUNDLE},

@@ -36,8 +36,9 @@ typedef struct scene_mesh {
     float *normals;    /* world-space unit shading normal per vertex, or NULL: shaded flat.
                         * The loader sets them (io/shapes.h: shapes_smooth_normals); a zero
                         * normal shades its triangles flat. Owned by the scene. */
-    int file_normals;  /* the normals are the mesh file's own (a reduced mesh writes them);
-                        * 0: computed by the loader, or none */
+    int file_normals;  /* the normals are the mesh file's own; 0: computed by the loader, or
+                        * none (a reduced mesh writes both kinds unless told to leave computed
+                        * ones to the reader: reduce.h, recompute_normals) */
     int flat_normals;  /* the file's normals shade the mesh flat (io/shapes.h:
                         * shapes_normals_flat): a reduced mesh says face_normals instead */
     uint32_t material; /* index into scene.materials */

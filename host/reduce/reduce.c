@@ -212,9 +212,12 @@ static int run_importance(reduce_state *st)
     return status;
 }
 
-/* What mesh m is decimated from: the scene's mesh, its texture coordinates, its normals where
- * they are its file's own and not flat (computed ones are not written: the reader of the output
- * computes them again; flat ones become face_normals), and its per-vertex importance. */
+/* What mesh m is decimated from: the scene's mesh, its texture coordinates, its normals unless
+ * they are flat (flat ones become face_normals) or were computed by the loader and are to be
+ * computed again by the reader (recompute_normals), and its per-vertex importance. Computed
+ * normals are carried by default: the reader would compute them from the reduced mesh, whose
+ * larger faces average the original's curvature away (a glass surface then shows the light in
+ * other places; see README, "Attributes through the reduction"). */
 static decimate_input decimation_input(const reduce_state *st, size_t m)
 {
     const scene_mesh *mesh = &st->scene->meshes[m];
@@ -226,7 +229,8 @@ static decimate_input decimation_input(const reduce_state *st, size_t m)
     in.indices = mesh->indices;
     in.triangle_count = mesh->triangle_count;
     in.texcoords = mesh->texcoords;
-    in.normals = mesh->file_normals && !mesh->flat_normals ? mesh->normals : NULL;
+    int carried = mesh->file_normals || !st->options->recompute_normals;
+    in.normals = carried && !mesh->flat_normals ? mesh->normals : NULL;
     in.vertex_importance = st->vertex_importance ? st->vertex_importance[m] : NULL;
     in.max_normal_angle = st->options->max_normal_angle;
     in.uv_weight = st->options->uv_weight;

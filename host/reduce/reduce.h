@@ -55,6 +55,10 @@ typedef struct reduce_options {
     double max_normal_angle; /* degrees, default 60 */
     double uv_weight;        /* combined: the attribute error term's weights (decimate.h; */
     double normal_weight;    /* defaults DECIMATE_UV_WEIGHT, DECIMATE_NORMAL_WEIGHT; 0: none) */
+    int recompute_normals;   /* a mesh whose normals the loader computed (a file without them)
+                                is written without normals, for the reader to compute from the
+                                reduced mesh; default 0: those of the original are carried
+                                through the collapses and written, so it shades as it did */
     const char **keep;       /* mesh names never decimated */
     size_t keep_count;
     int force;               /* allow a non-empty OUTDIR */

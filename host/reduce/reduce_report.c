@@ -25,6 +25,8 @@ static void add_totals(cJSON *root, const reduce_state *st)
     cJSON_AddNumberToObject(root, "max_normal_angle", o->max_normal_angle);
     cJSON_AddNumberToObject(root, "uv_weight", o->uv_weight);
     cJSON_AddNumberToObject(root, "normal_weight", o->normal_weight);
+    cJSON_AddStringToObject(root, "computed_normals",
+                            o->recompute_normals ? "recomputed" : "carried");
     cJSON_AddNumberToObject(root, "min_vertices", (double)o->min_vertices);
     cJSON_AddNumberToObject(root, "vertices_before", (double)st->plan.total_before);
     cJSON_AddNumberToObject(root, "vertices_requested", (double)st->plan.total_requested);
