@@ -524,19 +524,22 @@ void drop_unused_meshes(aiScene *scene)
     }
 }
 
-// "assets/<base name>" for a copy of `source`, unique among `copies`.
-std::string copy_name(const std::string &source,
-                      const std::vector<std::pair<std::string, std::string>> &copies)
+typedef std::vector<std::pair<std::string, std::string>> Copies; // source, name in outdir
+
+// Whether a copy is already named `name` (mitsuba_path_unique's test).
+int copy_name_taken(const char *name, const void *context)
 {
-    std::string base = source.substr(source.find_last_of('/') + 1);
-    size_t dot = base.find_last_of('.');
-    std::string stem = dot == std::string::npos ? base : base.substr(0, dot);
-    std::string extension = dot == std::string::npos ? "" : base.substr(dot);
-    std::string name = "assets/" + base;
-    for (int n = 2; std::any_of(copies.begin(), copies.end(),
-                                [&](const auto &c) { return c.second == name; });
-         n++)
-        name = "assets/" + stem + "-" + std::to_string(n) + extension;
+    const Copies &copies = *static_cast<const Copies *>(context);
+    return std::any_of(copies.begin(), copies.end(),
+                       [&](const auto &c) { return c.second == name; });
+}
+
+// "assets/<base name>" for a copy of `source`, unique among `copies`.
+std::string copy_name(const std::string &source, const Copies &copies)
+{
+    char *unique = mitsuba_path_unique("assets", source.c_str(), copy_name_taken, &copies);
+    std::string name(unique);
+    free(unique);
     return name;
 }
 
@@ -546,7 +549,7 @@ std::string copy_name(const std::string &source,
 int rewrite_texture_paths(aiScene *scene, const char *input_dir, const char *outdir, int bundle)
 {
     char *out_real = mitsuba_path_real(outdir);
-    std::vector<std::pair<std::string, std::string>> copies; // source, name in outdir
+    Copies copies;
     int status = 0;
     for (unsigned i = 0; i < scene->mNumMaterials && !status; i++) {
         aiMaterial *m = scene->mMaterials[i];

@@ -32,6 +32,21 @@ char *mitsuba_path_directory(const char *path)
     return dir;
 }
 
+char *mitsuba_path_unique(const char *dir, const char *path,
+                          int (*taken)(const char *name, const void *context),
+                          const void *context)
+{
+    const char *base = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
+    const char *dot = strrchr(base, '.');
+    int stem = dot && dot != base ? (int)(dot - base) : (int)strlen(base);
+    const char *extension = dot && dot != base ? dot : "";
+    char name[PATH_MAX];
+    snprintf(name, sizeof name, "%s/%s", dir, base);
+    for (int n = 2; taken(name, context); n++)
+        snprintf(name, sizeof name, "%s/%.*s-%d%s", dir, stem, base, n, extension);
+    return xstrdup(name);
+}
+
 char *mitsuba_path_real(const char *path)
 {
     char buffer[PATH_MAX];

@@ -10,6 +10,13 @@ char *mitsuba_path_join(const char *dir, const char *file);
 /* The directory of a path ("" when it has none). */
 char *mitsuba_path_directory(const char *path);
 
+/* "dir/<base name of path>", made unique with -2, -3, ... before the extension while
+ * `taken(name, context)` says another output has that name (the bundled copies of the Mitsuba
+ * and glTF writers). */
+char *mitsuba_path_unique(const char *dir, const char *path,
+                          int (*taken)(const char *name, const void *context),
+                          const void *context);
+
 /* The realpath of an existing path, or NULL. */
 char *mitsuba_path_real(const char *path);
 

@@ -257,8 +257,9 @@ static int walk(writer *w, size_t doc, xmlNodePtr parent, int depth)
 /* Pass 2: editing and writing                                                              */
 
 /* Whether `name` already names an output: a fragment's copy or a bundled file. */
-static int output_name_taken(const writer *w, const char *name)
+static int output_name_taken(const char *name, const void *context)
 {
+    const writer *w = context;
     for (size_t j = 1; j < w->doc_count; j++)
         if (w->docs[j].copy_name && strcmp(w->docs[j].copy_name, name) == 0)
             return 1;
@@ -268,20 +269,6 @@ static int output_name_taken(const writer *w, const char *name)
     return 0;
 }
 
-/* "<dir>/<base name of path>", made unique among the outputs with -2, -3, ... before the
- * extension. */
-static char *unique_output_name(const writer *w, const char *dir, const char *path)
-{
-    const char *base = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
-    const char *dot = strrchr(base, '.');
-    int stem = dot && dot != base ? (int)(dot - base) : (int)strlen(base);
-    const char *extension = dot && dot != base ? dot : "";
-    char name[PATH_MAX];
-    snprintf(name, sizeof name, "%s/%s", dir, base);
-    for (int n = 2; output_name_taken(w, name); n++)
-        snprintf(name, sizeof name, "%s/%.*s-%d%s", dir, stem, base, n, extension);
-    return xstrdup(name);
-}
 
 /* Whether `real` is a file the scene reads: one of its documents, or a path one of them names
  * (an edit's value is the realpath of what exists). */
@@ -304,7 +291,7 @@ static int bundle_file(writer *w, const char *real, const char **name)
             *name = w->assets[i].name;
             return 0;
         }
-    char *asset = unique_output_name(w, WRITE_ASSETS_DIR, real);
+    char *asset = mitsuba_path_unique(WRITE_ASSETS_DIR, real, output_name_taken, w);
     char *target = mitsuba_path_join(w->outdir, asset);
     char *target_real = mitsuba_path_real(target);
     int status = 0;
@@ -392,7 +379,8 @@ static size_t plan_copies(writer *w)
     }
     for (size_t i = 1; i < w->doc_count; i++)
         if (w->docs[i].copy) {
-            w->docs[i].copy_name = unique_output_name(w, WRITE_INCLUDES_DIR, w->docs[i].path);
+            w->docs[i].copy_name = mitsuba_path_unique(WRITE_INCLUDES_DIR, w->docs[i].path,
+                                                      output_name_taken, w);
             copies++;
         }
     return copies;

@@ -70,7 +70,8 @@
  *
  * Files (C++, sharing decimate_openmesh.hh): decimate.cc (decimate_mesh, decimate_measure),
  * decimate_weld.cc (the welded rebuild), decimate_modules.hh (the modules),
- * decimate_attributes.hh (the wedges, their module and the attribute quadrics), decimate_collapse.cc/.hh (the collapse loop), decimate_parallel.cc (decimate_many),
+ * decimate_attributes.hh (the wedges, their module and the attribute quadrics),
+ * decimate_collapse.cc/.hh (the collapse loop), decimate_parallel.cc (decimate_many),
  * decimate_stock.cc (decimate_stock_quadric). */
 #ifndef IDMR_DECIMATE_H
 #define IDMR_DECIMATE_H
