@@ -1,6 +1,7 @@
 """evaluation.py — what scripts/evaluate and scripts/report share: running idmr and Mitsuba 3
 (scripts/mitsuba-render) on a scene and its reductions, and the error measures of their renders
-(the paired reduction error of `idmr compare --paired`, RMSE, HDR-FLIP).
+(the paired reduction error of `idmr compare --paired`, RMSE, HDR-FLIP) and the pooling of one
+method's errors over its importance seeds.
 
 A Scene keeps its renders and reduced scenes in DIR/<scene name>/; the options it reads from the
 script's arguments `a` are output, pixels, iterations, reference_iterations, spp, reference_spp,
@@ -141,3 +142,28 @@ def rmse(a, image, reference):
 def flip(image, reference):
     _, out = run([VENV_PYTHON, "-c", FLIP, image, reference], capture=True)
     return float(out.strip())
+
+
+def pool_draws(measures):
+    """One renderer's figures for a method reduced with several importance seeds (`measures`,
+    one dict per seed with reduction_mse, mse_standard_error, noisy_rmse, rmse_vs_reference and
+    flip): the mean squared error and its root, the error the method makes on average. The
+    standard error of the mean is the larger of the seeds' spread (their sample deviation over
+    sqrt(n)) and the renders' own (sqrt(sum of squares) / n), and goes to the root as `idmr
+    compare` takes it (half the difference of the roots one error above and below); the other
+    figures are means."""
+    n = len(measures)
+    mse = sum(m["reduction_mse"] for m in measures) / n
+    render_se = math.sqrt(sum(m["mse_standard_error"] ** 2 for m in measures)) / n
+    spread_se = (math.sqrt(sum((m["reduction_mse"] - mse) ** 2 for m in measures) / (n - 1) / n)
+                 if n > 1 else 0.0)
+    se = max(render_se, spread_se)
+    pooled = {
+        "reduction_rmse": math.sqrt(mse) if mse > 0 else 0.0,
+        "standard_error": 0.5 * (math.sqrt(max(mse + se, 0.0)) - math.sqrt(max(mse - se, 0.0))),
+        "reduction_mse": mse,
+        "mse_standard_error": se,
+    }
+    for key in ("noisy_rmse", "rmse_vs_reference", "flip"):
+        pooled[key] = sum(m[key] for m in measures) / n
+    return pooled

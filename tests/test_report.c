@@ -1,6 +1,9 @@
-/* test_report.c — scripts/report, what accuracy costs in time:
+/* test_report.c — scripts/report, what accuracy costs in time, and the measures it shares with
+ * scripts/evaluate (scripts/evaluation.py):
  *   - its computing pieces (Pareto front, the sweep's points, the stop rule's agreement test,
  *     points.csv) by their unit tests, tests/report_units.py;
+ *   - the pooling of a method's reduction errors over its importance seeds (`evaluate
+ *     --importance-seeds`) by its unit tests, tests/evaluation_units.py;
  *   - a two-point sweep (quadric and combined at D = 0.1 on the shipped Cornell box, tiny
  *     renders) end to end: points.csv has exactly the report's columns and one row per point,
  *     every value a finite number where the point has one (quadric runs no importance pass, so
@@ -35,13 +38,17 @@ static int remove_work_dir(void **state)
     return 0;
 }
 
+/* The unit tests of scripts/report and of scripts/evaluation.py. */
 static void test_units(void **state)
 {
     (void)state;
-    run_result r = run("/usr/bin/python3 tests/report_units.py");
-    fprintf(stderr, "%s", r.err);
-    assert_succeeded(&r);
-    run_free(&r);
+    static const char *const scripts[] = {"tests/report_units.py", "tests/evaluation_units.py"};
+    for (size_t k = 0; k < sizeof scripts / sizeof *scripts; k++) {
+        run_result r = run("/usr/bin/python3 %s", scripts[k]);
+        fprintf(stderr, "%s", r.err);
+        assert_succeeded(&r);
+        run_free(&r);
+    }
 }
 
 /* The columns of points.csv, as scripts/report's COLUMNS names them; those a quadric point
