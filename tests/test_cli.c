@@ -664,6 +664,8 @@ static void test_reduce_refuses_unusable_simulation(void **state)
          "--simulation %s/report.bin", "not a simulation file"},
         {"(printf IDMRSIM1; tail -c +9 %s/sim/simulation.bin) > %s/version1.bin",
          "data/cornell/scene.xml", "--simulation %s/version1.bin", "older idmr"},
+        {"(printf IDMRSIM2; tail -c +9 %s/sim/simulation.bin) > %s/version2.bin",
+         "data/cornell/scene.xml", "--simulation %s/version2.bin", "10 times less"},
         {"true %s %s", "../shared/data/scenes/cbox-mitsuba/cbox.xml",
          "--simulation %s/sim/simulation.bin", "another scene"},
         {"bin/idmr importance data/cornell/scene.xml -o %s/dark --shadow-weight 0 --iterations 1 "

@@ -436,13 +436,13 @@ static void test_mirror_sums_the_light_it_shows(void **state)
 }
 
 /* The result's light importance is the photons' gathers plus the seen light as gathers:
- * Y π² r² N / Φ per unit of luminance Y, Φ = π × area × radiance for the 4 x 4 light. */
+ * 10 Y π² r² N / Φ per unit of luminance Y, Φ = π × area × radiance for the 4 x 4 light. */
 static void test_seen_light_counts_as_gathers(void **state)
 {
     const imp_case *run = imp_run(&seen_light);
     const idmr_sppm_params *params = &run->snapshot.core.params;
     double r = params->radius, power = M_PI * 16.0 * SEEN_RADIANCE;
-    double gathers = M_PI * M_PI * r * r * params->path_count / power;
+    double gathers = 10.0 * M_PI * M_PI * r * r * params->path_count / power;
     assert_true(r > 0);
     for (size_t t = 0; t < 4; t++) {
         double expected = (double)run->snapshot.light_fixed[t] * IMP_FIXED_UNIT +

@@ -236,12 +236,12 @@ static double convergence_change(importance_pass *p, const scene *s, unsigned in
 
 /* The gathers a unit of seen light counts as this iteration (importance.h): a white diffuse
  * surface showing luminance Y receives irradiance π Y, and its hit point gathers that times
- * π r² over the photon's share of the power, Φ / photons. */
+ * π r² over the photon's share of the power, Φ / photons; times IMPORTANCE_SEEN_LIGHT_WEIGHT. */
 static double seen_light_gathers(const sppm *core, const importance_pass *p)
 {
     double r = core->params.radius;
-    return p->total_power > 0 ? M_PI * M_PI * r * r * (double)core->params.path_count /
-                                    p->total_power
+    return p->total_power > 0 ? IMPORTANCE_SEEN_LIGHT_WEIGHT * M_PI * M_PI * r * r *
+                                    (double)core->params.path_count / p->total_power
                               : 0.0;
 }
 

@@ -10,9 +10,10 @@
 #include "core/error.h"
 #include "core/files.h"
 
-static const char MAGIC[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '2'};
+static const char MAGIC[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '3'};
 /* Version 1's light sums left out the light seen through specular surfaces (importance.h). */
 static const char MAGIC_VERSION_1[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '1'};
+static const char MAGIC_VERSION_2[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '2'};
 enum { KIND_CAMERA = 1, KIND_SHADOW = 2 };
 
 /* The fixed-size part after the magic. */
@@ -192,6 +193,12 @@ int importance_file_read(const char *path, const scene *s, const importance_opti
                            "importance left out the light seen through glass and mirrors; run "
                            "`idmr importance` again",
                            path);
+    else if (size >= sizeof MAGIC && !memcmp(bytes, MAGIC_VERSION_2, sizeof MAGIC))
+        status = error_set(IDMR_EXIT_INPUT,
+                           "--simulation: '%s' was written by an older idmr, whose light "
+                           "importance weighted the light seen through glass and mirrors %g "
+                           "times less; run `idmr importance` again",
+                           path, IMPORTANCE_SEEN_LIGHT_WEIGHT);
     else if (size < sizeof MAGIC + sizeof h || memcmp(bytes, MAGIC, sizeof MAGIC))
         status = error_set(IDMR_EXIT_INPUT,
                            "--simulation: '%s' is not a simulation file of idmr (the "

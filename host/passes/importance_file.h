@@ -4,7 +4,8 @@
  * can all be varied over one simulation.
  *
  * Layout, in the writer's byte order (the magic is read back only in the same order):
- *   char[8]  "IDMRSIM2" (version 1, whose light sums lacked the seen light, is refused)
+ *   char[8]  "IDMRSIM3" (version 1, whose light sums lacked the seen light, and version 2,
+ *            whose light sums weighted it IMPORTANCE_SEEN_LIGHT_WEIGHT times less, are refused)
  *   uint64   scene fingerprint, triangles
  *   uint32   iterations, photons per iteration, hit-point image width, height,
  *            kinds (bit 0: camera importance accumulated, γ > 0; bit 1: shadow rays, σ > 0),
