@@ -51,7 +51,8 @@
  * where a diffuse surface's brightness changes only with its irradiance: weighted like that
  * surface (1), glints got too few vertices. On the dragon Cornell box (Mitsuba 3 at 256 × 256,
  * D = 0.1, 30-iteration importance passes with seeds 1, 2, 3) 10 took combined's reduction error
- * from 0.0283, 0.0312, 0.0192 to 0.0179, 0.0168, 0.0176 (README, "Evaluation"). */
+ * from 0.0283, 0.0312, 0.0192 to 0.0179, 0.0168, 0.0176; at D = 0.03, where the glints take
+ * vertices the outline needs, it costs (seed 1: 0.0321 to 0.0487; README, "Evaluation"). */
 #define IMPORTANCE_SEEN_LIGHT_WEIGHT 10.0
 
 #include <stddef.h>

@@ -13,6 +13,7 @@
 static const char MAGIC[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '3'};
 /* Version 1's light sums left out the light seen through specular surfaces (importance.h). */
 static const char MAGIC_VERSION_1[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '1'};
+/* Version 2's weighted it IMPORTANCE_SEEN_LIGHT_WEIGHT times less. */
 static const char MAGIC_VERSION_2[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '2'};
 enum { KIND_CAMERA = 1, KIND_SHADOW = 2 };
 
