@@ -269,7 +269,6 @@ static int output_name_taken(const char *name, const void *context)
     return 0;
 }
 
-
 /* Whether `real` is a file the scene reads: one of its documents, or a path one of them names
  * (an edit's value is the realpath of what exists). */
 static int is_scene_input(const writer *w, const char *real)
