@@ -114,10 +114,12 @@ class Scene:
             self.radius = read_json(os.path.join(self.dir, stem + ".json"))["first_radius"]
         return image
 
-    def reduce(self, method, target, extra=(), label=None):
-        """The reduced scene's directory and report (idmr reduce, with the options `extra`), in
-        DIR/<scene>/<label> (default METHOD-TARGET)."""
-        a, outdir = self.a, os.path.join(self.dir, label or "%s-%g" % (method, target))
+    def reduce(self, spec, target, extra=(), label=None):
+        """The reduced scene's directory and report (idmr reduce with the method and options of
+        `spec`, method_spec(), and the options `extra`), in DIR/<scene>/<label> (default
+        SPEC_LABEL-TARGET)."""
+        method, options, spec_label = method_spec(spec)
+        a, outdir = self.a, os.path.join(self.dir, label or "%s-%g" % (spec_label, target))
         report = os.path.join(outdir, "report.json")
         if not (a.resume and os.path.exists(report)):
             command = [a.idmr, "reduce", self.path, "--target", repr(target), "--method", method,
@@ -125,8 +127,26 @@ class Scene:
                        "--iterations", str(a.importance_iterations)]
             if a.photons:
                 command += ["--photons", str(a.photons)]
-            run(command + list(extra))
+            run(command + options + list(extra))
         return outdir, read_json(report)
+
+
+def method_spec(spec):
+    """A --methods entry, METHOD[:OPTION=VALUE...] (combined:initial=0.05:passes=2), as the
+    `idmr reduce --method` value, the further reduce options it names (["--initial", "0.05",
+    "--passes", "2"]) and a label for file names (combined-initial0.05-passes2). A malformed
+    option (no '=', empty name or value) raises ValueError naming it."""
+    parts = spec.split(":")
+    method, options, label = parts[0], [], parts[0]
+    if not method:
+        raise ValueError("method spec '%s' names no method" % spec)
+    for part in parts[1:]:
+        name, equals, value = part.partition("=")
+        if not equals or not name or not value:
+            raise ValueError("method spec '%s': '%s' is not OPTION=VALUE" % (spec, part))
+        options += ["--" + name, value]
+        label += "-%s%s" % (name, value)
+    return method, options, label
 
 
 def paired(a, images):

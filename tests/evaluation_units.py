@@ -1,5 +1,6 @@
-"""evaluation_units.py — unit tests of scripts/evaluation.py's pooling of a method's reduction
-errors over its importance seeds (pool_draws, what `scripts/evaluate --importance-seeds N`
+"""evaluation_units.py — unit tests of scripts/evaluation.py: method specs with further reduce
+options (method_spec: METHOD:OPTION=VALUE...), and the pooling of a method's reduction errors
+over its importance seeds (pool_draws, what `scripts/evaluate --importance-seeds N`
 reports): the mean of the squared errors against exact sums, the standard error from the seeds'
 spread or from the renders, whichever is larger, and a mean below zero (the renders' noise
 larger than the change) reported as 0 with a finite error. Run by tests/test_report.c (python3
@@ -11,12 +12,27 @@ import unittest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
                                 "scripts"))
-from evaluation import pool_draws  # noqa: E402
+from evaluation import method_spec, pool_draws  # noqa: E402
 
 
 def draw(mse, se, flip=0.1, noisy=0.5, reference=0.2):
     return {"reduction_mse": mse, "mse_standard_error": se, "flip": flip, "noisy_rmse": noisy,
             "rmse_vs_reference": reference}
+
+
+class MethodSpec(unittest.TestCase):
+    def test_a_bare_method_has_no_options(self):
+        self.assertEqual(method_spec("combined"), ("combined", [], "combined"))
+
+    def test_options_become_reduce_arguments_and_label(self):
+        self.assertEqual(method_spec("combined:initial=0.05:passes=2"),
+                         ("combined", ["--initial", "0.05", "--passes", "2"],
+                          "combined-initial0.05-passes2"))
+
+    def test_malformed_options_are_refused(self):
+        for bad in ("combined:initial", "combined:=2", "combined:passes=", ":passes=2"):
+            with self.assertRaises(ValueError):
+                method_spec(bad)
 
 
 class PoolDraws(unittest.TestCase):

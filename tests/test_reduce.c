@@ -11,6 +11,9 @@
  *   outdir       an existing non-empty OUTDIR needs force; the scene's own directory never
  *   keep         keeping the knot leaves nothing to decimate; an unknown name is an error
  *   target       D outside (0, 1] is an error; D = 1 decimates nothing
+ *   passes       --initial and --passes out of range or with the wrong method: errors; the knot
+ *                initially reduced, two importance passes, each remapped to the original knot,
+ *                which ends at the target
  *
  * Scenes that the tests must be able to damage are copies. */
 #include <math.h>
@@ -380,6 +383,74 @@ static void test_target_out_of_range(void **state)
     }
 }
 
+/* --initial outside (0, 1], --passes outside 1 .. REDUCE_MAX_PASSES, either with the quadric
+ * method (no importance pass) or with --simulation (a pass over the whole scene): errors naming
+ * the option. */
+static void test_passes_refused(void **state)
+{
+    reduce_options o;
+    small_options(&o);
+    const double bad_initial[] = {0, -0.5, 1.5, NAN};
+    for (size_t i = 0; i < sizeof bad_initial / sizeof *bad_initial; i++) {
+        o.initial = bad_initial[i];
+        expect_refused(&o, "--initial");
+    }
+    small_options(&o);
+    const unsigned int bad_passes[] = {0, REDUCE_MAX_PASSES + 1};
+    for (size_t i = 0; i < sizeof bad_passes / sizeof *bad_passes; i++) {
+        o.passes = bad_passes[i];
+        expect_refused(&o, "--passes");
+    }
+    small_options(&o);
+    o.passes = 2;
+    o.method = REDUCE_QUADRIC;
+    expect_refused(&o, "importance pass");
+    small_options(&o);
+    o.initial = 0.5;
+    o.simulation = "unused.bin";
+    expect_refused(&o, "--simulation");
+}
+
+/* The paper's multi-pass reduction (3.5): the knot (48,000 vertices, above the initial floor)
+ * quadric-reduced to 25 % first, the box's meshes (under the floor) left whole; the first
+ * importance pass simulates that scene, the second the first's result; each remaps its
+ * importance to the original knot, which ends at the target. The report has the initial
+ * reduction and both passes, and the output scene holds what it says. */
+static void test_two_passes(void **state)
+{
+    scene *s = test_load_scene(CORNELL);
+    reduce_options o;
+    small_options(&o);
+    o.initial = 0.25;
+    o.passes = 2;
+    reduction r;
+    reduction_run(&r, s, &o);
+    uint64_t knot = test_find_mesh(s, "knot")->vertex_count, others = s->vertex_count - knot;
+    const cJSON *initial = cJSON_GetObjectItemCaseSensitive(r.report, "initial");
+    assert_true(number(initial, "target") == 0.25);
+    assert_int_equal((uint64_t)number(initial, "vertices_after"), others + knot / 4);
+    const cJSON *passes = cJSON_GetObjectItemCaseSensitive(r.report, "passes");
+    assert_int_equal(cJSON_GetArraySize(passes), 2);
+    const cJSON *first = cJSON_GetArrayItem(passes, 0), *second = cJSON_GetArrayItem(passes, 1);
+    assert_true(number(first, "vertices_simulated") == number(initial, "vertices_after"));
+    assert_true(number(second, "vertices_simulated") == number(first, "vertices_after"));
+    assert_true(number(second, "vertices_after") == number(r.report, "vertices_after"));
+    for (int k = 0; k < 2; k++) {
+        const cJSON *pass = cJSON_GetArrayItem(passes, k);
+        assert_true(number(pass, "pass") == k + 1);
+        assert_true(number(pass, "device_bytes") > 0);
+        assert_true(number(pass, "importance_seconds") > 0);
+        assert_true(number(pass, "reduction_seconds") > 0);
+    }
+    uint64_t total = check_report_against_output(r.report, s, r.out);
+    uint64_t requested = (uint64_t)number(r.report, "vertices_requested");
+    assert_true(fabs((double)total - (double)requested) <= 0.01 * (double)requested);
+    assert_true(is_decimated(mesh_entry(r.report, "knot")));
+    check_in_place(test_find_mesh(s, "knot"), test_find_mesh(r.out, "knot"));
+    reduction_free(&r);
+    scene_free(s);
+}
+
 static int compare_points(const void *a, const void *b)
 {
     return memcmp(a, b, 3 * sizeof(float));
@@ -433,6 +504,8 @@ int main(void)
         cmocka_unit_test(test_recompute_normals),
         cmocka_unit_test(test_target_out_of_range),
         cmocka_unit_test(test_target_one),
+        cmocka_unit_test(test_passes_refused),
+        cmocka_unit_test(test_two_passes),
     };
     return DEVICE_TEST_RUN("reduce", tests, NULL, NULL) != 0;
 }

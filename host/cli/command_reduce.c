@@ -60,6 +60,11 @@ static enum option_parse parse_option(int c, void *context, pass_arguments *argu
     case OPT_SIMULATION:
         o->simulation = optarg;
         return OPTION_TAKEN;
+    case OPT_INITIAL:
+        return option_result(parse_double("--initial", optarg, 1e-9, 1, &o->initial));
+    case OPT_PASSES:
+        return option_result(
+            parse_unsigned("--passes", optarg, 1, REDUCE_MAX_PASSES, &o->passes));
     case OPT_RANKING_TOLERANCE:
         return option_result(
             parse_double("--ranking-tolerance", optarg, 0, 2, &o->ranking_tolerance));
@@ -103,6 +108,8 @@ int command_reduce(int argc, char **argv)
         {"factor-tolerance", required_argument, NULL, OPT_FACTOR_TOLERANCE},
         {"ranking-tolerance", required_argument, NULL, OPT_RANKING_TOLERANCE},
         {"simulation", required_argument, NULL, OPT_SIMULATION},
+        {"initial", required_argument, NULL, OPT_INITIAL},
+        {"passes", required_argument, NULL, OPT_PASSES},
         {0, 0, 0, 0}};
     reduce_cli_request request = {.have_target = 0};
     reduce_options_default(&request.options);

@@ -45,6 +45,8 @@ enum option_id {
     OPT_FACTOR_TOLERANCE,
     OPT_RANKING_TOLERANCE,
     OPT_SIMULATION,
+    OPT_INITIAL,
+    OPT_PASSES,
 };
 
 /* Options of the SPPM core, shared by `importance`, `reduce` and `render` (-o among them). */

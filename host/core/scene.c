@@ -386,6 +386,28 @@ static void finalize_lights(scene *s)
     }
 }
 
+scene *scene_view(const scene *s)
+{
+    scene *view = xmalloc(sizeof *view);
+    *view = *s;
+    view->meshes = xmalloc((s->mesh_count + 1) * sizeof *view->meshes);
+    if (s->mesh_count)
+        memcpy(view->meshes, s->meshes, s->mesh_count * sizeof *view->meshes);
+    view->lights = xmalloc((s->light_count + 1) * sizeof *view->lights);
+    if (s->light_count)
+        memcpy(view->lights, s->lights, s->light_count * sizeof *view->lights);
+    return view;
+}
+
+void scene_view_free(scene *view)
+{
+    if (!view)
+        return;
+    free(view->meshes);
+    free(view->lights);
+    free(view);
+}
+
 int scene_finalize(scene *s)
 {
     uint64_t triangles = 0, vertices = 0;

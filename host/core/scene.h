@@ -160,6 +160,14 @@ int scene_check_output_file(const scene *s, const char *path);
  * importance, and beyond 1e38 the BVH builder's binning overflows (Embree aborts). */
 #define SCENE_COORDINATE_LIMIT 1e11f
 
+/* A view of `s`: a copy of the scene struct with its own arrays of meshes and lights, sharing
+ * everything else (names, materials, textures, the meshes' geometry) with `s`, which must
+ * outlive it unchanged. The caller may point a view mesh's positions, indices, texcoords and
+ * normals (with their counts) at other geometry, then must scene_finalize() the view before
+ * use. Freed with scene_view_free(), which frees only the view's own arrays, never the geometry. */
+scene *scene_view(const scene *s);
+void scene_view_free(scene *view);
+
 /* Numbers triangles, completes area lights, computes bbox and feature bits. Returns 0, or -1
  * with the error set (for example a scene with more than 2^32 - 1 triangles, or a coordinate
  * beyond SCENE_COORDINATE_LIMIT). */

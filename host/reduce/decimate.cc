@@ -201,6 +201,20 @@ int decimate_welded(const decimate_input *in, decimate_method method, decimate_o
         out->collapsed_into[v] = (uint32_t)v;
 
     ReductionDecimater decimater(mesh);
+    std::vector<uint32_t> distance;
+    if (in->vertex_distance) { // per decimater vertex: the least of the input vertices in it
+        distance.assign(n, 0);
+        std::vector<bool> seen(n, false);
+        for (uint32_t i = 0; i < in->vertex_count; i++) {
+            uint32_t w = out->welded_of[i];
+            if (w >= n)
+                continue;
+            distance[w] = seen[w] ? std::min(distance[w], in->vertex_distance[i])
+                                  : in->vertex_distance[i];
+            seen[w] = true;
+        }
+        decimater.set_distances(&distance);
+    }
     Modules modules;
     if (!add_modules(decimater, modules, mesh, method, in, importance, attributes,
                      out->collapsed_into)) {

@@ -100,6 +100,10 @@ typedef struct decimate_input {
     const float *texcoords; /* uv per input vertex, or NULL */
     const float *normals;   /* shading normal per input vertex, or NULL */
     const double *vertex_importance; /* per input vertex; needed by IMPORTANCE and COMBINED */
+    const uint32_t *vertex_distance; /* per input vertex, or NULL: the collapses between it and
+                                        the vertex its importance was remapped from
+                                        (reduce/remap.h); only breaks ties, see "Remapped
+                                        importance" above */
     uint64_t target_vertices;        /* vertices to keep; where welding leaves fewer, fewer */
     double max_normal_angle;         /* degrees; default 60 (the paper's α_max) */
     double boundary_tolerance; /* COMBINED: the boundary lock's limit, as a share of the new

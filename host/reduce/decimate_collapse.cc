@@ -70,7 +70,8 @@ bool ReductionDecimater::rings_share_only(Mesh::VertexHandle v0, Mesh::VertexHan
     return true;
 }
 
-// The best collapse of v: least priority, then least important target.
+// The best collapse of v: least priority, then least important target, then the target closest
+// to its importance source.
 bool ReductionDecimater::best_collapse(Mesh::VertexHandle v, Entry *entry,
                                        Mesh::HalfedgeHandle *target)
 {
@@ -84,7 +85,8 @@ bool ReductionDecimater::best_collapse(Mesh::VertexHandle v, Entry *entry,
         float priority = collapse_priority(ci);
         if (priority < 0)
             continue;
-        Entry candidate{priority, 0.0, v.idx(), 0};
+        Mesh::VertexHandle to = mesh_.to_vertex_handle(h);
+        Entry candidate{priority, distance(v), 0.0, distance(to), v.idx(), 0};
         if (!found || entry->operator>(candidate)) {
             *entry = candidate;
             *target = h;
@@ -95,27 +97,33 @@ bool ReductionDecimater::best_collapse(Mesh::VertexHandle v, Entry *entry,
 }
 
 // With the importance module every collapse of v has the same priority (v's ring sum), so the
-// best is the first legal one in order of target importance: no need to test them all.
+// best is the first legal one in order of target importance (then of the target's distance from
+// its importance source): no need to test them all.
 bool ReductionDecimater::least_important_collapse(Mesh::VertexHandle v, Entry *entry,
                                                   Mesh::HalfedgeHandle *target)
 {
     candidates_.clear();
-    for (auto h : mesh_.voh_range(v))
-        candidates_.emplace_back(importance_->importance(mesh_.to_vertex_handle(h)), h);
-    std::sort(candidates_.begin(), candidates_.end(),
-              [](const std::pair<double, Mesh::HalfedgeHandle> &a,
-                 const std::pair<double, Mesh::HalfedgeHandle> &b) {
-                  return a.first < b.first || (a.first == b.first && a.second < b.second);
-              });
+    for (auto h : mesh_.voh_range(v)) {
+        Mesh::VertexHandle to = mesh_.to_vertex_handle(h);
+        candidates_.push_back(Candidate{importance_->importance(to), distance(to), h});
+    }
+    std::sort(candidates_.begin(), candidates_.end(), [](const Candidate &a, const Candidate &b) {
+        if (a.importance != b.importance)
+            return a.importance < b.importance;
+        if (a.distance != b.distance)
+            return a.distance < b.distance;
+        return a.halfedge < b.halfedge;
+    });
     for (const auto &candidate : candidates_) {
-        CollapseInfo ci(mesh_, candidate.second);
+        CollapseInfo ci(mesh_, candidate.halfedge);
         if (!collapse_legal(ci))
             continue;
         float priority = collapse_priority(ci);
         if (priority < 0)
             continue;
-        *entry = Entry{priority, candidate.first, v.idx(), 0};
-        *target = candidate.second;
+        *entry = Entry{priority, distance(v), candidate.importance, candidate.distance, v.idx(),
+                       0};
+        *target = candidate.halfedge;
         return true;
     }
     return false;
@@ -159,7 +167,7 @@ size_t ReductionDecimater::heap_all_vertices()
     version_.assign(n, 0);
     target_.assign(n, Mesh::HalfedgeHandle());
     live_.assign(n, false);
-    stored_.assign(n, Entry{0, 0, 0, 0});
+    stored_.assign(n, Entry{0, 0, 0, 0, 0, 0});
     size_t alive = 0;
     for (auto v : mesh_.vertices())
         if (!mesh_.status(v).deleted()) {

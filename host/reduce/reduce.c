@@ -22,13 +22,28 @@
 
 /* ---- stages ---- */
 
-/* --target in (0, 1]; every --keep name is a mesh of the scene. */
+/* --target and --initial in (0, 1], --passes in 1 .. REDUCE_MAX_PASSES and only with a method
+ * that has an importance pass (and not with --simulation, a pass of the whole scene); every
+ * --keep name is a mesh of the scene. */
 static int check_options(const reduce_state *st)
 {
     const reduce_options *o = st->options;
     const scene *s = st->scene;
     if (!(o->target > 0 && o->target <= 1))
         return error_set(IDMR_EXIT_INPUT, "--target must be in (0, 1], not %g", o->target);
+    if (!(o->initial > 0 && o->initial <= 1))
+        return error_set(IDMR_EXIT_INPUT, "--initial must be in (0, 1], not %g", o->initial);
+    if (o->passes < 1 || o->passes > REDUCE_MAX_PASSES)
+        return error_set(IDMR_EXIT_INPUT, "--passes must be 1 to %u, not %u", REDUCE_MAX_PASSES,
+                         o->passes);
+    int staged = o->initial < 1 || o->passes > 1;
+    if (staged && !reduce_method_uses_importance(o->method))
+        return error_set(IDMR_EXIT_INPUT, "--initial and --passes are for the methods with an "
+                                          "importance pass, not '%s'",
+                         reduce_method_name(o->method));
+    if (staged && o->simulation)
+        return error_set(IDMR_EXIT_INPUT, "--simulation is a pass over the whole scene: it "
+                                          "cannot be combined with --initial or --passes");
     for (size_t k = 0; k < o->keep_count; k++) {
         size_t m = 0;
         while (m < s->mesh_count && strcmp(s->meshes[m].name, o->keep[k]))
@@ -48,18 +63,19 @@ static budget_mesh budget_entry(const reduce_state *st, const importance_result 
 {
     const reduce_options *o = st->options;
     const scene *s = st->scene;
+    /* The importance sum of a mesh does not depend on how finely it is meshed: the simulated
+     * scene's sum stands for the original's. */
     importance_weights weights = importance_weights_of(&o->importance);
     budget_mesh entry = {.name = s->meshes[m].name,
                          .vertices = s->meshes[m].vertex_count,
                          .pinned = reduce_mesh_pinned(o, &s->meshes[m]),
                          .importance = 1.0};
     if (reduce_method_uses_importance(o->method))
-        entry.importance = importance_mesh_sums(r, s, m, &weights).amount;
+        entry.importance = importance_mesh_sums(r, st->simulated, m, &weights).amount;
     return entry;
 }
 
-/* Whether mesh m can be decimated at all: not pinned, above --min-vertices. */
-static int decimatable(const reduce_state *st, size_t m)
+int reduce_decimatable(const reduce_state *st, size_t m)
 {
     const scene_mesh *mesh = &st->scene->meshes[m];
     return !reduce_mesh_pinned(st->options, mesh) &&
@@ -85,11 +101,11 @@ typedef struct checkpoint_state {
  * c->ranking. */
 static void rank_vertex_importance(checkpoint_state *c, const importance_result *r)
 {
-    const scene *s = c->st->scene;
+    const scene *s = c->st->simulated;
     importance_weights weights = importance_weights_of(&c->st->options->importance);
     size_t global = 0, k = 0;
     for (size_t m = 0; m < c->st->count; m++) {
-        if (!decimatable(c->st, m))
+        if (!reduce_decimatable(c->st, m))
             continue;
         importance_mesh_vertices(r, s, m, &weights, c->vertex_scratch);
         for (uint32_t v = 0; v < s->meshes[m].vertex_count; v++, global++)
@@ -150,7 +166,7 @@ static int checkpoint(void *context, const importance_result *r, int *stop, char
 static int importance_with_stop_rule(reduce_state *st)
 {
     const reduce_options *o = st->options;
-    const scene *s = st->scene;
+    const scene *s = st->simulated;
     /* The ranking matters where the collapses follow the vertex importance. */
     int ranked = reduce_method_collapses(o->method) != DECIMATE_QUADRIC;
     checkpoint_state c = {.st = st,
@@ -159,7 +175,7 @@ static int importance_with_stop_rule(reduce_state *st)
                           .stride = 1};
     size_t largest = 0, candidates = 0;
     for (size_t m = 0; m < st->count; m++)
-        if (decimatable(st, m)) {
+        if (reduce_decimatable(st, m)) {
             candidates += s->meshes[m].vertex_count;
             if (s->meshes[m].vertex_count > largest)
                 largest = s->meshes[m].vertex_count;
@@ -172,6 +188,8 @@ static int importance_with_stop_rule(reduce_state *st)
     c.ranking = xcalloc(c.sampled + 1, sizeof *c.ranking);
     c.previous_ranking = xcalloc(c.sampled + 1, sizeof *c.previous_ranking);
     c.vertex_scratch = xcalloc(largest + 1, sizeof *c.vertex_scratch);
+    free(st->checkpoints);
+    st->checkpoint_count = 0;
     st->checkpoints = xcalloc(o->importance.sppm.iterations / FACTOR_STOP_EVERY + 1,
                               sizeof *st->checkpoints);
     importance_options options = o->importance;
@@ -192,8 +210,10 @@ static int importance_with_stop_rule(reduce_state *st)
     return status;
 }
 
-/* Methods with importance: the importance pass (or the saved one --simulation names), and each
- * mesh's per-vertex importance, computed once for the decimation and the importance outputs. */
+/* Methods with importance: the importance pass on the simulated scene (or the saved one
+ * --simulation names), and each mesh's per-vertex importance, computed once for the decimation
+ * and the importance outputs, and copied back to the originals where the simulated scene is a
+ * reduced one. */
 static int run_importance(reduce_state *st)
 {
     const reduce_options *o = st->options;
@@ -204,21 +224,24 @@ static int run_importance(reduce_state *st)
         status = o->simulation ? importance_file_read(o->simulation, st->scene, &o->importance,
                                                       &st->importance)
                                : importance_with_stop_rule(st);
-        if (!status)
-            st->vertex_importance = importance_vertex_values(&st->importance, st->scene,
+        if (!status) {
+            st->vertex_importance = importance_vertex_values(&st->importance, st->simulated,
                                                              &weights);
+            reduce_remap(st);
+        }
     }
-    st->seconds_importance = monotonic_seconds() - start;
+    st->seconds_importance += monotonic_seconds() - start;
     return status;
 }
 
 /* What mesh m is decimated from: the scene's mesh, its texture coordinates, its normals unless
  * they are flat (flat ones become face_normals) or were computed by the loader and are to be
- * computed again by the reader (recompute_normals), and its per-vertex importance. Computed
+ * computed again by the reader (recompute_normals), and its per-vertex importance (remapped, with
+ * each vertex's distance from its source, where it was computed on a reduced mesh). Computed
  * normals are carried by default: the reader would compute them from the reduced mesh, whose
  * larger faces average the original's curvature away (a glass surface then shows the light in
  * other places; see README, "Attributes through the reduction"). */
-static decimate_input decimation_input(const reduce_state *st, size_t m)
+decimate_input reduce_decimation_input(const reduce_state *st, size_t m)
 {
     const scene_mesh *mesh = &st->scene->meshes[m];
     decimate_input in;
@@ -232,6 +255,10 @@ static decimate_input decimation_input(const reduce_state *st, size_t m)
     int carried = mesh->file_normals || !st->options->recompute_normals;
     in.normals = carried && !mesh->flat_normals ? mesh->normals : NULL;
     in.vertex_importance = st->vertex_importance ? st->vertex_importance[m] : NULL;
+    if (st->remapped && st->remapped[m]) {
+        in.vertex_importance = st->remapped[m];
+        in.vertex_distance = st->distance[m];
+    }
     in.max_normal_angle = st->options->max_normal_angle;
     in.uv_weight = st->options->uv_weight;
     in.normal_weight = st->options->normal_weight;
@@ -247,7 +274,7 @@ static int plan_budget(reduce_state *st)
     st->input = xcalloc(st->count + 1, sizeof *st->input);
     budget_mesh *budget = st->budget = xcalloc(st->count + 1, sizeof *budget);
     for (size_t m = 0; m < st->count; m++) {
-        st->input[m] = decimation_input(st, m);
+        st->input[m] = reduce_decimation_input(st, m);
         budget[m] = budget_entry(st, &st->importance, m);
     }
     int status = budget_distribute(budget, st->count, o->target, o->min_vertices, &st->plan);
@@ -256,9 +283,9 @@ static int plan_budget(reduce_state *st)
      * another renderer must show it as the input). */
     if (!status && st->plan.total_requested == st->plan.total_before)
         for (size_t m = 0; m < st->count; m++)
-            if (decimatable(st, m))
+            if (reduce_decimatable(st, m))
                 st->plan.decimate[m] = 1;
-    st->seconds_budget = monotonic_seconds() - start;
+    st->seconds_budget += monotonic_seconds() - start;
     return status;
 }
 
@@ -340,7 +367,7 @@ static int write_report(reduce_state *st)
     cJSON *report = reduce_report_json(st);
     int status;
     if (reduce_method_uses_importance(o->method)) {
-        status = importance_write_outputs(st->staging, report, st->scene, &o->importance,
+        status = importance_write_outputs(st->staging, report, st->simulated, &o->importance,
                                           &st->importance, st->vertex_importance);
     } else {
         char path[PATH_MAX];
@@ -373,7 +400,7 @@ static void print_summary(const reduce_state *st)
 
 static void state_free(reduce_state *st)
 {
-    importance_vertex_values_free(st->vertex_importance, st->scene);
+    importance_vertex_values_free(st->vertex_importance, st->simulated);
     for (size_t m = 0; m < st->count; m++) {
         if (st->output)
             decimate_output_free(&st->output[m]);
@@ -386,15 +413,49 @@ static void state_free(reduce_state *st)
     free(st->ply);
     budget_plan_free(&st->plan);
     importance_result_free(&st->importance);
+    reduce_passes_free(st);
+}
+
+/* The record of the pass that just ended (report.json: passes). */
+static int record_pass(reduce_state *st, double seconds_importance, double seconds_reduction)
+{
+    const sppm_summary *run = &st->importance.sppm;
+    reduce_pass_record *p = &st->passes[st->pass_count++];
+    p->seconds_importance = st->seconds_importance - seconds_importance;
+    p->seconds_reduction = st->seconds_budget + st->seconds_decimation - seconds_reduction;
+    p->vertices_simulated = st->simulated->vertex_count;
+    p->vertices_after = st->vertices_after;
+    p->device_bytes = st->options->simulation
+                          ? 0
+                          : run->geometry_bytes + run->bvh_bytes + run->buffer_bytes;
+    p->iterations = run->iterations;
+    return 0;
+}
+
+/* One importance pass and the reduction of the originals after it; from the second on, the
+ * importance pass runs on the last one's result. */
+static int run_pass(reduce_state *st, unsigned int pass)
+{
+    double importance_before = st->seconds_importance;
+    double reduction_before = st->seconds_budget + st->seconds_decimation;
+    if (pass > 1 && reduce_next_pass(st))
+        return -1;
+    if (st->options->passes > 1 && st->options->importance.sppm.progress)
+        fprintf(stderr, "idmr: pass %u of %u: importance on %llu vertices\n", pass,
+                st->options->passes, (unsigned long long)st->simulated->vertex_count);
+    return run_importance(st) || plan_budget(st) || reduce_decimation(st) ||
+           record_pass(st, importance_before, reduction_before);
 }
 
 int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
 {
-    reduce_state st = {.device = d, .scene = s, .outdir = outdir, .options = o,
+    reduce_state st = {.device = d, .scene = s, .simulated = s, .outdir = outdir, .options = o,
                        .count = s->mesh_count};
-    int status = check_options(&st) || reduce_outdir_prepare(&st) || run_importance(&st) ||
-                 plan_budget(&st) || reduce_decimation(&st) || write_reduced_scene(&st) ||
-                 write_report(&st);
+    st.passes = xcalloc(REDUCE_MAX_PASSES + 1, sizeof *st.passes);
+    int status = check_options(&st) || reduce_outdir_prepare(&st) || reduce_initial(&st);
+    for (unsigned int pass = 1; !status && pass <= o->passes; pass++)
+        status = run_pass(&st, pass);
+    status = status || write_reduced_scene(&st) || write_report(&st);
     status = reduce_outdir_finish(&st, !status);
     if (!status)
         print_summary(&st);

@@ -20,7 +20,13 @@
  * scene's own directory. The paths OUTDIR/scene.xml names are relative to OUTDIR; with bundle,
  * every file it names is copied under OUTDIR (io/mitsuba_write.h).
  *
+ * Multiple passes and the initial reduction (paper 3.5, options initial and passes): the first
+ * importance pass runs on the scene quadric-reduced to D0 (or on the scene itself), each later
+ * one on the previous pass's result; every pass's importance is copied back to the original
+ * vertices along the collapse chains (remap.h) and the originals are decimated from it.
+ *
  * Files: reduce.c (the pipeline and its option, importance, budget and writing stages),
+ * reduce_passes.c (the initial reduction, the scene each pass simulates, the remapping),
  * factor_stop.c (when the importance pass has learnt enough), reduce_outdir.c,
  * reduce_decimation.c (with the compensation rounds), reduce_report.c; the
  * stages share the reduce_state of reduce_stages.h. */
@@ -31,6 +37,12 @@
 #include "device/device.h"
 #include "passes/importance.h"
 #include "core/scene.h"
+
+/* Meshes with fewer vertices are left whole by the initial reduction (paper 5: the Cornell
+ * box's walls), whatever D0: it would only take their shape, and they are small. */
+#define REDUCE_INITIAL_FLOOR 1024u
+/* The most importance passes --passes may ask for. */
+#define REDUCE_MAX_PASSES 16u
 
 typedef enum reduce_method {
     REDUCE_IMPORTANCE,
@@ -51,6 +63,12 @@ typedef struct reduce_options {
                                  0.05, 0: not part of the rule) */
     const char *simulation;  /* when set, no importance pass: this saved one is read
                                 (passes/importance_file.h) and weighted by the options */
+    double initial;          /* D0 of the initial reduction (paper 3.5), (0, 1]; 1: none. The
+                                importance pass then runs on the scene quadric-reduced to D0
+                                (meshes of fewer than REDUCE_INITIAL_FLOOR vertices left whole)
+                                and its importance is remapped to the originals (remap.h) */
+    unsigned int passes;     /* importance passes, default 1: each further one runs on the
+                                previous pass's result and is remapped to the originals again */
     unsigned long min_vertices; /* default 16 */
     double max_normal_angle; /* degrees, default 60 */
     double uv_weight;        /* combined: the attribute error term's weights (decimate.h; */

@@ -324,6 +324,6 @@ int reduce_decimation(reduce_state *st)
     free(redo);
     if (!status)
         warn_missed(st);
-    st->seconds_decimation = monotonic_seconds() - start;
+    st->seconds_decimation += monotonic_seconds() - start;
     return status;
 }

@@ -14,6 +14,8 @@ void reduce_options_default(reduce_options *o)
     o->method = REDUCE_COMBINED;
     o->factor_tolerance = FACTOR_STOP_TOLERANCE;
     o->ranking_tolerance = FACTOR_STOP_RANKING_TOLERANCE;
+    o->initial = 1.0;
+    o->passes = 1;
     o->min_vertices = 16;
     o->max_normal_angle = 60.0;
     o->uv_weight = DECIMATE_UV_WEIGHT;

@@ -42,6 +42,7 @@ static void add_totals(cJSON *root, const reduce_state *st)
 
 static void add_seconds(cJSON *seconds, const reduce_state *st)
 {
+    cJSON_AddNumberToObject(seconds, "initial", st->seconds_initial);
     cJSON_AddNumberToObject(seconds, "importance", st->seconds_importance);
     cJSON_AddNumberToObject(seconds, "budget", st->seconds_budget);
     cJSON_AddNumberToObject(seconds, "decimation", st->seconds_decimation);
@@ -99,6 +100,35 @@ static void add_mesh(cJSON *meshes, const reduce_state *st, size_t m)
     cJSON_AddBoolToObject(mesh, "pinned", reduce_mesh_pinned(st->options, in));
 }
 
+/* The initial reduction (null without one) and one entry per importance pass: its seconds, the
+ * vertices it simulated and those the reduction after it kept, its device memory. */
+static void add_passes(cJSON *root, const reduce_state *st)
+{
+    const reduce_options *o = st->options;
+    if (o->initial < 1) {
+        cJSON *initial = cJSON_AddObjectToObject(root, "initial");
+        cJSON_AddNumberToObject(initial, "target", o->initial);
+        cJSON_AddNumberToObject(initial, "vertex_floor", REDUCE_INITIAL_FLOOR);
+        cJSON_AddNumberToObject(initial, "vertices_after", (double)st->vertices_initial);
+        cJSON_AddNumberToObject(initial, "seconds", st->seconds_initial);
+    } else {
+        cJSON_AddNullToObject(root, "initial");
+    }
+    cJSON *list = cJSON_AddArrayToObject(root, "passes");
+    for (unsigned int k = 0; k < st->pass_count; k++) {
+        const reduce_pass_record *p = &st->passes[k];
+        cJSON *item = cJSON_CreateObject();
+        cJSON_AddNumberToObject(item, "pass", k + 1);
+        cJSON_AddNumberToObject(item, "iterations", p->iterations);
+        cJSON_AddNumberToObject(item, "vertices_simulated", (double)p->vertices_simulated);
+        cJSON_AddNumberToObject(item, "vertices_after", (double)p->vertices_after);
+        cJSON_AddNumberToObject(item, "device_bytes", (double)p->device_bytes);
+        cJSON_AddNumberToObject(item, "importance_seconds", p->seconds_importance);
+        cJSON_AddNumberToObject(item, "reduction_seconds", p->seconds_reduction);
+        cJSON_AddItemToArray(list, item);
+    }
+}
+
 /* The stop rule on the decimation factors (factor_stop.h): its settings, where it stopped the
  * pass (null: it did not) and its checkpoints (changes null at the first, or with no importance
  * yet to plan from). */
@@ -136,7 +166,7 @@ cJSON *reduce_report_json(const reduce_state *st)
 {
     const reduce_options *o = st->options;
     cJSON *root = reduce_method_uses_importance(o->method)
-                      ? importance_report_json(st->scene, st->device, &o->importance,
+                      ? importance_report_json(st->simulated, st->device, &o->importance,
                                                &st->importance)
                       : report_without_importance(st->scene);
     add_totals(root, st);
@@ -144,6 +174,8 @@ cJSON *reduce_report_json(const reduce_state *st)
         cJSON_AddStringToObject(root, "simulation", o->simulation);
     else if (reduce_method_uses_importance(o->method))
         add_stop_rule(root, st);
+    if (reduce_method_uses_importance(o->method))
+        add_passes(root, st);
     add_seconds(cJSON_GetObjectItem(root, "seconds"), st);
     cJSON *meshes = cJSON_GetObjectItem(root, "meshes");
     for (size_t m = 0; m < st->scene->mesh_count; m++)

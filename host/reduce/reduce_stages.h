@@ -8,15 +8,22 @@
  *   outdir       OUTDIR checked (empty unless forced, holding no input) and its staging
  *                directory made beside it, where every later stage writes; published as OUTDIR
  *                when all succeeded, removed otherwise or on an interrupt (reduce_outdir.c)
+ *   initial      with --initial D0: the scene quadric-reduced to D0, its collapse history, and
+ *                the view of it the first importance pass simulates: history, view, simulated
+ *                (reduce_passes.c)
  *   importance   the importance pass (methods with importance), stopped once the decimation
  *                factors settle (factor_stop.h), or the saved pass --simulation names
  *                (passes/importance_file.h), and per-vertex importance of every mesh,
  *                computed once for the decimation and the importance outputs: importance,
- *                checkpoints, stopped_at, vertex_importance (reduce.c)
+ *                checkpoints, stopped_at, vertex_importance (reduce.c); with a history, that
+ *                importance copied back to the original vertices: remapped, distance
+ *                (reduce_passes.c)
  *   budget       decimation inputs and the plan of Eq. 3: input, plan (reduce.c)
  *   decimation   the planned meshes, then rounds that plan again with the floors meshes
  *                reached and relax locks: output, budget floors, compensation_rounds,
  *                vertices_after (reduce_decimation.c)
+ *   next pass    with --passes K, between passes: this pass's output becomes the history and
+ *                the view the next pass simulates; the per-pass state is reset (reduce_passes.c)
  *   write        meshes/NAME.ply and scene.xml: ply, meshes_written (reduce.c)
  *   report       report.json (with the importance outputs) and the closing line (reduce.c; the
  *                JSON is built in reduce_report.c)
@@ -36,6 +43,15 @@ typedef struct factor_checkpoint {
     double factor_change, ranking_change;
 } factor_checkpoint;
 
+/* What one importance pass and the reduction after it did (report.json: passes). */
+typedef struct reduce_pass_record {
+    double seconds_importance, seconds_reduction; /* reduction: budget and decimation */
+    uint64_t vertices_simulated; /* of the scene the importance pass ran on */
+    uint64_t vertices_after;     /* of the reduced scene after it */
+    uint64_t device_bytes;       /* the importance pass's device memory (0: --simulation) */
+    unsigned int iterations;
+} reduce_pass_record;
+
 typedef struct reduce_state {
     device *device;
     scene *scene;
@@ -44,12 +60,25 @@ typedef struct reduce_state {
     const reduce_options *options;
     size_t count; /* meshes in the scene */
 
-    importance_result importance;  /* importance: per scene triangle */
+    scene *simulated;       /* the scene the importance pass runs on: `scene`, or `view` */
+    scene *view;            /* initial, next pass: the scene with the meshes of `history` */
+    decimate_output *history; /* initial, next pass: per mesh, the decimation `view` holds
+                                 (collapsed_into NULL: the mesh as it is); NULL: none */
+    double seconds_initial;
+    uint64_t vertices_initial; /* vertices of the initially reduced scene */
+    reduce_pass_record *passes; /* one per pass run */
+    unsigned int pass_count;
+
+    importance_result importance;  /* importance: per triangle of `simulated` */
     factor_checkpoint *checkpoints; /* importance: the stop rule's checkpoints (factor_stop.h) */
     size_t checkpoint_count;
     unsigned int stopped_at;       /* importance: the iteration the stop rule ended the pass
                                       after; 0 when it ran to --iterations or --tolerance */
-    double **vertex_importance;    /* importance: per mesh, per vertex; NULL without the pass */
+    double **vertex_importance;    /* importance: per mesh, per vertex of `simulated`; NULL
+                                      without the pass */
+    double **remapped;             /* importance: with a history, per mesh whose history has
+                                      collapses, per original vertex (remap.h); else NULL */
+    uint32_t **distance;           /*             and each one's distance from its source */
     decimate_input *input;         /* budget: what each mesh is decimated from */
     budget_mesh *budget;           /* budget: what the plan was made from; the decimation adds
                                       the floors it learns */
@@ -65,6 +94,25 @@ typedef struct reduce_state {
 
     double seconds_importance, seconds_budget, seconds_decimation, seconds_write;
 } reduce_state;
+
+/* Whether mesh m can be decimated at all: not pinned, above --min-vertices. */
+int reduce_decimatable(const reduce_state *st, size_t m);
+
+/* What mesh m is decimated from (reduce.c): the scene's mesh, its attributes as reduce.h says,
+ * and its per-vertex importance (remapped where there is a history). */
+decimate_input reduce_decimation_input(const reduce_state *st, size_t m);
+
+/* The initial reduction (with --initial; nothing otherwise), and the change from one pass to the
+ * next (reduce_passes.c). Return 0, or -1 with the error set. */
+int reduce_initial(reduce_state *st);
+int reduce_next_pass(reduce_state *st);
+
+/* After the importance pass: with a history, the importance per vertex of the simulated scene
+ * copied back to the originals into st->remapped and st->distance (reduce_passes.c). */
+void reduce_remap(reduce_state *st);
+
+/* Frees what reduce_initial(), reduce_next_pass() and reduce_remap() left in the state. */
+void reduce_passes_free(reduce_state *st);
 
 /* Emitters, meshes named with --keep and meshes without area (every triangle degenerate: all
  * its points coincide or lie on a line) are never decimated. */

@@ -1,0 +1,159 @@
+/* reduce_passes.c — the stages of `idmr reduce` that let the importance pass run on a reduced
+ * scene (paper 3.5; reduce.h, reduce_stages.h): the initial reduction (--initial D0), the scene
+ * each pass simulates (a view of the scene with the reduced meshes), the importance copied back
+ * to the original vertices (remap.h), and the change from one pass to the next (--passes). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+#include "core/error.h"
+#include "core/progress.h"
+#include "passes/importance_outputs.h"
+#include "reduce/remap.h"
+#include "reduce/reduce_stages.h"
+
+/* The view the importance pass simulates: the scene with each mesh that the history decimated
+ * replaced by its decimated copy. */
+static int build_view(reduce_state *st)
+{
+    scene_view_free(st->view);
+    st->view = scene_view(st->scene);
+    for (size_t m = 0; m < st->count; m++) {
+        const decimate_output *h = &st->history[m];
+        if (!h->collapsed_into)
+            continue;
+        scene_mesh *mesh = &st->view->meshes[m];
+        mesh->positions = h->mesh.positions;
+        mesh->indices = h->mesh.indices;
+        mesh->texcoords = h->mesh.texcoords;
+        mesh->normals = h->mesh.normals;
+        mesh->vertex_count = h->mesh.vertex_count;
+        mesh->triangle_count = h->mesh.triangle_count;
+    }
+    st->simulated = st->view;
+    return scene_finalize(st->view);
+}
+
+/* Whether the initial reduction decimates mesh m: decimatable and not below the floor. */
+static int initially_reduced(const reduce_state *st, size_t m)
+{
+    return reduce_decimatable(st, m) && st->scene->meshes[m].vertex_count >= REDUCE_INITIAL_FLOOR;
+}
+
+int reduce_initial(reduce_state *st)
+{
+    const reduce_options *o = st->options;
+    if (!(o->initial < 1))
+        return 0;
+    double start = monotonic_seconds();
+    unsigned int threads = o->threads ? o->threads : (unsigned int)sysconf(_SC_NPROCESSORS_ONLN);
+    decimate_input *jobs = xcalloc(st->count + 1, sizeof *jobs);
+    decimate_output *results = xcalloc(st->count + 1, sizeof *results);
+    int *job_status = xcalloc(st->count + 1, sizeof *job_status);
+    char(*job_messages)[512] = xcalloc(st->count + 1, sizeof *job_messages);
+    size_t *job_mesh = xcalloc(st->count + 1, sizeof *job_mesh);
+    size_t n = 0;
+    for (size_t m = 0; m < st->count; m++)
+        if (initially_reduced(st, m)) {
+            jobs[n] = reduce_decimation_input(st, m);
+            jobs[n].target_vertices =
+                (uint64_t)ceil(o->initial * (double)st->scene->meshes[m].vertex_count);
+            job_mesh[n++] = m;
+        }
+    if (o->importance.sppm.progress)
+        fprintf(stderr, "idmr: initial reduction: %zu meshes to %g of their vertices (quadric)\n",
+                n, o->initial);
+    decimate_many(jobs, results, job_status, job_messages, n, DECIMATE_QUADRIC, threads);
+    st->history = xcalloc(st->count + 1, sizeof *st->history);
+    int status = 0;
+    for (size_t j = 0; j < n; j++) {
+        st->history[job_mesh[j]] = results[j];
+        if (job_status[j] && !status)
+            status = error_set(IDMR_EXIT_FAILURE, "initial reduction: %s", job_messages[j]);
+    }
+    free(jobs);
+    free(results);
+    free(job_status);
+    free(job_messages);
+    free(job_mesh);
+    if (!status)
+        status = build_view(st);
+    st->vertices_initial = st->view ? st->view->vertex_count : 0;
+    st->seconds_initial = monotonic_seconds() - start;
+    return status;
+}
+
+void reduce_remap(reduce_state *st)
+{
+    if (!st->history)
+        return;
+    st->remapped = xcalloc(st->count + 1, sizeof *st->remapped);
+    st->distance = xcalloc(st->count + 1, sizeof *st->distance);
+    for (size_t m = 0; m < st->count; m++) {
+        const decimate_output *h = &st->history[m];
+        if (!h->collapsed_into)
+            continue; /* simulated as it is: its own values */
+        uint32_t original = st->scene->meshes[m].vertex_count;
+        st->remapped[m] = xcalloc((size_t)original + 1, sizeof *st->remapped[m]);
+        st->distance[m] = xcalloc((size_t)original + 1, sizeof *st->distance[m]);
+        remap_values(h, original, st->vertex_importance[m], st->remapped[m], st->distance[m]);
+    }
+}
+
+/* Frees the remapped importance. */
+static void remapped_free(reduce_state *st)
+{
+    for (size_t m = 0; st->remapped && m < st->count; m++) {
+        free(st->remapped[m]);
+        free(st->distance[m]);
+    }
+    free(st->remapped);
+    free(st->distance);
+    st->remapped = NULL;
+    st->distance = NULL;
+}
+
+/* Frees the history and the view of it. */
+static void history_free(reduce_state *st)
+{
+    scene_view_free(st->view);
+    st->view = NULL;
+    st->simulated = st->scene;
+    for (size_t m = 0; st->history && m < st->count; m++)
+        decimate_output_free(&st->history[m]);
+    free(st->history);
+    st->history = NULL;
+}
+
+int reduce_next_pass(reduce_state *st)
+{
+    /* What the last pass computed on its simulated scene goes first, while that scene exists. */
+    importance_vertex_values_free(st->vertex_importance, st->simulated);
+    st->vertex_importance = NULL;
+    remapped_free(st);
+    importance_result_free(&st->importance);
+    history_free(st);
+    /* The last pass's output is the next pass's history: decimated from the originals. Meshes
+     * it did not decimate have no output, and are simulated as they are. */
+    st->history = st->output;
+    st->output = NULL;
+    free(st->input);
+    free(st->budget);
+    st->input = NULL;
+    st->budget = NULL;
+    budget_plan_free(&st->plan);
+    st->stopped_at = 0;
+    st->compensation_rounds = 0;
+    st->locks_relaxed = 0;
+    st->seams_freed = 0;
+    return build_view(st);
+}
+
+void reduce_passes_free(reduce_state *st)
+{
+    remapped_free(st);
+    history_free(st);
+    free(st->passes);
+    st->passes = NULL;
+}
