@@ -14,6 +14,10 @@
  *   passes       --initial and --passes out of range or with the wrong method: errors; the knot
  *                initially reduced, two importance passes, each remapped to the original knot,
  *                which ends at the target
+ *   memory       a budget below the whole box's render and importance memory: target and
+ *                initial reduction chosen, every pass and the reduced scene's render within it,
+ *                no pass uploads the whole scene; a budget below the film's buffers alone is an
+ *                error
  *
  * Scenes that the tests must be able to damage are copies. */
 #include <math.h>
@@ -451,6 +455,84 @@ static void test_two_passes(void **state)
     scene_free(s);
 }
 
+/* The Cornell box's render and importance memory as reduce costs them (the shipped scene, its
+ * BVH built; the render at the scene's film and the run's photons). */
+static void cornell_memory(const scene *s, const reduce_options *o, uint64_t *render_bytes,
+                           uint64_t *importance_bytes)
+{
+    bvh b;
+    test_build_bvh(s, &b);
+    render_options ro;
+    render_options_default(&ro);
+    ro.sppm.photons = o->importance.sppm.photons;
+    sppm_memory m;
+    assert_int_equal(render_memory(device_test_device(), s, bvh_device_bytes(&b), &ro, &m), 0);
+    *render_bytes = sppm_memory_total(&m);
+    assert_int_equal(importance_memory(device_test_device(), s, bvh_device_bytes(&b),
+                                       &o->importance, &m),
+                     0);
+    *importance_bytes = sppm_memory_total(&m);
+    bvh_free(&b);
+}
+
+/* A memory budget of 80 % of what the whole Cornell box needs to render and to simulate: the
+ * target and an initial reduction are chosen for it, no importance pass allocates more than the
+ * budget or uploads the whole scene (its device bytes stay below the whole scene's, and it
+ * simulates fewer vertices), and the reduced scene renders within the budget (as reported, and
+ * as computed again here from the written scene). */
+static void test_memory_budget(void **state)
+{
+    scene *s = test_load_scene(CORNELL);
+    reduce_options o;
+    small_options(&o);
+    o.target = 1;
+    uint64_t render_bytes, importance_bytes;
+    cornell_memory(s, &o, &render_bytes, &importance_bytes);
+    o.memory_budget = (uint64_t)(0.8 * (double)(render_bytes < importance_bytes
+                                                    ? render_bytes
+                                                    : importance_bytes));
+    reduction r;
+    reduction_run(&r, s, &o);
+    double budget = (double)o.memory_budget;
+    assert_true(number(r.report, "target") < 1);
+    const cJSON *initial = cJSON_GetObjectItemCaseSensitive(r.report, "initial");
+    assert_true(cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(initial, "chosen_for_budget")));
+    const cJSON *pass;
+    cJSON_ArrayForEach(pass, cJSON_GetObjectItemCaseSensitive(r.report, "passes"))
+    {
+        assert_true(number(pass, "device_bytes") <= budget);
+        assert_true(number(pass, "device_bytes") < (double)importance_bytes);
+        assert_true(number(pass, "vertices_simulated") < (double)s->vertex_count);
+    }
+    assert_true(number(r.report, "device_peak_bytes") <= budget);
+    assert_true(number(r.report, "peak_rss_bytes") > 0);
+    const cJSON *memory = cJSON_GetObjectItemCaseSensitive(r.report, "memory_budget");
+    assert_true(number(memory, "bytes") == budget);
+    const cJSON *rendered = cJSON_GetObjectItemCaseSensitive(memory, "render_device_bytes");
+    assert_true(number(rendered, "total") <= budget);
+    uint64_t reduced_render, reduced_importance;
+    cornell_memory(r.out, &o, &reduced_render, &reduced_importance);
+    print_message("  budget %.0f bytes: the whole box renders in %llu, the reduced one in %llu "
+                  "(report: %.0f)\n",
+                  budget, (unsigned long long)render_bytes, (unsigned long long)reduced_render,
+                  number(rendered, "total"));
+    assert_true((double)reduced_render <= budget);
+    assert_int_equal(check_report_against_output(r.report, s, r.out),
+                     (uint64_t)number(r.report, "vertices_after"));
+    reduction_free(&r);
+    scene_free(s);
+}
+
+/* A budget below what rendering needs with every decimatable mesh gone (the film's and photons'
+ * buffers alone): an input error naming --memory-budget, and no output. */
+static void test_memory_budget_too_small(void **state)
+{
+    reduce_options o;
+    small_options(&o);
+    o.memory_budget = 1024;
+    expect_refused(&o, "--memory-budget");
+}
+
 static int compare_points(const void *a, const void *b)
 {
     return memcmp(a, b, 3 * sizeof(float));
@@ -506,6 +588,8 @@ int main(void)
         cmocka_unit_test(test_target_one),
         cmocka_unit_test(test_passes_refused),
         cmocka_unit_test(test_two_passes),
+        cmocka_unit_test(test_memory_budget),
+        cmocka_unit_test(test_memory_budget_too_small),
     };
     return DEVICE_TEST_RUN("reduce", tests, NULL, NULL) != 0;
 }

@@ -21,6 +21,9 @@
  *                            directional albedo by quadrature (the weights scatter() samples)
  *   invariants               bit-identical images for every work-group size (one case a
  *                            size); a missing camera or light is an input error
+ *   device memory            both passes allocate exactly what render_memory() and
+ *                            importance_memory() say; a budget a byte short, or a run larger
+ *                            than the device, is refused before any allocation
  *
  * Every test runs on every device (tests/device_test.h); runs shared by several tests are made
  * once per device. render_run() builds sppm.cl once per device and later runs load it from the
@@ -888,6 +891,73 @@ static void test_missing_camera_is_an_input_error(void **state)
     test_expect_refused(s, 1, "no sensor");
 }
 
+/* Both passes on a lit plane: what a run allocates on the device equals what render_memory()
+ * and importance_memory() say it will (the function every budget uses; sppm_run() checks it
+ * too); a device budget of exactly that runs, one byte less is refused before anything is
+ * allocated, with a message giving the sizes; and a run beyond the device's own memory is
+ * refused the same way, naming the device. */
+static void test_device_memory_is_what_runs_allocate(void **state)
+{
+    scene *s = bare_plane("memory.xml");
+    imp_point_light(s, V3(0, 0, 1), 1.0f);
+    imp_look_at(s, V3(0, 0, 2), V3(0, 0, 0), V3(0, 1, 0), 16, 12, 0.5f);
+    test_finalize_scene(s);
+    bvh b;
+    test_build_bvh(s, &b);
+    device *d = device_test_device();
+    for (int render = 0; render <= 1; render++) {
+        importance_options io;
+        render_options ro;
+        test_importance_options(&io, 1, 1000);
+        test_render_options(&ro, 1, 1000);
+        sppm_options *core = render ? &ro.sppm : &io.sppm;
+        sppm_memory m;
+        assert_int_equal(render ? render_memory(d, s, bvh_device_bytes(&b), &ro, &m)
+                                : importance_memory(d, s, bvh_device_bytes(&b), &io, &m),
+                         0);
+        uint64_t expected = sppm_memory_total(&m);
+        for (int over = 0; over <= 2; over++) {
+            /* 0: a budget of exactly the run's memory; 1: a byte less; 2: more photons than
+             * the device's memory holds (the device's own limit). */
+            core->device_budget = over == 1 ? expected - 1 : over == 0 ? expected : 0;
+            if (over == 2) {
+                uint64_t per_path =
+                    (m.core - hit_point_grid_bytes(16 * 12) - 16 * 12 * sizeof(idmr_hit_point)) /
+                    1000;
+                uint64_t paths = d->info.global_memory / per_path + 1;
+                if (paths * IDMR_PATH_VERTICES > 0xffffffffu)
+                    continue; /* the photon limit comes first on this device */
+                core->photons = (unsigned int)paths;
+            }
+            importance_result ir;
+            render_result rr;
+            error_clear();
+            int status =
+                render ? render_run(d, s, &b, &ro, &rr) : importance_run(d, s, &b, &io, &ir);
+            const sppm_summary *run = render ? &rr.sppm : &ir.sppm;
+            uint64_t allocated = run->geometry_bytes + run->bvh_bytes + run->buffer_bytes;
+            if (over == 0) {
+                if (status)
+                    fail_msg("%s", error_message());
+                assert_int_equal(allocated, expected);
+            } else {
+                print_message("  %s\n", error_message());
+                assert_int_equal(status, -1);
+                assert_non_null(strstr(error_message(), render ? "render pass" : "importance"));
+                assert_non_null(strstr(error_message(), over == 1 ? "memory budget" : "has ("));
+                assert_non_null(strstr(error_message(), "BVH"));
+                assert_int_equal(allocated, 0);
+            }
+            if (render)
+                render_result_free(&rr);
+            else
+                importance_result_free(&ir);
+        }
+    }
+    bvh_free(&b);
+    scene_free(s);
+}
+
 static int group_teardown(void **state)
 {
     plane.ready = 0;
@@ -920,6 +990,7 @@ int main(void)
         DEVICE_TEST_SWEEP(test_same_image_for_any_local_size),
         cmocka_unit_test(test_missing_light_is_an_input_error),
         cmocka_unit_test(test_missing_camera_is_an_input_error),
+        cmocka_unit_test(test_device_memory_is_what_runs_allocate),
     };
     return DEVICE_TEST_RUN("render", tests, NULL, group_teardown) != 0;
 }

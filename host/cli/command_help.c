@@ -32,7 +32,7 @@ static const struct {
      "      --shadow-weight W     weight of the triangles that cast the shadows the camera\n"
      "                            sees (default 1; 0: no shadow rays)\n"},
     {"reduce", 1,
-     "  reduce SCENE --target D -o OUTDIR\n"
+     "  reduce SCENE --target D -o OUTDIR   (or --memory-budget BYTES for --target)\n"
      "                            the reduced scene: OUTDIR/scene.xml and meshes/*.ply with\n"
      "                            about D of all vertices; takes the options of importance\n"
      "      --method M            combined (default: importance budgets each mesh and\n"
@@ -55,6 +55,11 @@ static const struct {
      "                            importance back to the originals along the collapse chains\n"
      "      --passes K            K importance passes (default 1), each on the last one's\n"
      "                            result, remapped to the originals again\n"
+     "      --memory-budget BYTES the device memory (512M, 2G) the reduced scene may take\n"
+     "                            when rendered (geometry, BVH, buffers at the scene's film\n"
+     "                            and --photons); the target becomes what fits if\n"
+     "                            smaller, an initial reduction is chosen when the importance\n"
+     "                            pass would not fit, and no pass allocates more\n"
      "      --min-vertices N      meshes this small are not decimated (default 16)\n"
      "      --max-normal-angle A  no collapse turns a face more than A degrees (default 60)\n"
      "      --uv-weight W         combined: a texture-coordinate change of 1 costs as much as\n"

@@ -65,6 +65,8 @@ static enum option_parse parse_option(int c, void *context, pass_arguments *argu
     case OPT_PASSES:
         return option_result(
             parse_unsigned("--passes", optarg, 1, REDUCE_MAX_PASSES, &o->passes));
+    case OPT_MEMORY_BUDGET:
+        return option_result(parse_bytes("--memory-budget", optarg, &o->memory_budget));
     case OPT_RANKING_TOLERANCE:
         return option_result(
             parse_double("--ranking-tolerance", optarg, 0, 2, &o->ranking_tolerance));
@@ -110,6 +112,7 @@ int command_reduce(int argc, char **argv)
         {"simulation", required_argument, NULL, OPT_SIMULATION},
         {"initial", required_argument, NULL, OPT_INITIAL},
         {"passes", required_argument, NULL, OPT_PASSES},
+        {"memory-budget", required_argument, NULL, OPT_MEMORY_BUDGET},
         {0, 0, 0, 0}};
     reduce_cli_request request = {.have_target = 0};
     reduce_options_default(&request.options);
@@ -117,8 +120,11 @@ int command_reduce(int argc, char **argv)
     request.options.keep = xcalloc((size_t)argc + 1, sizeof *request.options.keep);
     pass_arguments arguments = {.command = "reduce"};
     int code = parse_pass_arguments(argc, argv, table, parse_option, &request, &arguments);
-    if (!code && (!arguments.output || !request.have_target))
-        code = usage_error("reduce: --target D and -o OUTDIR are required");
+    if (!code && (!arguments.output || (!request.have_target && !request.options.memory_budget)))
+        code = usage_error("reduce: -o OUTDIR and --target D or --memory-budget BYTES are "
+                           "required");
+    if (!code && !request.have_target)
+        request.options.target = 1.0; /* the budget alone sets it */
     if (!code && request.options.simulation &&
         !reduce_method_uses_importance(request.options.method))
         code = usage_error("reduce: --simulation is for the methods with importance, not '%s'",

@@ -8,6 +8,7 @@
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "core/error.h"
 
@@ -51,6 +52,31 @@ int parse_double(const char *option, const char *text, double min, double max, d
         return error_set(IDMR_EXIT_INPUT, "%s: '%s' is not a number from %g to %g", option, text,
                          min, max);
     *out = value;
+    return 0;
+}
+
+int parse_bytes(const char *option, const char *text, uint64_t *out)
+{
+    char *end;
+    errno = 0;
+    double value = strtod(text, &end);
+    double unit = 1.0;
+    if (end != text && end[0] && !end[1]) {
+        const char *units = "KMGT";
+        const char *at = strchr(units, end[0] == 'k' ? 'K' : end[0]);
+        if (at) {
+            unit = ldexp(1.0, 10 * (int)(at - units + 1));
+            end++;
+        }
+    }
+    double bytes = floor(value * unit);
+    if (errno || end == text || *end || !isfinite(value) || text[0] == '-' || !(bytes >= 1) ||
+        bytes > 0x1p63)
+        return error_set(IDMR_EXIT_INPUT,
+                         "%s: '%s' is not a size in bytes (a positive number, optionally "
+                         "followed by K, M, G or T: 512M, 2G)",
+                         option, text);
+    *out = (uint64_t)bytes;
     return 0;
 }
 

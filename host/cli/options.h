@@ -47,6 +47,7 @@ enum option_id {
     OPT_SIMULATION,
     OPT_INITIAL,
     OPT_PASSES,
+    OPT_MEMORY_BUDGET,
 };
 
 /* Options of the SPPM core, shared by `importance`, `reduce` and `render` (-o among them). */
@@ -83,6 +84,9 @@ int usage_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 int parse_unsigned(const char *option, const char *text, unsigned long min, unsigned long max,
                    unsigned int *out);
 int parse_double(const char *option, const char *text, double min, double max, double *out);
+/* A size in bytes: a positive number, optionally followed by K, M, G or T (powers of 1024),
+ * such as 512M or 1.5G; 0, or -1 with an error naming `option` set (exit code 2). */
+int parse_bytes(const char *option, const char *text, uint64_t *out);
 
 /* What a parser made of option `c` (its argument in optarg). */
 enum option_parse {

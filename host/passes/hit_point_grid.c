@@ -7,15 +7,37 @@
 
 #include "core/error.h"
 
+/* The grid's buckets and scan chunks for `hit_points`, and its five buffers' sizes in the order
+ * of hit_point_grid_create(): one place for the allocation and hit_point_grid_bytes(). */
+static void grid_sizes(unsigned int hit_points, unsigned int *cells, unsigned int *chunks,
+                       size_t bytes[5])
+{
+    *cells = 1024;
+    while (*cells < 2u * hit_points)
+        *cells *= 2;
+    *chunks = (*cells + IDMR_SCAN_CHUNK - 1) / IDMR_SCAN_CHUNK;
+    bytes[0] = *cells * sizeof(cl_uint);
+    bytes[1] = (*cells + 1) * sizeof(cl_uint);
+    bytes[2] = *cells * sizeof(cl_uint);
+    bytes[3] = *chunks * sizeof(cl_uint);
+    bytes[4] = (hit_points ? hit_points : 1) * sizeof(cl_uint);
+}
+
+uint64_t hit_point_grid_bytes(unsigned int hit_points)
+{
+    unsigned int cells, chunks;
+    size_t bytes[5];
+    grid_sizes(hit_points, &cells, &chunks, bytes);
+    return (uint64_t)bytes[0] + bytes[1] + bytes[2] + bytes[3] + bytes[4];
+}
+
 int hit_point_grid_create(device *d, cl_program program, unsigned int hit_points,
                           hit_point_grid *g)
 {
     memset(g, 0, sizeof *g);
     g->hit_points = hit_points;
-    g->cells = 1024;
-    while (g->cells < 2u * hit_points)
-        g->cells *= 2;
-    g->chunks = (g->cells + IDMR_SCAN_CHUNK - 1) / IDMR_SCAN_CHUNK;
+    size_t bytes[5];
+    grid_sizes(hit_points, &g->cells, &g->chunks, bytes);
     if (device_create_kernel(program, "grid_count", &g->count) ||
         device_create_kernel(program, "scan_chunks", &g->scan_chunks) ||
         device_create_kernel(program, "scan_chunk_sums", &g->scan_chunk_sums) ||
@@ -23,11 +45,11 @@ int hit_point_grid_create(device *d, cl_program program, unsigned int hit_points
         device_create_kernel(program, "grid_scatter", &g->scatter))
         return -1;
     const device_buffer_request buffers[] = {
-        {&g->cell_counts, g->cells * sizeof(cl_uint), "grid cell counts"},
-        {&g->cell_start, (g->cells + 1) * sizeof(cl_uint), "grid cell starts"},
-        {&g->cell_cursor, g->cells * sizeof(cl_uint), "grid cursors"},
-        {&g->chunk_sums, g->chunks * sizeof(cl_uint), "grid prefix sums"},
-        {&g->grid_points, (hit_points ? hit_points : 1) * sizeof(cl_uint), "grid hit point lists"},
+        {&g->cell_counts, bytes[0], "grid cell counts"},
+        {&g->cell_start, bytes[1], "grid cell starts"},
+        {&g->cell_cursor, bytes[2], "grid cursors"},
+        {&g->chunk_sums, bytes[3], "grid prefix sums"},
+        {&g->grid_points, bytes[4], "grid hit point lists"},
     };
     return device_buffers(d, buffers, sizeof buffers / sizeof *buffers, &g->bytes);
 }

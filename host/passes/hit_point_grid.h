@@ -32,6 +32,10 @@ int hit_point_grid_create(device *d, cl_program program, unsigned int hit_points
                           hit_point_grid *g);
 void hit_point_grid_release(hit_point_grid *g);
 
+/* Device memory of the grid's buffers for `hit_points`, as hit_point_grid_create() allocates
+ * them. */
+uint64_t hit_point_grid_bytes(unsigned int hit_points);
+
 /* Sets params' radius, cell size and cell count for gather radius² `radius2` in scene s. */
 void hit_point_grid_place(const hit_point_grid *g, const scene *s, double radius2,
                           idmr_sppm_params *params);

@@ -84,6 +84,30 @@ static double brightest_visible_luminance(const scene *s)
     return isfinite(brightest) ? brightest : 0;
 }
 
+/* The sizes of the pass's buffers: per photon slot a gather count, per kind an accumulator word
+ * per scene triangle (one at least), and (finish) the triangle seen through each pixel: one
+ * place for prepare(), finish() and pass_bytes(). */
+typedef struct pass_sizes {
+    size_t words; /* accumulator words per kind */
+    size_t gathered, accumulator, pixel_triangles; /* bytes */
+} pass_sizes;
+
+static pass_sizes sizes_of(const scene *s, unsigned int pixels, size_t slots)
+{
+    pass_sizes z;
+    z.words = s->triangle_count ? (size_t)s->triangle_count : 1;
+    z.gathered = slots * sizeof(cl_uint);
+    z.accumulator = z.words * sizeof(cl_ulong);
+    z.pixel_triangles = (size_t)pixels * sizeof(cl_uint);
+    return z;
+}
+
+static uint64_t pass_bytes(const scene *s, unsigned int pixels, size_t slots)
+{
+    pass_sizes z = sizes_of(s, pixels, slots);
+    return (uint64_t)z.gathered + KINDS * (uint64_t)z.accumulator + z.pixel_triangles;
+}
+
 static int prepare(sppm *core, void *state)
 {
     importance_pass *p = state;
@@ -91,13 +115,14 @@ static int prepare(sppm *core, void *state)
      * surface is IDMR_FIXED_SCALE units, as the largest Eq. 2 weight is; 0: nothing to see. */
     double brightest = brightest_visible_luminance(core->scene);
     core->params.fixed_scale = brightest > 0 ? (float)(IDMR_FIXED_SCALE / brightest) : 0.0f;
-    p->words = core->scene->triangle_count ? (size_t)core->scene->triangle_count : 1;
+    pass_sizes z = sizes_of(core->scene, core->pixels, core->slots);
+    p->words = z.words;
     const device_buffer_request buffers[] = {
-        {&p->gathered, core->slots * sizeof(cl_uint), "gather counts"},
-        {&p->accumulators[CAMERA], p->words * sizeof(cl_ulong), KIND_NAMES[CAMERA]},
-        {&p->accumulators[LIGHT], p->words * sizeof(cl_ulong), KIND_NAMES[LIGHT]},
-        {&p->accumulators[SHADOW], p->words * sizeof(cl_ulong), KIND_NAMES[SHADOW]},
-        {&p->accumulators[SEEN_LIGHT], p->words * sizeof(cl_ulong), KIND_NAMES[SEEN_LIGHT]},
+        {&p->gathered, z.gathered, "gather counts"},
+        {&p->accumulators[CAMERA], z.accumulator, KIND_NAMES[CAMERA]},
+        {&p->accumulators[LIGHT], z.accumulator, KIND_NAMES[LIGHT]},
+        {&p->accumulators[SHADOW], z.accumulator, KIND_NAMES[SHADOW]},
+        {&p->accumulators[SEEN_LIGHT], z.accumulator, KIND_NAMES[SEEN_LIGHT]},
     };
     p->scratch = xmalloc(p->words * sizeof *p->scratch);
     p->previous = xcalloc(p->words, sizeof *p->previous);
@@ -305,9 +330,11 @@ static int finish(sppm *core, void *state)
     idmr_camera camera = core->scene->camera;
     cl_mem triangles = NULL;
     r->pixel_triangle = xmalloc(pixels * sizeof *r->pixel_triangle);
+    size_t bytes = sizes_of(core->scene, core->pixels, core->slots).pixel_triangles;
+    core->summary->buffer_bytes += bytes;
     int status =
-        device_buffer(core->dev, CL_MEM_WRITE_ONLY, pixels * sizeof(cl_uint), NULL,
-                      "pixel triangles", &triangles) ||
+        device_buffer(core->dev, CL_MEM_WRITE_ONLY, bytes, NULL, "pixel triangles",
+                      &triangles) ||
         DEVICE_SET_ARGS(p->centre_hits, "pixel_centre_hits", DEVICE_ARG(core->params),
                         DEVICE_ARG(camera)) ||
         device_scene_set_args(&core->uploaded, p->centre_hits, "pixel_centre_hits", 2) ||
@@ -342,6 +369,22 @@ void importance_snapshot_free(importance_snapshot *snapshot)
     memset(snapshot, 0, sizeof *snapshot);
 }
 
+/* The pass as the core sees it, before its state and hooks: what sizes its memory. */
+static sppm_pass pass_on_core(void)
+{
+    return (sppm_pass){.name = "importance",
+                       .pass = IDMR_SPPM_IMPORTANCE,
+                       .photon_record_bytes = sizeof(idmr_photon_vertex),
+                       .pass_bytes = pass_bytes};
+}
+
+int importance_memory(const device *d, const scene *s, uint64_t bvh_bytes,
+                      const importance_options *o, sppm_memory *m)
+{
+    sppm_pass pass = pass_on_core();
+    return sppm_memory_of(d, s, bvh_bytes, &o->sppm, &pass, m);
+}
+
 int importance_run(device *d, const scene *s, const bvh *b, const importance_options *o,
                    importance_result *r)
 {
@@ -365,17 +408,15 @@ int importance_run(device *d, const scene *s, const bvh *b, const importance_opt
     char defines[128];
     importance_defines(o->accumulate_importance, o->gamma > 0, state.shadows, defines,
                        sizeof defines);
-    sppm_pass pass = {.name = "importance",
-                      .pass = IDMR_SPPM_IMPORTANCE,
-                      .defines = defines,
-                      .photon_record_bytes = sizeof(idmr_photon_vertex),
-                      .state = &state,
-                      .prepare = prepare,
-                      .gather = gather,
-                      .collect = collect,
-                      .snapshot = o->snapshot ? snapshot : NULL,
-                      .finish = finish,
-                      .release = release};
+    sppm_pass pass = pass_on_core();
+    pass.defines = defines;
+    pass.state = &state;
+    pass.prepare = prepare;
+    pass.gather = gather;
+    pass.collect = collect;
+    pass.snapshot = o->snapshot ? snapshot : NULL;
+    pass.finish = finish;
+    pass.release = release;
     int status =
         sppm_run(d, s, b, &o->sppm, &pass, &r->sppm, o->snapshot ? &o->snapshot->core : NULL);
     if (o->snapshot)

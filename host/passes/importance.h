@@ -124,6 +124,11 @@ typedef struct importance_weights {
 
 importance_weights importance_weights_of(const importance_options *o);
 
+/* The device memory a run of the pass on scene s allocates, with a BVH of bvh_bytes
+ * (passes/sppm.h, sppm_memory_of). 0, or -1 with the error set. */
+int importance_memory(const device *d, const scene *s, uint64_t bvh_bytes,
+                      const importance_options *o, sppm_memory *m);
+
 /* Runs the pass. The scene needs a camera and at least one light. Returns 0, or -1 with the
  * error set. `r` is freed with importance_result_free() either way. */
 int importance_run(device *d, const scene *s, const bvh *b, const importance_options *o,

@@ -60,6 +60,23 @@ static double fixed_scale(const scene *s, float scene_radius, unsigned int photo
     return brightest > 0 && isfinite(brightest) ? IDMR_RENDER_PHOTON_UNITS * M_PI / brightest : 0;
 }
 
+/* The sizes of the pass's buffers: per pixel its hit point's throughput and its radiance sums
+ * (three 64-bit words): one place for prepare() and pass_bytes(). */
+static void pass_sizes(unsigned int pixels, size_t bytes[2])
+{
+    bytes[0] = (size_t)pixels * sizeof(idmr_render_hit);
+    bytes[1] = (size_t)pixels * 3 * sizeof(cl_ulong);
+}
+
+static uint64_t pass_bytes(const scene *s, unsigned int pixels, size_t slots)
+{
+    (void)s;
+    (void)slots;
+    size_t bytes[2];
+    pass_sizes(pixels, bytes);
+    return (uint64_t)bytes[0] + bytes[1];
+}
+
 static int prepare(sppm *core, void *state)
 {
     render_pass *p = state;
@@ -69,10 +86,11 @@ static int prepare(sppm *core, void *state)
     if (!(core->params.fixed_scale > 0) || !isfinite(core->params.fixed_scale))
         return error_set(IDMR_EXIT_INPUT, "%s: no light emits any power: the image would be black",
                          s->file);
-    size_t pixels = core->pixels;
+    size_t pixels = core->pixels, bytes[2];
+    pass_sizes(core->pixels, bytes);
     const device_buffer_request buffers[] = {
-        {&p->render_hits, pixels * sizeof(idmr_render_hit), "hit point throughputs"},
-        {&p->pixel_radiance, pixels * 3 * sizeof(cl_ulong), "pixel radiance"},
+        {&p->render_hits, bytes[0], "hit point throughputs"},
+        {&p->pixel_radiance, bytes[1], "pixel radiance"},
     };
     p->sum = xcalloc(pixels * 3, sizeof *p->sum);
     p->units = xmalloc(pixels * 3 * sizeof *p->units);
@@ -163,6 +181,22 @@ static void release(void *state)
     free(p->hits);
 }
 
+/* The pass as the core sees it, before its state and hooks: what sizes its memory. */
+static sppm_pass pass_on_core(void)
+{
+    return (sppm_pass){.name = "render",
+                       .pass = IDMR_SPPM_RENDER,
+                       .photon_record_bytes = sizeof(idmr_render_photon),
+                       .pass_bytes = pass_bytes};
+}
+
+int render_memory(const device *d, const scene *s, uint64_t bvh_bytes, const render_options *o,
+                  sppm_memory *m)
+{
+    sppm_pass pass = pass_on_core();
+    return sppm_memory_of(d, s, bvh_bytes, &o->sppm, &pass, m);
+}
+
 int render_run(device *d, const scene *s, const bvh *b, const render_options *o,
                render_result *r)
 {
@@ -171,15 +205,13 @@ int render_run(device *d, const scene *s, const bvh *b, const render_options *o,
     memset(&state, 0, sizeof state);
     state.options = o;
     state.result = r;
-    sppm_pass pass = {.name = "render",
-                      .pass = IDMR_SPPM_RENDER,
-                      .photon_record_bytes = sizeof(idmr_render_photon),
-                      .state = &state,
-                      .prepare = prepare,
-                      .gather = gather,
-                      .collect = collect,
-                      .finish = finish,
-                      .release = release};
+    sppm_pass pass = pass_on_core();
+    pass.state = &state;
+    pass.prepare = prepare;
+    pass.gather = gather;
+    pass.collect = collect;
+    pass.finish = finish;
+    pass.release = release;
     int status =
         sppm_run(d, s, b, &o->sppm, &pass, &r->sppm, o->snapshot ? &o->snapshot->core : NULL);
     if (o->snapshot)

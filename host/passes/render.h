@@ -60,6 +60,11 @@ typedef struct render_result {
 
 void render_options_default(render_options *o);
 
+/* The device memory a render of scene s allocates, with a BVH of bvh_bytes (passes/sppm.h,
+ * sppm_memory_of). 0, or -1 with the error set. */
+int render_memory(const device *d, const scene *s, uint64_t bvh_bytes, const render_options *o,
+                  sppm_memory *m);
+
 /* Renders scene `s` (which needs a camera and a light) with BVH `b`. Returns 0, or -1 with the
  * error set; free `r` with render_result_free() either way. */
 int render_run(device *d, const scene *s, const bvh *b, const render_options *o,

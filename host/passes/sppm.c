@@ -138,6 +138,65 @@ static int build_program(sppm *core, const sppm_pass *pass)
     return 0;
 }
 
+/* The sizes of the core's own buffers (hit points, photon path lengths, photon slots), in
+ * allocate()'s order: one place for the allocation and sppm_memory_of(). */
+static void core_sizes(unsigned int pixels, unsigned int photons, size_t record_bytes,
+                       size_t bytes[3])
+{
+    bytes[0] = (size_t)pixels * sizeof(idmr_hit_point);
+    bytes[1] = (size_t)photons * sizeof(cl_uint);
+    bytes[2] = (size_t)photons * IDMR_PATH_VERTICES * record_bytes;
+}
+
+int sppm_memory_of(const device *d, const scene *s, uint64_t bvh_bytes, const sppm_options *o,
+                   const sppm_pass *pass, sppm_memory *m)
+{
+    sppm_summary film;
+    memset(&film, 0, sizeof film);
+    if (check_inputs(d, s, o, pass, &film))
+        return -1;
+    unsigned int pixels = film.width * film.height;
+    size_t bytes[3];
+    core_sizes(pixels, film.photons, pass->photon_record_bytes, bytes);
+    m->geometry = device_scene_geometry_bytes(s);
+    m->bvh = bvh_bytes;
+    m->core = hit_point_grid_bytes(pixels) + bytes[0] + bytes[1] + bytes[2];
+    m->pass = pass->pass_bytes
+                  ? pass->pass_bytes(s, pixels, (size_t)film.photons * IDMR_PATH_VERTICES)
+                  : 0;
+    return 0;
+}
+
+uint64_t sppm_memory_total(const sppm_memory *m)
+{
+    return m->geometry + m->bvh + m->core + m->pass;
+}
+
+/* The run's device memory against the budget it was given and the device's global memory. */
+static int check_memory(const device *d, const sppm_options *o, const sppm_pass *pass,
+                        const sppm_memory *m)
+{
+    const double mib = 1048576.0;
+    uint64_t total = sppm_memory_total(m);
+    char parts[160];
+    snprintf(parts, sizeof parts, "geometry %.1f, BVH %.1f, buffers %.1f MiB", m->geometry / mib,
+             m->bvh / mib, (m->core + m->pass) / mib);
+    if (o->device_budget && total > o->device_budget)
+        return error_set(IDMR_EXIT_INPUT,
+                         "the %s pass needs %.1f MiB of device memory (%s; %llu bytes), more "
+                         "than the memory budget of %.1f MiB (%llu bytes)",
+                         pass->name, total / mib, parts, (unsigned long long)total,
+                         o->device_budget / mib, (unsigned long long)o->device_budget);
+    if (total > d->info.global_memory)
+        return error_set(IDMR_EXIT_FAILURE,
+                         "the %s pass needs %.1f MiB of device memory (%s), more than device "
+                         "'%s' has (%.1f MiB): reduce the scene first (idmr reduce "
+                         "--memory-budget), or lower --photons or --resolution",
+                         pass->name, total / mib, parts, d->info.name,
+                         d->info.global_memory / mib);
+    return 0;
+}
+
 /* The core's buffers, and the arguments of camera_paths (params, camera, the scene's buffers,
  * hit points, then the pass's records) and photon_paths (params, the scene's buffers, path
  * lengths, records) that do not change, bound in order. */
@@ -147,10 +206,12 @@ static int allocate(sppm *core, const sppm_pass *pass)
     core->slots = (size_t)summary->photons * IDMR_PATH_VERTICES;
     if (hit_point_grid_create(core->dev, core->program, core->pixels, &core->grid))
         return -1;
+    size_t bytes[3];
+    core_sizes(core->pixels, summary->photons, pass->photon_record_bytes, bytes);
     const device_buffer_request buffers[] = {
-        {&core->hit_points, core->pixels * sizeof(idmr_hit_point), "hit points"},
-        {&core->path_length, summary->photons * sizeof(cl_uint), "photon path lengths"},
-        {&core->photon_records, core->slots * pass->photon_record_bytes, "photon paths"},
+        {&core->hit_points, bytes[0], "hit points"},
+        {&core->path_length, bytes[1], "photon path lengths"},
+        {&core->photon_records, bytes[2], "photon paths"},
     };
     summary->buffer_bytes = core->grid.bytes;
     if (device_buffers(core->dev, buffers, sizeof buffers / sizeof *buffers,
@@ -321,7 +382,10 @@ int sppm_run(device *d, const scene *s, const bvh *b, const sppm_options *o, spp
              sppm_summary *summary, sppm_snapshot *snapshot)
 {
     memset(summary, 0, sizeof *summary);
-    if (check_inputs(d, s, o, pass, summary)) {
+    sppm_memory memory;
+    if (check_inputs(d, s, o, pass, summary) ||
+        sppm_memory_of(d, s, bvh_device_bytes(b), o, pass, &memory) ||
+        check_memory(d, o, pass, &memory)) {
         pass->release(pass->state);
         return -1;
     }
@@ -338,5 +402,13 @@ int sppm_run(device *d, const scene *s, const bvh *b, const sppm_options *o, spp
     }
     pass->release(pass->state);
     release(&core);
+    /* What was allocated is what sppm_memory_of() says a run allocates: budgets rely on it. */
+    uint64_t allocated = summary->geometry_bytes + summary->bvh_bytes + summary->buffer_bytes;
+    if (!status && allocated != sppm_memory_total(&memory))
+        status = error_set(IDMR_EXIT_FAILURE,
+                           "internal error: the %s pass allocated %llu bytes on the device, "
+                           "but sppm_memory_of() says %llu",
+                           pass->name, (unsigned long long)allocated,
+                           (unsigned long long)sppm_memory_total(&memory));
     return status ? -1 : 0;
 }

@@ -49,6 +49,8 @@ typedef struct sppm_options {
     double radius;           /* first gather radius; 0: from what the camera sees (below) */
     double time_limit;       /* seconds; > 0 stops after the iteration in which they pass */
     size_t local_size;       /* work-group size; 0 lets the runtime choose */
+    uint64_t device_budget;  /* device bytes the run may allocate (sppm_memory_of); 0: the
+                                device's global memory is the only limit */
     int generic;             /* build the all-features program instead of the scene's */
     int progress;            /* report progress on stderr */
 } sppm_options;
@@ -131,6 +133,10 @@ typedef struct sppm_pass {
     const char *defines;         /* more build options (-D ...), or NULL */
     size_t photon_record_bytes;  /* one record of the photon slots */
     void *state;                 /* the pass's own data, handed to every hook */
+    /* The bytes of the pass's own device buffers (prepare's and finish's) on scene s with a
+     * hit-point image of `pixels` and `slots` photon slots, from the sizes its hooks allocate
+     * (NULL: none). */
+    uint64_t (*pass_bytes)(const scene *s, unsigned int pixels, size_t slots);
     /* Once the program is built and the core's buffers exist: creates the pass's kernels and
      * buffers (adding their bytes to core->summary->buffer_bytes), binds camera_paths' records
      * (argument core->camera_pass_argument), and may set constant params. */
@@ -144,15 +150,34 @@ typedef struct sppm_pass {
                    size_t detail_size);
     /* When a snapshot is asked for: copies the pass's buffers of the iteration (may be NULL). */
     int (*snapshot)(sppm *core, void *state);
-    /* After the last iteration, before the core is released (may be NULL). */
+    /* After the last iteration, before the core is released (may be NULL); adds the bytes of
+     * any buffer it allocates to core->summary->buffer_bytes. */
     int (*finish)(sppm *core, void *state);
     /* Releases what prepare created; always called, once (also when a run fails before
      * prepare: the state is then as the pass made it). */
     void (*release)(void *state);
 } sppm_pass;
 
+/* The device memory of a run, by part, as sppm_run() allocates it: the scene's geometry
+ * buffers (device_scene_geometry_bytes), its BVH, the core's buffers (the hit-point grid, hit
+ * points, photon path lengths and slots) and the pass's own (sppm_pass.pass_bytes); a buffer
+ * that is freed within the run counts for the whole run. */
+typedef struct sppm_memory {
+    uint64_t geometry, bvh, core, pass;
+} sppm_memory;
+
+/* What a run of `pass` with options o on scene s, with a BVH of bvh_bytes on the device
+ * (bvh_device_bytes), allocates: the one function the run's allocations and every budget use
+ * (sppm_run() fails if they ever disagree). 0, or -1 with the error set (options or scene the
+ * run would refuse). */
+int sppm_memory_of(const device *d, const scene *s, uint64_t bvh_bytes, const sppm_options *o,
+                   const sppm_pass *pass, sppm_memory *m);
+uint64_t sppm_memory_total(const sppm_memory *m);
+
 /* Runs `pass` on scene `s` (which needs a camera and a light) with BVH `b`: validates the
- * options, uploads, builds, iterates, and releases everything. `summary` is filled (free it
+ * options, checks its device memory (sppm_memory_of) against options.device_budget and the
+ * device's global memory before allocating anything, uploads, builds, iterates, and releases
+ * everything. `summary` is filled (free it
  * with sppm_summary_free() either way); `snapshot` (may be NULL) receives the last iteration's
  * core buffers. Returns 0, or -1 with the error set. */
 int sppm_run(device *d, const scene *s, const bvh *b, const sppm_options *o, sppm_pass *pass,

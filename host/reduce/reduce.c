@@ -138,7 +138,7 @@ static int checkpoint(void *context, const importance_result *r, int *stop, char
         return 0;
     }
     budget_plan plan;
-    if (budget_distribute(c->budget, st->count, st->options->target, st->options->min_vertices,
+    if (budget_distribute(c->budget, st->count, st->target, st->options->min_vertices,
                           &plan))
         return -1;
     rank_vertex_importance(c, r);
@@ -194,6 +194,7 @@ static int importance_with_stop_rule(reduce_state *st)
                               sizeof *st->checkpoints);
     importance_options options = o->importance;
     options.checkpoint = checkpoint;
+    options.sppm.device_budget = o->memory_budget;
     options.checkpoint_context = &c;
     bvh b;
     int status = bvh_build(s, &b);
@@ -265,9 +266,7 @@ decimate_input reduce_decimation_input(const reduce_state *st, size_t m)
     return in;
 }
 
-/* The decimation inputs and the plan: importance sums set the factors (method importance), or
- * equal importance gives the uniform D of the quadric baseline. */
-static int plan_budget(reduce_state *st)
+int reduce_plan_budget(reduce_state *st)
 {
     const reduce_options *o = st->options;
     double start = monotonic_seconds();
@@ -277,7 +276,7 @@ static int plan_budget(reduce_state *st)
         st->input[m] = reduce_decimation_input(st, m);
         budget[m] = budget_entry(st, &st->importance, m);
     }
-    int status = budget_distribute(budget, st->count, o->target, o->min_vertices, &st->plan);
+    int status = budget_distribute(budget, st->count, st->target, o->min_vertices, &st->plan);
     /* Nothing to remove (D = 1): every mesh that could be decimated is still rewritten, as its
      * PLY without a collapse, so the output is the scene converted (and a check of the writer:
      * another renderer must show it as the input). */
@@ -387,12 +386,11 @@ static const char *reduced_scene_name(const scene *s)
 /* The closing line. */
 static void print_summary(const reduce_state *st)
 {
-    const reduce_options *o = st->options;
     fprintf(stderr,
             "idmr: %llu -> %llu vertices (target %.4g: %llu), %zu of %zu meshes rewritten; "
             "reduced scene in %s/%s\n",
             (unsigned long long)st->plan.total_before, (unsigned long long)st->vertices_after,
-            o->target, (unsigned long long)st->plan.total_requested, st->meshes_written,
+            st->target, (unsigned long long)st->plan.total_requested, st->meshes_written,
             st->count, st->outdir, reduced_scene_name(st->scene));
 }
 
@@ -443,19 +441,20 @@ static int run_pass(reduce_state *st, unsigned int pass)
     if (st->options->passes > 1 && st->options->importance.sppm.progress)
         fprintf(stderr, "idmr: pass %u of %u: importance on %llu vertices\n", pass,
                 st->options->passes, (unsigned long long)st->simulated->vertex_count);
-    return run_importance(st) || plan_budget(st) || reduce_decimation(st) ||
+    return run_importance(st) || reduce_plan_budget(st) || reduce_decimation(st) ||
            record_pass(st, importance_before, reduction_before);
 }
 
 int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
 {
     reduce_state st = {.device = d, .scene = s, .simulated = s, .outdir = outdir, .options = o,
-                       .count = s->mesh_count};
+                       .count = s->mesh_count, .target = o->target, .initial = o->initial};
     st.passes = xcalloc(REDUCE_MAX_PASSES + 1, sizeof *st.passes);
-    int status = check_options(&st) || reduce_outdir_prepare(&st) || reduce_initial(&st);
+    int status = check_options(&st) || reduce_memory_plan(&st) || reduce_outdir_prepare(&st) ||
+                 reduce_initial(&st);
     for (unsigned int pass = 1; !status && pass <= o->passes; pass++)
         status = run_pass(&st, pass);
-    status = status || write_reduced_scene(&st) || write_report(&st);
+    status = status || reduce_memory_fit(&st) || write_reduced_scene(&st) || write_report(&st);
     status = reduce_outdir_finish(&st, !status);
     if (!status)
         print_summary(&st);

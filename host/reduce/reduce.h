@@ -27,6 +27,8 @@
  *
  * Files: reduce.c (the pipeline and its option, importance, budget and writing stages),
  * reduce_passes.c (the initial reduction, the scene each pass simulates, the remapping),
+ * reduce_memory.c (the target and initial reduction a memory budget asks for, and the check that
+ * the reduced scene fits it),
  * factor_stop.c (when the importance pass has learnt enough), reduce_outdir.c,
  * reduce_decimation.c (with the compensation rounds), reduce_report.c; the
  * stages share the reduce_state of reduce_stages.h. */
@@ -69,6 +71,14 @@ typedef struct reduce_options {
                                 and its importance is remapped to the originals (remap.h) */
     unsigned int passes;     /* importance passes, default 1: each further one runs on the
                                 previous pass's result and is remapped to the originals again */
+    uint64_t memory_budget;  /* device bytes the reduced scene may take when rendered (its
+                                geometry, BVH and the renderer's buffers at the scene's film
+                                size and importance.sppm.photons, or the device's default
+                                photons without them; passes/sppm.h, sppm_memory_of),
+                                and the most the importance pass may allocate; 0: none. The
+                                target becomes the smaller of --target and what fits, and
+                                without --initial an initial reduction is chosen when the whole
+                                scene's importance pass would not fit (reduce_memory.c) */
     unsigned long min_vertices; /* default 16 */
     double max_normal_angle; /* degrees, default 60 */
     double uv_weight;        /* combined: the attribute error term's weights (decimate.h; */

@@ -115,7 +115,7 @@ static uint64_t vertices_after(const reduce_state *st)
 static long replan(reduce_state *st, unsigned char *redo)
 {
     budget_plan plan;
-    if (budget_distribute(st->budget, st->count, st->options->target, st->options->min_vertices,
+    if (budget_distribute(st->budget, st->count, st->target, st->options->min_vertices,
                           &plan))
         return -1;
     long changed = 0;

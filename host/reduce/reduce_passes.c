@@ -13,17 +13,14 @@
 #include "reduce/remap.h"
 #include "reduce/reduce_stages.h"
 
-/* The view the importance pass simulates: the scene with each mesh that the history decimated
- * replaced by its decimated copy. */
-static int build_view(reduce_state *st)
+scene *reduce_view_of(const reduce_state *st, const decimate_output *meshes)
 {
-    scene_view_free(st->view);
-    st->view = scene_view(st->scene);
+    scene *view = scene_view(st->scene);
     for (size_t m = 0; m < st->count; m++) {
-        const decimate_output *h = &st->history[m];
+        const decimate_output *h = &meshes[m];
         if (!h->collapsed_into)
             continue;
-        scene_mesh *mesh = &st->view->meshes[m];
+        scene_mesh *mesh = &view->meshes[m];
         mesh->positions = h->mesh.positions;
         mesh->indices = h->mesh.indices;
         mesh->texcoords = h->mesh.texcoords;
@@ -31,8 +28,21 @@ static int build_view(reduce_state *st)
         mesh->vertex_count = h->mesh.vertex_count;
         mesh->triangle_count = h->mesh.triangle_count;
     }
-    st->simulated = st->view;
-    return scene_finalize(st->view);
+    if (scene_finalize(view)) {
+        scene_view_free(view);
+        return NULL;
+    }
+    return view;
+}
+
+/* The view the importance pass simulates: the scene with each mesh that the history decimated
+ * replaced by its decimated copy. */
+static int build_view(reduce_state *st)
+{
+    scene_view_free(st->view);
+    st->view = reduce_view_of(st, st->history);
+    st->simulated = st->view ? st->view : st->scene;
+    return st->view ? 0 : -1;
 }
 
 /* Whether the initial reduction decimates mesh m: decimatable and not below the floor. */
@@ -44,7 +54,7 @@ static int initially_reduced(const reduce_state *st, size_t m)
 int reduce_initial(reduce_state *st)
 {
     const reduce_options *o = st->options;
-    if (!(o->initial < 1))
+    if (!(st->initial < 1))
         return 0;
     double start = monotonic_seconds();
     unsigned int threads = o->threads ? o->threads : (unsigned int)sysconf(_SC_NPROCESSORS_ONLN);
@@ -58,12 +68,12 @@ int reduce_initial(reduce_state *st)
         if (initially_reduced(st, m)) {
             jobs[n] = reduce_decimation_input(st, m);
             jobs[n].target_vertices =
-                (uint64_t)ceil(o->initial * (double)st->scene->meshes[m].vertex_count);
+                (uint64_t)ceil(st->initial * (double)st->scene->meshes[m].vertex_count);
             job_mesh[n++] = m;
         }
     if (o->importance.sppm.progress)
-        fprintf(stderr, "idmr: initial reduction: %zu meshes to %g of their vertices (quadric)\n",
-                n, o->initial);
+        fprintf(stderr, "idmr: initial reduction: %zu meshes to %.4g of their vertices (quadric)\n",
+                n, st->initial);
     decimate_many(jobs, results, job_status, job_messages, n, DECIMATE_QUADRIC, threads);
     st->history = xcalloc(st->count + 1, sizeof *st->history);
     int status = 0;

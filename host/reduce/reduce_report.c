@@ -2,6 +2,7 @@
  * report's object (method importance) or a bare one with the scene, meshes and seconds, to which
  * the reduction adds its options, vertex totals, stage seconds and per-mesh figures. */
 #include <math.h>
+#include <sys/resource.h>
 
 #include "reduce/reduce_stages.h"
 
@@ -20,7 +21,7 @@ static cJSON *report_without_importance(const scene *s)
 static void add_totals(cJSON *root, const reduce_state *st)
 {
     const reduce_options *o = st->options;
-    cJSON_AddNumberToObject(root, "target", o->target);
+    cJSON_AddNumberToObject(root, "target", st->target);
     cJSON_AddStringToObject(root, "method", reduce_method_name(o->method));
     cJSON_AddNumberToObject(root, "max_normal_angle", o->max_normal_angle);
     cJSON_AddNumberToObject(root, "uv_weight", o->uv_weight);
@@ -105,9 +106,10 @@ static void add_mesh(cJSON *meshes, const reduce_state *st, size_t m)
 static void add_passes(cJSON *root, const reduce_state *st)
 {
     const reduce_options *o = st->options;
-    if (o->initial < 1) {
+    if (st->initial < 1) {
         cJSON *initial = cJSON_AddObjectToObject(root, "initial");
-        cJSON_AddNumberToObject(initial, "target", o->initial);
+        cJSON_AddNumberToObject(initial, "target", st->initial);
+        cJSON_AddBoolToObject(initial, "chosen_for_budget", !(o->initial < 1));
         cJSON_AddNumberToObject(initial, "vertex_floor", REDUCE_INITIAL_FLOOR);
         cJSON_AddNumberToObject(initial, "vertices_after", (double)st->vertices_initial);
         cJSON_AddNumberToObject(initial, "seconds", st->seconds_initial);
@@ -127,6 +129,44 @@ static void add_passes(cJSON *root, const reduce_state *st)
         cJSON_AddNumberToObject(item, "reduction_seconds", p->seconds_reduction);
         cJSON_AddItemToArray(list, item);
     }
+}
+
+/* The memory budget's figures (null without one): the budget, the target asked for, the
+ * plan's BVH estimate, the reduced scene's exact render memory by part and the decimations run
+ * again to fit. */
+static void add_memory(cJSON *root, const reduce_state *st)
+{
+    const reduce_options *o = st->options;
+    if (!o->memory_budget) {
+        cJSON_AddNullToObject(root, "memory_budget");
+        return;
+    }
+    cJSON *memory = cJSON_AddObjectToObject(root, "memory_budget");
+    cJSON_AddNumberToObject(memory, "bytes", (double)o->memory_budget);
+    cJSON_AddNumberToObject(memory, "target_requested", o->target);
+    cJSON_AddNumberToObject(memory, "bvh_bytes_per_triangle_estimate",
+                            st->bvh_bytes_per_triangle);
+    const sppm_memory *m = &st->render_memory;
+    cJSON *render = cJSON_AddObjectToObject(memory, "render_device_bytes");
+    cJSON_AddNumberToObject(render, "total", (double)sppm_memory_total(m));
+    cJSON_AddNumberToObject(render, "geometry", (double)m->geometry);
+    cJSON_AddNumberToObject(render, "bvh", (double)m->bvh);
+    cJSON_AddNumberToObject(render, "buffers", (double)(m->core + m->pass));
+    cJSON_AddNumberToObject(memory, "fit_rounds", st->fit_rounds);
+}
+
+/* The peaks of the run: the most device memory a pass allocated, and the process's resident
+ * set (getrusage: the largest it has been). */
+static void add_peaks(cJSON *root, const reduce_state *st)
+{
+    uint64_t device_peak = 0;
+    for (unsigned int k = 0; k < st->pass_count; k++)
+        if (st->passes[k].device_bytes > device_peak)
+            device_peak = st->passes[k].device_bytes;
+    struct rusage usage;
+    double rss = getrusage(RUSAGE_SELF, &usage) == 0 ? (double)usage.ru_maxrss * 1024.0 : 0.0;
+    cJSON_AddNumberToObject(root, "device_peak_bytes", (double)device_peak);
+    cJSON_AddNumberToObject(root, "peak_rss_bytes", rss);
 }
 
 /* The stop rule on the decimation factors (factor_stop.h): its settings, where it stopped the
@@ -176,6 +216,8 @@ cJSON *reduce_report_json(const reduce_state *st)
         add_stop_rule(root, st);
     if (reduce_method_uses_importance(o->method))
         add_passes(root, st);
+    add_memory(root, st);
+    add_peaks(root, st);
     add_seconds(cJSON_GetObjectItem(root, "seconds"), st);
     cJSON *meshes = cJSON_GetObjectItem(root, "meshes");
     for (size_t m = 0; m < st->scene->mesh_count; m++)

@@ -8,6 +8,10 @@
  *   outdir       OUTDIR checked (empty unless forced, holding no input) and its staging
  *                directory made beside it, where every later stage writes; published as OUTDIR
  *                when all succeeded, removed otherwise or on an interrupt (reduce_outdir.c)
+ *   memory plan  with --memory-budget: the target (and, without --initial, the initial D0) that
+ *                the budget allows, from the device memory of the render and importance passes
+ *                (passes/sppm.h: sppm_memory_of) as a line in the triangles that may be
+ *                decimated: target, initial, the line (reduce_memory.c)
  *   initial      with --initial D0: the scene quadric-reduced to D0, its collapse history, and
  *                the view of it the first importance pass simulates: history, view, simulated
  *                (reduce_passes.c)
@@ -24,6 +28,9 @@
  *                vertices_after (reduce_decimation.c)
  *   next pass    with --passes K, between passes: this pass's output becomes the history and
  *                the view the next pass simulates; the per-pass state is reset (reduce_passes.c)
+ *   memory fit   with --memory-budget: the reduced scene's exact render memory (its BVH built);
+ *                above the budget, the target is lowered and the budget and decimation stages
+ *                run again: render_bytes, fit_rounds (reduce_memory.c)
  *   write        meshes/NAME.ply and scene.xml: ply, meshes_written (reduce.c)
  *   report       report.json (with the importance outputs) and the closing line (reduce.c; the
  *                JSON is built in reduce_report.c)
@@ -59,6 +66,15 @@ typedef struct reduce_state {
     char staging[2048];   /* where the stages write (files_stage_begin) */
     const reduce_options *options;
     size_t count; /* meshes in the scene */
+    double target;  /* D the plan aims at: --target, or less where the memory budget says so */
+    double initial; /* D0 of the initial reduction: --initial, or chosen for the budget; 1: none */
+
+    /* memory plan, memory fit (with --memory-budget): */
+    double bvh_bytes_per_triangle; /* the plan's estimate, then what the simulated scene's BVH
+                                      took */
+    double render_fixed_bytes;     /* render memory without the triangles that may go */
+    sppm_memory render_memory;     /* memory fit: rendering the reduced scene, exactly */
+    unsigned int fit_rounds;       /* decimations run again to fit the budget */
 
     scene *simulated;       /* the scene the importance pass runs on: `scene`, or `view` */
     scene *view;            /* initial, next pass: the scene with the meshes of `history` */
@@ -97,6 +113,20 @@ typedef struct reduce_state {
 
 /* Whether mesh m can be decimated at all: not pinned, above --min-vertices. */
 int reduce_decimatable(const reduce_state *st, size_t m);
+
+/* The decimation inputs and the plan of Eq. 3 for st->target (reduce.c): importance sums set the
+ * factors (methods with importance), or equal importance gives the uniform D of the quadric
+ * baseline. Returns 0, or -1 with the error set. */
+int reduce_plan_budget(reduce_state *st);
+
+/* A finalised view of the scene (core/scene.h, scene_view) in which every mesh that `meshes`
+ * holds a decimation of (collapsed_into set) is that decimation; NULL with the error set. */
+scene *reduce_view_of(const reduce_state *st, const decimate_output *meshes);
+
+/* The memory plan and fit stages (reduce_memory.c); nothing without a budget. 0, or -1 with the
+ * error set. */
+int reduce_memory_plan(reduce_state *st);
+int reduce_memory_fit(reduce_state *st);
 
 /* What mesh m is decimated from (reduce.c): the scene's mesh, its attributes as reduce.h says,
  * and its per-vertex importance (remapped where there is a history). */

@@ -1,0 +1,237 @@
+/* reduce_memory.c — `idmr reduce --memory-budget BYTES` (reduce.h, reduce_stages.h): the target
+ * and initial reduction a device-memory budget allows, and the check that the reduced scene
+ * fits it.
+ *
+ * Device memory is what the passes allocate, computed by the function that sizes their
+ * allocations (passes/sppm.h, sppm_memory_of, through render_memory and importance_memory):
+ * geometry buffers, BVH, the SPPM core's buffers and the pass's own. Rendering the reduced scene
+ * is costed at the scene's film (resolution 1) and this run's --photons per iteration (the
+ * device's default, as `idmr render` takes it, when none are given).
+ *
+ * The plan. Apart from the BVH, a pass's memory is a line in the triangles of the meshes the
+ * reduction may decimate (the free triangles): evaluated once for the scene and once for a view
+ * without those triangles, it gives the fixed part (the film's and photons' buffers, the meshes
+ * that are kept) and the cost per free triangle. The BVH is estimated at
+ * BVH_BYTES_PER_TRIANGLE per triangle (Embree's SBVH flattened as bvh_layout.h: 84 bytes on the
+ * Cornell box, 88 on the glass of water), since building the whole scene's BVH is what a scene
+ * too large for the device cannot afford; the fit below corrects what the estimate misses.
+ * With the free triangles scaled by
+ * D, the largest D whose render fits MEMORY_MARGIN of the budget becomes the target where it is
+ * below --target; and when the importance pass over the whole scene would not fit (and no
+ * --initial was given), the largest D0 whose importance pass fits is the initial reduction.
+ * The importance pass itself is run with the budget as its device limit, so it fails with a
+ * message rather than allocate more.
+ *
+ * The fit. After the last decimation the reduced scene's BVH is built and its render memory
+ * computed exactly; above the budget, the target is lowered in proportion to the excess over
+ * the fixed part and the plan and decimation run again (at most FIT_ROUNDS times). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "core/error.h"
+#include "device/bvh.h"
+#include "passes/render.h"
+#include "reduce/reduce_stages.h"
+
+/* The BVH's device bytes per triangle until one has been built (see above): a little above the
+ * largest measured, so the first plan errs on the small side. */
+#define BVH_BYTES_PER_TRIANGLE 100.0
+/* The share of the budget the plan aims at: room for the BVH estimate and for triangle counts
+ * that do not scale exactly with the vertex counts the reduction targets. */
+#define MEMORY_MARGIN 0.95
+/* The decimations the fit may run again. */
+#define FIT_ROUNDS 3
+
+/* A pass's device memory without the BVH, as fixed + per_triangle × (free triangles kept). */
+typedef struct memory_line {
+    double fixed, per_triangle;
+    uint64_t fixed_triangles, free_triangles; /* in the scene as loaded */
+} memory_line;
+
+typedef enum memory_pass { RENDER_PASS, IMPORTANCE_PASS } memory_pass;
+
+static const char *const PASS_NAMES[] = {"rendering the reduced scene", "the importance pass"};
+
+/* The render the budget is for: the scene's film, and this run's photons per iteration (the
+ * device's default when none were given). */
+static render_options budget_render(const reduce_state *st)
+{
+    render_options render;
+    render_options_default(&render);
+    render.sppm.photons = st->options->importance.sppm.photons;
+    return render;
+}
+
+/* The pass's memory of scene s (BVH excluded). */
+static int memory_of(const reduce_state *st, memory_pass pass, const scene *s, uint64_t *bytes)
+{
+    sppm_memory m;
+    int status;
+    if (pass == RENDER_PASS) {
+        render_options render = budget_render(st);
+        status = render_memory(st->device, s, 0, &render, &m);
+    } else {
+        status = importance_memory(st->device, s, 0, &st->options->importance, &m);
+    }
+    *bytes = status ? 0 : sppm_memory_total(&m);
+    return status;
+}
+
+/* The pass's line, from the scene and a view of it without the free triangles. */
+static int line_of(const reduce_state *st, memory_pass pass, memory_line *line)
+{
+    scene *bare = scene_view(st->scene);
+    line->fixed_triangles = line->free_triangles = 0;
+    for (size_t m = 0; m < st->count; m++) {
+        if (reduce_decimatable(st, m)) {
+            line->free_triangles += st->scene->meshes[m].triangle_count;
+            bare->meshes[m].vertex_count = bare->meshes[m].triangle_count = 0;
+        } else {
+            line->fixed_triangles += st->scene->meshes[m].triangle_count;
+        }
+    }
+    uint64_t full = 0, fixed = 0;
+    int status = scene_finalize(bare) || memory_of(st, pass, st->scene, &full) ||
+                 memory_of(st, pass, bare, &fixed);
+    scene_view_free(bare);
+    line->fixed = (double)fixed;
+    line->per_triangle = line->free_triangles
+                             ? ((double)full - (double)fixed) / (double)line->free_triangles
+                             : 0.0;
+    return status;
+}
+
+/* The pass's bytes at fraction D of the free triangles, with `bvh` bytes per triangle. */
+static double bytes_at(const memory_line *line, double d, double bvh_per_triangle)
+{
+    double free_kept = d * (double)line->free_triangles;
+    return line->fixed + line->per_triangle * free_kept +
+           bvh_per_triangle * ((double)line->fixed_triangles + free_kept);
+}
+
+/* The largest D in [0, 1] whose bytes stay within MEMORY_MARGIN of the budget; -1 when not even
+ * D = 0 does. */
+static double fitting_fraction(const memory_line *line, double bvh_per_triangle,
+                               uint64_t budget)
+{
+    double room = MEMORY_MARGIN * (double)budget - bytes_at(line, 0.0, bvh_per_triangle);
+    if (room < 0)
+        return -1.0;
+    double per_d = bytes_at(line, 1.0, bvh_per_triangle) - bytes_at(line, 0.0, bvh_per_triangle);
+    return per_d > room ? room / per_d : 1.0;
+}
+
+#define MIB(x) ((double)(x) / 1048576.0)
+
+int reduce_memory_plan(reduce_state *st)
+{
+    const reduce_options *o = st->options;
+    uint64_t budget = o->memory_budget;
+    if (!budget)
+        return 0;
+    /* Without an importance pass (quadric) only the render is costed: nothing else runs. */
+    int simulates = reduce_method_uses_importance(o->method);
+    memory_line render, importance;
+    if (line_of(st, RENDER_PASS, &render) ||
+        (simulates && line_of(st, IMPORTANCE_PASS, &importance)))
+        return -1;
+    if (!simulates)
+        importance = render;
+    double per_triangle = st->bvh_bytes_per_triangle = BVH_BYTES_PER_TRIANGLE;
+    st->render_fixed_bytes = render.fixed + per_triangle * (double)render.fixed_triangles;
+    const memory_line *lines[] = {&render, &importance};
+    for (int pass = RENDER_PASS; pass <= IMPORTANCE_PASS; pass++)
+        if (fitting_fraction(lines[pass], per_triangle, budget) < 0)
+            return error_set(IDMR_EXIT_INPUT,
+                             "--memory-budget %.1f MiB: %s needs about %.1f MiB even with every "
+                             "mesh that may be decimated gone (the buffers of its film and "
+                             "photons, and the %llu triangles of meshes that are kept): raise "
+                             "the budget, or lower the photons or the film size",
+                             MIB(budget), PASS_NAMES[pass],
+                             MIB(bytes_at(lines[pass], 0.0, per_triangle)),
+                             (unsigned long long)lines[pass]->fixed_triangles);
+    double d = fitting_fraction(&render, per_triangle, budget);
+    if (d < st->target)
+        st->target = d;
+    double d0 = fitting_fraction(&importance, per_triangle, budget);
+    if (simulates && !(o->initial < 1) && d0 < 1)
+        st->initial = d0;
+    if (o->importance.sppm.progress) {
+        char initial[64] = "none";
+        if (st->initial < 1)
+            snprintf(initial, sizeof initial, "%.4g%s", st->initial,
+                     o->initial < 1 ? "" : " (for the budget)");
+        fprintf(stderr,
+                "idmr: memory budget %.1f MiB: rendering the scene as it is needs about %.1f "
+                "MiB, its importance pass %.1f MiB; target %.4g%s, initial reduction %s\n",
+                MIB(budget), MIB(bytes_at(&render, 1.0, per_triangle)),
+                MIB(bytes_at(&importance, 1.0, per_triangle)), st->target,
+                st->target < o->target ? " (for the budget)" : "", initial);
+    }
+    return 0;
+}
+
+/* The reduced scene's render memory, exactly: its BVH built on the host. */
+static int measure_reduced(reduce_state *st)
+{
+    scene *reduced = reduce_view_of(st, st->output);
+    if (!reduced)
+        return -1;
+    bvh b;
+    int status = bvh_build(reduced, &b);
+    if (!status) {
+        render_options render = budget_render(st);
+        status = render_memory(st->device, reduced, bvh_device_bytes(&b), &render,
+                               &st->render_memory);
+        bvh_free(&b);
+    }
+    scene_view_free(reduced);
+    return status;
+}
+
+/* Frees the plan and the decimation, to run them again for a lower target. */
+static void forget_decimation(reduce_state *st)
+{
+    for (size_t m = 0; st->output && m < st->count; m++)
+        decimate_output_free(&st->output[m]);
+    free(st->output);
+    free(st->input);
+    free(st->budget);
+    st->output = NULL;
+    st->input = NULL;
+    st->budget = NULL;
+    budget_plan_free(&st->plan);
+    st->compensation_rounds = st->locks_relaxed = st->seams_freed = 0;
+}
+
+int reduce_memory_fit(reduce_state *st)
+{
+    uint64_t budget = st->options->memory_budget;
+    if (!budget)
+        return 0;
+    for (;;) {
+        if (measure_reduced(st))
+            return -1;
+        double total = (double)sppm_memory_total(&st->render_memory);
+        if (total <= (double)budget)
+            return 0;
+        double fixed = st->render_fixed_bytes;
+        if (st->fit_rounds == FIT_ROUNDS || total <= fixed)
+            return error_set(IDMR_EXIT_FAILURE,
+                             "--memory-budget %.1f MiB: the reduced scene still needs %.1f MiB "
+                             "to render after %u smaller targets (now %.4g); give a smaller "
+                             "--target",
+                             MIB(budget), MIB(total), st->fit_rounds, st->target);
+        st->fit_rounds++;
+        st->target *= (MEMORY_MARGIN * (double)budget - fixed) / (total - fixed);
+        if (st->options->importance.sppm.progress)
+            fprintf(stderr,
+                    "idmr: the reduced scene needs %.1f MiB to render, above the budget of %.1f "
+                    "MiB: decimating again to %.4g\n",
+                    MIB(total), MIB(budget), st->target);
+        forget_decimation(st);
+        if (reduce_plan_budget(st) || reduce_decimation(st))
+            return -1;
+    }
+}
