@@ -35,8 +35,13 @@ static void bench_dragon(void)
     double *importance = malloc(mesh.vertex_count * sizeof *importance);
     for (uint32_t v = 0; v < mesh.vertex_count; v++)
         importance[v] = mesh.positions[3 * (size_t)v] > 0.0f ? 10.0 : 0.5;
-    decimate_input in = {"dragon", mesh.positions, mesh.vertex_count, mesh.indices,
-                         mesh.triangle_count, importance, 0, 60.0, 0, 0};
+    decimate_input in = {.name = "dragon",
+                         .positions = mesh.positions,
+                         .vertex_count = mesh.vertex_count,
+                         .indices = mesh.indices,
+                         .triangle_count = mesh.triangle_count,
+                         .vertex_importance = importance,
+                         .max_normal_angle = 60.0};
     uint32_t start, uncollapsible;
     if (decimate_measure(&in, &start, &uncollapsible)) {
         fprintf(stderr, "bench_decimation: %s\n", error_message());
@@ -99,14 +104,19 @@ static void bench_parallel(void)
     int *status = calloc(n, sizeof *status);
     for (size_t m = 0; m < n; m++) {
         const scene_mesh *mesh = &s->meshes[m];
-        in[m] = (decimate_input){mesh->name, mesh->positions, mesh->vertex_count, mesh->indices,
-                                 mesh->triangle_count, NULL, mesh->vertex_count / 10, 60.0, 0, 0};
+        in[m] = (decimate_input){.name = mesh->name,
+                                 .positions = mesh->positions,
+                                 .vertex_count = mesh->vertex_count,
+                                 .indices = mesh->indices,
+                                 .triangle_count = mesh->triangle_count,
+                                 .target_vertices = mesh->vertex_count / 10,
+                                 .max_normal_angle = 60.0};
     }
     double seconds[2] = {1e30, 1e30};
     for (int round = 0; round < ROUNDS; round++)
         for (unsigned int threads = 1; threads <= 2; threads++) {
             double t0 = trace_seconds();
-            if (decimate_many(in, out, status, NULL, n, DECIMATE_QUADRIC, threads)) {
+            if (decimate_many(in, out, status, NULL, n, DECIMATE_QUADRIC, threads, NULL)) {
                 fprintf(stderr, "bench_decimation: a living-room mesh failed\n");
                 exit(1);
             }

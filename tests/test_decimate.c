@@ -405,7 +405,7 @@ static void test_many_threads_same_output(void **state)
         char messages[POOL_MESHES][512];
         for (int i = 0; i < POOL_MESHES; i++)
             assert_int_equal(decimate_mesh(&p.in[i], method, &one[i]), 0);
-        assert_int_equal(decimate_many(p.in, many, status, messages, POOL_MESHES, method, 2), 0);
+        assert_int_equal(decimate_many(p.in, many, status, messages, POOL_MESHES, method, 2, NULL), 0);
         for (int i = 0; i < POOL_MESHES; i++) {
             assert_int_equal(status[i], 0);
             assert_same_output(&one[i], &many[i]);
@@ -427,7 +427,8 @@ static void test_many_threads_failing_mesh(void **state)
     int status[POOL_MESHES];
     char messages[POOL_MESHES][512];
     assert_int_equal(
-        decimate_many(p.in, many, status, messages, POOL_MESHES, DECIMATE_IMPORTANCE, 2), 1);
+        decimate_many(p.in, many, status, messages, POOL_MESHES, DECIMATE_IMPORTANCE, 2, NULL),
+        1);
     for (int i = 0; i < POOL_MESHES; i++) {
         assert_int_equal(status[i], i == 2 ? -1 : 0);
         if (i != 2)

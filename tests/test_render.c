@@ -929,13 +929,8 @@ static void test_device_memory_is_what_runs_allocate(void **state)
                     continue; /* the photon limit comes first on this device */
                 core->photons = (unsigned int)paths;
             }
-            importance_result ir;
-            render_result rr;
-            error_clear();
-            int status =
-                render ? render_run(d, s, &b, &ro, &rr) : importance_run(d, s, &b, &io, &ir);
-            const sppm_summary *run = render ? &rr.sppm : &ir.sppm;
-            uint64_t allocated = run->geometry_bytes + run->bvh_bytes + run->buffer_bytes;
+            uint64_t allocated;
+            int status = test_run_either(render, s, &b, &io, &ro, &allocated);
             if (over == 0) {
                 if (status)
                     fail_msg("%s", error_message());
@@ -948,10 +943,6 @@ static void test_device_memory_is_what_runs_allocate(void **state)
                 assert_non_null(strstr(error_message(), "BVH"));
                 assert_int_equal(allocated, 0);
             }
-            if (render)
-                render_result_free(&rr);
-            else
-                importance_result_free(&ir);
         }
     }
     bvh_free(&b);

@@ -106,6 +106,27 @@ static inline void test_run_render(const scene *s, const bvh *b, const render_op
         fail_msg("render_run: %s", error_message());
 }
 
+/* Runs the importance pass with `io` (render = 0) or the renderer with `ro` on scene s and BVH b
+ * on the device under test, the error cleared first, and frees the result; returns the run's
+ * status, with the device bytes it allocated (geometry, BVH and buffers) in *allocated. */
+static inline int test_run_either(int render, const scene *s, const bvh *b,
+                                  const importance_options *io, const render_options *ro,
+                                  uint64_t *allocated)
+{
+    importance_result ir;
+    render_result rr;
+    error_clear();
+    int status = render ? render_run(device_test_device(), s, b, ro, &rr)
+                        : importance_run(device_test_device(), s, b, io, &ir);
+    const sppm_summary *run = render ? &rr.sppm : &ir.sppm;
+    *allocated = run->geometry_bytes + run->bvh_bytes + run->buffer_bytes;
+    if (render)
+        render_result_free(&rr);
+    else
+        importance_result_free(&ir);
+    return status;
+}
+
 /* The importance pass (render = 0) or the renderer (one iteration of 1000 paths, should it
  * run) refuses scene s (finalized and freed here) as bad input: IDMR_EXIT_INPUT, with
  * `message` in the error. */
@@ -118,16 +139,9 @@ static inline void test_expect_refused(scene *s, int render, const char *message
     render_options ro;
     test_importance_options(&io, 1, 1000);
     test_render_options(&ro, 1, 1000);
-    importance_result ir;
-    render_result rr;
-    error_clear();
-    int status = render ? render_run(device_test_device(), s, &b, &ro, &rr)
-                        : importance_run(device_test_device(), s, &b, &io, &ir);
+    uint64_t allocated;
+    int status = test_run_either(render, s, &b, &io, &ro, &allocated);
     print_message("  %s\n", error_message());
-    if (render)
-        render_result_free(&rr);
-    else
-        importance_result_free(&ir);
     bvh_free(&b);
     scene_free(s);
     assert_int_equal(status, -1);

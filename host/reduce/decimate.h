@@ -79,6 +79,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "core/progress.h"
 #include "io/mesh_io.h"
 
 #ifdef __cplusplus
@@ -162,10 +163,12 @@ void decimate_output_free(decimate_output *out);
 long decimate_stock_quadric(const decimate_input *in);
 
 /* Decimates `count` meshes on `threads` threads, largest first. status[i] is 0 or -1;
- * messages[i] (may be NULL) gets the error of a failed mesh. Returns the number that failed. */
+ * messages[i] (may be NULL) gets the error of a failed mesh. `bar` (may be NULL), begun with
+ * the inputs' total vertex count, advances by each mesh's vertices when it is done. Returns the
+ * number that failed. */
 size_t decimate_many(const decimate_input *in, decimate_output *out, int *status,
                      char (*messages)[512], size_t count, decimate_method method,
-                     unsigned int threads);
+                     unsigned int threads, progress *bar);
 
 #ifdef __cplusplus
 }

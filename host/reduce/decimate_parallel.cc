@@ -1,8 +1,10 @@
 // decimate_parallel.cc — decimate_many() (see decimate.h): a pool of threads that take meshes,
-// largest first, from one shared counter; each mesh is decimated by decimate_mesh() on its own.
+// largest first, from one shared counter; each mesh is decimated by decimate_mesh() on its own,
+// and the progress bar, when given, advances by its input vertices once it is done.
 #include <algorithm>
 #include <atomic>
 #include <cstdio>
+#include <mutex>
 #include <thread>
 #include <vector>
 
@@ -13,8 +15,10 @@ extern "C" {
 
 extern "C" size_t decimate_many(const decimate_input *in, decimate_output *out, int *status,
                                 char (*messages)[512], size_t count, decimate_method method,
-                                unsigned int threads)
+                                unsigned int threads, progress *bar)
 {
+    std::mutex shown;
+    uint64_t vertices_done = 0;
     std::vector<size_t> order(count);
     for (size_t i = 0; i < count; i++)
         order[i] = i;
@@ -33,6 +37,11 @@ extern "C" size_t decimate_many(const decimate_input *in, decimate_output *out, 
                 failed++;
                 if (messages)
                     std::snprintf(messages[i], sizeof messages[i], "%s", error_message());
+            }
+            if (bar) {
+                std::lock_guard<std::mutex> lock(shown);
+                vertices_done += in[i].vertex_count;
+                progress_update(bar, (unsigned int)vertices_done, nullptr);
             }
         }
     };

@@ -25,6 +25,7 @@
  * mesh whose target changed is decimated again, so the total meets the request wherever the
  * floors allow. */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <unistd.h>
 
@@ -59,27 +60,35 @@ static const lock_step LOCK_STEPS[] = {
  * many as cover the excess, so meshes take turns; three turns per step. */
 #define RELAX_ROUNDS (3 * (LOCK_STEP_COUNT - 1))
 
-/* Decimates the meshes flagged in `redo` to st->plan.target, replacing earlier outputs. */
-static int decimate_selected(reduce_state *st, decimate_method method, unsigned int threads,
-                             const unsigned char *redo)
+int reduce_decimate_meshes(const reduce_state *st, const decimate_input *inputs,
+                           const uint64_t *targets, const unsigned char *selected,
+                           decimate_method method, const char *label, decimate_output *outputs)
 {
+    const reduce_options *o = st->options;
+    unsigned int threads = o->threads ? o->threads : (unsigned int)sysconf(_SC_NPROCESSORS_ONLN);
     decimate_input *jobs = xcalloc(st->count + 1, sizeof *jobs);
     decimate_output *results = xcalloc(st->count + 1, sizeof *results);
     int *job_status = xcalloc(st->count + 1, sizeof *job_status);
     char(*job_messages)[512] = xcalloc(st->count + 1, sizeof *job_messages);
     size_t *job_mesh = xcalloc(st->count + 1, sizeof *job_mesh);
     size_t n = 0;
+    uint64_t vertices = 0;
     for (size_t m = 0; m < st->count; m++)
-        if (redo[m]) {
-            jobs[n] = st->input[m];
-            jobs[n].target_vertices = st->plan.target[m];
+        if (selected[m]) {
+            jobs[n] = inputs[m];
+            jobs[n].target_vertices = targets[m];
+            vertices += inputs[m].vertex_count;
             job_mesh[n++] = m;
         }
-    decimate_many(jobs, results, job_status, job_messages, n, method, threads);
+    progress bar;
+    progress_begin(&bar, label, (unsigned int)(vertices ? vertices : 1),
+                   o->importance.sppm.progress && n > 0);
+    decimate_many(jobs, results, job_status, job_messages, n, method, threads, &bar);
+    progress_end(&bar);
     int status = 0;
     for (size_t j = 0; j < n; j++) {
-        decimate_output_free(&st->output[job_mesh[j]]);
-        st->output[job_mesh[j]] = results[j];
+        decimate_output_free(&outputs[job_mesh[j]]);
+        outputs[job_mesh[j]] = results[j];
         if (job_status[j] && !status)
             status = error_set(IDMR_EXIT_FAILURE, "%s", job_messages[j]);
     }
@@ -280,7 +289,6 @@ int reduce_decimation(reduce_state *st)
     const reduce_options *o = st->options;
     double start = monotonic_seconds();
     decimate_method method = reduce_method_collapses(o->method);
-    unsigned int threads = o->threads ? o->threads : (unsigned int)sysconf(_SC_NPROCESSORS_ONLN);
     st->output = xcalloc(st->count + 1, sizeof *st->output);
     unsigned char *redo = xcalloc(st->count + 1, 1);
     for (size_t m = 0; m < st->count; m++)
@@ -288,13 +296,14 @@ int reduce_decimation(reduce_state *st)
     uint64_t *first_target = xcalloc(st->count + 1, sizeof *first_target);
     for (size_t m = 0; m < st->count; m++)
         first_target[m] = st->plan.target[m];
-    progress bar;
     unsigned int last = COMPENSATION_ROUNDS + RELAX_ROUNDS;
-    progress_begin(&bar, "decimation", last + 1, o->importance.sppm.progress);
     int status = 0;
     for (unsigned int round = 0; !status && round <= last; round++) {
-        status = decimate_selected(st, method, threads, redo);
-        progress_update(&bar, round + 1, NULL);
+        char label[64] = "decimation";
+        if (round > 0)
+            snprintf(label, sizeof label, "decimation, round %u", round + 1);
+        status = reduce_decimate_meshes(st, st->input, st->plan.target, redo, method, label,
+                                        st->output);
         st->vertices_after = vertices_after(st);
         uint64_t requested = st->plan.total_requested;
         if (status || st->vertices_after <= requested || round == last)
@@ -318,8 +327,6 @@ int reduce_decimation(reduce_state *st)
         if (changed < 0)
             status = -1;
     }
-    progress_update(&bar, last + 1, NULL);
-    progress_end(&bar);
     free(first_target);
     free(redo);
     if (!status)

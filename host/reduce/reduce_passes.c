@@ -5,7 +5,6 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <unistd.h>
 
 #include "core/error.h"
 #include "core/progress.h"
@@ -57,36 +56,26 @@ int reduce_initial(reduce_state *st)
     if (!(st->initial < 1))
         return 0;
     double start = monotonic_seconds();
-    unsigned int threads = o->threads ? o->threads : (unsigned int)sysconf(_SC_NPROCESSORS_ONLN);
-    decimate_input *jobs = xcalloc(st->count + 1, sizeof *jobs);
-    decimate_output *results = xcalloc(st->count + 1, sizeof *results);
-    int *job_status = xcalloc(st->count + 1, sizeof *job_status);
-    char(*job_messages)[512] = xcalloc(st->count + 1, sizeof *job_messages);
-    size_t *job_mesh = xcalloc(st->count + 1, sizeof *job_mesh);
+    decimate_input *inputs = xcalloc(st->count + 1, sizeof *inputs);
+    uint64_t *targets = xcalloc(st->count + 1, sizeof *targets);
+    unsigned char *selected = xcalloc(st->count + 1, 1);
     size_t n = 0;
     for (size_t m = 0; m < st->count; m++)
         if (initially_reduced(st, m)) {
-            jobs[n] = reduce_decimation_input(st, m);
-            jobs[n].target_vertices =
-                (uint64_t)ceil(st->initial * (double)st->scene->meshes[m].vertex_count);
-            job_mesh[n++] = m;
+            inputs[m] = reduce_decimation_input(st, m);
+            targets[m] = (uint64_t)ceil(st->initial * (double)st->scene->meshes[m].vertex_count);
+            selected[m] = 1;
+            n++;
         }
     if (o->importance.sppm.progress)
         fprintf(stderr, "idmr: initial reduction: %zu meshes to %.4g of their vertices (quadric)\n",
                 n, st->initial);
-    decimate_many(jobs, results, job_status, job_messages, n, DECIMATE_QUADRIC, threads);
     st->history = xcalloc(st->count + 1, sizeof *st->history);
-    int status = 0;
-    for (size_t j = 0; j < n; j++) {
-        st->history[job_mesh[j]] = results[j];
-        if (job_status[j] && !status)
-            status = error_set(IDMR_EXIT_FAILURE, "initial reduction: %s", job_messages[j]);
-    }
-    free(jobs);
-    free(results);
-    free(job_status);
-    free(job_messages);
-    free(job_mesh);
+    int status = reduce_decimate_meshes(st, inputs, targets, selected, DECIMATE_QUADRIC,
+                                        "initial reduction", st->history);
+    free(inputs);
+    free(targets);
+    free(selected);
     if (!status)
         status = build_view(st);
     st->vertices_initial = st->view ? st->view->vertex_count : 0;

@@ -123,6 +123,14 @@ int reduce_plan_budget(reduce_state *st);
  * holds a decimation of (collapsed_into set) is that decimation; NULL with the error set. */
 scene *reduce_view_of(const reduce_state *st, const decimate_output *meshes);
 
+/* Decimates every mesh m flagged in `selected` from inputs[m] to targets[m], in parallel
+ * (decimate_many: st->options->threads), into outputs[m] (an earlier output there is freed),
+ * with a progress bar named `label` over their vertices (reduce_decimation.c). Returns 0, or -1
+ * with the first failure's error set. */
+int reduce_decimate_meshes(const reduce_state *st, const decimate_input *inputs,
+                           const uint64_t *targets, const unsigned char *selected,
+                           decimate_method method, const char *label, decimate_output *outputs);
+
 /* The memory plan and fit stages (reduce_memory.c); nothing without a budget. 0, or -1 with the
  * error set. */
 int reduce_memory_plan(reduce_state *st);
