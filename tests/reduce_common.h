@@ -21,6 +21,7 @@
 
 #include "core/error.h"
 #include "io/mitsuba.h"
+#include "io/scene_load.h"
 #include "reduce/reduce.h"
 #include "test_support.h"
 

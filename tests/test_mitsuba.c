@@ -8,7 +8,8 @@
  * cases are tables and each case runs as its own test, named by the case. Error tests check
  * that loading fails and that the message names the file, the line and the element. The last
  * tests load the real scenes from ../shared/data (via IDMR_ROOT); a missing data directory
- * fails them, it never skips. */
+ * fails them, it never skips; one of them loads the living room streaming (meshes released once
+ * read) and checks that each mesh read again is what the whole load read. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -1300,6 +1301,51 @@ static void test_real_living_room(void **state)
     scene_free(s);
 }
 
+/* Streaming (mitsuba_load_streaming, scene_mesh_restore): the living room (OBJ meshes with
+ * texture coordinates, normals, flipped v, transforms) loaded with every mesh file released
+ * once read has the whole load's counts and bounding box; each mesh read again is the whole
+ * load's byte for byte. */
+static void test_streaming_restores_what_was_loaded(void **state)
+{
+    require_shared_data();
+    warn_silence(1);
+    scene *whole = mitsuba_load(SCENES "/living-room/scene.xml");
+    scene *streamed = mitsuba_load_streaming(SCENES "/living-room/scene.xml", 1);
+    warn_silence(0);
+    assert_non_null(whole);
+    assert_non_null(streamed);
+    assert_int_equal(streamed->mesh_count, whole->mesh_count);
+    assert_true(streamed->vertex_count == whole->vertex_count);
+    assert_memory_equal(streamed->bbox_min, whole->bbox_min, sizeof whole->bbox_min);
+    assert_memory_equal(streamed->bbox_max, whole->bbox_max, sizeof whole->bbox_max);
+    size_t released = 0;
+    for (size_t m = 0; m < whole->mesh_count; m++) {
+        const scene_mesh *a = &whole->meshes[m];
+        scene_mesh *b = &streamed->meshes[m];
+        assert_int_equal(b->released, a->file != NULL && a->light < 0);
+        released += b->released;
+        if (b->released)
+            assert_null(b->positions);
+        assert_int_equal(scene_mesh_restore(streamed, m), 0);
+        assert_false(b->released);
+        assert_int_equal(b->vertex_count, a->vertex_count);
+        assert_int_equal(b->triangle_count, a->triangle_count);
+        assert_memory_equal(b->positions, a->positions, 12 * (size_t)a->vertex_count);
+        assert_memory_equal(b->indices, a->indices, 12 * (size_t)a->triangle_count);
+        assert_int_equal(b->texcoords != NULL, a->texcoords != NULL);
+        assert_int_equal(b->normals != NULL, a->normals != NULL);
+        if (a->texcoords)
+            assert_memory_equal(b->texcoords, a->texcoords, 8 * (size_t)a->vertex_count);
+        if (a->normals)
+            assert_memory_equal(b->normals, a->normals, 12 * (size_t)a->vertex_count);
+        assert_int_equal(b->file_normals, a->file_normals);
+        assert_int_equal(b->flat_normals, a->flat_normals);
+    }
+    assert_true(released >= 60);
+    scene_free(whole);
+    scene_free(streamed);
+}
+
 int main(void)
 {
     static const struct CMUnitTest single_tests[] = {
@@ -1342,6 +1388,7 @@ int main(void)
         cmocka_unit_test(test_real_glass_of_water_missing_mesh),
         cmocka_unit_test(test_broken_ply_files),
         cmocka_unit_test(test_real_living_room),
+        cmocka_unit_test(test_streaming_restores_what_was_loaded),
     };
     struct CMUnitTest tests[128];
     size_t count = 0;

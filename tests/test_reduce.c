@@ -16,8 +16,9 @@
  *                which ends at the target
  *   memory       a budget below the whole box's render and importance memory: target and
  *                initial reduction chosen, every pass and the reduced scene's render within it,
- *                no pass uploads the whole scene; a budget below the film's buffers alone is an
- *                error
+ *                no pass uploads the whole scene; loaded streaming (the knot released once
+ *                read, read again where needed) the knot's PLY is the same byte for byte; a
+ *                budget below the film's buffers alone is an error
  *
  * Scenes that the tests must be able to damage are copies. */
 #include <math.h>
@@ -519,6 +520,27 @@ static void test_memory_budget(void **state)
     assert_true((double)reduced_render <= budget);
     assert_int_equal(check_report_against_output(r.report, s, r.out),
                      (uint64_t)number(r.report, "vertices_after"));
+    /* Streaming, as the command loads under a budget: the knot is released as soon as it is
+     * read and read again where it is needed; the result is the same, byte for byte. */
+    scene *streamed = scene_load_streaming(CORNELL, REDUCE_INITIAL_FLOOR);
+    assert_non_null(streamed);
+    assert_true(test_find_mesh(streamed, "knot")->released);
+    assert_null(test_find_mesh(streamed, "knot")->positions);
+    reduction again;
+    reduction_run(&again, streamed, &o);
+    char first[4200], second[4200];
+    snprintf(first, sizeof first, "%s/meshes/knot.ply", r.dir);
+    snprintf(second, sizeof second, "%s/meshes/knot.ply", again.dir);
+    size_t first_size, second_size;
+    char *first_bytes = read_file(first, &first_size);
+    char *second_bytes = read_file(second, &second_size);
+    assert_int_equal(first_size, second_size);
+    assert_memory_equal(first_bytes, second_bytes, first_size);
+    assert_true(number(again.report, "vertices_after") == number(r.report, "vertices_after"));
+    free(first_bytes);
+    free(second_bytes);
+    reduction_free(&again);
+    scene_free(streamed);
     reduction_free(&r);
     scene_free(s);
 }

@@ -78,7 +78,10 @@ static enum option_parse parse_option(int c, void *context, pass_arguments *argu
 /* The reduction: this command's call into reduce/. */
 static int run_reduce(const pass_arguments *arguments, const reduce_options *o)
 {
-    scene *s = scene_load(arguments->scene);
+    /* Under a memory budget the large meshes are read mesh by mesh where they are needed
+     * (streaming: reduce.h), not held all at once. */
+    scene *s = o->memory_budget ? scene_load_streaming(arguments->scene, REDUCE_INITIAL_FLOOR)
+                                : scene_load(arguments->scene);
     if (!s)
         return fail();
     device d;

@@ -19,7 +19,14 @@ void progress_begin(progress *p, const char *label, unsigned int total, int enab
     p->enabled = enabled;
     p->terminal = isatty(STDERR_FILENO);
     p->next_line = 0;
+    p->done = 0;
     p->start = monotonic_seconds();
+}
+
+void progress_advance(progress *p, unsigned int amount, const char *detail)
+{
+    p->done += amount;
+    progress_update(p, p->done, detail);
 }
 
 void progress_update(progress *p, unsigned int done, const char *detail)

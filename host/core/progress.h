@@ -16,12 +16,15 @@ typedef struct progress {
     int enabled;
     int terminal;
     unsigned int next_line; /* non-terminal: the next count that gets a line */
+    unsigned int done;      /* what progress_advance() has added up */
     double start;
 } progress;
 
 void progress_begin(progress *p, const char *label, unsigned int total, int enabled);
 /* `done` of total finished; `detail` (may be NULL) is shown after the bar. */
 void progress_update(progress *p, unsigned int done, const char *detail);
+/* `amount` more finished (progress_update with the running sum). */
+void progress_advance(progress *p, unsigned int amount, const char *detail);
 void progress_end(progress *p);
 
 #ifdef __cplusplus

@@ -27,6 +27,8 @@ void scene_free(scene *s)
         return;
     for (size_t i = 0; i < s->mesh_count; i++) {
         scene_mesh *m = &s->meshes[i];
+        if (m->source && s->free_mesh_source)
+            s->free_mesh_source(m->source);
         free(m->name);
         free(m->shape_type);
         free(m->file);
@@ -386,6 +388,52 @@ static void finalize_lights(scene *s)
     }
 }
 
+void scene_mesh_release(scene *s, size_t m)
+{
+    scene_mesh *mesh = &s->meshes[m];
+    if (!mesh->source || !s->restore_mesh || mesh->light >= 0 || mesh->released)
+        return;
+    mesh->had_texcoords = mesh->texcoords != NULL;
+    mesh->had_normals = mesh->normals != NULL;
+    mesh->no_area = 1;
+    for (uint32_t t = 0; t < mesh->triangle_count && mesh->no_area; t++)
+        mesh->no_area = scene_mesh_triangle_area(mesh, t) == 0.0;
+    for (int k = 0; k < 3; k++) {
+        mesh->box_min[k] = FLT_MAX;
+        mesh->box_max[k] = -FLT_MAX;
+    }
+    for (uint32_t v = 0; v < mesh->vertex_count; v++)
+        for (int k = 0; k < 3; k++) {
+            mesh->box_min[k] = fminf(mesh->box_min[k], mesh->positions[3 * (size_t)v + k]);
+            mesh->box_max[k] = fmaxf(mesh->box_max[k], mesh->positions[3 * (size_t)v + k]);
+        }
+    free(mesh->positions);
+    free(mesh->indices);
+    free(mesh->texcoords);
+    free(mesh->normals);
+    mesh->positions = mesh->texcoords = mesh->normals = NULL;
+    mesh->indices = NULL;
+    mesh->released = 1;
+}
+
+int scene_mesh_restore(scene *s, size_t m)
+{
+    scene_mesh *mesh = &s->meshes[m];
+    if (!mesh->released)
+        return 0;
+    uint32_t vertices = mesh->vertex_count, triangles = mesh->triangle_count;
+    if (s->restore_mesh(mesh->source, mesh))
+        return -1;
+    mesh->released = 0;
+    if (mesh->vertex_count != vertices || mesh->triangle_count != triangles)
+        return error_set(IDMR_EXIT_INPUT,
+                         "mesh '%s': read again from %s, it has %u vertices and %u triangles, "
+                         "not the %u and %u it had (was the file changed?)",
+                         mesh->name, mesh->file ? mesh->file : "its file", mesh->vertex_count,
+                         mesh->triangle_count, vertices, triangles);
+    return 0;
+}
+
 scene *scene_view(const scene *s)
 {
     scene *view = xmalloc(sizeof *view);
@@ -421,7 +469,7 @@ int scene_finalize(scene *s)
         m->first_triangle = (uint32_t)triangles;
         triangles += m->triangle_count;
         vertices += m->vertex_count;
-        for (uint64_t t = 0; t < 3 * (uint64_t)m->triangle_count; t++)
+        for (uint64_t t = 0; !m->released && t < 3 * (uint64_t)m->triangle_count; t++)
             if (m->indices[t] >= m->vertex_count)
                 return error_set(IDMR_EXIT_INPUT, "%s: mesh '%s': triangle %llu uses vertex %u of %u",
                                  s->file, m->name, (unsigned long long)(t / 3), m->indices[t],
@@ -436,7 +484,12 @@ int scene_finalize(scene *s)
     }
     for (size_t i = 0; i < s->mesh_count; i++) {
         const scene_mesh *m = &s->meshes[i];
-        for (uint32_t v = 0; v < m->vertex_count; v++)
+        if (m->released && m->vertex_count)
+            for (int k = 0; k < 3; k++) { /* its box was checked when it was loaded */
+                s->bbox_min[k] = fminf(s->bbox_min[k], m->box_min[k]);
+                s->bbox_max[k] = fmaxf(s->bbox_max[k], m->box_max[k]);
+            }
+        for (uint32_t v = 0; !m->released && v < m->vertex_count; v++)
             for (int k = 0; k < 3; k++) {
                 float x = m->positions[3 * (size_t)v + k];
                 if (!isfinite(x))

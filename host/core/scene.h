@@ -44,7 +44,20 @@ typedef struct scene_mesh {
     uint32_t material; /* index into scene.materials */
     int light;         /* index into scene.lights if the shape is an area emitter, else -1 */
     uint32_t first_triangle; /* set by scene_finalize() */
+    /* Streaming (scene_mesh_release): a mesh the loader can read again may have its geometry
+     * (positions, indices, texcoords, normals) out of memory; the counts, flags and these stay. */
+    int released;            /* the geometry is not in memory: scene_mesh_restore() reads it */
+    int no_area;             /* of a released mesh: every triangle degenerate */
+    int had_texcoords, had_normals; /* of a released mesh: what its geometry holds */
+    float box_min[3], box_max[3]; /* of a released mesh: its bounding box */
+    struct scene_mesh_source *source; /* how the loader reads it again; NULL: it cannot */
 } scene_mesh;
+
+/* How a loader reads a mesh's geometry again (the loader's own type), and the functions it
+ * gives the scene for that: restore fills the mesh's geometry exactly as the load did. */
+typedef struct scene_mesh_source scene_mesh_source;
+typedef int (*scene_mesh_restore_fn)(const scene_mesh_source *source, scene_mesh *mesh);
+typedef void (*scene_mesh_source_free_fn)(scene_mesh_source *source);
 
 typedef struct scene_material_info {
     char *name;      /* the bsdf's id, or "<shape name>/bsdf" for an inline one */
@@ -103,6 +116,8 @@ typedef struct scene {
     int has_camera;
 
     /* Set by scene_finalize(). */
+    scene_mesh_restore_fn restore_mesh;        /* set by a loader that gives meshes sources */
+    scene_mesh_source_free_fn free_mesh_source;
     uint64_t vertex_count;
     uint64_t triangle_count;
     float bbox_min[3];
@@ -159,6 +174,15 @@ int scene_check_output_file(const scene *s, const char *path);
  * about 1e12 on its 32-bit float arithmetic loses light importance, from 1e15 camera
  * importance, and beyond 1e38 the BVH builder's binning overflows (Embree aborts). */
 #define SCENE_COORDINATE_LIMIT 1e11f
+
+/* Streaming. scene_mesh_release() frees mesh m's geometry, first noting its bounding box and
+ * whether it has area (scene_finalize() and the reduction use those while it is out); a mesh
+ * without a source, an emitter, and one already released are left as they are. 
+ * scene_mesh_restore() reads a released mesh's geometry again through the loader (0 when it is
+ * in memory already); the counts must be those it had, or it fails naming the mesh. 0, or -1
+ * with the error set. */
+void scene_mesh_release(scene *s, size_t m);
+int scene_mesh_restore(scene *s, size_t m);
 
 /* A view of `s`: a copy of the scene struct with its own arrays of meshes and lights, sharing
  * everything else (names, materials, textures, the meshes' geometry) with `s`, which must

@@ -32,10 +32,18 @@
 #ifndef IDMR_MITSUBA_H
 #define IDMR_MITSUBA_H
 
+#include <stdint.h>
+
 #include "core/scene.h"
 
 /* Loads `path` and returns the finalized scene, or NULL with the error set (IDMR_EXIT_INPUT for
  * bad input); messages read "file:line: <element type="...">: what is wrong". */
 scene *mitsuba_load(const char *path);
+
+/* As mitsuba_load(), with every mesh file of at least release_from vertices (emitters excepted)
+ * released as soon as it is read (core/scene.h, scene_mesh_release), so the load never holds
+ * more than one such mesh: the scene's geometry is read again mesh by mesh where it is needed
+ * (scene_mesh_restore). release_from 0: none released. */
+scene *mitsuba_load_streaming(const char *path, uint32_t release_from);
 
 #endif

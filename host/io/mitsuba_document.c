@@ -174,11 +174,14 @@ static void loader_free(loader *ld)
     mitsuba_ids_free(ld);
 }
 
-scene *mitsuba_load(const char *path)
+scene *mitsuba_load(const char *path) { return mitsuba_load_streaming(path, 0); }
+
+scene *mitsuba_load_streaming(const char *path, uint32_t release_from)
 {
     loader ld;
     memset(&ld, 0, sizeof ld);
     ld.default_material = -1;
+    ld.release_from = release_from;
     xmlInitParser();
     ld.s = scene_create(path);
     xmlNodePtr root = open_document(&ld, path);

@@ -62,6 +62,8 @@ typedef struct loader {
     int major_version;    /* 0 for Mitsuba 0.x files, else 3 */
     int default_material; /* the shared diffuse 0.5, or -1 until needed */
     size_t include_count; /* <include> elements read so far */
+    uint32_t release_from; /* mesh files with at least this many vertices are released once
+                              read (scene_mesh_release: streaming); 0: none */
 } loader;
 
 /* What was not read (mitsuba_unread.c). Marks node (may be NULL) as read by some reader;

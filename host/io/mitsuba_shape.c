@@ -21,32 +21,95 @@ static int is_mesh_file_type(const char *type)
            strcmp(type, "stl") == 0;
 }
 
-/* Reads a mesh file shape; *file gets the resolved path, *written the path as in the file,
- * *face_normals the shape's face_normals flag. An OBJ's texture coordinates are turned as
- * Mitsuba turns them (v -> 1 - v, unless flip_tex_coords is false), so they mean what they mean
- * in a PLY. */
-static int shape_read_file(loader *ld, xmlNodePtr node, mesh_data *mesh, char **file,
-                           const char **written, int *face_normals)
+/* What a mesh file shape is made from: the file and the properties that turn it into the
+ * world-space mesh, kept with the scene mesh so its geometry can be read again
+ * (scene_mesh_restore) exactly as the load read it. */
+struct scene_mesh_source {
+    char *file;          /* resolved */
+    xform to_world;
+    int face_normals;    /* the shape's face_normals: no shading normals */
+    int flip_tex_coords; /* an OBJ's v turned as Mitsuba turns it (v -> 1 - v) */
+    int flip_normals;
+};
+
+static void source_free(scene_mesh_source *source)
 {
+    if (source)
+        free(source->file);
+    free(source);
+}
+
+/* The source of a mesh file shape from its properties; *written gets the path as in the file.
+ * NULL with the error set. */
+static scene_mesh_source *shape_source(loader *ld, xmlNodePtr node, const char **written)
+{
+    scene_mesh_source *source = xcalloc(1, sizeof *source);
     if (mitsuba_prop_string(node, "filename", NULL, written))
-        return -1;
-    if (!*written)
-        return mitsuba_fail(node, "missing <string name=\"filename\">");
-    *file = mitsuba_resolve_path(ld, mitsuba_prop_find(node, "filename"), *written);
-    if (access(*file, R_OK) != 0)
-        return mitsuba_fail(node, "cannot read '%s' (%s): %s", *written, *file, strerror(errno));
+        goto fail;
+    if (!*written) {
+        mitsuba_fail(node, "missing <string name=\"filename\">");
+        goto fail;
+    }
+    source->file = mitsuba_resolve_path(ld, mitsuba_prop_find(node, "filename"), *written);
+    if (access(source->file, R_OK) != 0) {
+        mitsuba_fail(node, "cannot read '%s' (%s): %s", *written, source->file, strerror(errno));
+        goto fail;
+    }
     /* Mitsuba's front side comes from the file's normals unless face_normals is set. */
-    if (mitsuba_prop_bool(node, "face_normals", 0, face_normals))
+    if (mitsuba_prop_bool(node, "face_normals", 0, &source->face_normals) ||
+        mitsuba_prop_transform(node, "to_world", &source->to_world) ||
+        mitsuba_prop_bool(node, "flip_normals", 0, &source->flip_normals) ||
+        (strcmp(mitsuba_attr(node, "type"), "obj") == 0 &&
+         mitsuba_prop_bool(node, "flip_tex_coords", 1, &source->flip_tex_coords)))
+        goto fail;
+    return source;
+fail:
+    source_free(source);
+    return NULL;
+}
+
+/* A mesh file shape's world-space geometry from its source, with Mitsuba's shading normals: the
+ * file's own, smooth vertex normals where it has none, none under face_normals. *file_normals
+ * says whether the normals are the file's own, *flat_normals whether those shade it flat
+ * (shapes_normals_flat). 0, or -1 with the error set (naming the file). */
+static int source_geometry(const scene_mesh_source *source, mesh_data *mesh, int *file_normals,
+                           int *flat_normals)
+{
+    memset(mesh, 0, sizeof *mesh);
+    if (mesh_io_read_oriented(source->file, mesh, !source->face_normals, NULL))
         return -1;
-    if (mesh_io_read_oriented(*file, mesh, !*face_normals, NULL))
-        return mitsuba_fail_prefix(node);
-    int flip_tex_coords = 0;
-    if (strcmp(mitsuba_attr(node, "type"), "obj") == 0 &&
-        mitsuba_prop_bool(node, "flip_tex_coords", 1, &flip_tex_coords))
-        return -1;
-    if (flip_tex_coords && mesh->texcoords)
+    if (source->flip_tex_coords && mesh->texcoords)
         for (uint32_t v = 0; v < mesh->vertex_count; v++)
             mesh->texcoords[2 * (size_t)v + 1] = 1.0f - mesh->texcoords[2 * (size_t)v + 1];
+    if (source->face_normals) {
+        free(mesh->normals);
+        mesh->normals = NULL;
+    }
+    shapes_transform(mesh, &source->to_world);
+    *file_normals = mesh->normals != NULL;
+    *flat_normals = *file_normals && shapes_normals_flat(mesh);
+    if (!source->face_normals && !mesh->normals)
+        shapes_smooth_normals(mesh);
+    if (source->flip_normals)
+        shapes_flip_winding(mesh);
+    return 0;
+}
+
+/* scene_mesh_restore_fn: the geometry read again into the scene mesh. */
+static int source_restore(const scene_mesh_source *source, scene_mesh *mesh)
+{
+    mesh_data data;
+    int file_normals, flat_normals;
+    if (source_geometry(source, &data, &file_normals, &flat_normals)) {
+        mesh_data_free(&data);
+        return -1;
+    }
+    mesh->positions = data.positions;
+    mesh->indices = data.indices;
+    mesh->texcoords = data.texcoords;
+    mesh->normals = data.normals;
+    mesh->vertex_count = data.vertex_count;
+    mesh->triangle_count = data.triangle_count;
     return 0;
 }
 
@@ -79,43 +142,41 @@ static int shape_builtin(xmlNodePtr node, const char *type, mesh_data *mesh)
     return 0;
 }
 
-/* The shape's geometry in world space, with Mitsuba's shading normals: a mesh file's own
- * normals, smooth vertex normals where it has none, none (flat) under face_normals; a built-in
- * shape's from shapes.h. *file_normals says whether the normals are the mesh file's own, and
+/* The shape's geometry in world space, with Mitsuba's shading normals: a mesh file's from its
+ * source (source_geometry; *source gets it), a built-in shape's from shapes.h (their normals;
+ * *source NULL). *file_normals says whether the normals are the mesh file's own, and
  * *flat_normals whether those shade the mesh flat (shapes_normals_flat). */
 static int shape_geometry(loader *ld, xmlNodePtr node, const char *type, mesh_data *mesh,
-                          char **file, const char **written, int *file_normals,
+                          scene_mesh_source **source, const char **written, int *file_normals,
                           int *flat_normals)
 {
-    xform to_world;
-    int flip, face_normals = 0, builtin = !is_mesh_file_type(type);
     memset(mesh, 0, sizeof *mesh);
+    *source = NULL;
+    *file_normals = *flat_normals = 0;
     if (strcmp(type, "serialized") == 0)
         return mitsuba_fail(node,
                             "unsupported shape type 'serialized' (convert the mesh to PLY or OBJ)");
+    if (is_mesh_file_type(type)) {
+        *source = shape_source(ld, node, written);
+        if (!*source)
+            return -1;
+        return source_geometry(*source, mesh, file_normals, flat_normals)
+                   ? mitsuba_fail_prefix(node)
+                   : 0;
+    }
+    xform to_world;
+    int flip;
     if (mitsuba_prop_transform(node, "to_world", &to_world) ||
         mitsuba_prop_bool(node, "flip_normals", 0, &flip))
         return -1;
-    if (!builtin && shape_read_file(ld, node, mesh, file, written, &face_normals))
+    int status = shape_builtin(node, type, mesh);
+    if (status > 0)
+        return mitsuba_fail(node, "unsupported shape type '%s'", type);
+    if (status < 0)
         return -1;
-    if (builtin) {
-        int status = shape_builtin(node, type, mesh);
-        if (status > 0)
-            return mitsuba_fail(node, "unsupported shape type '%s'", type);
-        if (status < 0)
-            return -1;
-    }
-    if (face_normals) {
-        free(mesh->normals);
-        mesh->normals = NULL;
-    }
     shapes_transform(mesh, &to_world);
-    *file_normals = !builtin && mesh->normals;
-    *flat_normals = *file_normals && shapes_normals_flat(mesh);
-    if (!builtin && !face_normals && !mesh->normals)
-        shapes_smooth_normals(mesh);
     /* A built-in shape's normal is transformed as a normal, so a mirror flips its winding. */
-    if (builtin && xform_determinant3(&to_world) < 0.0)
+    if (xform_determinant3(&to_world) < 0.0)
         flip = !flip;
     if (flip)
         shapes_flip_winding(mesh);
@@ -202,7 +263,8 @@ int mitsuba_load_shape(loader *ld, xmlNodePtr node)
     idmr_light light;
     bsdf_parsed inline_bsdf;
     mesh_data mesh;
-    char *file = NULL, name[256];
+    scene_mesh_source *source = NULL;
+    char name[256];
     memset(&light, 0, sizeof light);
     if (mitsuba_require_attr(node, "type", &type) || shape_find_parts(ld, node, &parts))
         return -1;
@@ -213,19 +275,21 @@ int mitsuba_load_shape(loader *ld, xmlNodePtr node)
         (parts.emitter && mitsuba_emitter_area(ld, parts.emitter, &light)))
         return -1;
     int file_normals = 0, flat_normals = 0;
-    if (shape_geometry(ld, node, type, &mesh, &file, &written, &file_normals, &flat_normals)) {
+    if (shape_geometry(ld, node, type, &mesh, &source, &written, &file_normals, &flat_normals)) {
         mesh_data_free(&mesh);
-        free(file);
+        source_free(source);
         return -1;
     }
     shape_name(node, type, written, name, sizeof name);
-    scene_mesh *added = scene_add_mesh(ld->s, name, type, file, (int)xmlGetLineNo(node),
-                                       mesh.vertex_count, mesh.positions, mesh.triangle_count,
-                                       mesh.indices, mesh.texcoords);
+    scene_mesh *added = scene_add_mesh(ld->s, name, type, source ? source->file : NULL,
+                                       (int)xmlGetLineNo(node), mesh.vertex_count, mesh.positions,
+                                       mesh.triangle_count, mesh.indices, mesh.texcoords);
     added->normals = mesh.normals;
     added->file_normals = file_normals;
     added->flat_normals = flat_normals;
-    free(file);
+    added->source = source; /* the scene frees it (scene_mesh_release can read it again) */
+    ld->s->restore_mesh = source_restore;
+    ld->s->free_mesh_source = source_free;
     int material = shape_material(ld, has_inline_bsdf ? &inline_bsdf : NULL, parts.bsdf_entry,
                                   added->name);
     if (material < 0)
@@ -233,5 +297,7 @@ int mitsuba_load_shape(loader *ld, xmlNodePtr node)
     added->material = (uint32_t)material;
     added->xml_file = xstrdup(mitsuba_node_file(node));
     added->light = parts.emitter ? scene_add_light(ld->s, &light) : -1;
+    if (ld->release_from && added->vertex_count >= ld->release_from)
+        scene_mesh_release(ld->s, ld->s->mesh_count - 1);
     return 0;
 }

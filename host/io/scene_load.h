@@ -3,10 +3,16 @@
 #ifndef IDMR_SCENE_LOAD_H
 #define IDMR_SCENE_LOAD_H
 
+#include <stdint.h>
+
 #include "core/scene.h"
 
 /* The finalized scene of `path`, or NULL with the error set (as the format's loader sets it). */
 scene *scene_load(const char *path);
+
+/* As scene_load(), with the mesh files of at least release_from vertices released once read
+ * (io/mitsuba.h, mitsuba_load_streaming; a glTF scene is loaded whole). */
+scene *scene_load_streaming(const char *path, uint32_t release_from);
 
 /* Whether the scene was read from a glTF file (and is written back as one). */
 int scene_is_gltf(const scene *s);

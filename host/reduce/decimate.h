@@ -163,9 +163,9 @@ void decimate_output_free(decimate_output *out);
 long decimate_stock_quadric(const decimate_input *in);
 
 /* Decimates `count` meshes on `threads` threads, largest first. status[i] is 0 or -1;
- * messages[i] (may be NULL) gets the error of a failed mesh. `bar` (may be NULL), begun with
- * the inputs' total vertex count, advances by each mesh's vertices when it is done. Returns the
- * number that failed. */
+ * messages[i] (may be NULL) gets the error of a failed mesh. `bar` (may be NULL) advances by
+ * each mesh's input vertices when it is done (progress_advance). Returns the number that
+ * failed. */
 size_t decimate_many(const decimate_input *in, decimate_output *out, int *status,
                      char (*messages)[512], size_t count, decimate_method method,
                      unsigned int threads, progress *bar);

@@ -18,7 +18,6 @@ extern "C" size_t decimate_many(const decimate_input *in, decimate_output *out, 
                                 unsigned int threads, progress *bar)
 {
     std::mutex shown;
-    uint64_t vertices_done = 0;
     std::vector<size_t> order(count);
     for (size_t i = 0; i < count; i++)
         order[i] = i;
@@ -40,8 +39,7 @@ extern "C" size_t decimate_many(const decimate_input *in, decimate_output *out, 
             }
             if (bar) {
                 std::lock_guard<std::mutex> lock(shown);
-                vertices_done += in[i].vertex_count;
-                progress_update(bar, (unsigned int)vertices_done, nullptr);
+                progress_advance(bar, in[i].vertex_count, nullptr);
             }
         }
     };

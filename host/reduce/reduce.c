@@ -41,9 +41,10 @@ static int check_options(const reduce_state *st)
         return error_set(IDMR_EXIT_INPUT, "--initial and --passes are for the methods with an "
                                           "importance pass, not '%s'",
                          reduce_method_name(o->method));
-    if (staged && o->simulation)
+    if ((staged || o->memory_budget) && o->simulation)
         return error_set(IDMR_EXIT_INPUT, "--simulation is a pass over the whole scene: it "
-                                          "cannot be combined with --initial or --passes");
+                                          "cannot be combined with --initial, --passes or "
+                                          "--memory-budget");
     for (size_t k = 0; k < o->keep_count; k++) {
         size_t m = 0;
         while (m < s->mesh_count && strcmp(s->meshes[m].name, o->keep[k]))
@@ -242,6 +243,15 @@ static int run_importance(reduce_state *st)
  * normals are carried by default: the reader would compute them from the reduced mesh, whose
  * larger faces average the original's curvature away (a glass surface then shows the light in
  * other places; see README, "Attributes through the reduction"). */
+void reduce_mesh_attributes(const reduce_state *st, size_t m, int *texcoords, int *normals)
+{
+    const scene_mesh *mesh = &st->scene->meshes[m];
+    int carried = mesh->file_normals || !st->options->recompute_normals;
+    *texcoords = mesh->released ? mesh->had_texcoords : mesh->texcoords != NULL;
+    *normals = carried && !mesh->flat_normals &&
+               (mesh->released ? mesh->had_normals : mesh->normals != NULL);
+}
+
 decimate_input reduce_decimation_input(const reduce_state *st, size_t m)
 {
     const scene_mesh *mesh = &st->scene->meshes[m];
@@ -252,9 +262,10 @@ decimate_input reduce_decimation_input(const reduce_state *st, size_t m)
     in.vertex_count = mesh->vertex_count;
     in.indices = mesh->indices;
     in.triangle_count = mesh->triangle_count;
-    in.texcoords = mesh->texcoords;
-    int carried = mesh->file_normals || !st->options->recompute_normals;
-    in.normals = carried && !mesh->flat_normals ? mesh->normals : NULL;
+    int texcoords, normals;
+    reduce_mesh_attributes(st, m, &texcoords, &normals);
+    in.texcoords = texcoords ? mesh->texcoords : NULL;
+    in.normals = normals ? mesh->normals : NULL;
     in.vertex_importance = st->vertex_importance ? st->vertex_importance[m] : NULL;
     if (st->remapped && st->remapped[m]) {
         in.vertex_importance = st->remapped[m];

@@ -25,6 +25,13 @@
  * one on the previous pass's result; every pass's importance is copied back to the original
  * vertices along the collapse chains (remap.h) and the originals are decimated from it.
  *
+ * Streaming: a scene loaded with its large meshes released (io/scene_load.h,
+ * scene_load_streaming; `idmr reduce --memory-budget` loads so) is reduced with each released
+ * mesh read again only while it is decimated, `threads` at a time, and released after, so host
+ * memory holds the meshes in flight, the reduced copies and the per-vertex importance, not the
+ * whole scene. Meshes the initial reduction leaves whole are read again and kept; without an
+ * initial reduction the importance pass needs the whole scene, and all are read again.
+ *
  * Files: reduce.c (the pipeline and its option, importance, budget and writing stages),
  * reduce_passes.c (the initial reduction, the scene each pass simulates, the remapping),
  * reduce_memory.c (the target and initial reduction a memory budget asks for, and the check that

@@ -60,43 +60,98 @@ static const lock_step LOCK_STEPS[] = {
  * many as cover the excess, so meshes take turns; three turns per step. */
 #define RELAX_ROUNDS (3 * (LOCK_STEP_COUNT - 1))
 
-int reduce_decimate_meshes(const reduce_state *st, const decimate_input *inputs,
+/* A mesh to decimate and its size, sorted largest first: the order decimate_many() takes
+ * meshes in, kept across streaming groups. */
+typedef struct sized_mesh {
+    uint32_t vertices;
+    size_t mesh;
+} sized_mesh;
+
+static int larger_first(const void *a, const void *b)
+{
+    uint32_t x = ((const sized_mesh *)a)->vertices, y = ((const sized_mesh *)b)->vertices;
+    return (x < y) - (x > y);
+}
+
+/* The job of mesh m: inputs[m] with its target, its geometry read again first where it is
+ * released (streaming: then *restored is set, and it is released again after the job). */
+static int job_of(reduce_state *st, const decimate_input *inputs, const uint64_t *targets,
+                  size_t m, decimate_input *job, int *restored)
+{
+    *job = inputs[m];
+    job->target_vertices = targets[m];
+    *restored = st->scene->meshes[m].released;
+    if (!*restored)
+        return 0;
+    if (scene_mesh_restore(st->scene, m))
+        return -1;
+    decimate_input fresh = reduce_decimation_input(st, m);
+    job->positions = fresh.positions;
+    job->indices = fresh.indices;
+    job->texcoords = fresh.texcoords;
+    job->normals = fresh.normals;
+    return 0;
+}
+
+int reduce_decimate_meshes(reduce_state *st, const decimate_input *inputs,
                            const uint64_t *targets, const unsigned char *selected,
                            decimate_method method, const char *label, decimate_output *outputs)
 {
     const reduce_options *o = st->options;
     unsigned int threads = o->threads ? o->threads : (unsigned int)sysconf(_SC_NPROCESSORS_ONLN);
-    decimate_input *jobs = xcalloc(st->count + 1, sizeof *jobs);
-    decimate_output *results = xcalloc(st->count + 1, sizeof *results);
-    int *job_status = xcalloc(st->count + 1, sizeof *job_status);
-    char(*job_messages)[512] = xcalloc(st->count + 1, sizeof *job_messages);
-    size_t *job_mesh = xcalloc(st->count + 1, sizeof *job_mesh);
+    sized_mesh *order = xcalloc(st->count + 1, sizeof *order);
     size_t n = 0;
     uint64_t vertices = 0;
+    int streaming = 0;
     for (size_t m = 0; m < st->count; m++)
         if (selected[m]) {
-            jobs[n] = inputs[m];
-            jobs[n].target_vertices = targets[m];
             vertices += inputs[m].vertex_count;
-            job_mesh[n++] = m;
+            streaming |= st->scene->meshes[m].released;
+            order[n++] = (sized_mesh){inputs[m].vertex_count, m};
         }
+    qsort(order, n, sizeof *order, larger_first);
+    /* Meshes in memory go in one call; released ones `threads` at a time, each read again just
+     * before and released just after, so host memory holds the meshes in flight. */
+    size_t group = streaming ? threads : n;
+    decimate_input *jobs = xcalloc(group + 1, sizeof *jobs);
+    decimate_output *results = xcalloc(group + 1, sizeof *results);
+    int *job_status = xcalloc(group + 1, sizeof *job_status);
+    int *restored = xcalloc(group + 1, sizeof *restored);
+    char(*job_messages)[512] = xcalloc(group + 1, sizeof *job_messages);
     progress bar;
     progress_begin(&bar, label, (unsigned int)(vertices ? vertices : 1),
                    o->importance.sppm.progress && n > 0);
-    decimate_many(jobs, results, job_status, job_messages, n, method, threads, &bar);
-    progress_end(&bar);
     int status = 0;
-    for (size_t j = 0; j < n; j++) {
-        decimate_output_free(&outputs[job_mesh[j]]);
-        outputs[job_mesh[j]] = results[j];
-        if (job_status[j] && !status)
-            status = error_set(IDMR_EXIT_FAILURE, "%s", job_messages[j]);
+    for (size_t first = 0; first < n && !status; first += group) {
+        size_t count = n - first < group ? n - first : group;
+        for (size_t j = 0; j < count; j++) {
+            restored[j] = 0;
+            if (!status)
+                status =
+                    job_of(st, inputs, targets, order[first + j].mesh, &jobs[j], &restored[j]);
+        }
+        if (!status)
+            decimate_many(jobs, results, job_status, job_messages, count, method, threads,
+                          &bar);
+        for (size_t j = 0; j < count; j++) {
+            size_t m = order[first + j].mesh;
+            if (restored[j])
+                scene_mesh_release(st->scene, m);
+            if (status)
+                continue;
+            decimate_output_free(&outputs[m]);
+            outputs[m] = results[j];
+            if (job_status[j])
+                status = error_set(IDMR_EXIT_FAILURE, "%s", job_messages[j]);
+        }
     }
+    progress_end(&bar);
+    free(order);
     free(jobs);
     free(results);
     free(job_status);
+    free(restored);
     free(job_messages);
-    free(job_mesh);
     return status;
 }
 
@@ -192,14 +247,15 @@ static uint64_t missed_by(const reduce_state *st, size_t m, const uint64_t *firs
 static int lock_step_applies(const reduce_state *st, size_t m, size_t s, decimate_method method,
                              double mean)
 {
-    const decimate_input *in = &st->input[m];
     int frees_seams = LOCK_STEPS[s].seams_free != LOCK_STEPS[s - 1].seams_free;
     int moves_boundary =
         LOCK_STEPS[s].boundary_tolerance != LOCK_STEPS[s - 1].boundary_tolerance;
     if (moves_boundary && LOCK_STEPS[s].boundary_tolerance > SEEN_LOCK_LIMIT &&
         importance_density(st, m) >= SEEN_SHARE * mean)
         return 0;
-    return (frees_seams && (in->texcoords || in->normals)) ||
+    int texcoords, normals;
+    reduce_mesh_attributes(st, m, &texcoords, &normals);
+    return (frees_seams && (texcoords || normals)) ||
            (moves_boundary && method == DECIMATE_COMBINED);
 }
 

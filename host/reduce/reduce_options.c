@@ -86,5 +86,6 @@ static int has_no_area(const scene_mesh *mesh)
 
 int reduce_mesh_pinned(const reduce_options *o, const scene_mesh *mesh)
 {
-    return mesh->light >= 0 || is_kept(o, mesh->name) || has_no_area(mesh);
+    return mesh->light >= 0 || is_kept(o, mesh->name) ||
+           (mesh->released ? mesh->no_area : has_no_area(mesh));
 }

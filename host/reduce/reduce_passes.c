@@ -12,14 +12,19 @@
 #include "reduce/remap.h"
 #include "reduce/reduce_stages.h"
 
-scene *reduce_view_of(const reduce_state *st, const decimate_output *meshes)
+scene *reduce_view_of(reduce_state *st, const decimate_output *meshes)
 {
+    /* A released mesh without a decimation here is shown as it is: read again (and kept). */
+    for (size_t m = 0; m < st->count; m++)
+        if (!meshes[m].collapsed_into && scene_mesh_restore(st->scene, m))
+            return NULL;
     scene *view = scene_view(st->scene);
     for (size_t m = 0; m < st->count; m++) {
         const decimate_output *h = &meshes[m];
         if (!h->collapsed_into)
             continue;
         scene_mesh *mesh = &view->meshes[m];
+        mesh->released = 0; /* the view's mesh is the decimation, in memory */
         mesh->positions = h->mesh.positions;
         mesh->indices = h->mesh.indices;
         mesh->texcoords = h->mesh.texcoords;
@@ -32,6 +37,14 @@ scene *reduce_view_of(const reduce_state *st, const decimate_output *meshes)
         return NULL;
     }
     return view;
+}
+
+int reduce_restore_all(reduce_state *st)
+{
+    for (size_t m = 0; m < st->count; m++)
+        if (scene_mesh_restore(st->scene, m))
+            return -1;
+    return 0;
 }
 
 /* The view the importance pass simulates: the scene with each mesh that the history decimated
@@ -53,9 +66,13 @@ static int initially_reduced(const reduce_state *st, size_t m)
 int reduce_initial(reduce_state *st)
 {
     const reduce_options *o = st->options;
-    if (!(st->initial < 1))
-        return 0;
+    if (!(st->initial < 1)) /* the passes simulate the scene itself: all of it in memory */
+        return reduce_restore_all(st);
     double start = monotonic_seconds();
+    /* Streaming: the meshes the initial reduction leaves whole are simulated as they are. */
+    for (size_t m = 0; m < st->count; m++)
+        if (!initially_reduced(st, m) && scene_mesh_restore(st->scene, m))
+            return -1;
     decimate_input *inputs = xcalloc(st->count + 1, sizeof *inputs);
     uint64_t *targets = xcalloc(st->count + 1, sizeof *targets);
     unsigned char *selected = xcalloc(st->count + 1, 1);

@@ -83,9 +83,11 @@ static void add_mesh(cJSON *meshes, const reduce_state *st, size_t m)
             cJSON_AddNumberToObject(mesh, "boundary_tolerance", tolerance);
     }
     const decimate_input *decimated_from = &st->input[m];
-    if (decimated && (decimated_from->texcoords || decimated_from->normals)) {
-        cJSON_AddBoolToObject(mesh, "texcoords", decimated_from->texcoords != NULL);
-        cJSON_AddBoolToObject(mesh, "normals", decimated_from->normals != NULL);
+    int texcoords, normals;
+    reduce_mesh_attributes(st, m, &texcoords, &normals);
+    if (decimated && (texcoords || normals)) {
+        cJSON_AddBoolToObject(mesh, "texcoords", texcoords);
+        cJSON_AddBoolToObject(mesh, "normals", normals);
         cJSON_AddStringToObject(mesh, "seams", decimated_from->seams_free ? "free" : "kept");
     }
     if (decimated) {

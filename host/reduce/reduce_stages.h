@@ -120,14 +120,20 @@ int reduce_decimatable(const reduce_state *st, size_t m);
 int reduce_plan_budget(reduce_state *st);
 
 /* A finalised view of the scene (core/scene.h, scene_view) in which every mesh that `meshes`
- * holds a decimation of (collapsed_into set) is that decimation; NULL with the error set. */
-scene *reduce_view_of(const reduce_state *st, const decimate_output *meshes);
+ * holds a decimation of (collapsed_into set) is that decimation, and every other mesh is the
+ * scene's (read again, and kept, where it was released); NULL with the error set. */
+scene *reduce_view_of(reduce_state *st, const decimate_output *meshes);
+
+/* Every released mesh (core/scene.h: streaming) read again (reduce_passes.c). 0, or -1 with the
+ * error set. */
+int reduce_restore_all(reduce_state *st);
 
 /* Decimates every mesh m flagged in `selected` from inputs[m] to targets[m], in parallel
- * (decimate_many: st->options->threads), into outputs[m] (an earlier output there is freed),
- * with a progress bar named `label` over their vertices (reduce_decimation.c). Returns 0, or -1
- * with the first failure's error set. */
-int reduce_decimate_meshes(const reduce_state *st, const decimate_input *inputs,
+ * (decimate_many: st->options->threads), largest first, into outputs[m] (an earlier output
+ * there is freed), with a progress bar named `label` over their vertices (reduce_decimation.c).
+ * Released meshes (streaming) go `threads` at a time: read again, decimated, released. Returns
+ * 0, or -1 with the first failure's error set. */
+int reduce_decimate_meshes(reduce_state *st, const decimate_input *inputs,
                            const uint64_t *targets, const unsigned char *selected,
                            decimate_method method, const char *label, decimate_output *outputs);
 
@@ -137,8 +143,13 @@ int reduce_memory_plan(reduce_state *st);
 int reduce_memory_fit(reduce_state *st);
 
 /* What mesh m is decimated from (reduce.c): the scene's mesh, its attributes as reduce.h says,
- * and its per-vertex importance (remapped where there is a history). */
+ * and its per-vertex importance (remapped where there is a history). A released mesh (core/
+ * scene.h: streaming) gives no geometry: reduce_decimate_meshes() reads it again first. */
 decimate_input reduce_decimation_input(const reduce_state *st, size_t m);
+
+/* Whether mesh m is decimated with texture coordinates and with shading normals (the rules of
+ * reduce_decimation_input), whether its geometry is in memory or released. */
+void reduce_mesh_attributes(const reduce_state *st, size_t m, int *texcoords, int *normals);
 
 /* The initial reduction (with --initial; nothing otherwise), and the change from one pass to the
  * next (reduce_passes.c). Return 0, or -1 with the error set. */
