@@ -233,5 +233,7 @@ int reduce_memory_fit(reduce_state *st)
         forget_decimation(st);
         if (reduce_plan_budget(st) || reduce_decimation(st))
             return -1;
+        if (st->pass_count) /* the last pass's reduction is this one now */
+            st->passes[st->pass_count - 1].vertices_after = st->vertices_after;
     }
 }

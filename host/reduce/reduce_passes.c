@@ -48,7 +48,7 @@ int reduce_restore_all(reduce_state *st)
 }
 
 /* The view the importance pass simulates: the scene with each mesh that the history decimated
- * replaced by its decimated copy. */
+ * replaced by its decimated copy (the others as they are, read again where released). */
 static int build_view(reduce_state *st)
 {
     scene_view_free(st->view);
@@ -69,10 +69,6 @@ int reduce_initial(reduce_state *st)
     if (!(st->initial < 1)) /* the passes simulate the scene itself: all of it in memory */
         return reduce_restore_all(st);
     double start = monotonic_seconds();
-    /* Streaming: the meshes the initial reduction leaves whole are simulated as they are. */
-    for (size_t m = 0; m < st->count; m++)
-        if (!initially_reduced(st, m) && scene_mesh_restore(st->scene, m))
-            return -1;
     decimate_input *inputs = xcalloc(st->count + 1, sizeof *inputs);
     uint64_t *targets = xcalloc(st->count + 1, sizeof *targets);
     unsigned char *selected = xcalloc(st->count + 1, 1);
