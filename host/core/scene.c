@@ -122,11 +122,7 @@ scene_mesh *scene_add_mesh(scene *s, const char *name, const char *shape_type, c
     m->shape_type = xstrdup(shape_type ? shape_type : "");
     m->file = file ? xstrdup(file) : NULL;
     m->xml_line = xml_line;
-    m->vertex_count = vertex_count;
-    m->positions = positions;
-    m->triangle_count = triangle_count;
-    m->indices = indices;
-    m->texcoords = texcoords;
+    scene_mesh_set_geometry(m, vertex_count, positions, triangle_count, indices, texcoords, NULL);
     m->light = -1;
     index_mesh_name(s, s->mesh_count - 1);
     return m;
@@ -416,6 +412,19 @@ void scene_mesh_release(scene *s, size_t m)
     mesh->released = 1;
 }
 
+void scene_mesh_set_geometry(scene_mesh *mesh, uint32_t vertex_count, float *positions,
+                             uint32_t triangle_count, uint32_t *indices, float *texcoords,
+                             float *normals)
+{
+    mesh->vertex_count = vertex_count;
+    mesh->positions = positions;
+    mesh->triangle_count = triangle_count;
+    mesh->indices = indices;
+    mesh->texcoords = texcoords;
+    mesh->normals = normals;
+    mesh->released = 0;
+}
+
 int scene_mesh_restore(scene *s, size_t m)
 {
     scene_mesh *mesh = &s->meshes[m];
@@ -424,7 +433,6 @@ int scene_mesh_restore(scene *s, size_t m)
     uint32_t vertices = mesh->vertex_count, triangles = mesh->triangle_count;
     if (s->restore_mesh(mesh->source, mesh))
         return -1;
-    mesh->released = 0;
     if (mesh->vertex_count != vertices || mesh->triangle_count != triangles)
         return error_set(IDMR_EXIT_INPUT,
                          "mesh '%s': read again from %s, it has %u vertices and %u triangles, "

@@ -184,6 +184,12 @@ int scene_check_output_file(const scene *s, const char *path);
 void scene_mesh_release(scene *s, size_t m);
 int scene_mesh_restore(scene *s, size_t m);
 
+/* Points mesh's geometry at the arrays given (taking them over or sharing them is the caller's
+ * affair) and marks it in memory. */
+void scene_mesh_set_geometry(scene_mesh *mesh, uint32_t vertex_count, float *positions,
+                             uint32_t triangle_count, uint32_t *indices, float *texcoords,
+                             float *normals);
+
 /* A view of `s`: a copy of the scene struct with its own arrays of meshes and lights, sharing
  * everything else (names, materials, textures, the meshes' geometry) with `s`, which must
  * outlive it unchanged. The caller may point a view mesh's positions, indices, texcoords and

@@ -95,7 +95,7 @@ static int source_geometry(const scene_mesh_source *source, mesh_data *mesh, int
     return 0;
 }
 
-/* scene_mesh_restore_fn: the geometry read again into the scene mesh. */
+/* scene_mesh_restore_fn: the geometry read again into the scene mesh (which takes it over). */
 static int source_restore(const scene_mesh_source *source, scene_mesh *mesh)
 {
     mesh_data data;
@@ -104,12 +104,8 @@ static int source_restore(const scene_mesh_source *source, scene_mesh *mesh)
         mesh_data_free(&data);
         return -1;
     }
-    mesh->positions = data.positions;
-    mesh->indices = data.indices;
-    mesh->texcoords = data.texcoords;
-    mesh->normals = data.normals;
-    mesh->vertex_count = data.vertex_count;
-    mesh->triangle_count = data.triangle_count;
+    scene_mesh_set_geometry(mesh, data.vertex_count, data.positions, data.triangle_count,
+                            data.indices, data.texcoords, data.normals);
     return 0;
 }
 

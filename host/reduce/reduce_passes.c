@@ -23,14 +23,10 @@ scene *reduce_view_of(reduce_state *st, const decimate_output *meshes)
         const decimate_output *h = &meshes[m];
         if (!h->collapsed_into)
             continue;
-        scene_mesh *mesh = &view->meshes[m];
-        mesh->released = 0; /* the view's mesh is the decimation, in memory */
-        mesh->positions = h->mesh.positions;
-        mesh->indices = h->mesh.indices;
-        mesh->texcoords = h->mesh.texcoords;
-        mesh->normals = h->mesh.normals;
-        mesh->vertex_count = h->mesh.vertex_count;
-        mesh->triangle_count = h->mesh.triangle_count;
+        /* The view's mesh is the decimation, in memory (shared: the output owns it). */
+        scene_mesh_set_geometry(&view->meshes[m], h->mesh.vertex_count, h->mesh.positions,
+                                h->mesh.triangle_count, h->mesh.indices, h->mesh.texcoords,
+                                h->mesh.normals);
     }
     if (scene_finalize(view)) {
         scene_view_free(view);
