@@ -24,6 +24,7 @@
  * A plan made again may also raise targets (a relaxed mesh now gives more than planned): every
  * mesh whose target changed is decimated again, so the total meets the request wherever the
  * floors allow. */
+#include <malloc.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -144,6 +145,10 @@ int reduce_decimate_meshes(reduce_state *st, const decimate_input *inputs,
             if (job_status[j])
                 status = error_set(IDMR_EXIT_FAILURE, "%s", job_messages[j]);
         }
+        /* The group's meshes and OpenMesh's copies were freed in the worker threads' heaps:
+         * hand that memory back, so the next group does not stack on top of it. */
+        if (streaming)
+            malloc_trim(0);
     }
     progress_end(&bar);
     free(order);
