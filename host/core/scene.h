@@ -177,7 +177,7 @@ int scene_check_output_file(const scene *s, const char *path);
 
 /* Streaming. scene_mesh_release() frees mesh m's geometry, first noting its bounding box and
  * whether it has area (scene_finalize() and the reduction use those while it is out); a mesh
- * without a source, an emitter, and one already released are left as they are. 
+ * without a source, an emitter, and one already released are left as they are.
  * scene_mesh_restore() reads a released mesh's geometry again through the loader (0 when it is
  * in memory already); the counts must be those it had, or it fails naming the mesh. 0, or -1
  * with the error set. */
