@@ -12,7 +12,7 @@
  * reduction may decimate (the free triangles): evaluated once for the scene and once for a view
  * without those triangles, it gives the fixed part (the film's and photons' buffers, the meshes
  * that are kept) and the cost per free triangle. The BVH is estimated at
- * BVH_BYTES_PER_TRIANGLE per triangle (Embree's SBVH flattened as bvh_layout.h: 84 bytes on the
+ * REDUCE_BVH_BYTES_PER_TRIANGLE per triangle (Embree's SBVH flattened as bvh_layout.h: 84 bytes on the
  * Cornell box, 88 on the glass of water), since building the whole scene's BVH is what a scene
  * too large for the device cannot afford; the fit below corrects what the estimate misses.
  * With the free triangles scaled by
@@ -34,9 +34,6 @@
 #include "passes/render.h"
 #include "reduce/reduce_stages.h"
 
-/* The BVH's device bytes per triangle until one has been built (see above): a little above the
- * largest measured, so the first plan errs on the small side. */
-#define BVH_BYTES_PER_TRIANGLE 100.0
 /* The share of the budget the plan aims at: room for the BVH estimate and for triangle counts
  * that do not scale exactly with the vertex counts the reduction targets. */
 #define MEMORY_MARGIN 0.95
@@ -136,12 +133,11 @@ int reduce_memory_plan(reduce_state *st)
     if (line_of(st, RENDER_PASS, &render) ||
         (simulates && line_of(st, IMPORTANCE_PASS, &importance)))
         return -1;
-    if (!simulates)
-        importance = render;
-    double per_triangle = st->bvh_bytes_per_triangle = BVH_BYTES_PER_TRIANGLE;
+    int last_pass = simulates ? IMPORTANCE_PASS : RENDER_PASS;
+    double per_triangle = REDUCE_BVH_BYTES_PER_TRIANGLE;
     st->render_fixed_bytes = render.fixed + per_triangle * (double)render.fixed_triangles;
     const memory_line *lines[] = {&render, &importance};
-    for (int pass = RENDER_PASS; pass <= IMPORTANCE_PASS; pass++)
+    for (int pass = RENDER_PASS; pass <= last_pass; pass++)
         if (fitting_fraction(lines[pass], per_triangle, budget) < 0)
             return error_set(IDMR_EXIT_INPUT,
                              "--memory-budget %.1f MiB: %s needs about %.1f MiB even with every "
@@ -154,9 +150,14 @@ int reduce_memory_plan(reduce_state *st)
     double d = fitting_fraction(&render, per_triangle, budget);
     if (d < st->target)
         st->target = d;
-    double d0 = fitting_fraction(&importance, per_triangle, budget);
-    if (simulates && !(o->initial < 1) && d0 < 1)
-        st->initial = d0;
+    char simulated[96] = "";
+    if (simulates) {
+        double d0 = fitting_fraction(&importance, per_triangle, budget);
+        if (!(o->initial < 1) && d0 < 1)
+            st->initial = d0;
+        snprintf(simulated, sizeof simulated, ", its importance pass %.1f MiB",
+                 MIB(bytes_at(&importance, 1.0, per_triangle)));
+    }
     if (o->importance.sppm.progress) {
         char initial[64] = "none";
         if (st->initial < 1)
@@ -164,9 +165,8 @@ int reduce_memory_plan(reduce_state *st)
                      o->initial < 1 ? "" : " (for the budget)");
         fprintf(stderr,
                 "idmr: memory budget %.1f MiB: rendering the scene as it is needs about %.1f "
-                "MiB, its importance pass %.1f MiB; target %.4g%s, initial reduction %s\n",
-                MIB(budget), MIB(bytes_at(&render, 1.0, per_triangle)),
-                MIB(bytes_at(&importance, 1.0, per_triangle)), st->target,
+                "MiB%s; target %.4g%s, initial reduction %s\n",
+                MIB(budget), MIB(bytes_at(&render, 1.0, per_triangle)), simulated, st->target,
                 st->target < o->target ? " (for the budget)" : "", initial);
     }
     return 0;

@@ -147,7 +147,7 @@ static void add_memory(cJSON *root, const reduce_state *st)
     cJSON_AddNumberToObject(memory, "bytes", (double)o->memory_budget);
     cJSON_AddNumberToObject(memory, "target_requested", o->target);
     cJSON_AddNumberToObject(memory, "bvh_bytes_per_triangle_estimate",
-                            st->bvh_bytes_per_triangle);
+                            REDUCE_BVH_BYTES_PER_TRIANGLE);
     const sppm_memory *m = &st->render_memory;
     cJSON *render = cJSON_AddObjectToObject(memory, "render_device_bytes");
     cJSON_AddNumberToObject(render, "total", (double)sppm_memory_total(m));

@@ -50,6 +50,10 @@ typedef struct factor_checkpoint {
     double factor_change, ranking_change;
 } factor_checkpoint;
 
+/* The memory plan's estimate of the BVH's device bytes per triangle (reduce_memory.c): a little
+ * above the largest measured, so the plan errs on the small side; the fit corrects it. */
+#define REDUCE_BVH_BYTES_PER_TRIANGLE 100.0
+
 /* What one importance pass and the reduction after it did (report.json: passes). */
 typedef struct reduce_pass_record {
     double seconds_importance, seconds_reduction; /* reduction: budget and decimation */
@@ -70,8 +74,6 @@ typedef struct reduce_state {
     double initial; /* D0 of the initial reduction: --initial, or chosen for the budget; 1: none */
 
     /* memory plan, memory fit (with --memory-budget): */
-    double bvh_bytes_per_triangle; /* the plan's estimate, then what the simulated scene's BVH
-                                      took */
     double render_fixed_bytes;     /* render memory without the triangles that may go */
     sppm_memory render_memory;     /* memory fit: rendering the reduced scene, exactly */
     unsigned int fit_rounds;       /* decimations run again to fit the budget */
