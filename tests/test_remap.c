@@ -13,7 +13,10 @@
  *               lowest index goes first (vertex 0 is removed first); with vertex 0 at distance 0
  *               and the others at 1, the first collapse removes another vertex into vertex 0
  *               (among equal priorities, the collapse into the target closest to its source),
- *               and vertex 0 survives a reduction to half */
+ *               and vertex 0 survives a reduction to half
+ *   spill       the remapped importance moved out of memory while the memory fit builds its
+ *               BVH (reduce_memory.c) and read back: every value and distance bit for bit, a
+ *               mesh without any still without, and no file left in the staging directory */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -22,10 +25,14 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
+
+#include <dirent.h>
 
 #include <cmocka.h>
 
 #include "decimate_common.h"
+#include "reduce/reduce_stages.h"
 #include "reduce/remap.h"
 
 /* ---- 1. a history by hand ---- */
@@ -212,6 +219,74 @@ static void test_ties_follow_distances(void **state)
     decimate_output_free(&out);
 }
 
+/* ---- 4. the remapped importance out of memory and back ---- */
+
+/* Entries of directory `path` other than . and .. */
+static int entries_in(const char *path)
+{
+    DIR *d = opendir(path);
+    assert_non_null(d);
+    int count = 0;
+    for (struct dirent *e; (e = readdir(d));)
+        count += strcmp(e->d_name, ".") && strcmp(e->d_name, "..");
+    closedir(d);
+    return count;
+}
+
+static void test_spill_and_restore(void **state)
+{
+    (void)state;
+    char staging[] = "/tmp/test_remap.XXXXXX";
+    assert_non_null(mkdtemp(staging));
+    /* Mesh 1 was simulated as it is: it has no remapped importance. */
+    scene_mesh meshes[3];
+    memset(meshes, 0, sizeof meshes);
+    const uint32_t counts[3] = {1000, 5, 70001};
+    scene s;
+    memset(&s, 0, sizeof s);
+    s.meshes = meshes;
+    s.mesh_count = 3;
+    reduce_state st;
+    memset(&st, 0, sizeof st);
+    st.scene = st.simulated = &s;
+    st.count = 3;
+    snprintf(st.staging, sizeof st.staging, "%s", staging);
+    st.remapped = xcalloc(4, sizeof *st.remapped);
+    st.distance = xcalloc(4, sizeof *st.distance);
+    st.spilled = xcalloc(4, sizeof *st.spilled);
+    for (size_t m = 0; m < 3; m++) {
+        meshes[m].vertex_count = counts[m];
+        if (m == 1)
+            continue;
+        st.remapped[m] = xcalloc(counts[m], sizeof *st.remapped[m]);
+        st.distance[m] = xcalloc(counts[m], sizeof *st.distance[m]);
+        for (uint32_t i = 0; i < counts[m]; i++) {
+            st.remapped[m][i] = ldexp(1.0 + (double)i / 3.0, (int)(i % 40) - 20) + (double)m;
+            st.distance[m][i] = i * 7u + (uint32_t)m;
+        }
+    }
+    assert_int_equal(reduce_remapped_spill(&st), 0);
+    for (size_t m = 0; m < 3; m++) {
+        assert_null(st.remapped[m]);
+        assert_null(st.distance[m]);
+    }
+    assert_int_equal(entries_in(staging), 0);
+    assert_int_equal(reduce_remapped_restore(&st), 0);
+    assert_null(st.spill);
+    assert_null(st.remapped[1]);
+    for (size_t m = 0; m < 3; m += 2)
+        for (uint32_t i = 0; i < counts[m]; i++) {
+            double expected = ldexp(1.0 + (double)i / 3.0, (int)(i % 40) - 20) + (double)m;
+            assert_memory_equal(&st.remapped[m][i], &expected, sizeof expected);
+            assert_int_equal(st.distance[m][i], i * 7u + (uint32_t)m);
+        }
+    /* Nothing spilled: nothing to read back. */
+    assert_int_equal(reduce_remapped_restore(&st), 0);
+    reduce_passes_free(&st);
+    assert_int_equal(entries_in(staging), 0);
+    assert_int_equal(rmdir(staging), 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -220,6 +295,7 @@ int main(void)
         cmocka_unit_test(test_dragon_history),
         cmocka_unit_test(test_ties_without_distances),
         cmocka_unit_test(test_ties_follow_distances),
+        cmocka_unit_test(test_spill_and_restore),
     };
     return cmocka_run_group_tests_name("remap", tests, NULL, NULL);
 }

@@ -20,6 +20,7 @@ static cJSON *devices_json(const device_info *list, size_t count)
         cJSON_AddStringToObject(d, "kind", list[i].kind);
         cJSON_AddNumberToObject(d, "compute_units", list[i].compute_units);
         cJSON_AddNumberToObject(d, "global_memory", (double)list[i].global_memory);
+        cJSON_AddBoolToObject(d, "host_unified_memory", list[i].host_unified);
         cJSON_AddStringToObject(d, "opencl_c_version", list[i].opencl_c_version);
         cJSON_AddBoolToObject(d, "int64_atomics", list[i].int64_atomics);
         cJSON_AddItemToArray(root, d);

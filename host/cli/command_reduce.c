@@ -1,6 +1,7 @@
 /* command_reduce.c — `idmr reduce SCENE --target D -o OUTDIR [options]`: the reduced scene
  * (reduce/reduce.h: importance pass, budget, decimation, writing OUTDIR). Options: the
  * importance pass's (options.h) and the reduction's own. */
+#include <malloc.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -79,7 +80,11 @@ static enum option_parse parse_option(int c, void *context, pass_arguments *argu
 static int run_reduce(const pass_arguments *arguments, const reduce_options *o)
 {
     /* Under a memory budget the large meshes are read mesh by mesh where they are needed
-     * (streaming: reduce.h), not held all at once. */
+     * (streaming: reduce.h), not held all at once; and every block of a mebibyte or more is
+     * mapped on its own, so freeing a mesh hands its memory back at once (glibc otherwise raises
+     * that threshold as large blocks are freed, and keeps them in its heaps). */
+    if (o->memory_budget)
+        mallopt(M_MMAP_THRESHOLD, 1 << 20);
     scene *s = o->memory_budget ? scene_load_streaming(arguments->scene, REDUCE_INITIAL_FLOOR)
                                 : scene_load(arguments->scene);
     if (!s)

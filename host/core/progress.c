@@ -1,4 +1,4 @@
-/* progress.c — clock and progress display (see progress.h). */
+/* progress.c — clock, resident memory and progress display (see progress.h). */
 #include "core/progress.h"
 
 #include <stdio.h>
@@ -10,6 +10,17 @@ double monotonic_seconds(void)
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+unsigned long long resident_bytes(void)
+{
+    FILE *f = fopen("/proc/self/statm", "r");
+    unsigned long long size = 0, resident = 0;
+    int read = f && fscanf(f, "%llu %llu", &size, &resident) == 2;
+    if (f)
+        fclose(f);
+    long page = sysconf(_SC_PAGESIZE);
+    return read && page > 0 ? resident * (unsigned long long)page : 0;
 }
 
 void progress_begin(progress *p, const char *label, unsigned int total, int enabled)

@@ -1,5 +1,6 @@
-/* progress.h — the monotonic clock for timings, and progress on stderr for long work: a bar
- * redrawn in place when stderr is a terminal, otherwise one line at every tenth of the work. */
+/* progress.h — the monotonic clock for timings, the process's resident memory, and progress on
+ * stderr for long work: a bar redrawn in place when stderr is a terminal, otherwise one line at
+ * every tenth of the work. */
 #ifndef IDMR_PROGRESS_H
 #define IDMR_PROGRESS_H
 
@@ -9,6 +10,9 @@ extern "C" {
 
 /* Seconds on the monotonic clock. */
 double monotonic_seconds(void);
+
+/* The process's resident memory now, in bytes (/proc/self/statm); 0 where it cannot be read. */
+unsigned long long resident_bytes(void);
 
 typedef struct progress {
     const char *label;

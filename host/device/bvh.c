@@ -357,6 +357,10 @@ static int build_tree(RTCDevice device, build_input *in, builder *b, size_t root
     } else if (*(const int *)top == BUILD_LEAF) {
         hang_root_leaf(b, root, top, in);
     } else {
+        /* The build is done with the primitives (the leaves hold their ids): their 64 bytes per
+         * triangle go before the flat arrays grow beside Embree's nodes. */
+        free(in->prims);
+        in->prims = NULL;
         flatten(b, top, root, 1);
     }
     rtcReleaseBVH(tree);

@@ -80,6 +80,9 @@ static void query_device(device_info *info)
                     &info->global_memory, NULL);
     clGetDeviceInfo(info->id, CL_DEVICE_MAX_MEM_ALLOC_SIZE, sizeof info->max_allocation,
                     &info->max_allocation, NULL);
+    cl_bool unified = CL_FALSE;
+    clGetDeviceInfo(info->id, CL_DEVICE_HOST_UNIFIED_MEMORY, sizeof unified, &unified, NULL);
+    info->host_unified = unified == CL_TRUE;
     clGetDeviceInfo(info->id, CL_DEVICE_OPENCL_C_VERSION, sizeof info->opencl_c_version,
                     info->opencl_c_version, NULL);
     clGetDeviceInfo(info->id, CL_DEVICE_EXTENSIONS, sizeof extensions - 1, extensions, NULL);

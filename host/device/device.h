@@ -27,6 +27,8 @@ typedef struct device_info {
     cl_uint compute_units;
     cl_ulong global_memory;
     cl_ulong max_allocation;
+    int host_unified; /* CL_DEVICE_HOST_UNIFIED_MEMORY: its memory is the host's (a CPU device,
+                         PoCL): its buffers count in the process's resident memory */
     char opencl_c_version[64];
     int int64_atomics; /* cl_khr_int64_base_atomics */
 } device_info;

@@ -392,6 +392,8 @@ int sppm_run(device *d, const scene *s, const bvh *b, const sppm_options *o, spp
     sppm core = {.dev = d, .scene = s, .options = o, .summary = summary,
                  .pixels = summary->width * summary->height};
     int status = device_scene_upload(d, s, b, &core.uploaded);
+    if (o->release_bvh)
+        bvh_free(o->release_bvh);
     if (!status) {
         summary->bvh_bytes = core.uploaded.bvh_bytes;
         summary->geometry_bytes = core.uploaded.bytes - core.uploaded.bvh_bytes;

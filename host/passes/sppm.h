@@ -51,6 +51,9 @@ typedef struct sppm_options {
     size_t local_size;       /* work-group size; 0 lets the runtime choose */
     uint64_t device_budget;  /* device bytes the run may allocate (sppm_memory_of); 0: the
                                 device's global memory is the only limit */
+    bvh *release_bvh;        /* NULL, or the BVH the run is given: its host arrays are freed
+                                (bvh_free) once uploaded, so that on a device sharing the
+                                host's memory they do not sit beside the device's copy */
     int generic;             /* build the all-features program instead of the scene's */
     int progress;            /* report progress on stderr */
 } sppm_options;

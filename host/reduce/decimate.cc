@@ -271,11 +271,18 @@ extern "C" int decimate_measure(const decimate_input *in, uint32_t *vertices,
     return 0;
 }
 
-extern "C" void decimate_output_free(decimate_output *out)
+extern "C" void decimate_output_free_history(decimate_output *out)
 {
-    mesh_data_free(&out->mesh);
     std::free(out->collapsed_into);
     std::free(out->output_index);
     std::free(out->welded_of);
+    out->collapsed_into = out->output_index = out->welded_of = nullptr;
+    out->history_count = 0;
+}
+
+extern "C" void decimate_output_free(decimate_output *out)
+{
+    mesh_data_free(&out->mesh);
+    decimate_output_free_history(out);
     std::memset(out, 0, sizeof *out);
 }

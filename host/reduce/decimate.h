@@ -156,6 +156,9 @@ int decimate_measure(const decimate_input *in, uint32_t *vertices, uint32_t *unc
  * (out->mesh.vertex_count says what was). */
 int decimate_mesh(const decimate_input *in, decimate_method method, decimate_output *out);
 void decimate_output_free(decimate_output *out);
+/* Frees the collapse history alone (welded_of, collapsed_into, output_index: 12 bytes per input
+ * vertex), keeping the decimated mesh, once nothing will follow the chains again. */
+void decimate_output_free_history(decimate_output *out);
 
 /* The benchmark's baseline: stock OpenMesh (DecimaterT with ModQuadricT, nothing else) on the
  * mesh as OpenMesh builds it, to target_vertices of in->vertex_count. Returns the output vertex

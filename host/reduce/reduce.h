@@ -52,6 +52,8 @@
 #define REDUCE_INITIAL_FLOOR 1024u
 /* The most importance passes --passes may ask for. */
 #define REDUCE_MAX_PASSES 16u
+/* The share of a --memory-budget the plan aims at (reduce_memory.c): room for its estimates. */
+#define REDUCE_MEMORY_MARGIN 0.95
 
 typedef enum reduce_method {
     REDUCE_IMPORTANCE,

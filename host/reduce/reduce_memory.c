@@ -12,33 +12,50 @@
  * reduction may decimate (the free triangles): evaluated once for the scene and once for a view
  * without those triangles, it gives the fixed part (the film's and photons' buffers, the meshes
  * that are kept) and the cost per free triangle. The BVH is estimated at
- * REDUCE_BVH_BYTES_PER_TRIANGLE per triangle (Embree's SBVH flattened as bvh_layout.h: 84 bytes on the
- * Cornell box, 88 on the glass of water), since building the whole scene's BVH is what a scene
- * too large for the device cannot afford; the fit below corrects what the estimate misses.
- * With the free triangles scaled by
- * D, the largest D whose render fits MEMORY_MARGIN of the budget becomes the target where it is
- * below --target; and when the importance pass over the whole scene would not fit (and no
- * --initial was given), the largest D0 whose importance pass fits is the initial reduction.
+ * REDUCE_BVH_BYTES_PER_TRIANGLE per triangle (Embree's SBVH flattened as bvh_layout.h: 84 bytes
+ * on the Cornell box, 88 on the glass of water), since building the whole scene's BVH is what a
+ * scene too large for the device cannot afford; the fit below corrects what the estimate misses.
+ * With the free triangles scaled by D, the largest D whose render fits REDUCE_MEMORY_MARGIN
+ * (reduce.h) of the budget becomes the target where it is below --target; and when the
+ * importance pass over the whole scene would not fit (and no --initial was given), the largest
+ * D0 whose importance pass fits is the initial reduction.
  * The importance pass itself is run with the budget as its device limit, so it fails with a
  * message rather than allocate more.
  *
+ * A device that shares the host's memory (device_info.host_unified: a CPU, as PoCL's) has its
+ * buffers in the process's resident memory, beside what the host holds while the pass runs, so
+ * there the importance pass's line also counts: what the process holds when the plan is made
+ * (the OpenCL runtime, the scene as loaded, its large meshes released: streaming), the collapse
+ * histories of the initial reduction (HISTORY_BYTES_PER_VERTEX per vertex of the meshes that may
+ * be decimated), and per simulated triangle HOST_BYTES_PER_TRIANGLE: the scene it simulates, the
+ * sums read back and, until uploaded, its BVH. The initial reduction so chosen keeps the whole
+ * process within the budget while the pass runs; the decimation takes only as many meshes at a
+ * time as keep it there too (reduce_decimation.c), and the fit's BVH build is made with the
+ * remapped importance on disk (below). bench-outofcore reports the peak.
+ *
  * The fit. After the last decimation the reduced scene's BVH is built and its render memory
  * computed exactly; above the budget, the target is lowered in proportion to the excess over
- * the fixed part and the plan and decimation run again (at most FIT_ROUNDS times). */
+ * the fixed part and the plan and decimation run again (at most FIT_ROUNDS times). On a device
+ * that shares the host's memory, the remapped importance, which only such a decimation needs,
+ * waits in the staging directory while the BVH is built (reduce_remapped_spill). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 
 #include "core/error.h"
+#include "core/progress.h"
 #include "device/bvh.h"
 #include "passes/render.h"
 #include "reduce/reduce_stages.h"
 
-/* The share of the budget the plan aims at: room for the BVH estimate and for triangle counts
- * that do not scale exactly with the vertex counts the reduction targets. */
-#define MEMORY_MARGIN 0.95
 /* The decimations the fit may run again. */
 #define FIT_ROUNDS 3
+/* What the host holds beside a device that shares its memory (above): per original vertex the
+ * collapse history (decimate.h: welded_of, collapsed_into, output_index), and per simulated
+ * triangle its geometry (24 bytes), the three importance sums read back (24) and, while it is
+ * uploaded, the staging of the BVH (the device's part is in the line already). */
+#define HISTORY_BYTES_PER_VERTEX 12.0
+#define HOST_BYTES_PER_TRIANGLE 100.0
 
 /* A pass's device memory without the BVH, as fixed + per_triangle × (free triangles kept). */
 typedef struct memory_line {
@@ -107,12 +124,12 @@ static double bytes_at(const memory_line *line, double d, double bvh_per_triangl
            bvh_per_triangle * ((double)line->fixed_triangles + free_kept);
 }
 
-/* The largest D in [0, 1] whose bytes stay within MEMORY_MARGIN of the budget; -1 when not even
- * D = 0 does. */
+/* The largest D in [0, 1] whose bytes stay within REDUCE_MEMORY_MARGIN of the budget; -1 when
+ * not even D = 0 does. */
 static double fitting_fraction(const memory_line *line, double bvh_per_triangle,
                                uint64_t budget)
 {
-    double room = MEMORY_MARGIN * (double)budget - bytes_at(line, 0.0, bvh_per_triangle);
+    double room = REDUCE_MEMORY_MARGIN * (double)budget - bytes_at(line, 0.0, bvh_per_triangle);
     if (room < 0)
         return -1.0;
     double per_d = bytes_at(line, 1.0, bvh_per_triangle) - bytes_at(line, 0.0, bvh_per_triangle);
@@ -120,6 +137,25 @@ static double fitting_fraction(const memory_line *line, double bvh_per_triangle,
 }
 
 #define MIB(x) ((double)(x) / 1048576.0)
+
+/* Vertices of the meshes that may be decimated. */
+static double decimatable_vertices(const reduce_state *st)
+{
+    double vertices = 0;
+    for (size_t m = 0; m < st->count; m++)
+        if (reduce_decimatable(st, m))
+            vertices += (double)st->scene->meshes[m].vertex_count;
+    return vertices;
+}
+
+/* The host's memory beside a device that shares it (above), added to the importance pass's
+ * line: what the process holds now, and the host's bytes per simulated triangle. */
+static void add_host_memory(memory_line *importance)
+{
+    importance->fixed += (double)resident_bytes() +
+                         HOST_BYTES_PER_TRIANGLE * (double)importance->fixed_triangles;
+    importance->per_triangle += HOST_BYTES_PER_TRIANGLE;
+}
 
 int reduce_memory_plan(reduce_state *st)
 {
@@ -150,13 +186,30 @@ int reduce_memory_plan(reduce_state *st)
     double d = fitting_fraction(&render, per_triangle, budget);
     if (d < st->target)
         st->target = d;
-    char simulated[96] = "";
+    char simulated[160] = "";
     if (simulates) {
+        int shared = st->device->info.host_unified;
+        if (shared)
+            add_host_memory(&importance);
         double d0 = fitting_fraction(&importance, per_triangle, budget);
-        if (!(o->initial < 1) && d0 < 1)
+        if (!(o->initial < 1) && d0 < 1) {
+            /* Reduced first: its collapse histories are held while the pass runs. */
+            importance.fixed += shared ? HISTORY_BYTES_PER_VERTEX * decimatable_vertices(st) : 0;
+            d0 = fitting_fraction(&importance, per_triangle, budget);
+            if (d0 < 0)
+                return error_set(IDMR_EXIT_INPUT,
+                                 "--memory-budget %.1f MiB: device '%s' shares the host's "
+                                 "memory, and what this run holds while the importance pass "
+                                 "runs on even the smallest initial reduction needs about "
+                                 "%.1f MiB: raise the budget",
+                                 MIB(budget), st->device->info.name,
+                                 MIB(bytes_at(&importance, 0.0, per_triangle)));
             st->initial = d0;
-        snprintf(simulated, sizeof simulated, ", its importance pass %.1f MiB",
-                 MIB(bytes_at(&importance, 1.0, per_triangle)));
+        }
+        snprintf(simulated, sizeof simulated, ", its importance pass %.1f MiB%s",
+                 MIB(bytes_at(&importance, 1.0, per_triangle)),
+                 shared ? " (with what the host holds meanwhile: the device shares its memory)"
+                        : "");
     }
     if (o->importance.sppm.progress) {
         char initial[64] = "none";
@@ -210,8 +263,12 @@ int reduce_memory_fit(reduce_state *st)
     uint64_t budget = st->options->memory_budget;
     if (!budget)
         return 0;
+    /* On a device that shares the host's memory the BVH build (about 160 bytes per triangle
+     * while it runs) would sit beside the remapped importance, which only a further decimation
+     * needs: it waits on disk meanwhile. */
+    int spill = st->device->info.host_unified;
     for (;;) {
-        if (measure_reduced(st))
+        if ((spill && reduce_remapped_spill(st)) || measure_reduced(st))
             return -1;
         double total = (double)sppm_memory_total(&st->render_memory);
         if (total <= (double)budget)
@@ -224,14 +281,14 @@ int reduce_memory_fit(reduce_state *st)
                              "--target",
                              MIB(budget), MIB(total), st->fit_rounds, st->target);
         st->fit_rounds++;
-        st->target *= (MEMORY_MARGIN * (double)budget - fixed) / (total - fixed);
+        st->target *= (REDUCE_MEMORY_MARGIN * (double)budget - fixed) / (total - fixed);
         if (st->options->importance.sppm.progress)
             fprintf(stderr,
                     "idmr: the reduced scene needs %.1f MiB to render, above the budget of %.1f "
                     "MiB: decimating again to %.4g\n",
                     MIB(total), MIB(budget), st->target);
         forget_decimation(st);
-        if (reduce_plan_budget(st) || reduce_decimation(st))
+        if (reduce_remapped_restore(st) || reduce_plan_budget(st) || reduce_decimation(st))
             return -1;
         if (st->pass_count) /* the last pass's reduction is this one now */
             st->passes[st->pass_count - 1].vertices_after = st->vertices_after;

@@ -2,9 +2,11 @@
  * scene (paper 3.5; reduce.h, reduce_stages.h): the initial reduction (--initial D0), the scene
  * each pass simulates (a view of the scene with the reduced meshes), the importance copied back
  * to the original vertices (remap.h), and the change from one pass to the next (--passes). */
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "core/error.h"
 #include "core/progress.h"
@@ -12,16 +14,22 @@
 #include "reduce/remap.h"
 #include "reduce/reduce_stages.h"
 
+/* Whether `o` holds a decimated mesh (its history may be freed already). */
+static int holds_decimation(const decimate_output *o)
+{
+    return o->mesh.positions != NULL;
+}
+
 scene *reduce_view_of(reduce_state *st, const decimate_output *meshes)
 {
     /* A released mesh without a decimation here is shown as it is: read again (and kept). */
     for (size_t m = 0; m < st->count; m++)
-        if (!meshes[m].collapsed_into && scene_mesh_restore(st->scene, m))
+        if (!holds_decimation(&meshes[m]) && scene_mesh_restore(st->scene, m))
             return NULL;
     scene *view = scene_view(st->scene);
     for (size_t m = 0; m < st->count; m++) {
         const decimate_output *h = &meshes[m];
-        if (!h->collapsed_into)
+        if (!holds_decimation(h))
             continue;
         /* The view's mesh is the decimation, in memory (shared: the output owns it). */
         scene_mesh_set_geometry(&view->meshes[m], h->mesh.vertex_count, h->mesh.positions,
@@ -81,7 +89,7 @@ int reduce_initial(reduce_state *st)
                 n, st->initial);
     st->history = xcalloc(st->count + 1, sizeof *st->history);
     int status = reduce_decimate_meshes(st, inputs, targets, selected, DECIMATE_QUADRIC,
-                                        "initial reduction", st->history);
+                                        "initial reduction", 1, st->history);
     free(inputs);
     free(targets);
     free(selected);
@@ -98,28 +106,92 @@ void reduce_remap(reduce_state *st)
         return;
     st->remapped = xcalloc(st->count + 1, sizeof *st->remapped);
     st->distance = xcalloc(st->count + 1, sizeof *st->distance);
+    st->spilled = xcalloc(st->count + 1, sizeof *st->spilled);
     for (size_t m = 0; m < st->count; m++) {
-        const decimate_output *h = &st->history[m];
+        decimate_output *h = &st->history[m];
         if (!h->collapsed_into)
             continue; /* simulated as it is: its own values */
         uint32_t original = st->scene->meshes[m].vertex_count;
         st->remapped[m] = xcalloc((size_t)original + 1, sizeof *st->remapped[m]);
         st->distance[m] = xcalloc((size_t)original + 1, sizeof *st->distance[m]);
         remap_values(h, original, st->vertex_importance[m], st->remapped[m], st->distance[m]);
+        /* The chains are followed: only the reduced mesh (the view's) is needed from here. */
+        decimate_output_free_history(h);
     }
 }
 
-/* Frees the remapped importance. */
+/* Frees the remapped importance (and closes its file where it was spilled). */
 static void remapped_free(reduce_state *st)
 {
+    if (st->spill)
+        fclose(st->spill);
+    st->spill = NULL;
     for (size_t m = 0; st->remapped && m < st->count; m++) {
         free(st->remapped[m]);
         free(st->distance[m]);
     }
     free(st->remapped);
     free(st->distance);
+    free(st->spilled);
     st->remapped = NULL;
     st->distance = NULL;
+    st->spilled = NULL;
+}
+
+int reduce_remapped_spill(reduce_state *st)
+{
+    if (!st->remapped)
+        return 0;
+    char path[2100];
+    snprintf(path, sizeof path, "%s/.remapped", st->staging);
+    FILE *f = fopen(path, "w+b");
+    if (!f)
+        return error_set(IDMR_EXIT_FAILURE, "%s: cannot create it to hold the remapped "
+                                            "importance meanwhile: %s", path, strerror(errno));
+    remove(path); /* unnamed from here: it goes with the process whatever happens */
+    int written = 1;
+    for (size_t m = 0; m < st->count; m++) {
+        size_t n = st->remapped[m] ? st->scene->meshes[m].vertex_count : 0;
+        written = written && fwrite(st->remapped[m], sizeof *st->remapped[m], n, f) == n &&
+                  fwrite(st->distance[m], sizeof *st->distance[m], n, f) == n;
+    }
+    if (!written || fflush(f)) {
+        fclose(f);
+        return error_set(IDMR_EXIT_FAILURE, "%s: cannot write the remapped importance: %s",
+                         st->staging, strerror(errno));
+    }
+    for (size_t m = 0; m < st->count; m++)
+        if (st->remapped[m]) {
+            free(st->remapped[m]);
+            free(st->distance[m]);
+            st->remapped[m] = NULL;
+            st->distance[m] = NULL;
+            st->spilled[m] = 1;
+        }
+    st->spill = f;
+    return 0;
+}
+
+int reduce_remapped_restore(reduce_state *st)
+{
+    if (!st->spill)
+        return 0;
+    rewind(st->spill);
+    int read = 1;
+    for (size_t m = 0; m < st->count; m++) {
+        if (!st->spilled[m])
+            continue;
+        size_t n = st->scene->meshes[m].vertex_count;
+        st->remapped[m] = xcalloc(n + 1, sizeof *st->remapped[m]);
+        st->distance[m] = xcalloc(n + 1, sizeof *st->distance[m]);
+        read = read && fread(st->remapped[m], sizeof *st->remapped[m], n, st->spill) == n &&
+               fread(st->distance[m], sizeof *st->distance[m], n, st->spill) == n;
+        st->spilled[m] = 0;
+    }
+    fclose(st->spill);
+    st->spill = NULL;
+    return read ? 0 : error_set(IDMR_EXIT_FAILURE, "%s: cannot read the remapped importance "
+                                                    "back", st->staging);
 }
 
 /* Frees the history and the view of it. */

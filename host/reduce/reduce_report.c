@@ -145,6 +145,8 @@ static void add_memory(cJSON *root, const reduce_state *st)
     }
     cJSON *memory = cJSON_AddObjectToObject(root, "memory_budget");
     cJSON_AddNumberToObject(memory, "bytes", (double)o->memory_budget);
+    /* The device's buffers are the host's memory: the budget bounds the whole process. */
+    cJSON_AddBoolToObject(memory, "host_memory_counted", st->device->info.host_unified);
     cJSON_AddNumberToObject(memory, "target_requested", o->target);
     cJSON_AddNumberToObject(memory, "bvh_bytes_per_triangle_estimate",
                             REDUCE_BVH_BYTES_PER_TRIANGLE);

@@ -38,6 +38,8 @@
 #ifndef IDMR_REDUCE_STAGES_H
 #define IDMR_REDUCE_STAGES_H
 
+#include <stdio.h>
+
 #include <cjson/cJSON.h>
 
 #include "reduce/budget.h"
@@ -81,7 +83,8 @@ typedef struct reduce_state {
     scene *simulated;       /* the scene the importance pass runs on: `scene`, or `view` */
     scene *view;            /* initial, next pass: the scene with the meshes of `history` */
     decimate_output *history; /* initial, next pass: per mesh, the decimation `view` holds
-                                 (collapsed_into NULL: the mesh as it is); NULL: none */
+                                 (no mesh: the mesh as it is); its collapse history is freed
+                                 once remapped; NULL: none */
     double seconds_initial;
     uint64_t vertices_initial; /* vertices of the initially reduced scene */
     reduce_pass_record *passes; /* one per pass run */
@@ -97,6 +100,9 @@ typedef struct reduce_state {
     double **remapped;             /* importance: with a history, per mesh whose history has
                                       collapses, per original vertex (remap.h); else NULL */
     uint32_t **distance;           /*             and each one's distance from its source */
+    unsigned char *spilled;        /* memory fit: per mesh, its remapped importance is in `spill`
+                                      (reduce_remapped_spill), not in memory */
+    FILE *spill;
     decimate_input *input;         /* budget: what each mesh is decimated from */
     budget_mesh *budget;           /* budget: what the plan was made from; the decimation adds
                                       the floors it learns */
@@ -133,11 +139,13 @@ int reduce_restore_all(reduce_state *st);
 /* Decimates every mesh m flagged in `selected` from inputs[m] to targets[m], in parallel
  * (decimate_many: st->options->threads), largest first, into outputs[m] (an earlier output
  * there is freed), with a progress bar named `label` over their vertices (reduce_decimation.c).
- * Released meshes (streaming) go `threads` at a time: read again, decimated, released. Returns
- * 0, or -1 with the first failure's error set. */
+ * Released meshes (streaming) go `threads` at a time: read again, decimated, released. Without
+ * `keep_history` each output's collapse history is freed as soon as it is made. Returns 0, or
+ * -1 with the first failure's error set. */
 int reduce_decimate_meshes(reduce_state *st, const decimate_input *inputs,
                            const uint64_t *targets, const unsigned char *selected,
-                           decimate_method method, const char *label, decimate_output *outputs);
+                           decimate_method method, const char *label, int keep_history,
+                           decimate_output *outputs);
 
 /* The memory plan and fit stages (reduce_memory.c); nothing without a budget. 0, or -1 with the
  * error set. */
@@ -161,6 +169,13 @@ int reduce_next_pass(reduce_state *st);
 /* After the importance pass: with a history, the importance per vertex of the simulated scene
  * copied back to the originals into st->remapped and st->distance (reduce_passes.c). */
 void reduce_remap(reduce_state *st);
+
+/* The remapped importance moved into an unnamed file in the staging directory, out of memory,
+ * and read back (reduce_memory.c: while the fit builds the reduced scene's BVH on a device that
+ * shares the host's memory, only a further decimation needs it). Each 0 (nothing to do without
+ * a remapped importance, or none spilled), or -1 with the error set. */
+int reduce_remapped_spill(reduce_state *st);
+int reduce_remapped_restore(reduce_state *st);
 
 /* Frees what reduce_initial(), reduce_next_pass() and reduce_remap() left in the state. */
 void reduce_passes_free(reduce_state *st);
