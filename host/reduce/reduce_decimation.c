@@ -91,6 +91,7 @@ static size_t group_size(const reduce_state *st, const sized_mesh *next, size_t 
     uint64_t budget = st->options->memory_budget;
     if (!budget || !st->device->info.host_unified)
         return count;
+    malloc_trim(0); /* what the last pass or group freed is not held */
     double held = (double)resident_bytes();
     size_t fitting = 1;
     while (fitting < count) {
