@@ -51,9 +51,11 @@
 /* The decimations the fit may run again. */
 #define FIT_ROUNDS 3
 /* What the host holds beside a device that shares its memory (above): per original vertex the
- * collapse history (decimate.h: welded_of, collapsed_into, output_index), and per simulated
- * triangle its geometry (24 bytes), the three importance sums read back (24) and, while it is
- * uploaded, the staging of the BVH (the device's part is in the line already). */
+ * collapse history (decimate.h: welded_of, collapsed_into, output_index); per simulated triangle
+ * an estimate: its geometry (about 24 bytes) and the three importance sums read back (24), with
+ * room for the moment of the upload, when the host's copy of the BVH (about as large as the
+ * device's, freed once uploaded) sits beside the device's before the photon and film buffers
+ * are allocated. */
 #define HISTORY_BYTES_PER_VERTEX 12.0
 #define HOST_BYTES_PER_TRIANGLE 100.0
 
