@@ -156,7 +156,7 @@ int reduce_decimate_meshes(reduce_state *st, const decimate_input *inputs,
     for (size_t first = 0, count = 0; first < n && !status; first += count) {
         count = streaming ? group_size(st, order + first, n - first, group) : n;
         if (count < group && count < n - first && !narrowed++ && o->importance.sppm.progress)
-            fprintf(stderr, "idmr: %s: %zu meshes at a time instead of %zu, to stay within the "
+            fprintf(stderr, "idmr: %s: meshes go %zu at a time, not %zu, to stay within the "
                             "memory budget (the device shares the host's memory)\n",
                     label, count, group);
         for (size_t j = 0; j < count; j++) {

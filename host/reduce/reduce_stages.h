@@ -30,7 +30,9 @@
  *                the view the next pass simulates; the per-pass state is reset (reduce_passes.c)
  *   memory fit   with --memory-budget: the reduced scene's exact render memory (its BVH built);
  *                above the budget, the target is lowered and the budget and decimation stages
- *                run again: render_bytes, fit_rounds (reduce_memory.c)
+ *                run again: render_bytes, fit_rounds; on a device sharing the host's memory
+ *                the remapped importance waits on disk meanwhile: spilled, spill
+ *                (reduce_memory.c)
  *   write        meshes/NAME.ply and scene.xml: ply, meshes_written (reduce.c)
  *   report       report.json (with the importance outputs) and the closing line (reduce.c; the
  *                JSON is built in reduce_report.c)
@@ -139,7 +141,8 @@ int reduce_restore_all(reduce_state *st);
 /* Decimates every mesh m flagged in `selected` from inputs[m] to targets[m], in parallel
  * (decimate_many: st->options->threads), largest first, into outputs[m] (an earlier output
  * there is freed), with a progress bar named `label` over their vertices (reduce_decimation.c).
- * Released meshes (streaming) go `threads` at a time: read again, decimated, released. Without
+ * Released meshes (streaming) go `threads` at a time, or fewer where a budget bounds the host
+ * (reduce_memory.c: a device sharing its memory): read again, decimated, released. Without
  * `keep_history` each output's collapse history is freed as soon as it is made. Returns 0, or
  * -1 with the first failure's error set. */
 int reduce_decimate_meshes(reduce_state *st, const decimate_input *inputs,
