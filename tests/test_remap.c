@@ -253,7 +253,6 @@ static void test_spill_and_restore(void **state)
     snprintf(st.staging, sizeof st.staging, "%s", staging);
     st.remapped = xcalloc(4, sizeof *st.remapped);
     st.distance = xcalloc(4, sizeof *st.distance);
-    st.spilled = xcalloc(4, sizeof *st.spilled);
     for (size_t m = 0; m < 3; m++) {
         meshes[m].vertex_count = counts[m];
         if (m == 1)

@@ -199,8 +199,7 @@ static int importance_with_stop_rule(reduce_state *st)
     options.checkpoint_context = &c;
     bvh b;
     int status = bvh_build(s, &b);
-    if (o->memory_budget) /* the host's copy is not needed once uploaded */
-        options.sppm.release_bvh = &b;
+    options.sppm.release_bvh = &b; /* the host's copy is not needed once uploaded */
     if (!status) {
         status = importance_run(st->device, s, &b, &options, &st->importance);
         bvh_free(&b);

@@ -91,7 +91,6 @@ static size_t group_size(const reduce_state *st, const sized_mesh *next, size_t 
     uint64_t budget = st->options->memory_budget;
     if (!budget || !st->device->info.host_unified)
         return count;
-    malloc_trim(0); /* what the last pass or group freed is not held */
     double held = (double)resident_bytes();
     size_t fitting = 1;
     while (fitting < count) {
@@ -154,6 +153,10 @@ int reduce_decimate_meshes(reduce_state *st, const decimate_input *inputs,
                    o->importance.sppm.progress && n > 0);
     int status = 0, narrowed = 0;
     for (size_t first = 0, count = 0; first < n && !status; first += count) {
+        /* What the last pass or group freed (in the worker threads' heaps too) goes back, so
+         * the next group neither stacks on it nor counts it as held. */
+        if (streaming)
+            malloc_trim(0);
         count = streaming ? group_size(st, order + first, n - first, group) : n;
         if (count < group && count < n - first && !narrowed++ && o->importance.sppm.progress)
             fprintf(stderr, "idmr: %s: meshes go %zu at a time, not %zu, to stay within the "
@@ -181,10 +184,6 @@ int reduce_decimate_meshes(reduce_state *st, const decimate_input *inputs,
             if (job_status[j])
                 status = error_set(IDMR_EXIT_FAILURE, "%s", job_messages[j]);
         }
-        /* The group's meshes and OpenMesh's copies were freed in the worker threads' heaps:
-         * hand that memory back, so the next group does not stack on top of it. */
-        if (streaming)
-            malloc_trim(0);
     }
     progress_end(&bar);
     free(order);

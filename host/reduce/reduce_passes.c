@@ -106,7 +106,6 @@ void reduce_remap(reduce_state *st)
         return;
     st->remapped = xcalloc(st->count + 1, sizeof *st->remapped);
     st->distance = xcalloc(st->count + 1, sizeof *st->distance);
-    st->spilled = xcalloc(st->count + 1, sizeof *st->spilled);
     for (size_t m = 0; m < st->count; m++) {
         decimate_output *h = &st->history[m];
         if (!h->collapsed_into)
@@ -132,12 +131,12 @@ static void remapped_free(reduce_state *st)
     }
     free(st->remapped);
     free(st->distance);
-    free(st->spilled);
     st->remapped = NULL;
     st->distance = NULL;
-    st->spilled = NULL;
 }
 
+/* The spill file holds, per mesh in order, one byte saying whether the mesh has a remapped
+ * importance, then its values and distances (vertex_count of each). */
 int reduce_remapped_spill(reduce_state *st)
 {
     if (!st->remapped)
@@ -151,8 +150,10 @@ int reduce_remapped_spill(reduce_state *st)
     remove(path); /* unnamed from here: it goes with the process whatever happens */
     int written = 1;
     for (size_t m = 0; m < st->count; m++) {
-        size_t n = st->remapped[m] ? st->scene->meshes[m].vertex_count : 0;
-        written = written && fwrite(st->remapped[m], sizeof *st->remapped[m], n, f) == n &&
+        unsigned char present = st->remapped[m] != NULL;
+        size_t n = present ? st->scene->meshes[m].vertex_count : 0;
+        written = written && fwrite(&present, 1, 1, f) == 1 &&
+                  fwrite(st->remapped[m], sizeof *st->remapped[m], n, f) == n &&
                   fwrite(st->distance[m], sizeof *st->distance[m], n, f) == n;
     }
     if (!written || fflush(f)) {
@@ -160,14 +161,12 @@ int reduce_remapped_spill(reduce_state *st)
         return error_set(IDMR_EXIT_FAILURE, "%s: cannot write the remapped importance: %s",
                          st->staging, strerror(errno));
     }
-    for (size_t m = 0; m < st->count; m++)
-        if (st->remapped[m]) {
-            free(st->remapped[m]);
-            free(st->distance[m]);
-            st->remapped[m] = NULL;
-            st->distance[m] = NULL;
-            st->spilled[m] = 1;
-        }
+    for (size_t m = 0; m < st->count; m++) {
+        free(st->remapped[m]);
+        free(st->distance[m]);
+        st->remapped[m] = NULL;
+        st->distance[m] = NULL;
+    }
     st->spill = f;
     return 0;
 }
@@ -178,15 +177,16 @@ int reduce_remapped_restore(reduce_state *st)
         return 0;
     rewind(st->spill);
     int read = 1;
-    for (size_t m = 0; m < st->count; m++) {
-        if (!st->spilled[m])
+    for (size_t m = 0; m < st->count && read; m++) {
+        unsigned char present = 0;
+        read = fread(&present, 1, 1, st->spill) == 1;
+        if (!read || !present)
             continue;
         size_t n = st->scene->meshes[m].vertex_count;
         st->remapped[m] = xcalloc(n + 1, sizeof *st->remapped[m]);
         st->distance[m] = xcalloc(n + 1, sizeof *st->distance[m]);
-        read = read && fread(st->remapped[m], sizeof *st->remapped[m], n, st->spill) == n &&
+        read = fread(st->remapped[m], sizeof *st->remapped[m], n, st->spill) == n &&
                fread(st->distance[m], sizeof *st->distance[m], n, st->spill) == n;
-        st->spilled[m] = 0;
     }
     fclose(st->spill);
     st->spill = NULL;

@@ -31,7 +31,7 @@
  *   memory fit   with --memory-budget: the reduced scene's exact render memory (its BVH built);
  *                above the budget, the target is lowered and the budget and decimation stages
  *                run again: render_bytes, fit_rounds; on a device sharing the host's memory
- *                the remapped importance waits on disk meanwhile: spilled, spill
+ *                the remapped importance waits on disk meanwhile: spill
  *                (reduce_memory.c)
  *   write        meshes/NAME.ply and scene.xml: ply, meshes_written (reduce.c)
  *   report       report.json (with the importance outputs) and the closing line (reduce.c; the
@@ -102,9 +102,8 @@ typedef struct reduce_state {
     double **remapped;             /* importance: with a history, per mesh whose history has
                                       collapses, per original vertex (remap.h); else NULL */
     uint32_t **distance;           /*             and each one's distance from its source */
-    unsigned char *spilled;        /* memory fit: per mesh, its remapped importance is in `spill`
-                                      (reduce_remapped_spill), not in memory */
-    FILE *spill;
+    FILE *spill;                   /* memory fit: the remapped importance, while it is out of
+                                      memory (reduce_remapped_spill); NULL otherwise */
     decimate_input *input;         /* budget: what each mesh is decimated from */
     budget_mesh *budget;           /* budget: what the plan was made from; the decimation adds
                                       the floors it learns */
