@@ -1,15 +1,18 @@
-/* test_decimate.c — our collapse loop in the OpenMesh decimation bridge (host/reduce/decimate*.cc):
- * the order of collapses under the importance module, the heap, the collapse history, bad input
- * and the thread pool. One case a test; the normal limit and the welding of non-manifold input
+/* test_decimate.c — the order of collapses, on the collapse engine (decimate_mesh, collapse.h)
+ * and on the reference (decimate_reference_mesh: OpenMesh's decimater under our heap): the order
+ * under the importance rule, the reference's heap, the collapse history, bad input and the
+ * thread pool. One case a test; the normal limit and the welding of non-manifold input
  * have programs of their own (test_decimate_normal_limit.c, test_decimate_weld.c), the helpers
  * are in decimate_common.h.
  *
  *   order        a flat 7 x 7 grid with hand-set importance: the first collapse removes the
  *                vertex of least one-ring sum (centre included) into its least important
  *                neighbour; the second collapse shows that the kept vertex's neighbours were
- *                re-scored (the stale-ring bug of OpenMesh's DecimaterT picks another vertex)
- *   heap         after every collapse on the dragon (res4) no heap entry is stale; the
- *                DecimaterT re-scoring leaves stale entries (so the check can fail)
+ *                re-scored (the reference) or not taken in the same pass (the engine: the kept
+ *                vertex is touched), where the stale-ring bug of OpenMesh's DecimaterT picks
+ *                another vertex
+ *   heap         (reference) after every collapse on the dragon (res4) no heap entry is stale;
+ *                the DecimaterT re-scoring leaves stale entries (so the check can fail)
  *   history      collapse chains end in survivors, survivors are the output vertices (importance
  *                and quadric)
  *   bad input    no importance, no triangles, no vertices, a target above the vertex count
@@ -104,6 +107,8 @@ static uint32_t argmin(const double *values, uint32_t count)
  * wrong rules pick (and the stale re-scoring sends second, into T). */
 enum { X = AT(2, 3), T = AT(2, 2), W = AT(4, 2), Z = AT(3, 2), WT = AT(3, 1) };
 
+typedef int (*decimate_function)(const decimate_input *, decimate_method, decimate_output *);
+
 /* The grid with its importance, decimated by `collapses` collapses. */
 typedef struct grid_fixture {
     mesh_data mesh;
@@ -111,14 +116,14 @@ typedef struct grid_fixture {
     decimate_input in;
 } grid_fixture;
 
-static void grid_decimate(grid_fixture *g, uint32_t collapses, int removed_ring_only,
-                          decimate_output *out)
+static void grid_decimate(grid_fixture *g, decimate_function decimate, uint32_t collapses,
+                          int removed_ring_only, decimate_output *out)
 {
     make_grid(GRID, 0, &g->mesh);
     grid_importance_flat(g->importance);
     g->in = input_of("grid", &g->mesh, g->importance, GRID * GRID - collapses);
     g->in.reheap_removed_ring_only = removed_ring_only;
-    assert_int_equal(decimate_mesh(&g->in, DECIMATE_IMPORTANCE, out), 0);
+    assert_int_equal(decimate(&g->in, DECIMATE_IMPORTANCE, out), 0);
     assert_int_equal(out->collapses, collapses);
 }
 
@@ -142,11 +147,11 @@ static void test_grid_ring_sums(void **state)
 }
 
 /* One collapse: X into T. T stays where it was; X's position is gone; the rest is the input's. */
-static void test_grid_first_collapse(void **state)
+static void check_first_collapse(decimate_function decimate)
 {
     grid_fixture g;
     decimate_output out;
-    grid_decimate(&g, 1, 0, &out);
+    grid_decimate(&g, decimate, 1, 0, &out);
     assert_int_equal(out.vertices_welded, GRID * GRID);
     for (uint32_t v = 0; v < GRID * GRID; v++)
         assert_int_equal(out.welded_of[v], v);
@@ -167,12 +172,19 @@ static void test_grid_first_collapse(void **state)
     mesh_data_free(&g.mesh);
 }
 
+static void test_grid_first_collapse(void **state) { check_first_collapse(decimate_mesh); }
+static void test_grid_first_collapse_reference(void **state)
+{
+    check_first_collapse(decimate_reference_mesh);
+}
+
 /* Two collapses: X into T first; where W and Z went shows how the second was chosen. */
-static void check_two_collapses(int removed_ring_only, uint32_t w_into, uint32_t z_into)
+static void check_two_collapses(decimate_function decimate, int removed_ring_only,
+                                uint32_t w_into, uint32_t z_into)
 {
     grid_fixture g;
     decimate_output out;
-    grid_decimate(&g, 2, removed_ring_only, &out);
+    grid_decimate(&g, decimate, 2, removed_ring_only, &out);
     assert_int_equal(out.collapsed_into[X], T);
     assert_int_equal(out.collapsed_into[W], w_into);
     assert_int_equal(out.collapsed_into[Z], z_into);
@@ -180,12 +192,24 @@ static void check_two_collapses(int removed_ring_only, uint32_t w_into, uint32_t
     mesh_data_free(&g.mesh);
 }
 
-/* The second collapse is W into (3,1), because T's neighbour Z was re-scored. */
-static void test_grid_second_collapse(void **state) { check_two_collapses(0, WT, Z); }
+/* The second collapse is W into (3,1): the reference re-scored T's neighbour Z (138 now); the
+ * engine ranked Z first on its pass-start score (116) but T, its target, was touched by X's
+ * collapse, so Z waits for the next pass. */
+static void test_grid_second_collapse(void **state)
+{
+    check_two_collapses(decimate_mesh, 0, WT, Z);
+}
+static void test_grid_second_collapse_reference(void **state)
+{
+    check_two_collapses(decimate_reference_mesh, 0, WT, Z);
+}
 
-/* The same with DecimaterT's re-scoring: Z keeps its stale entry (116, into T) and goes second,
- * into T (its stale target: T held 0); W stays. */
-static void test_grid_second_collapse_stale(void **state) { check_two_collapses(1, W, T); }
+/* The reference with DecimaterT's re-scoring: Z keeps its stale entry (116, into T) and goes
+ * second, into T (its stale target: T held 0); W stays. */
+static void test_grid_second_collapse_stale(void **state)
+{
+    check_two_collapses(decimate_reference_mesh, 1, W, T);
+}
 
 /* ---- 2. heap order after collapses ---- */
 
@@ -197,14 +221,14 @@ static void test_heap_order(void **state)
     dragon.in.target_vertices = dragon.measured - 250;
     dragon.in.verify_heap = 1;
     decimate_output out;
-    assert_int_equal(decimate_mesh(&dragon.in, DECIMATE_IMPORTANCE, &out), 0);
+    assert_int_equal(decimate_reference_mesh(&dragon.in, DECIMATE_IMPORTANCE, &out), 0);
     assert_int_equal(out.collapses, 250);
     assert_int_equal(out.mesh.vertex_count, dragon.measured - 250);
     uint64_t ours = out.heap_violations;
     decimate_output_free(&out);
 
     dragon.in.reheap_removed_ring_only = 1;
-    assert_int_equal(decimate_mesh(&dragon.in, DECIMATE_IMPORTANCE, &out), 0);
+    assert_int_equal(decimate_reference_mesh(&dragon.in, DECIMATE_IMPORTANCE, &out), 0);
     uint64_t stale = out.heap_violations;
     decimate_output_free(&out);
     print_message("  dragon res4: %u vertices, 250 collapses: %llu stale entries (ours), %llu "
@@ -444,7 +468,9 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_grid_ring_sums),
         cmocka_unit_test(test_grid_first_collapse),
+        cmocka_unit_test(test_grid_first_collapse_reference),
         cmocka_unit_test(test_grid_second_collapse),
+        cmocka_unit_test(test_grid_second_collapse_reference),
         cmocka_unit_test(test_grid_second_collapse_stale),
         cmocka_unit_test(test_heap_order),
         cmocka_unit_test(test_history),

@@ -1,236 +1,189 @@
-// decimate.cc — decimate_mesh() and decimate_measure() (see decimate.h): the welded rebuild
-// (decimate_weld.cc), the decimater with its modules (decimate_modules.hh) and our collapse loop
-// (decimate_collapse.cc), and the copy of the result into a decimate_output.
-#include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
-
+// decimate.cc — decimate_mesh() and decimate_measure() (see decimate.h), the product path: the
+// welded rebuild (decimate_weld.cc, OpenMesh), its mesh laid out on flat arrays, the collapse
+// engine (collapse.h) on them, and the result split per wedge into a decimate_output.
 #include <algorithm>
-#include <array>
 #include <cstring>
 #include <exception>
 #include <vector>
 
-#include "reduce/decimate_collapse.hh"
-#include "reduce/decimate_modules.hh"
 #include "reduce/decimate_openmesh.hh"
 
 extern "C" {
 #include "core/error.h"
+#include "reduce/collapse.h"
 }
 
 using namespace idmr_decimate;
 
 namespace {
 
-// The module handles of one decimater: the normal limit and the history always, the attributes
-// where the mesh has them, and one priority module: the importance, the quadric or the weighted
-// quadric one (with the boundary lock).
-struct Modules {
-    ModNormalLimitT<Mesh>::Handle normal_limit;
-    ModHistoryT<Mesh>::Handle history;
-    ModAttributesT<Mesh>::Handle attributes;
-    ModImportanceT<Mesh>::Handle importance;
-    OpenMesh::Decimater::ModQuadricT<Mesh>::Handle quadric;
-    ModWeightedQuadricT<Mesh>::Handle weighted_quadric;
-    ModBoundaryLockT<Mesh>::Handle boundary_lock;
+// The welded mesh on flat arrays, as the engine takes it.
+struct FlatMesh {
+    std::vector<float> positions;
+    std::vector<uint32_t> triangles, corner_ids;
+    std::vector<uint8_t> locked;
 };
 
-// Adds and sets up the modules of `method`. Returns false when the decimater does not
-// initialise: OpenMesh accepts exactly one priority (non-binary) module and otherwise returns
-// false from initialize() without a word.
-bool add_modules(ReductionDecimater &decimater, Modules &modules, Mesh &mesh,
-                 decimate_method method, const decimate_input *in,
-                 const std::vector<double> &importance, const AttributeTable &attributes,
-                 uint32_t *collapsed_into)
-{
-    decimater.add(modules.normal_limit);
-    decimater.add(modules.history);
-    decimater.module(modules.normal_limit)
-        .set_max_angle(in->max_normal_angle > 0 ? in->max_normal_angle : 60.0);
-    decimater.module(modules.history).set_history(collapsed_into);
-    if (attributes.present()) {
-        decimater.add(modules.attributes);
-        decimater.module(modules.attributes).set_table(&attributes);
-        decimater.module(modules.attributes).set_seams_free(in->seams_free != 0);
-        decimater.set_attributes(&attributes);
-    }
-    if (method == DECIMATE_IMPORTANCE) {
-        decimater.add(modules.importance);
-        for (auto v : mesh.vertices())
-            decimater.module(modules.importance).importance(v) = importance[v.idx()];
-        decimater.set_importance(&decimater.module(modules.importance));
-    } else if (method == DECIMATE_COMBINED) {
-        decimater.add(modules.weighted_quadric);
-        decimater.add(modules.boundary_lock);
-        decimater.module(modules.boundary_lock)
-            .set_max_deviation(in->boundary_tolerance > 0 ? in->boundary_tolerance
-                                                          : DECIMATE_BOUNDARY_TOLERANCE);
-        for (auto v : mesh.vertices())
-            decimater.module(modules.weighted_quadric).importance(v) = importance[v.idx()];
-        decimater.module(modules.weighted_quadric)
-            .set_attributes(&attributes, in->uv_weight, in->normal_weight);
-    } else {
-        decimater.add(modules.quadric);
-    }
-    return decimater.initialize(); // runs the modules' initialize(): importance is set by now
-}
-
-// The output's vertices with attributes: each mesh vertex once per wedge, in vertex order, its
-// wedges in the order of its faces; `corner_out` gets, per face, the output vertex of each corner.
-// The faces' corner sets name vertices by their index before garbage collection: old_index.
-void split_wedges(Mesh &mesh, const AttributeTable &attributes,
-                  const std::vector<uint32_t> &old_index,
-                  std::vector<std::array<uint32_t, 3>> &corner_out, std::vector<uint32_t> &first_of,
-                  std::vector<uint32_t> &vertex_of, std::vector<uint32_t> &id_of)
-{
-    corner_out.assign(mesh.n_faces(), {{0, 0, 0}});
-    first_of.assign(mesh.n_vertices(), 0);
-    std::vector<std::pair<uint32_t, uint32_t>> wedges; // (attribute id, output vertex)
-    for (auto v : mesh.vertices()) {
-        wedges.clear();
-        first_of[v.idx()] = (uint32_t)vertex_of.size();
-        int named = (int)old_index[v.idx()];
-        for (auto f : mesh.vf_range(v)) {
-            const CornerSet &set = mesh.property(attributes.corners, f);
-            uint32_t id = corner_id(set, named);
-            auto found = std::find_if(wedges.begin(), wedges.end(),
-                                      [id](const std::pair<uint32_t, uint32_t> &w) {
-                                          return w.first == id;
-                                      });
-            uint32_t index;
-            if (found != wedges.end()) {
-                index = found->second;
-            } else {
-                index = (uint32_t)vertex_of.size();
-                wedges.emplace_back(id, index);
-                vertex_of.push_back((uint32_t)v.idx());
-                id_of.push_back(id);
-            }
-            for (int k = 0; k < 3; k++)
-                if (set.vertex[k] == named)
-                    corner_out[f.idx()][k] = index;
-        }
-        if (wedges.empty()) { // no faces (not expected after garbage collection): itself
-            vertex_of.push_back((uint32_t)v.idx());
-            id_of.push_back(0);
-        }
-    }
-}
-
-// Copies the output vertices' attributes from the table (uv first, then the normal).
-void copy_attributes(const AttributeTable &attributes, const std::vector<uint32_t> &id_of,
-                     mesh_data *out)
-{
-    size_t n = id_of.size();
-    int stride = attributes.stride();
-    if (attributes.uv_floats)
-        out->texcoords = (float *)xmalloc(2 * sizeof(float) * (n + 1));
-    if (attributes.normal_floats)
-        out->normals = (float *)xmalloc(3 * sizeof(float) * (n + 1));
-    for (size_t i = 0; i < n; i++) {
-        const float *value = &attributes.values[(size_t)stride * id_of[i]];
-        for (int k = 0; k < attributes.uv_floats; k++)
-            out->texcoords[2 * i + k] = value[k];
-        for (int k = 0; k < attributes.normal_floats; k++)
-            out->normals[3 * i + k] = value[attributes.uv_floats + k];
-    }
-}
-
-// Compacts the mesh and copies its vertices and faces into out->mesh (a vertex once per wedge
-// where the mesh has attributes); out->output_index maps the decimater's vertices to their
-// (first) place in it (garbage collection does not keep their order).
-void copy_out(Mesh &mesh, const AttributeTable &attributes, decimate_output *out)
+// Lays the welded mesh out flat: vertex i is mesh vertex i; a face's corners in the order it
+// was added (its corner set where the mesh has attributes).
+void flatten(Mesh &mesh, const AttributeTable &attributes, FlatMesh &flat)
 {
     size_t n = mesh.n_vertices();
-    out->history_count = (uint32_t)n;
-    OpenMesh::VPropHandleT<uint32_t> before;
-    mesh.add_property(before);
-    for (auto v : mesh.all_vertices())
-        mesh.property(before, v) = (uint32_t)v.idx();
-    mesh.garbage_collection();
-    // Without attributes every vertex is one output vertex and a face's corners are its vertices.
-    std::vector<std::array<uint32_t, 3>> corner_out;
-    std::vector<uint32_t> first_of, vertex_of, id_of, old_index;
-    for (auto v : mesh.vertices())
-        old_index.push_back(mesh.property(before, v));
-    if (attributes.present()) {
-        split_wedges(mesh, attributes, old_index, corner_out, first_of, vertex_of, id_of);
-    } else {
-        for (auto v : mesh.vertices()) {
-            first_of.push_back((uint32_t)v.idx());
-            vertex_of.push_back((uint32_t)v.idx());
-        }
-    }
-    out->output_index = (uint32_t *)xmalloc(sizeof(uint32_t) * (n + 1));
-    for (size_t v = 0; v < n; v++)
-        out->output_index[v] = DECIMATE_REMOVED;
-    for (auto v : mesh.vertices())
-        out->output_index[mesh.property(before, v)] = first_of[v.idx()];
-    mesh.remove_property(before);
-    size_t count = vertex_of.size();
-    out->mesh.vertex_count = (uint32_t)count;
-    out->mesh.triangle_count = (uint32_t)mesh.n_faces();
-    out->mesh.positions = (float *)xmalloc(3 * sizeof(float) * (count + 1));
-    out->mesh.indices = (uint32_t *)xmalloc(3 * sizeof(uint32_t) * (mesh.n_faces() + 1));
-    for (size_t i = 0; i < count; i++)
+    flat.positions.resize(3 * n);
+    flat.locked.assign(n, 0);
+    for (auto v : mesh.all_vertices()) {
+        const Mesh::Point &p = mesh.point(v);
         for (int k = 0; k < 3; k++)
-            out->mesh.positions[3 * i + k] = mesh.point(Mesh::VertexHandle((int)vertex_of[i]))[k];
-    size_t corner = 0;
+            flat.positions[3 * (size_t)v.idx() + k] = p[k];
+        flat.locked[v.idx()] = mesh.status(v).locked();
+    }
+    flat.triangles.reserve(3 * mesh.n_faces());
+    if (attributes.present())
+        flat.corner_ids.reserve(3 * mesh.n_faces());
     for (auto f : mesh.faces()) {
         if (attributes.present()) {
-            for (int k = 0; k < 3; k++)
-                out->mesh.indices[corner++] = corner_out[f.idx()][k];
+            const CornerSet &set = mesh.property(attributes.corners, f);
+            for (int k = 0; k < 3; k++) {
+                flat.triangles.push_back((uint32_t)set.vertex[k]);
+                flat.corner_ids.push_back(set.id[k]);
+            }
             continue;
         }
         for (auto v : mesh.fv_range(f))
-            out->mesh.indices[corner++] = (uint32_t)v.idx();
+            flat.triangles.push_back((uint32_t)v.idx());
     }
-    if (attributes.present())
-        copy_attributes(attributes, id_of, &out->mesh);
+}
+
+// The reduced mesh into out->mesh: every vertex of a live triangle once per wedge (distinct
+// corner id), in vertex order, its wedges in the order its corners come in the triangle list;
+// out->output_index[v] is v's first output vertex, or DECIMATE_REMOVED.
+void write_output(const FlatMesh &flat, const AttributeTable &attributes, decimate_output *out)
+{
+    size_t n = flat.locked.size(), corners = flat.triangles.size();
+    bool split = attributes.present();
+    // Per vertex, its live corners in triangle order (a counting sort).
+    std::vector<uint32_t> start(n + 1, 0), corner_of;
+    size_t live = 0;
+    for (size_t c = 0; c < corners; c += 3)
+        if (flat.triangles[c] != COLLAPSE_NONE) {
+            for (int k = 0; k < 3; k++)
+                start[flat.triangles[c + k] + 1]++;
+            live++;
+        }
+    for (size_t v = 0; v < n; v++)
+        start[v + 1] += start[v];
+    corner_of.resize(start[n]);
+    std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+    for (size_t c = 0; c < corners; c++)
+        if (flat.triangles[c - c % 3] != COLLAPSE_NONE)
+            corner_of[fill[flat.triangles[c]]++] = (uint32_t)c;
+
+    std::vector<uint32_t> output_of(corners, 0), vertex_of, id_of;
+    out->output_index = (uint32_t *)xmalloc(sizeof(uint32_t) * (n + 1));
+    for (size_t v = 0; v < n; v++) {
+        out->output_index[v] = DECIMATE_REMOVED;
+        size_t first = vertex_of.size();
+        for (uint32_t i = start[v]; i < start[v + 1]; i++) {
+            uint32_t c = corner_of[i], id = split ? flat.corner_ids[c] : 0;
+            size_t w = first;
+            while (w < vertex_of.size() && id_of[w] != id)
+                w++;
+            if (w == vertex_of.size()) {
+                vertex_of.push_back((uint32_t)v);
+                id_of.push_back(id);
+            }
+            output_of[c] = (uint32_t)w;
+        }
+        if (vertex_of.size() > first)
+            out->output_index[v] = (uint32_t)first;
+    }
+    size_t count = vertex_of.size();
+    mesh_data *m = &out->mesh;
+    m->vertex_count = (uint32_t)count;
+    m->triangle_count = (uint32_t)live;
+    m->positions = (float *)xmalloc(3 * sizeof(float) * (count + 1));
+    m->indices = (uint32_t *)xmalloc(3 * sizeof(uint32_t) * (live + 1));
+    for (size_t i = 0; i < count; i++)
+        std::memcpy(&m->positions[3 * i], &flat.positions[3 * (size_t)vertex_of[i]],
+                    3 * sizeof(float));
+    size_t written = 0;
+    for (size_t c = 0; c < corners; c++)
+        if (flat.triangles[c - c % 3] != COLLAPSE_NONE)
+            m->indices[written++] = output_of[c];
+    if (!split)
+        return;
+    int stride = attributes.stride();
+    if (attributes.uv_floats)
+        m->texcoords = (float *)xmalloc(2 * sizeof(float) * (count + 1));
+    if (attributes.normal_floats)
+        m->normals = (float *)xmalloc(3 * sizeof(float) * (count + 1));
+    for (size_t i = 0; i < count; i++) {
+        const float *value = &attributes.values[(size_t)stride * id_of[i]];
+        for (int k = 0; k < attributes.uv_floats; k++)
+            m->texcoords[2 * i + k] = value[k];
+        for (int k = 0; k < attributes.normal_floats; k++)
+            m->normals[3 * i + k] = value[attributes.uv_floats + k];
+    }
 }
 
 // decimate_mesh() without the exception boundary.
 int decimate_welded(const decimate_input *in, decimate_method method, decimate_output *out)
 {
-    Mesh mesh;
+    FlatMesh flat;
     std::vector<double> importance;
     AttributeTable attributes;
-    build_welded_mesh(in, mesh, out, importance, attributes);
-    size_t n = mesh.n_vertices();
-    out->collapsed_into = (uint32_t *)xmalloc(sizeof(uint32_t) * (n + 1));
-    for (size_t v = 0; v < n; v++)
-        out->collapsed_into[v] = (uint32_t)v;
+    {
+        Mesh mesh;
+        build_welded_mesh(in, mesh, out, importance, attributes);
+        flatten(mesh, attributes, flat);
+    } // the OpenMesh mesh is freed before the engine runs
+    size_t n = flat.locked.size();
+    std::vector<uint32_t> distance = welded_distances(in, out, n);
+    importance.resize(n, 0.0);
+    collapse_mesh cm;
+    std::memset(&cm, 0, sizeof cm);
+    cm.vertex_count = (uint32_t)n;
+    cm.positions = flat.positions.data();
+    cm.triangle_count = (uint32_t)(flat.triangles.size() / 3);
+    cm.triangles = flat.triangles.data();
+    if (attributes.present()) {
+        cm.corner_ids = flat.corner_ids.data();
+        cm.attributes = attributes.values.data();
+        cm.attribute_count = (uint32_t)(attributes.values.size() / attributes.stride());
+        cm.uv_floats = attributes.uv_floats;
+        cm.normal_floats = attributes.normal_floats;
+    }
+    cm.locked = flat.locked.data();
+    cm.importance = in->vertex_importance ? importance.data() : nullptr;
+    cm.distance = distance.empty() ? nullptr : distance.data();
 
-    ReductionDecimater decimater(mesh);
-    std::vector<uint32_t> distance;
-    if (in->vertex_distance) { // per decimater vertex: the least of the input vertices in it
-        distance.assign(n, 0);
-        std::vector<bool> seen(n, false);
-        for (uint32_t i = 0; i < in->vertex_count; i++) {
-            uint32_t w = out->welded_of[i];
-            if (w >= n)
-                continue;
-            distance[w] = seen[w] ? std::min(distance[w], in->vertex_distance[i])
-                                  : in->vertex_distance[i];
-            seen[w] = true;
-        }
-        decimater.set_distances(&distance);
-    }
-    Modules modules;
-    if (!add_modules(decimater, modules, mesh, method, in, importance, attributes,
-                     out->collapsed_into)) {
-        decimate_output_free(out);
-        return error_set(IDMR_EXIT_FAILURE,
-                         "mesh '%s': the OpenMesh decimater did not initialise (it needs "
-                         "exactly one priority module)",
-                         in->name);
-    }
+    collapse_options options;
+    std::memset(&options, 0, sizeof options);
+    options.method = method;
     // The target counts all vertices (once per wedge), the locked copies of loose faces
     // included: the collapsible surface gets what remains after them.
-    size_t target = (size_t)std::min<uint64_t>(in->target_vertices, out->vertices_welded);
-    out->collapses = (uint32_t)decimater.decimate_to(target, in->verify_heap != 0,
-                                                     in->reheap_removed_ring_only != 0,
-                                                     &out->heap_violations);
-    copy_out(mesh, attributes, out); // the history, collapsed_into, is in welded indices already
+    options.target_vertices = std::min<uint64_t>(in->target_vertices, out->vertices_welded);
+    options.max_normal_angle = in->max_normal_angle > 0 ? in->max_normal_angle : 60.0;
+    options.boundary_tolerance =
+        in->boundary_tolerance > 0 ? in->boundary_tolerance : DECIMATE_BOUNDARY_TOLERANCE;
+    options.seams_free = in->seams_free;
+    options.uv_weight = in->uv_weight;
+    options.normal_weight = in->normal_weight;
+    options.threads = in->threads ? in->threads : 1;
+
+    out->history_count = (uint32_t)n;
+    out->collapsed_into = (uint32_t *)xmalloc(sizeof(uint32_t) * (n + 1));
+    collapse_result result;
+    std::memset(&result, 0, sizeof result);
+    result.collapsed_into = out->collapsed_into;
+    if (collapse_run(&cm, &options, &result)) {
+        error_prefix("mesh '%s'", in->name);
+        decimate_output_free(out);
+        return -1;
+    }
+    out->collapses = result.collapses;
+    out->passes = result.passes;
+    write_output(flat, attributes, out);
     return 0;
 }
 

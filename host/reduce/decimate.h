@@ -24,11 +24,13 @@
  * collapse, as in the paper; rotations can add up over many collapses (a sphere decimated by
  * importance to 20 % ended with one inward face in 5 of 20 random importance fields).
  *
- * The collapse loop is ours too (on OpenMesh's BaseDecimaterT, which runs the modules): after a
- * collapse it re-scores the kept vertex and its whole new one-ring, because the importance moved
- * to the kept vertex changes the ring sums of *its* neighbours, which OpenMesh's DecimaterT (it
- * re-scores only the removed vertex's former ring) would leave stale. Ties in priority go to the
- * least important target.
+ * The collapses run on our engine (collapse.h): passes over flat arrays, each scoring every
+ * vertex's best collapse in parallel, ranking them, and taking them greedily where no earlier
+ * collapse of the pass touched their neighbourhood; the result does not depend on the thread
+ * count. The engine enforces every rule above. The previous implementation, OpenMesh's
+ * BaseDecimaterT running our modules under a heap that re-scores the kept vertex's whole
+ * one-ring after each collapse (decimate_reference_mesh), stays as the reference the tests
+ * compare the engine with; it takes one collapse at a time and is about 100x slower.
  *
  * Non-manifold input: OpenMesh's reader splits vertices where the surface is not manifold and
  * adds faces it cannot attach as loose triangles with copied vertices. Here the mesh is rebuilt:
@@ -68,11 +70,12 @@
  * affine and the normals follow the planes (a textured wall), the term is zero. IMPORTANCE keeps
  * the paper's order and QUADRIC stays OpenMesh's geometric baseline; both have no such term.
  *
- * Files (C++, sharing decimate_openmesh.hh): decimate.cc (decimate_mesh, decimate_measure),
- * decimate_weld.cc (the welded rebuild), decimate_modules.hh (the modules),
- * decimate_attributes.hh (the wedges, their module and the attribute quadrics),
- * decimate_collapse.cc/.hh (the collapse loop), decimate_parallel.cc (decimate_many),
- * decimate_stock.cc (decimate_stock_quadric). */
+ * Files: collapse.h/.c (the engine, C); the C++ files share decimate_openmesh.hh: decimate.cc
+ * (decimate_mesh, decimate_measure: the welded rebuild handed to the engine),
+ * decimate_weld.cc (the welded rebuild), decimate_parallel.cc (decimate_many),
+ * decimate_stock.cc (decimate_stock_quadric), and the reference: decimate_reference.cc
+ * (decimate_reference_mesh), decimate_modules.hh (its modules), decimate_attributes.hh (the
+ * wedges, their module and the attribute quadrics), decimate_collapse.cc/.hh (its heap loop). */
 #ifndef IDMR_DECIMATE_H
 #define IDMR_DECIMATE_H
 
@@ -114,9 +117,11 @@ typedef struct decimate_input {
     double uv_weight;     /* COMBINED: the attribute error term's weight of texture coordinates
                              and of normals (see "Attributes" above); 0: no term. reduce uses */
     double normal_weight; /* DECIMATE_UV_WEIGHT and DECIMATE_NORMAL_WEIGHT unless told */
-    int verify_heap;  /* tests: after every collapse, count heap entries whose stored priority or
+    unsigned int threads; /* threads inside this mesh (0: 1); the result is the same for any */
+    /* decimate_reference_mesh only (tests): */
+    int verify_heap;  /* after every collapse, count heap entries whose stored priority or
                          target differs from a fresh evaluation (heap_violations) */
-    int reheap_removed_ring_only; /* tests: re-score as OpenMesh's DecimaterT does */
+    int reheap_removed_ring_only; /* re-score as OpenMesh's DecimaterT does */
 } decimate_input;
 
 #define DECIMATE_BOUNDARY_TOLERANCE 0.01 /* the boundary lock's default limit: 1 % */
@@ -134,6 +139,7 @@ typedef struct decimate_output {
     uint32_t faces_loose;            /* faces that could not be attached at all */
     uint32_t faces_dropped;          /* faces that welded into zero area */
     uint32_t collapses;
+    uint32_t passes; /* the engine's passes (0 for the reference) */
     /* The collapse history, over the decimater's history_count vertices (the welded ones, the
      * copies of patched and loose faces, and positions left without faces, which are removed
      * without a collapse). welded_of maps input vertices to them. */
@@ -156,6 +162,12 @@ int decimate_measure(const decimate_input *in, uint32_t *vertices, uint32_t *unc
  * (out->mesh.vertex_count says what was). */
 int decimate_mesh(const decimate_input *in, decimate_method method, decimate_output *out);
 void decimate_output_free(decimate_output *out);
+
+/* The reference the engine is tested against: the same welded rebuild and rules on OpenMesh's
+ * decimater, one collapse at a time in heap order (decimate_reference.cc). Same contract as
+ * decimate_mesh(); in->threads is ignored. */
+int decimate_reference_mesh(const decimate_input *in, decimate_method method,
+                            decimate_output *out);
 /* Frees the collapse history alone (welded_of, collapsed_into, output_index: 12 bytes per input
  * vertex), keeping the decimated mesh, once nothing will follow the chains again. */
 void decimate_output_free_history(decimate_output *out);
@@ -165,7 +177,8 @@ void decimate_output_free_history(decimate_output *out);
  * count, or -1 with the error set. */
 long decimate_stock_quadric(const decimate_input *in);
 
-/* Decimates `count` meshes on `threads` threads, largest first. status[i] is 0 or -1;
+/* Decimates `count` meshes on `threads` threads, largest first; where there are fewer meshes than
+ * threads, each mesh gets a share of the threads inside it (in[i].threads is overridden). status[i] is 0 or -1;
  * messages[i] (may be NULL) gets the error of a failed mesh. `bar` (may be NULL) advances by
  * each mesh's input vertices when it is done (progress_advance). Returns the number that
  * failed. */

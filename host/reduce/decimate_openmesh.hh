@@ -39,6 +39,11 @@ typedef OpenMesh::Decimater::CollapseInfoT<Mesh> CollapseInfo;
 void build_welded_mesh(const decimate_input *in, Mesh &mesh, decimate_output *out,
                        std::vector<double> &importance, AttributeTable &attributes);
 
+// Per mesh vertex (n of them), the least vertex_distance of the input vertices welded into it;
+// empty when the input has no distances.
+std::vector<uint32_t> welded_distances(const decimate_input *in, const decimate_output *out,
+                                       size_t n);
+
 } // namespace idmr_decimate
 
 #endif

@@ -1,6 +1,7 @@
 // decimate_parallel.cc — decimate_many() (see decimate.h): a pool of threads that take meshes,
-// largest first, from one shared counter; each mesh is decimated by decimate_mesh() on its own,
-// and the progress bar, when given, advances by its input vertices once it is done.
+// largest first, from one shared counter; each mesh is decimated by decimate_mesh(), with the
+// threads the pool leaves over (threads / meshes, at least 1) inside it, and the progress bar,
+// when given, advances by its input vertices once it is done.
 #include <algorithm>
 #include <atomic>
 #include <cstdio>
@@ -24,6 +25,9 @@ extern "C" size_t decimate_many(const decimate_input *in, decimate_output *out, 
     std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
         return in[a].triangle_count > in[b].triangle_count;
     });
+    if (threads < 1)
+        threads = 1;
+    unsigned int inner = count < threads ? threads / (unsigned int)count : 1;
     std::atomic<size_t> next(0), failed(0);
     auto worker = [&]() {
         for (;;) {
@@ -31,7 +35,9 @@ extern "C" size_t decimate_many(const decimate_input *in, decimate_output *out, 
             if (k >= count)
                 return;
             size_t i = order[k];
-            status[i] = decimate_mesh(&in[i], method, &out[i]);
+            decimate_input job = in[i];
+            job.threads = inner;
+            status[i] = decimate_mesh(&job, method, &out[i]);
             if (status[i]) {
                 failed++;
                 if (messages)
@@ -43,8 +49,6 @@ extern "C" size_t decimate_many(const decimate_input *in, decimate_output *out, 
             }
         }
     };
-    if (threads < 1)
-        threads = 1;
     std::vector<std::thread> pool;
     for (unsigned int t = 1; t < threads && t < count; t++)
         pool.emplace_back(worker);

@@ -260,4 +260,22 @@ void build_welded_mesh(const decimate_input *in, Mesh &mesh, decimate_output *ou
     remove_isolated_vertices(b);
 }
 
+std::vector<uint32_t> welded_distances(const decimate_input *in, const decimate_output *out,
+                                       size_t n)
+{
+    std::vector<uint32_t> distance;
+    if (!in->vertex_distance)
+        return distance;
+    distance.assign(n, 0);
+    std::vector<bool> seen(n, false);
+    for (uint32_t i = 0; i < in->vertex_count; i++) {
+        uint32_t w = out->welded_of[i];
+        if (w >= n)
+            continue;
+        distance[w] = seen[w] ? std::min(distance[w], in->vertex_distance[i]) : in->vertex_distance[i];
+        seen[w] = true;
+    }
+    return distance;
+}
+
 } // namespace idmr_decimate

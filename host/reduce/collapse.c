@@ -1,0 +1,1256 @@
+/* collapse.c — the collapse engine (collapse.h): passes of adjacency, scoring, ranking and greedy
+ * application over flat arrays.
+ *
+ * State, per vertex: flags (locked by the caller, removed, touched in this pass), the plane
+ * quadric (10 doubles: the upper triangle of A, then b, then c, for p'Ap + 2b'p + c), the
+ * importance, the best collapse the scoring found (target, cost, tie keys) and the donor (the
+ * vertex that went into it in this pass). Per triangle: its three vertices and corner ids (the
+ * caller's arrays, rewritten). Per attribute id (COMBINED with attributes): its attribute
+ * quadric (see "Attribute quadrics" below). The adjacency is rebuilt at the start of each pass:
+ * adjacency[adjacency_start[v] ..] lists the live triangles at v.
+ *
+ * Why a vertex's pass-start triangles stay exact until it is touched: a triangle changes only
+ * when one of its vertices is removed (it then moves to the kept vertex, or dies with the edge),
+ * and every vertex of the removed vertex's triangles is touched. The current triangles of a
+ * touched vertex are its pass-start ones plus its donor's (current_wedges). */
+#include "reduce/collapse.h"
+
+#include <float.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/error.h"
+
+enum {
+    FLAG_LOCKED = 1,  /* the caller's lock: never removed */
+    FLAG_REMOVED = 2, /* collapsed into another vertex */
+    FLAG_TOUCHED = 4, /* a collapse taken in this pass changed its triangles */
+    FLAG_STALE = 8,   /* its score must be computed again (it or a neighbour was touched) */
+};
+
+#define BOUNDARY_WEIGHT 10.0 /* COMBINED: an open edge's plane, per length² (decimate_modules) */
+#define FLOOR_SHARE 0.01     /* COMBINED: the importance floor, a share of the mean */
+#define PASS_COST_FACTOR 1.5f /* a pass stops at this x the median candidate's cost */
+#define MAX_CHANNELS 5 /* uv and normal */
+#define SCORE_BLOCK 512 /* vertices a thread takes at a time */
+
+/* A vertex's one-ring: each neighbour and how many live triangles hold the edge to it (at most
+ * 255 counted); a view into the pass's ring arrays. */
+typedef struct ring {
+    const uint32_t *vertex;
+    const uint8_t *count;
+    uint32_t size;
+} ring;
+
+/* What a thread needs while it judges collapses. */
+typedef struct scratch {
+    uint32_t *ids, *mapped; /* the removed vertex's distinct corner ids and their images */
+    size_t ids_capacity;
+    struct target_key *targets;
+    size_t targets_capacity;
+} scratch;
+
+/* One candidate target of a vertex, for ordering them. */
+typedef struct target_key {
+    double key; /* the cost (QUADRIC, COMBINED) or the target's importance (IMPORTANCE) */
+    uint32_t distance, vertex;
+} target_key;
+
+/* A vertex's best collapse, for ranking. */
+typedef struct candidate {
+    float cost;
+    uint32_t distance; /* the removed vertex's */
+    double target_importance;
+    uint32_t target_distance;
+    uint32_t vertex;
+} candidate;
+
+/* Where the corners of the removed vertex go (decimate_attributes.hh, CollapseMapping). */
+typedef struct mapping {
+    uint32_t left_from, left_to, right_from, right_to, nearest_to;
+} mapping;
+
+/* The edge v0 -> v1 in v0's triangles. */
+typedef struct edge_sides {
+    uint32_t fl, fr; /* triangles, or COLLAPSE_NONE */
+    uint32_t vl, vr; /* their third vertices */
+} edge_sides;
+
+typedef struct engine {
+    collapse_mesh *m;
+    const collapse_options *o;
+    uint32_t n, t;
+    uint8_t *flags;
+    uint32_t *adjacency_start, *adjacency;
+    /* the rings of this pass: v's at ring_vertex[2 * adjacency_start[v] ..], ring_size[v] long */
+    uint32_t *ring_vertex, *ring_size;
+    uint8_t *ring_held;
+    double *quadric;
+    double *importance;
+    uint32_t *donor;
+    /* the scoring's results, per vertex */
+    uint32_t *best_target;
+    candidate *best;
+    /* attribute quadrics (COMBINED with attributes) */
+    int attributes_weighted, channels;
+    double uv_scale, normal_scale, centre[3];
+    double *attribute_terms;
+    double min_cos, boundary_tolerance;
+    uint64_t alive;
+} engine;
+
+/* ---- small helpers ---- */
+
+/* How many triangles hold the edge to v (0: v is not a neighbour). */
+static uint32_t ring_count(const ring *r, uint32_t v)
+{
+    for (uint32_t i = 0; i < r->size; i++)
+        if (r->vertex[i] == v)
+            return r->count[i];
+    return 0;
+}
+
+static void scratch_free(scratch *s)
+{
+    free(s->ids);
+    free(s->mapped);
+    free(s->targets);
+}
+
+static const float *position(const engine *e, uint32_t v) { return &e->m->positions[3 * (size_t)v]; }
+
+static uint32_t *corners(const engine *e, uint32_t t) { return &e->m->triangles[3 * (size_t)t]; }
+
+/* The corner of triangle t at v (0..2), or 3. */
+static int corner_at(const engine *e, uint32_t t, uint32_t v)
+{
+    const uint32_t *c = corners(e, t);
+    return c[0] == v ? 0 : c[1] == v ? 1 : c[2] == v ? 2 : 3;
+}
+
+static uint32_t id_at(const engine *e, uint32_t t, uint32_t v)
+{
+    return e->m->corner_ids[3 * (size_t)t + corner_at(e, t, v)];
+}
+
+static void cross(const double a[3], const double b[3], double out[3])
+{
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static double dot(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static void difference(const float *a, const float *b, double out[3])
+{
+    for (int k = 0; k < 3; k++)
+        out[k] = (double)a[k] - (double)b[k];
+}
+
+/* Triangle normal (not normalised) with corner positions p[3]. */
+static void normal_of(const float *p[3], double n[3])
+{
+    double e1[3], e2[3];
+    difference(p[1], p[0], e1);
+    difference(p[2], p[0], e2);
+    cross(e1, e2, n);
+}
+
+/* ---- adjacency and rings ---- */
+
+/* The live triangles at each vertex, in triangle order. */
+static void build_adjacency(engine *e)
+{
+    uint32_t *start = e->adjacency_start;
+    memset(start, 0, sizeof(uint32_t) * ((size_t)e->n + 1));
+    for (uint32_t t = 0; t < e->t; t++) {
+        const uint32_t *c = corners(e, t);
+        if (c[0] == COLLAPSE_NONE)
+            continue;
+        for (int k = 0; k < 3; k++)
+            start[c[k] + 1]++;
+    }
+    for (uint32_t v = 0; v < e->n; v++)
+        start[v + 1] += start[v];
+    for (uint32_t t = 0; t < e->t; t++) {
+        const uint32_t *c = corners(e, t);
+        if (c[0] == COLLAPSE_NONE)
+            continue;
+        for (int k = 0; k < 3; k++)
+            e->adjacency[start[c[k]]++] = t;
+    }
+    for (uint32_t v = e->n; v > 0; v--)
+        start[v] = start[v - 1];
+    start[0] = 0;
+}
+
+/* Builds v's one-ring from its pass-start triangles into the ring arrays (v's slot holds twice
+ * its triangles, the most neighbours it can have). */
+static void build_ring(engine *e, uint32_t v)
+{
+    uint32_t base = 2 * e->adjacency_start[v], size = 0;
+    uint32_t *vertex = &e->ring_vertex[base];
+    uint8_t *held = &e->ring_held[base];
+    for (uint32_t i = e->adjacency_start[v]; i < e->adjacency_start[v + 1]; i++) {
+        uint32_t t = e->adjacency[i];
+        const uint32_t *c = corners(e, t);
+        int k = corner_at(e, t, v);
+        for (int side = 1; side <= 2; side++) {
+            uint32_t w = c[(k + side) % 3], j = 0;
+            while (j < size && vertex[j] != w)
+                j++;
+            if (j == size) {
+                vertex[size] = w;
+                held[size++] = 1;
+            } else if (held[j] < 255) {
+                held[j]++;
+            }
+        }
+    }
+    e->ring_size[v] = size;
+}
+
+/* The one-ring of v in this pass (built by build_ring). */
+static ring ring_of(const engine *e, uint32_t v)
+{
+    uint32_t base = 2 * e->adjacency_start[v];
+    ring r = {&e->ring_vertex[base], &e->ring_held[base], e->ring_size[v]};
+    return r;
+}
+
+/* Whether the ring is one fan of manifold edges: every edge in at most two triangles and at most
+ * two open edges. Also gives whether it has an open edge. */
+static int ring_simple(const ring *r, int *boundary)
+{
+    int open = 0;
+    for (uint32_t i = 0; i < r->size; i++) {
+        if (r->count[i] > 2)
+            return 0;
+        open += r->count[i] == 1;
+    }
+    *boundary = open > 0;
+    return open <= 2;
+}
+
+/* A fan of one vertex: the triangles at v around it, for the seam rule. Counts how often the
+ * corner id at v changes between triangles that follow each other around v (cyclically for an
+ * inner vertex). v's triangles form one fan (a free vertex). */
+static unsigned seam_changes(const engine *e, uint32_t v, int inner)
+{
+    uint32_t begin = e->adjacency_start[v], end = e->adjacency_start[v + 1], count = end - begin;
+    /* Start: for a boundary vertex the triangle whose first edge from v (to its next corner) no
+     * other triangle closes; for an inner one, any. */
+    uint32_t start = e->adjacency[begin];
+    if (!inner)
+        for (uint32_t i = begin; i < end; i++) {
+            uint32_t t = e->adjacency[i];
+            const uint32_t *c = corners(e, t);
+            uint32_t next = c[(corner_at(e, t, v) + 1) % 3];
+            int closed = 0;
+            for (uint32_t j = begin; j < end && !closed; j++) {
+                uint32_t s = e->adjacency[j];
+                const uint32_t *d = corners(e, s);
+                closed = s != t && d[(corner_at(e, s, v) + 2) % 3] == next;
+            }
+            if (!closed) {
+                start = t;
+                break;
+            }
+        }
+    unsigned changes = 0;
+    uint32_t t = start, first_id = id_at(e, start, v), previous = first_id;
+    for (uint32_t step = 1; step < count; step++) {
+        const uint32_t *c = corners(e, t);
+        uint32_t far = c[(corner_at(e, t, v) + 2) % 3], following = COLLAPSE_NONE;
+        for (uint32_t j = begin; j < end; j++) {
+            uint32_t s = e->adjacency[j];
+            const uint32_t *d = corners(e, s);
+            if (d[(corner_at(e, s, v) + 1) % 3] == far) {
+                following = s;
+                break;
+            }
+        }
+        if (following == COLLAPSE_NONE)
+            break;
+        uint32_t id = id_at(e, following, v);
+        changes += id != previous;
+        previous = id;
+        t = following;
+    }
+    if (inner && previous != first_id)
+        changes++;
+    return changes;
+}
+
+/* The distinct corner ids at v among its pass-start triangles (in triangle order). */
+static size_t ids_of(const engine *e, uint32_t v, scratch *s)
+{
+    size_t count = 0;
+    uint32_t degree = e->adjacency_start[v + 1] - e->adjacency_start[v];
+    if (s->ids_capacity < degree) {
+        s->ids_capacity = 2 * degree;
+        s->ids = xrealloc(s->ids, sizeof(uint32_t) * s->ids_capacity);
+        s->mapped = xrealloc(s->mapped, sizeof(uint32_t) * s->ids_capacity);
+    }
+    for (uint32_t i = e->adjacency_start[v]; i < e->adjacency_start[v + 1]; i++) {
+        uint32_t id = id_at(e, e->adjacency[i], v);
+        size_t k = 0;
+        while (k < count && s->ids[k] != id)
+            k++;
+        if (k == count)
+            s->ids[count++] = id;
+    }
+    return count;
+}
+
+static edge_sides sides_of(const engine *e, uint32_t v0, uint32_t v1)
+{
+    edge_sides sides = {COLLAPSE_NONE, COLLAPSE_NONE, COLLAPSE_NONE, COLLAPSE_NONE};
+    for (uint32_t i = e->adjacency_start[v0]; i < e->adjacency_start[v0 + 1]; i++) {
+        uint32_t t = e->adjacency[i];
+        const uint32_t *c = corners(e, t);
+        int k = corner_at(e, t, v0);
+        if (c[(k + 1) % 3] == v1) {
+            sides.fl = t;
+            sides.vl = c[(k + 2) % 3];
+        } else if (c[(k + 2) % 3] == v1) {
+            sides.fr = t;
+            sides.vr = c[(k + 1) % 3];
+        }
+    }
+    return sides;
+}
+
+static mapping mapping_of(const engine *e, uint32_t v0, uint32_t v1, const edge_sides *sides)
+{
+    mapping m;
+    m.left_from = m.right_from = COLLAPSE_NONE;
+    uint32_t side = sides->fl != COLLAPSE_NONE ? sides->fl : sides->fr;
+    m.nearest_to = id_at(e, side, v1);
+    m.left_to = m.right_to = m.nearest_to;
+    if (sides->fl != COLLAPSE_NONE) {
+        m.left_from = id_at(e, sides->fl, v0);
+        m.left_to = id_at(e, sides->fl, v1);
+    }
+    if (sides->fr != COLLAPSE_NONE) {
+        m.right_from = id_at(e, sides->fr, v0);
+        m.right_to = id_at(e, sides->fr, v1);
+    }
+    return m;
+}
+
+static uint32_t mapped_id(const mapping *m, uint32_t id)
+{
+    return id == m->left_from ? m->left_to : id == m->right_from ? m->right_to : m->nearest_to;
+}
+
+/* ---- quadrics ---- */
+
+static void quadric_add_plane(double *q, const double n[3], double d, double weight)
+{
+    q[0] += weight * n[0] * n[0];
+    q[1] += weight * n[0] * n[1];
+    q[2] += weight * n[0] * n[2];
+    q[3] += weight * n[1] * n[1];
+    q[4] += weight * n[1] * n[2];
+    q[5] += weight * n[2] * n[2];
+    q[6] += weight * n[0] * d;
+    q[7] += weight * n[1] * d;
+    q[8] += weight * n[2] * d;
+    q[9] += weight * d * d;
+}
+
+/* (q0 + q1)(p) */
+static double quadric_error(const double *q0, const double *q1, const float *point)
+{
+    double q[10];
+    for (int k = 0; k < 10; k++)
+        q[k] = q0[k] + q1[k];
+    double x = point[0], y = point[1], z = point[2];
+    return q[0] * x * x + 2 * q[1] * x * y + 2 * q[2] * x * z + q[3] * y * y + 2 * q[4] * y * z +
+           q[5] * z * z + 2 * (q[6] * x + q[7] * y + q[8] * z) + q[9];
+}
+
+/* Attribute quadrics (decimate_attributes.hh, AttributeQuadrics): per id, the upper triangle of
+ * sum w g g' (6), per channel sum w g (3 each), sum w (1), sum over channels of w d g (3), per
+ * channel sum w d (1 each), sum of w d² (1); positions relative to the mesh's centre. */
+static int attribute_stride(int channels) { return 6 + 3 * channels + 1 + 3 + channels + 1; }
+
+static double attribute_value(const engine *e, uint32_t id, int channel)
+{
+    double v = e->m->attributes[(size_t)e->channels * id + channel];
+    return v * (channel < e->m->uv_floats ? e->uv_scale : e->normal_scale);
+}
+
+static void attribute_add_face(engine *e, const float *p[3], const uint32_t id[3], double w)
+{
+    double e1[3], e2[3], n[3];
+    difference(p[1], p[0], e1);
+    difference(p[2], p[0], e2);
+    cross(e1, e2, n);
+    double n2 = dot(n, n);
+    if (!(n2 > 0) || !(w > 0))
+        return;
+    double dual1[3], dual2[3], p0[3];
+    cross(e2, n, dual1);
+    cross(n, e1, dual2);
+    for (int k = 0; k < 3; k++) {
+        dual1[k] /= n2;
+        dual2[k] /= n2;
+        p0[k] = p[0][k] - e->centre[k];
+    }
+    int channels = e->channels, stride = attribute_stride(channels);
+    double face[6 + 3 * MAX_CHANNELS + 1 + 3 + MAX_CHANNELS + 1] = {0};
+    double *matrix = face, *gradient = face + 6, *weight = gradient + 3 * channels,
+           *linear = weight + 1, *offset = linear + 3, *constant = offset + channels;
+    *weight = w;
+    for (int ch = 0; ch < channels; ch++) {
+        double s0 = attribute_value(e, id[0], ch), s1 = attribute_value(e, id[1], ch),
+               s2 = attribute_value(e, id[2], ch), g[3];
+        for (int k = 0; k < 3; k++)
+            g[k] = dual1[k] * (s1 - s0) + dual2[k] * (s2 - s0);
+        double d = s0 - dot(g, p0);
+        for (int i = 0, k = 0; i < 3; i++)
+            for (int j = i; j < 3; j++)
+                matrix[k++] += w * g[i] * g[j];
+        for (int k = 0; k < 3; k++) {
+            gradient[3 * ch + k] += w * g[k];
+            linear[k] += w * d * g[k];
+        }
+        offset[ch] += w * d;
+        *constant += w * d * d;
+    }
+    for (int k = 0; k < 3; k++) {
+        double *q = &e->attribute_terms[(size_t)id[k] * stride];
+        for (int i = 0; i < stride; i++)
+            q[i] += face[i];
+    }
+}
+
+/* E_id at `point` with the attribute values of id `at`. */
+static double attribute_error(const engine *e, uint32_t id, const float *point, uint32_t at)
+{
+    int channels = e->channels;
+    const double *q = &e->attribute_terms[(size_t)id * attribute_stride(channels)];
+    const double *m = q, *gradient = q + 6, *weight = gradient + 3 * channels,
+                 *linear = weight + 1, *offset = linear + 3, *constant = offset + channels;
+    double p[3];
+    for (int k = 0; k < 3; k++)
+        p[k] = point[k] - e->centre[k];
+    double error = m[0] * p[0] * p[0] + m[3] * p[1] * p[1] + m[5] * p[2] * p[2] +
+                   2 * (m[1] * p[0] * p[1] + m[2] * p[0] * p[2] + m[4] * p[1] * p[2]) +
+                   2 * dot(linear, p) + *constant;
+    for (int ch = 0; ch < channels; ch++) {
+        double s = attribute_value(e, at, ch), gp = dot(&gradient[3 * ch], p);
+        error += *weight * s * s - 2 * s * gp - 2 * offset[ch] * s;
+    }
+    return error > 0 ? error : 0.0;
+}
+
+static void attribute_merge(engine *e, uint32_t from, uint32_t into)
+{
+    if (from == into)
+        return;
+    int stride = attribute_stride(e->channels);
+    const double *f = &e->attribute_terms[(size_t)from * stride];
+    double *t = &e->attribute_terms[(size_t)into * stride];
+    for (int k = 0; k < stride; k++)
+        t[k] += f[k];
+}
+
+/* The mean of a triangle's vertex importance, and its corner positions into p. */
+static double triangle_points(const engine *e, uint32_t t, const float *p[3])
+{
+    const uint32_t *c = corners(e, t);
+    double sum = 0;
+    for (int k = 0; k < 3; k++) {
+        p[k] = position(e, c[k]);
+        sum += e->importance[c[k]];
+    }
+    return sum / 3.0;
+}
+
+/* Whether the edge a-b (of a live triangle) is open: held by one live triangle. */
+static int edge_open(const engine *e, uint32_t a, uint32_t b)
+{
+    uint32_t held = 0;
+    for (uint32_t i = e->adjacency_start[a]; i < e->adjacency_start[a + 1]; i++)
+        held += corner_at(e, e->adjacency[i], b) < 3;
+    return held == 1;
+}
+
+/* COMBINED's attribute quadrics, where the mesh has an attribute with a weight. */
+static void start_attribute_quadrics(engine *e)
+{
+    const collapse_mesh *m = e->m;
+    e->channels = m->uv_floats + m->normal_floats;
+    e->attributes_weighted = m->corner_ids && e->channels > 0 &&
+                             ((m->uv_floats && e->o->uv_weight > 0) ||
+                              (m->normal_floats && e->o->normal_weight > 0));
+    if (!e->attributes_weighted)
+        return;
+    double low[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, high[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
+    for (uint32_t v = 0; v < e->n; v++) {
+        if (e->adjacency_start[v] == e->adjacency_start[v + 1])
+            continue;
+        for (int k = 0; k < 3; k++) {
+            low[k] = fmin(low[k], position(e, v)[k]);
+            high[k] = fmax(high[k], position(e, v)[k]);
+        }
+    }
+    double extent = fmax(high[0] - low[0], fmax(high[1] - low[1], high[2] - low[2]));
+    if (!(extent > 0) || !isfinite(extent)) {
+        e->attributes_weighted = 0;
+        return;
+    }
+    e->uv_scale = e->o->uv_weight * extent;
+    e->normal_scale = e->o->normal_weight * extent;
+    for (int k = 0; k < 3; k++)
+        e->centre[k] = 0.5 * (low[k] + high[k]);
+    e->attribute_terms =
+        xcalloc((size_t)m->attribute_count * attribute_stride(e->channels) + 1, sizeof(double));
+}
+
+/* The plane quadrics: QUADRIC, each face's plane weighted by its area (OpenMesh's ModQuadricT);
+ * COMBINED, weighted by area x (importance + floor), with planes across open edges and the
+ * attribute quadrics. Needs the adjacency. */
+static void build_quadrics(engine *e)
+{
+    int combined = e->o->method == DECIMATE_COMBINED;
+    double floor = 0;
+    if (combined) {
+        start_attribute_quadrics(e);
+        double weighted = 0, area = 0;
+        for (uint32_t t = 0; t < e->t; t++) {
+            if (corners(e, t)[0] == COLLAPSE_NONE)
+                continue;
+            const float *p[3];
+            double face_importance = triangle_points(e, t, p), n[3];
+            normal_of(p, n);
+            double a = 0.5 * sqrt(dot(n, n));
+            weighted += a * face_importance;
+            area += a;
+        }
+        double mean = area > 0 ? weighted / area : 0;
+        floor = mean > 0 && isfinite(mean) ? FLOOR_SHARE * mean : 1.0;
+    }
+    for (uint32_t t = 0; t < e->t; t++) {
+        const uint32_t *c = corners(e, t);
+        if (c[0] == COLLAPSE_NONE)
+            continue;
+        const float *p[3];
+        double face_importance = combined ? triangle_points(e, t, p) + floor : 1.0, n[3];
+        if (!combined)
+            triangle_points(e, t, p);
+        normal_of(p, n);
+        double twice_area = sqrt(dot(n, n));
+        if (!(twice_area > 0))
+            continue;
+        for (int k = 0; k < 3; k++)
+            n[k] /= twice_area;
+        double d = -(n[0] * p[0][0] + n[1] * p[0][1] + n[2] * p[0][2]);
+        double weight = 0.5 * twice_area * face_importance;
+        for (int k = 0; k < 3; k++)
+            quadric_add_plane(&e->quadric[10 * (size_t)c[k]], n, d, weight);
+        if (!combined)
+            continue;
+        for (int k = 0; k < 3; k++) {
+            uint32_t a = c[k], b = c[(k + 1) % 3];
+            if (!edge_open(e, a, b))
+                continue;
+            double edge[3], across[3];
+            difference(position(e, b), position(e, a), edge);
+            cross(edge, n, across);
+            double length = sqrt(dot(across, across));
+            if (!(length > 0))
+                continue;
+            for (int i = 0; i < 3; i++)
+                across[i] /= length;
+            const float *pa = position(e, a);
+            double da = -(across[0] * pa[0] + across[1] * pa[1] + across[2] * pa[2]);
+            double w = BOUNDARY_WEIGHT * dot(edge, edge) * face_importance;
+            quadric_add_plane(&e->quadric[10 * (size_t)a], across, da, w);
+            quadric_add_plane(&e->quadric[10 * (size_t)b], across, da, w);
+        }
+        if (e->attributes_weighted)
+            attribute_add_face(e, p, &e->m->corner_ids[3 * (size_t)t], weight);
+    }
+}
+
+/* ---- the rules ---- */
+
+/* No triangle of v0 that moves (one without v1) turns by more than the limit or degenerates. */
+static int normals_kept(const engine *e, uint32_t v0, uint32_t v1)
+{
+    const float *p1 = position(e, v1);
+    for (uint32_t i = e->adjacency_start[v0]; i < e->adjacency_start[v0 + 1]; i++) {
+        uint32_t t = e->adjacency[i];
+        if (corner_at(e, t, v1) < 3)
+            continue;
+        const uint32_t *c = corners(e, t);
+        const float *before[3], *after[3];
+        for (int k = 0; k < 3; k++) {
+            before[k] = position(e, c[k]);
+            after[k] = c[k] == v0 ? p1 : before[k];
+        }
+        double nb[3], na[3];
+        normal_of(before, nb);
+        normal_of(after, na);
+        double lb = sqrt(dot(nb, nb)), la = sqrt(dot(na, na));
+        if (!(la > 0))
+            return 0;
+        if (!(lb > 0))
+            continue; /* already degenerate: any direction is an improvement */
+        if (dot(nb, na) < e->min_cos * lb * la)
+            return 0;
+    }
+    return 1;
+}
+
+/* COMBINED: a boundary v0 goes into one of its two boundary neighbours only where it lies within
+ * the tolerance x |u - v1| of the new outline u - v1 (u its other boundary neighbour). */
+static int outline_kept(const engine *e, uint32_t v0, uint32_t v1, const ring *r0)
+{
+    uint32_t open[2], count = 0;
+    for (uint32_t i = 0; i < r0->size; i++)
+        if (r0->count[i] == 1 && count < 2)
+            open[count++] = r0->vertex[i];
+    if (count != 2 || (open[0] != v1 && open[1] != v1))
+        return 0;
+    uint32_t u = open[0] == v1 ? open[1] : open[0];
+    double chord[3], to_p[3];
+    difference(position(e, v1), position(e, u), chord);
+    difference(position(e, v0), position(e, u), to_p);
+    double length2 = dot(chord, chord);
+    double s = length2 > 0 ? fmin(1.0, fmax(0.0, dot(to_p, chord) / length2)) : 0.0;
+    double deviation2 = 0;
+    for (int k = 0; k < 3; k++) {
+        double d = to_p[k] - chord[k] * s;
+        deviation2 += d * d;
+    }
+    return deviation2 <= e->boundary_tolerance * e->boundary_tolerance * length2;
+}
+
+/* The seam rules of decimate.h ("Attributes"). */
+static int seams_kept(const engine *e, uint32_t v0, uint32_t v1, const edge_sides *sides,
+                      int inner, scratch *s)
+{
+    if (e->o->seams_free)
+        return 1;
+    size_t wedges = ids_of(e, v0, s);
+    int left = sides->fl != COLLAPSE_NONE, right = sides->fr != COLLAPSE_NONE;
+    if (wedges == 1)
+        return !(left && right && id_at(e, sides->fl, v1) != id_at(e, sides->fr, v1));
+    if (wedges != 2 || !left || !right || seam_changes(e, v0, inner) != 2)
+        return 0;
+    return id_at(e, sides->fl, v0) != id_at(e, sides->fr, v0) &&
+           id_at(e, sides->fl, v1) != id_at(e, sides->fr, v1);
+}
+
+/* With normals: every moved triangle keeps each corner's normal on its front side. */
+static int normals_face_out(const engine *e, uint32_t v0, uint32_t v1, const mapping *map)
+{
+    const collapse_mesh *m = e->m;
+    if (!m->normal_floats)
+        return 1;
+    int stride = m->uv_floats + m->normal_floats;
+    for (uint32_t i = e->adjacency_start[v0]; i < e->adjacency_start[v0 + 1]; i++) {
+        uint32_t t = e->adjacency[i];
+        if (corner_at(e, t, v1) < 3)
+            continue;
+        const uint32_t *c = corners(e, t);
+        const float *p[3];
+        uint32_t id[3];
+        for (int k = 0; k < 3; k++) {
+            int moved = c[k] == v0;
+            p[k] = position(e, moved ? v1 : c[k]);
+            id[k] = m->corner_ids[3 * (size_t)t + k];
+            if (moved)
+                id[k] = mapped_id(map, id[k]);
+        }
+        double g[3];
+        normal_of(p, g);
+        for (int k = 0; k < 3; k++) {
+            const float *n = &m->attributes[(size_t)stride * id[k] + m->uv_floats];
+            if (!(g[0] * n[0] + g[1] * n[1] + g[2] * n[2] > 0))
+                return 0;
+        }
+    }
+    return 1;
+}
+
+/* Whether v0 -> v1 is legal; r0 is v0's ring, v0 free and with more than two neighbours. *rule
+ * names the first rule that forbids it. */
+static int collapse_legal(const engine *e, uint32_t v0, uint32_t v1, const ring *r0,
+                          int boundary0, scratch *s, const char **rule)
+{
+    uint32_t held = ring_count(r0, v1);
+    if (held == 0)
+        return *rule = "not an edge", 0;
+    if (e->flags[v1] & FLAG_LOCKED)
+        return *rule = "locked", 0;
+    ring ring1 = ring_of(e, v1), *r1 = &ring1;
+    int boundary1;
+    if (!ring_simple(r1, &boundary1))
+        return *rule = "complex vertex", 0;
+    edge_sides sides = sides_of(e, v0, v1);
+    /* A triangle of the edge whose other two edges are open would leave a dangling edge. */
+    if (sides.fl != COLLAPSE_NONE && ring_count(r1, sides.vl) == 1 &&
+        ring_count(r0, sides.vl) == 1)
+        return *rule = "dangling edge", 0;
+    if (sides.fr != COLLAPSE_NONE && ring_count(r1, sides.vr) == 1 &&
+        ring_count(r0, sides.vr) == 1)
+        return *rule = "dangling edge", 0;
+    if (sides.vl == sides.vr)
+        return *rule = "one opposite vertex", 0;
+    int both_sides = sides.fl != COLLAPSE_NONE && sides.fr != COLLAPSE_NONE;
+    if (boundary0 && boundary1 && held == 2)
+        return *rule = "interior edge between boundaries", 0;
+    if (boundary0 && (!boundary1 || both_sides))
+        return *rule = "boundary vertex off the boundary", 0;
+    for (uint32_t i = 0; i < r0->size; i++) {
+        uint32_t w = r0->vertex[i];
+        if (w != v1 && w != sides.vl && w != sides.vr && ring_count(r1, w))
+            return *rule = "link condition", 0;
+    }
+    if (both_sides) {
+        ring ring_l = ring_of(e, sides.vl);
+        if (ring_l.size == 3 && e->ring_size[sides.vr] == 3 && ring_count(&ring_l, sides.vr))
+            return *rule = "two joined valence-3 vertices", 0;
+    }
+    if (!normals_kept(e, v0, v1))
+        return *rule = "normal limit", 0;
+    if (e->o->method == DECIMATE_COMBINED && boundary0 && !isinf(e->boundary_tolerance) &&
+        !outline_kept(e, v0, v1, r0))
+        return *rule = "boundary lock", 0;
+    if (e->m->corner_ids) {
+        if (!seams_kept(e, v0, v1, &sides, !boundary0, s))
+            return *rule = "seam", 0;
+        mapping map = mapping_of(e, v0, v1, &sides);
+        if (!normals_face_out(e, v0, v1, &map))
+            return *rule = "normal behind its triangle", 0;
+    }
+    return 1;
+}
+
+/* The cost of v0 -> v1 for QUADRIC and COMBINED. */
+static double collapse_cost(const engine *e, uint32_t v0, uint32_t v1, scratch *s)
+{
+    const float *p1 = position(e, v1);
+    double error = quadric_error(&e->quadric[10 * (size_t)v0], &e->quadric[10 * (size_t)v1], p1);
+    if (e->attributes_weighted) {
+        edge_sides sides = sides_of(e, v0, v1);
+        mapping map = mapping_of(e, v0, v1, &sides);
+        size_t count = ids_of(e, v0, s);
+        for (size_t k = 0; k < count; k++) {
+            s->mapped[k] = mapped_id(&map, s->ids[k]);
+            error += attribute_error(e, s->ids[k], p1, s->mapped[k]);
+            size_t j = 0;
+            while (j < k && s->mapped[j] != s->mapped[k])
+                j++;
+            if (j == k)
+                error += attribute_error(e, s->mapped[k], p1, s->mapped[k]);
+        }
+    }
+    CHECK_FINITE(error, "collapse cost");
+    return fmax(error, 0.0);
+}
+
+static uint32_t distance_of(const engine *e, uint32_t v)
+{
+    return e->m->distance ? e->m->distance[v] : 0;
+}
+
+static int compare_targets(const void *a, const void *b)
+{
+    const target_key *x = a, *y = b;
+    if (x->key != y->key)
+        return x->key < y->key ? -1 : 1;
+    if (x->distance != y->distance)
+        return x->distance < y->distance ? -1 : 1;
+    return x->vertex < y->vertex ? -1 : x->vertex > y->vertex;
+}
+
+/* Scores v: its best legal collapse into best[v] and best_target[v] (COLLAPSE_NONE: none). */
+static void score_vertex(engine *e, uint32_t v, scratch *s)
+{
+    e->best_target[v] = COLLAPSE_NONE;
+    if (e->flags[v] & (FLAG_LOCKED | FLAG_REMOVED))
+        return;
+    if (e->adjacency_start[v] == e->adjacency_start[v + 1])
+        return;
+    ring ring0 = ring_of(e, v), *r0 = &ring0;
+    int boundary0;
+    if (!ring_simple(r0, &boundary0) || r0->size <= 2)
+        return;
+    if (s->targets_capacity < r0->size) {
+        s->targets_capacity = 2 * r0->size;
+        s->targets = xrealloc(s->targets, sizeof(target_key) * s->targets_capacity);
+    }
+    int by_importance = e->o->method == DECIMATE_IMPORTANCE;
+    for (uint32_t i = 0; i < r0->size; i++) {
+        uint32_t u = r0->vertex[i];
+        s->targets[i].vertex = u;
+        s->targets[i].distance = distance_of(e, u);
+        s->targets[i].key = by_importance ? e->importance[u] : collapse_cost(e, v, u, s);
+    }
+    size_t count = r0->size;
+    for (size_t i = 1; i < count; i++) { /* an insertion sort: a ring is short */
+        target_key key = s->targets[i];
+        size_t j = i;
+        while (j > 0 && compare_targets(&key, &s->targets[j - 1]) < 0) {
+            s->targets[j] = s->targets[j - 1];
+            j--;
+        }
+        s->targets[j] = key;
+    }
+    for (size_t i = 0; i < count; i++) {
+        const char *rule;
+        uint32_t u = s->targets[i].vertex;
+        if (!collapse_legal(e, v, u, r0, boundary0, s, &rule))
+            continue;
+        double priority = s->targets[i].key;
+        if (by_importance) {
+            priority = e->importance[v];
+            for (uint32_t k = 0; k < r0->size; k++)
+                priority += e->importance[r0->vertex[k]];
+            CHECK_FINITE(priority, "ring importance");
+        }
+        e->best_target[v] = u;
+        e->best[v] = (candidate){(float)fmin(priority, (double)FLT_MAX / 2), distance_of(e, v),
+                                 by_importance ? e->importance[u] : 0.0,
+                                 s->targets[i].distance, v};
+        return;
+    }
+}
+
+/* ---- the per-vertex steps, in parallel ---- */
+
+/* Each vertex's step writes only that vertex's records, so the blocks may go to any thread. */
+typedef enum vertex_step { STEP_RINGS, STEP_SCORES } vertex_step;
+
+typedef struct vertex_job {
+    engine *e;
+    vertex_step step;
+    atomic_uint_fast32_t next;
+} vertex_job;
+
+static void *vertex_worker(void *arg)
+{
+    vertex_job *job = arg;
+    engine *e = job->e;
+    scratch s;
+    memset(&s, 0, sizeof s);
+    for (;;) {
+        uint32_t begin = (uint32_t)atomic_fetch_add(&job->next, SCORE_BLOCK);
+        if (begin >= e->n)
+            break;
+        uint32_t end = begin + SCORE_BLOCK < e->n ? begin + SCORE_BLOCK : e->n;
+        for (uint32_t v = begin; v < end; v++) {
+            if (job->step == STEP_RINGS)
+                build_ring(e, v);
+            else if (e->flags[v] & FLAG_STALE)
+                score_vertex(e, v, &s);
+        }
+    }
+    scratch_free(&s);
+    return NULL;
+}
+
+static void for_each_vertex(engine *e, vertex_step step)
+{
+    vertex_job job = {.e = e, .step = step};
+    atomic_init(&job.next, 0);
+    unsigned int threads = e->o->threads ? e->o->threads : 1;
+    if (threads > 64)
+        threads = 64;
+    pthread_t pool[64];
+    unsigned int started = 0;
+    for (unsigned int i = 1; i < threads && (size_t)i * SCORE_BLOCK < e->n; i++)
+        if (pthread_create(&pool[started], NULL, vertex_worker, &job) == 0)
+            started++;
+    vertex_worker(&job);
+    for (unsigned int i = 0; i < started; i++)
+        pthread_join(pool[i], NULL);
+}
+
+/* ---- ranking ---- */
+
+/* The full order of candidates: cost, then the removed vertex farthest from its importance
+ * source, then the least important target, then the target closest to its source, then the
+ * lower vertex. */
+static int compare_candidates(const void *a, const void *b)
+{
+    const candidate *x = a, *y = b;
+    if (x->cost != y->cost)
+        return x->cost < y->cost ? -1 : 1;
+    if (x->distance != y->distance)
+        return x->distance > y->distance ? -1 : 1;
+    if (x->target_importance != y->target_importance)
+        return x->target_importance < y->target_importance ? -1 : 1;
+    if (x->target_distance != y->target_distance)
+        return x->target_distance < y->target_distance ? -1 : 1;
+    return x->vertex < y->vertex ? -1 : x->vertex > y->vertex;
+}
+
+/* Sorts the candidates: a radix sort on the cost's bits (costs are not negative, so their bits
+ * order as the costs do), stable, so equal costs stay in vertex order; then runs of equal cost
+ * sorted by the full order where the ties have keys beyond the vertex. */
+static void rank_candidates(candidate *list, candidate *spare, size_t count, int full_ties)
+{
+    size_t histogram[2][65536];
+    memset(histogram, 0, sizeof histogram);
+    for (size_t i = 0; i < count; i++) {
+        uint32_t bits;
+        memcpy(&bits, &list[i].cost, sizeof bits);
+        histogram[0][bits & 0xffff]++;
+        histogram[1][bits >> 16]++;
+    }
+    for (int digit = 0; digit < 2; digit++) {
+        size_t sum = 0;
+        for (size_t b = 0; b < 65536; b++) {
+            size_t c = histogram[digit][b];
+            histogram[digit][b] = sum;
+            sum += c;
+        }
+        candidate *from = digit ? spare : list, *to = digit ? list : spare;
+        for (size_t i = 0; i < count; i++) {
+            uint32_t bits;
+            memcpy(&bits, &from[i].cost, sizeof bits);
+            uint32_t bucket = digit ? bits >> 16 : bits & 0xffff;
+            to[histogram[digit][bucket]++] = from[i];
+        }
+    }
+    if (!full_ties)
+        return;
+    for (size_t i = 0; i < count;) {
+        size_t j = i + 1;
+        while (j < count && list[j].cost == list[i].cost)
+            j++;
+        if (j - i > 1)
+            qsort(&list[i], j - i, sizeof(candidate), compare_candidates);
+        i = j;
+    }
+}
+
+/* ---- applying collapses ---- */
+
+/* The distinct corner ids at v among its current triangles (its pass-start ones and its
+ * donor's): its wedge count, 1 without attributes. */
+static uint32_t current_wedges(const engine *e, uint32_t v, scratch *s)
+{
+    if (!e->m->corner_ids)
+        return 1;
+    size_t count = 0;
+    uint32_t sources[2] = {v, e->donor[v]};
+    for (int k = 0; k < 2; k++) {
+        uint32_t source = sources[k];
+        if (source == COLLAPSE_NONE)
+            continue;
+        for (uint32_t i = e->adjacency_start[source]; i < e->adjacency_start[source + 1]; i++) {
+            uint32_t t = e->adjacency[i];
+            if (corners(e, t)[0] == COLLAPSE_NONE || corner_at(e, t, v) == 3)
+                continue;
+            uint32_t id = id_at(e, t, v);
+            size_t j = 0;
+            while (j < count && s->ids[j] != id)
+                j++;
+            if (j < count)
+                continue;
+            if (count == s->ids_capacity) {
+                s->ids_capacity = s->ids_capacity ? 2 * s->ids_capacity : 32;
+                s->ids = xrealloc(s->ids, sizeof(uint32_t) * s->ids_capacity);
+                s->mapped = xrealloc(s->mapped, sizeof(uint32_t) * s->ids_capacity);
+            }
+            s->ids[count++] = id;
+        }
+    }
+    return count ? (uint32_t)count : 1;
+}
+
+/* Takes v0 -> v1 (both untouched in this pass): moves v0's triangles onto v1, removes the two of
+ * the edge, merges the quadrics (or the importance), records the history and touches v0's ring.
+ * Returns the vertices (counted once per wedge) the mesh lost. */
+static uint64_t apply_collapse(engine *e, uint32_t v0, uint32_t v1, uint32_t *history,
+                               scratch *s)
+{
+    edge_sides sides = sides_of(e, v0, v1);
+    int attributes = e->m->corner_ids != NULL;
+    mapping map = {0, 0, 0, 0, 0};
+    uint64_t before = 1;
+    if (attributes) {
+        map = mapping_of(e, v0, v1, &sides);
+        before = current_wedges(e, v0, s) + current_wedges(e, v1, s);
+        if (sides.vl != COLLAPSE_NONE)
+            before += current_wedges(e, sides.vl, s);
+        if (sides.vr != COLLAPSE_NONE)
+            before += current_wedges(e, sides.vr, s);
+        if (e->attributes_weighted) {
+            size_t count = ids_of(e, v0, s);
+            for (size_t k = 0; k < count; k++)
+                attribute_merge(e, s->ids[k], mapped_id(&map, s->ids[k]));
+        }
+    }
+    for (uint32_t i = e->adjacency_start[v0]; i < e->adjacency_start[v0 + 1]; i++) {
+        uint32_t t = e->adjacency[i];
+        uint32_t *c = corners(e, t);
+        for (int k = 0; k < 3; k++)
+            e->flags[c[k]] |= FLAG_TOUCHED;
+        if (t == sides.fl || t == sides.fr) {
+            c[0] = c[1] = c[2] = COLLAPSE_NONE;
+            continue;
+        }
+        int k = corner_at(e, t, v0);
+        c[k] = v1;
+        if (attributes)
+            e->m->corner_ids[3 * (size_t)t + k] =
+                mapped_id(&map, e->m->corner_ids[3 * (size_t)t + k]);
+    }
+    if (e->quadric)
+        for (int k = 0; k < 10; k++)
+            e->quadric[10 * (size_t)v1 + k] += e->quadric[10 * (size_t)v0 + k];
+    if (e->o->method == DECIMATE_IMPORTANCE)
+        e->importance[v1] += e->importance[v0];
+    e->flags[v0] |= FLAG_REMOVED;
+    e->donor[v1] = v0;
+    history[v0] = v1;
+    if (!attributes)
+        return 1;
+    uint64_t after = current_wedges(e, v1, s);
+    if (sides.vl != COLLAPSE_NONE)
+        after += current_wedges(e, sides.vl, s);
+    if (sides.vr != COLLAPSE_NONE)
+        after += current_wedges(e, sides.vr, s);
+    return before > after ? before - after : 0;
+}
+
+/* A vertex's score depends on its triangles, its neighbours' triangles, quadrics and importance:
+ * after a pass, the touched vertices and their neighbours are scored again, the rest keep their
+ * scores. */
+static void mark_stale(engine *e)
+{
+    for (uint32_t v = 0; v < e->n; v++)
+        e->flags[v] &= (uint8_t)~FLAG_STALE;
+    for (uint32_t t = 0; t < e->t; t++) {
+        const uint32_t *c = corners(e, t);
+        if (c[0] == COLLAPSE_NONE)
+            continue;
+        if ((e->flags[c[0]] | e->flags[c[1]] | e->flags[c[2]]) & FLAG_TOUCHED)
+            for (int k = 0; k < 3; k++)
+                e->flags[c[k]] |= FLAG_STALE;
+    }
+    for (uint32_t v = 0; v < e->n; v++)
+        if (e->flags[v] & FLAG_REMOVED)
+            e->best_target[v] = COLLAPSE_NONE;
+}
+
+/* One pass; returns the collapses it took. */
+static uint32_t run_pass(engine *e, candidate *list, candidate *spare, uint32_t *history,
+                         scratch *s)
+{
+    build_adjacency(e);
+    for_each_vertex(e, STEP_RINGS);
+    for_each_vertex(e, STEP_SCORES);
+    size_t count = 0;
+    for (uint32_t v = 0; v < e->n; v++)
+        if (e->best_target[v] != COLLAPSE_NONE)
+            list[count++] = e->best[v];
+    if (!count)
+        return 0;
+    int full_ties = e->o->method == DECIMATE_IMPORTANCE || e->m->distance;
+    rank_candidates(list, spare, count, full_ties);
+    float cost_limit = list[count / 2].cost * PASS_COST_FACTOR;
+    for (uint32_t v = 0; v < e->n; v++) {
+        e->flags[v] &= (uint8_t)~FLAG_TOUCHED;
+        e->donor[v] = COLLAPSE_NONE;
+    }
+    uint32_t taken = 0;
+    for (size_t i = 0; i < count && e->alive > e->o->target_vertices; i++) {
+        if (list[i].cost > cost_limit && taken > 0)
+            break;
+        uint32_t v0 = list[i].vertex, v1 = e->best_target[v0];
+        if ((e->flags[v0] | e->flags[v1]) & FLAG_TOUCHED)
+            continue;
+        uint64_t lost = apply_collapse(e, v0, v1, history, s);
+        e->alive = e->alive > lost ? e->alive - lost : 0;
+        taken++;
+    }
+    mark_stale(e);
+    return taken;
+}
+
+/* ---- setup ---- */
+
+static void engine_free(engine *e)
+{
+    free(e->flags);
+    free(e->adjacency_start);
+    free(e->adjacency);
+    free(e->ring_vertex);
+    free(e->ring_held);
+    free(e->ring_size);
+    free(e->quadric);
+    free(e->importance);
+    free(e->donor);
+    free(e->best_target);
+    free(e->best);
+    free(e->attribute_terms);
+    memset(e, 0, sizeof *e);
+}
+
+static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
+{
+    memset(e, 0, sizeof *e);
+    if (o->method != DECIMATE_QUADRIC && !m->importance && m->vertex_count)
+        return error_set(IDMR_EXIT_FAILURE, "collapse: the %s method needs importance",
+                         o->method == DECIMATE_IMPORTANCE ? "importance" : "combined");
+    if (m->corner_ids && (m->uv_floats + m->normal_floats <= 0 ||
+                          m->uv_floats + m->normal_floats > MAX_CHANNELS || !m->attributes))
+        return error_set(IDMR_EXIT_FAILURE, "collapse: corner ids without an attribute table");
+    for (size_t i = 0; i < 3 * (size_t)m->triangle_count; i++)
+        if (m->triangles[i] != COLLAPSE_NONE &&
+            (m->triangles[i] >= m->vertex_count ||
+             (m->corner_ids && m->corner_ids[i] >= m->attribute_count)))
+            return error_set(IDMR_EXIT_FAILURE,
+                             "collapse: triangle %zu names vertex %u or attribute id %u, out of "
+                             "range",
+                             i / 3, m->triangles[i], m->corner_ids ? m->corner_ids[i] : 0);
+    e->m = m;
+    e->o = o;
+    e->n = m->vertex_count;
+    e->t = m->triangle_count;
+    e->min_cos = cos((o->max_normal_angle > 0 ? o->max_normal_angle : 60.0) * M_PI / 180.0);
+    e->boundary_tolerance =
+        o->boundary_tolerance > 0 ? o->boundary_tolerance : DECIMATE_BOUNDARY_TOLERANCE;
+    size_t n = (size_t)e->n + 1;
+    e->flags = xcalloc(n, 1);
+    e->adjacency_start = xmalloc(sizeof(uint32_t) * (n + 1));
+    e->adjacency = xmalloc(sizeof(uint32_t) * (3 * (size_t)e->t + 1));
+    e->ring_vertex = xmalloc(sizeof(uint32_t) * (6 * (size_t)e->t + 1));
+    e->ring_held = xmalloc(6 * (size_t)e->t + 1);
+    e->ring_size = xcalloc(n, sizeof(uint32_t));
+    e->donor = xmalloc(sizeof(uint32_t) * n);
+    e->best_target = xmalloc(sizeof(uint32_t) * n);
+    e->best = xmalloc(sizeof(candidate) * n);
+    e->importance = xcalloc(n, sizeof(double));
+    if (m->importance)
+        memcpy(e->importance, m->importance, sizeof(double) * e->n);
+    if (o->method != DECIMATE_IMPORTANCE)
+        e->quadric = xcalloc(10 * n, sizeof(double));
+    for (uint32_t v = 0; v < e->n; v++) {
+        e->donor[v] = COLLAPSE_NONE;
+        e->best_target[v] = COLLAPSE_NONE;
+        e->flags[v] = FLAG_STALE;
+        if (m->locked && m->locked[v])
+            e->flags[v] |= FLAG_LOCKED;
+    }
+    build_adjacency(e);
+    for_each_vertex(e, STEP_RINGS);
+    if (e->quadric)
+        build_quadrics(e);
+    scratch s;
+    memset(&s, 0, sizeof s);
+    for (uint32_t v = 0; v < e->n; v++)
+        if (e->adjacency_start[v] < e->adjacency_start[v + 1])
+            e->alive += current_wedges(e, v, &s);
+    scratch_free(&s);
+    return 0;
+}
+
+size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_method method)
+{
+    /* flags, adjacency_start, ring_size, donor, best_target, best, importance, the ranking's list
+     * and spare, the quadric */
+    size_t per_vertex = 1 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
+                        2 * sizeof(candidate) +
+                        (method != DECIMATE_IMPORTANCE ? 10 * sizeof(double) : 0);
+    /* per corner: the adjacency (4), the rings (2 x 5) */
+    size_t per_corner = 4 + 2 * (4 + 1);
+    return per_vertex * ((size_t)vertex_count + 1) + per_corner * 3 * (size_t)triangle_count;
+}
+
+int collapse_run(collapse_mesh *m, const collapse_options *o, collapse_result *result)
+{
+    engine e;
+    if (engine_init(&e, m, o))
+        return -1;
+    for (uint32_t v = 0; v < e.n; v++)
+        result->collapsed_into[v] = v;
+    result->vertices_before = e.alive;
+    result->collapses = 0;
+    result->passes = 0;
+    candidate *list = xmalloc(sizeof(candidate) * ((size_t)e.n + 1));
+    candidate *spare = xmalloc(sizeof(candidate) * ((size_t)e.n + 1));
+    scratch s;
+    memset(&s, 0, sizeof s);
+    while (e.alive > o->target_vertices) {
+        uint32_t taken = run_pass(&e, list, spare, result->collapsed_into, &s);
+        if (!taken)
+            break;
+        result->collapses += taken;
+        result->passes++;
+    }
+    result->vertices_after = e.alive;
+    scratch_free(&s);
+    free(list);
+    free(spare);
+    engine_free(&e);
+    return 0;
+}
+
+int collapse_evaluate(const collapse_mesh *mesh, const collapse_options *options, uint32_t v0,
+                      uint32_t v1, double *cost, const char **rule)
+{
+    collapse_mesh copy = *mesh;
+    size_t corners_size = sizeof(uint32_t) * 3 * (size_t)mesh->triangle_count;
+    copy.triangles = xmalloc(corners_size + 1);
+    memcpy(copy.triangles, mesh->triangles, corners_size);
+    if (mesh->corner_ids) {
+        copy.corner_ids = xmalloc(corners_size + 1);
+        memcpy(copy.corner_ids, mesh->corner_ids, corners_size);
+    }
+    engine e;
+    int status = -1;
+    if (engine_init(&e, &copy, options))
+        goto free_copy;
+    status = 0;
+    *rule = NULL;
+    if (v0 >= e.n || v1 >= e.n) {
+        status = error_set(IDMR_EXIT_FAILURE, "collapse_evaluate: vertex out of range");
+        goto free_engine;
+    }
+    scratch s;
+    memset(&s, 0, sizeof s);
+    ring r0 = ring_of(&e, v0);
+    int boundary0;
+    if (e.flags[v0] & FLAG_LOCKED)
+        *rule = "locked";
+    else if (!ring_simple(&r0, &boundary0))
+        *rule = "complex vertex";
+    else if (r0.size <= 2)
+        *rule = "two neighbours";
+    else if (collapse_legal(&e, v0, v1, &r0, boundary0, &s, rule)) {
+        status = 1;
+        if (options->method == DECIMATE_IMPORTANCE) {
+            *cost = e.importance[v0];
+            for (uint32_t k = 0; k < r0.size; k++)
+                *cost += e.importance[r0.vertex[k]];
+        } else {
+            *cost = collapse_cost(&e, v0, v1, &s);
+        }
+    }
+    scratch_free(&s);
+free_engine:
+    engine_free(&e);
+free_copy:
+    free(copy.triangles);
+    free(copy.corner_ids);
+    return status;
+}

@@ -1,0 +1,111 @@
+/* collapse.h — the collapse engine: one welded triangle mesh on flat arrays in, its reduced
+ * triangles and collapse history out, for all three methods (decimate.h says what each method
+ * keeps). No priority queue: the engine works in passes, as meshoptimizer's simplifier does.
+ *
+ * One pass:
+ *   1. adjacency   per vertex, its live triangles (a counting sort of the triangle list)
+ *   2. score       every free vertex picks its best legal collapse (cost, then ties) into a
+ *                  neighbour; in parallel, each vertex on its own, so the result does not depend
+ *                  on the thread count
+ *   3. rank        the candidates sorted by cost (ties broken by a total order, so the order is
+ *                  the same on any run)
+ *   4. apply       in that order, greedily: a collapse is taken only when neither of its vertices
+ *                  was touched by a collapse taken earlier in the pass; taking v0 -> v1 touches v0
+ *                  and v0's whole one-ring. So every collapse taken sees exactly the neighbourhood
+ *                  it was scored on, and its legality still holds. The pass stops at the
+ *                  target, or at 1.5 x the cost of the median candidate (after meshoptimizer's
+ *                  rule: cheap collapses left for the next pass are cheaper than expensive ones
+ *                  taken now). The target only stops passes, it does not shape them: reducing
+ *                  to one vertex fewer takes the same collapses and one more.
+ * Passes repeat until the target is met or no vertex has a legal collapse.
+ *
+ * The rules (each is collapse_legal's, on the current mesh; v0 is removed into its neighbour v1;
+ * fl, fr the triangles on the edge with vl, vr their third vertices):
+ *   - v0 and v1 are free: not locked by the caller, not complex (a vertex whose triangles form
+ *     more than one fan, or with an edge of more than two triangles);
+ *   - the link condition: the one-rings of v0 and v1 share no vertex but vl and vr;
+ *   - no triangle of the edge whose other two edges are both open (it would leave a dangling
+ *     edge); vl != vr; no interior edge between two boundary vertices; a boundary v0 only into a
+ *     boundary v1 along an open edge; v0 keeps more than two neighbours; vl and vr not both of
+ *     valence 3 when joined by an edge (the collapse would fold a tetrahedron flat);
+ *   - the normal limit: no triangle that moves turns by more than max_normal_angle or becomes
+ *     degenerate;
+ *   - COMBINED: the boundary lock (a boundary vertex goes only where the outline stays within
+ *     boundary_tolerance of the new edge's length);
+ *   - with attributes: the seam rules and normals on the front side (decimate.h, "Attributes").
+ * The costs: QUADRIC, the plane quadrics of the faces (unweighted, as OpenMesh's ModQuadricT);
+ * COMBINED, each face's plane weighted by area x (importance + floor), planes across open edges
+ * and the attribute quadrics; IMPORTANCE, the importance of v0's one-ring, centre included, into
+ * the least important neighbour. After a collapse v1 holds v0's quadric (or importance).
+ *
+ * Memory: per vertex about 140 bytes (a double quadric of 80 bytes, flags, the scores, the
+ * adjacency offsets, the history) plus 12 bytes per triangle corner for the triangle list and
+ * the adjacency; collapse_memory() says it exactly. The caller's arrays are not copied except
+ * the triangle list, which the engine owns while it runs. */
+#ifndef IDMR_COLLAPSE_H
+#define IDMR_COLLAPSE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "reduce/decimate.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define COLLAPSE_NONE 0xffffffffu
+
+/* A welded mesh. Vertices without live triangles are ignored. */
+typedef struct collapse_mesh {
+    uint32_t vertex_count;
+    const float *positions; /* 3 per vertex */
+    uint32_t triangle_count;
+    uint32_t *triangles;    /* 3 vertex indices per triangle, counter-clockwise; the engine
+                               rewrites them: a removed triangle gets COLLAPSE_NONE in all three */
+    uint32_t *corner_ids;   /* attribute id per corner (3 per triangle), rewritten with the
+                               triangles; NULL: no attributes */
+    const float *attributes; /* attribute_stride floats per id: uv (2) then normal (3), as
+                                uv_floats and normal_floats say */
+    uint32_t attribute_count;
+    int uv_floats, normal_floats;
+    const uint8_t *locked;   /* per vertex, or NULL: locked vertices never move */
+    const double *importance; /* per vertex; IMPORTANCE and COMBINED */
+    const uint32_t *distance; /* per vertex, or NULL: remap distance, for ties (decimate.h) */
+} collapse_mesh;
+
+typedef struct collapse_options {
+    decimate_method method;
+    uint64_t target_vertices;  /* counted once per wedge (distinct corner id) */
+    double max_normal_angle;   /* degrees, > 0 */
+    double boundary_tolerance; /* COMBINED; infinite: no boundary lock */
+    int seams_free;
+    double uv_weight, normal_weight; /* COMBINED's attribute term (decimate.h) */
+    unsigned int threads;            /* 1 or more: the result does not depend on it */
+} collapse_options;
+
+typedef struct collapse_result {
+    uint32_t *collapsed_into; /* caller's array of vertex_count: filled with the vertex each
+                                 removed vertex went into, itself for the others */
+    uint64_t vertices_before, vertices_after; /* counted once per wedge */
+    uint32_t collapses;
+    uint32_t passes;
+} collapse_result;
+
+/* Reduces the mesh in place. Returns 0, or -1 with the error set (no memory, bad input). */
+int collapse_run(collapse_mesh *mesh, const collapse_options *options, collapse_result *result);
+
+/* The bytes collapse_run() allocates for a mesh of this size (without attributes). */
+size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_method method);
+
+/* One collapse judged on the unreduced mesh, as the first pass judges it: returns 1 and its
+ * cost in *cost when v0 -> v1 is legal, 0 when a rule forbids it (*rule then names the rule),
+ * -1 with the error set on bad input. For tests on hand-drawn meshes. */
+int collapse_evaluate(const collapse_mesh *mesh, const collapse_options *options, uint32_t v0,
+                      uint32_t v1, double *cost, const char **rule);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,243 @@
+// decimate_reference.cc — decimate_reference_mesh() (see decimate.h): the reference the collapse
+// engine is tested against. The welded rebuild (decimate_weld.cc), OpenMesh's decimater with our
+// modules (decimate_modules.hh) and our heap-ordered collapse loop (decimate_collapse.cc), one
+// collapse at a time, and the copy of the result into a decimate_output.
+#include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+#include <exception>
+#include <vector>
+
+#include "reduce/decimate_collapse.hh"
+#include "reduce/decimate_modules.hh"
+#include "reduce/decimate_openmesh.hh"
+
+extern "C" {
+#include "core/error.h"
+}
+
+using namespace idmr_decimate;
+
+namespace {
+
+// The module handles of one decimater: the normal limit and the history always, the attributes
+// where the mesh has them, and one priority module: the importance, the quadric or the weighted
+// quadric one (with the boundary lock).
+struct Modules {
+    ModNormalLimitT<Mesh>::Handle normal_limit;
+    ModHistoryT<Mesh>::Handle history;
+    ModAttributesT<Mesh>::Handle attributes;
+    ModImportanceT<Mesh>::Handle importance;
+    OpenMesh::Decimater::ModQuadricT<Mesh>::Handle quadric;
+    ModWeightedQuadricT<Mesh>::Handle weighted_quadric;
+    ModBoundaryLockT<Mesh>::Handle boundary_lock;
+};
+
+// Adds and sets up the modules of `method`. Returns false when the decimater does not
+// initialise: OpenMesh accepts exactly one priority (non-binary) module and otherwise returns
+// false from initialize() without a word.
+bool add_modules(ReductionDecimater &decimater, Modules &modules, Mesh &mesh,
+                 decimate_method method, const decimate_input *in,
+                 const std::vector<double> &importance, const AttributeTable &attributes,
+                 uint32_t *collapsed_into)
+{
+    decimater.add(modules.normal_limit);
+    decimater.add(modules.history);
+    decimater.module(modules.normal_limit)
+        .set_max_angle(in->max_normal_angle > 0 ? in->max_normal_angle : 60.0);
+    decimater.module(modules.history).set_history(collapsed_into);
+    if (attributes.present()) {
+        decimater.add(modules.attributes);
+        decimater.module(modules.attributes).set_table(&attributes);
+        decimater.module(modules.attributes).set_seams_free(in->seams_free != 0);
+        decimater.set_attributes(&attributes);
+    }
+    if (method == DECIMATE_IMPORTANCE) {
+        decimater.add(modules.importance);
+        for (auto v : mesh.vertices())
+            decimater.module(modules.importance).importance(v) = importance[v.idx()];
+        decimater.set_importance(&decimater.module(modules.importance));
+    } else if (method == DECIMATE_COMBINED) {
+        decimater.add(modules.weighted_quadric);
+        decimater.add(modules.boundary_lock);
+        decimater.module(modules.boundary_lock)
+            .set_max_deviation(in->boundary_tolerance > 0 ? in->boundary_tolerance
+                                                          : DECIMATE_BOUNDARY_TOLERANCE);
+        for (auto v : mesh.vertices())
+            decimater.module(modules.weighted_quadric).importance(v) = importance[v.idx()];
+        decimater.module(modules.weighted_quadric)
+            .set_attributes(&attributes, in->uv_weight, in->normal_weight);
+    } else {
+        decimater.add(modules.quadric);
+    }
+    return decimater.initialize(); // runs the modules' initialize(): importance is set by now
+}
+
+// The output's vertices with attributes: each mesh vertex once per wedge, in vertex order, its
+// wedges in the order of its faces; `corner_out` gets, per face, the output vertex of each corner.
+// The faces' corner sets name vertices by their index before garbage collection: old_index.
+void split_wedges(Mesh &mesh, const AttributeTable &attributes,
+                  const std::vector<uint32_t> &old_index,
+                  std::vector<std::array<uint32_t, 3>> &corner_out, std::vector<uint32_t> &first_of,
+                  std::vector<uint32_t> &vertex_of, std::vector<uint32_t> &id_of)
+{
+    corner_out.assign(mesh.n_faces(), {{0, 0, 0}});
+    first_of.assign(mesh.n_vertices(), 0);
+    std::vector<std::pair<uint32_t, uint32_t>> wedges; // (attribute id, output vertex)
+    for (auto v : mesh.vertices()) {
+        wedges.clear();
+        first_of[v.idx()] = (uint32_t)vertex_of.size();
+        int named = (int)old_index[v.idx()];
+        for (auto f : mesh.vf_range(v)) {
+            const CornerSet &set = mesh.property(attributes.corners, f);
+            uint32_t id = corner_id(set, named);
+            auto found = std::find_if(wedges.begin(), wedges.end(),
+                                      [id](const std::pair<uint32_t, uint32_t> &w) {
+                                          return w.first == id;
+                                      });
+            uint32_t index;
+            if (found != wedges.end()) {
+                index = found->second;
+            } else {
+                index = (uint32_t)vertex_of.size();
+                wedges.emplace_back(id, index);
+                vertex_of.push_back((uint32_t)v.idx());
+                id_of.push_back(id);
+            }
+            for (int k = 0; k < 3; k++)
+                if (set.vertex[k] == named)
+                    corner_out[f.idx()][k] = index;
+        }
+        if (wedges.empty()) { // no faces (not expected after garbage collection): itself
+            vertex_of.push_back((uint32_t)v.idx());
+            id_of.push_back(0);
+        }
+    }
+}
+
+// Copies the output vertices' attributes from the table (uv first, then the normal).
+void copy_attributes(const AttributeTable &attributes, const std::vector<uint32_t> &id_of,
+                     mesh_data *out)
+{
+    size_t n = id_of.size();
+    int stride = attributes.stride();
+    if (attributes.uv_floats)
+        out->texcoords = (float *)xmalloc(2 * sizeof(float) * (n + 1));
+    if (attributes.normal_floats)
+        out->normals = (float *)xmalloc(3 * sizeof(float) * (n + 1));
+    for (size_t i = 0; i < n; i++) {
+        const float *value = &attributes.values[(size_t)stride * id_of[i]];
+        for (int k = 0; k < attributes.uv_floats; k++)
+            out->texcoords[2 * i + k] = value[k];
+        for (int k = 0; k < attributes.normal_floats; k++)
+            out->normals[3 * i + k] = value[attributes.uv_floats + k];
+    }
+}
+
+// Compacts the mesh and copies its vertices and faces into out->mesh (a vertex once per wedge
+// where the mesh has attributes); out->output_index maps the decimater's vertices to their
+// (first) place in it (garbage collection does not keep their order).
+void copy_out(Mesh &mesh, const AttributeTable &attributes, decimate_output *out)
+{
+    size_t n = mesh.n_vertices();
+    out->history_count = (uint32_t)n;
+    OpenMesh::VPropHandleT<uint32_t> before;
+    mesh.add_property(before);
+    for (auto v : mesh.all_vertices())
+        mesh.property(before, v) = (uint32_t)v.idx();
+    mesh.garbage_collection();
+    // Without attributes every vertex is one output vertex and a face's corners are its vertices.
+    std::vector<std::array<uint32_t, 3>> corner_out;
+    std::vector<uint32_t> first_of, vertex_of, id_of, old_index;
+    for (auto v : mesh.vertices())
+        old_index.push_back(mesh.property(before, v));
+    if (attributes.present()) {
+        split_wedges(mesh, attributes, old_index, corner_out, first_of, vertex_of, id_of);
+    } else {
+        for (auto v : mesh.vertices()) {
+            first_of.push_back((uint32_t)v.idx());
+            vertex_of.push_back((uint32_t)v.idx());
+        }
+    }
+    out->output_index = (uint32_t *)xmalloc(sizeof(uint32_t) * (n + 1));
+    for (size_t v = 0; v < n; v++)
+        out->output_index[v] = DECIMATE_REMOVED;
+    for (auto v : mesh.vertices())
+        out->output_index[mesh.property(before, v)] = first_of[v.idx()];
+    mesh.remove_property(before);
+    size_t count = vertex_of.size();
+    out->mesh.vertex_count = (uint32_t)count;
+    out->mesh.triangle_count = (uint32_t)mesh.n_faces();
+    out->mesh.positions = (float *)xmalloc(3 * sizeof(float) * (count + 1));
+    out->mesh.indices = (uint32_t *)xmalloc(3 * sizeof(uint32_t) * (mesh.n_faces() + 1));
+    for (size_t i = 0; i < count; i++)
+        for (int k = 0; k < 3; k++)
+            out->mesh.positions[3 * i + k] = mesh.point(Mesh::VertexHandle((int)vertex_of[i]))[k];
+    size_t corner = 0;
+    for (auto f : mesh.faces()) {
+        if (attributes.present()) {
+            for (int k = 0; k < 3; k++)
+                out->mesh.indices[corner++] = corner_out[f.idx()][k];
+            continue;
+        }
+        for (auto v : mesh.fv_range(f))
+            out->mesh.indices[corner++] = (uint32_t)v.idx();
+    }
+    if (attributes.present())
+        copy_attributes(attributes, id_of, &out->mesh);
+}
+
+// decimate_mesh() without the exception boundary.
+int decimate_welded(const decimate_input *in, decimate_method method, decimate_output *out)
+{
+    Mesh mesh;
+    std::vector<double> importance;
+    AttributeTable attributes;
+    build_welded_mesh(in, mesh, out, importance, attributes);
+    size_t n = mesh.n_vertices();
+    out->collapsed_into = (uint32_t *)xmalloc(sizeof(uint32_t) * (n + 1));
+    for (size_t v = 0; v < n; v++)
+        out->collapsed_into[v] = (uint32_t)v;
+
+    ReductionDecimater decimater(mesh);
+    std::vector<uint32_t> distance = welded_distances(in, out, n);
+    if (!distance.empty())
+        decimater.set_distances(&distance);
+    Modules modules;
+    if (!add_modules(decimater, modules, mesh, method, in, importance, attributes,
+                     out->collapsed_into)) {
+        decimate_output_free(out);
+        return error_set(IDMR_EXIT_FAILURE,
+                         "mesh '%s': the OpenMesh decimater did not initialise (it needs "
+                         "exactly one priority module)",
+                         in->name);
+    }
+    // The target counts all vertices (once per wedge), the locked copies of loose faces
+    // included: the collapsible surface gets what remains after them.
+    size_t target = (size_t)std::min<uint64_t>(in->target_vertices, out->vertices_welded);
+    out->collapses = (uint32_t)decimater.decimate_to(target, in->verify_heap != 0,
+                                                     in->reheap_removed_ring_only != 0,
+                                                     &out->heap_violations);
+    copy_out(mesh, attributes, out); // the history, collapsed_into, is in welded indices already
+    return 0;
+}
+
+} // namespace
+
+extern "C" int decimate_reference_mesh(const decimate_input *in, decimate_method method,
+                                       decimate_output *out)
+{
+    std::memset(out, 0, sizeof *out);
+    if (method != DECIMATE_QUADRIC && !in->vertex_importance)
+        return error_set(IDMR_EXIT_FAILURE, "mesh '%s': importance decimation without importance",
+                         in->name);
+    try {
+        return decimate_welded(in, method, out);
+    } catch (const std::exception &e) {
+        decimate_output_free(out);
+        return error_set(IDMR_EXIT_FAILURE, "mesh '%s': OpenMesh failed: %s", in->name, e.what());
+    }
+}
+
