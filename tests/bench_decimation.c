@@ -1,17 +1,19 @@
 /* bench_decimation.c — `make bench`: decimation of the full Stanford dragon
- * (../shared/data/models/dragon_vrip.ply, 437,645 vertices) to 10 %:
+ * (../shared/data/models/dragon_vrip.ply, 437,645 vertices) to 10 %, every method on the
+ * collapse engine (host/reduce/collapse.h) beside stock OpenMesh and meshoptimizer, in one run:
  *
- *   decimation: importance=<s> quadric=<s> ratio=<importance/quadric> meshopt=<s> ...
+ *   decimation: mesh=dragon target=0.1 threads=1 combined=<s> importance=<s> quadric=<s>
+ *               openmesh=<s> meshopt=<s> combined/meshopt=<r> quadric/meshopt=<r>
+ *   decimation-parallel: mesh=dragon threads=2 one=<s> two=<s> speedup=<one/two>
  *
- * importance: our decimation (host/decimate.h: importance module, normal limit, history, our
- * collapse loop), with a synthetic importance field (high on one side of the dragon);
- * quadric: stock OpenMesh DecimaterT + ModQuadricT as Debian ships it, the baseline;
- * meshopt: meshoptimizer's meshopt_simplify to 10 % of the triangles, the fastest widely used
- * simplifier, for reference. And the parallel decimation of the living room's meshes:
+ * combined, importance: a synthetic importance field (high on one side of the dragon); openmesh:
+ * stock DecimaterT + ModQuadricT as Debian ships it (one run, 20-40 s); meshopt: meshoptimizer's
+ * meshopt_simplify to 10 % of the triangles, one thread. Each engine figure is decimate_mesh()
+ * whole (the welded rebuild, the engine, the output), the best of ROUNDS. And the parallel
+ * decimation of the living room's meshes (meshes on threads):
  *
- *   decimation-parallel: meshes=<n> one=<s> two=<s> speedup=<one/two>
- *
- * The dragon runs once (20-40 s a method); the parallel figures are the best of ROUNDS runs. */
+ *   decimation-parallel: scene=living-room meshes=<n> one=<s> two=<s> speedup=<one/two>
+ */
 #include <meshoptimizer.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -20,10 +22,29 @@
 #include "io/mitsuba.h"
 #include "trace_common.h"
 
-#define DRAGON_ROUNDS 1 /* one run is 20-40 s */
-#define ROUNDS 2
+#define ROUNDS 3
 
 static double best_of(double a, double b) { return a < b ? a : b; }
+
+/* The best of ROUNDS runs of decimate_mesh; the output's vertex count into *vertices. */
+static double time_engine(decimate_input in, decimate_method method, unsigned int threads,
+                          uint32_t *vertices)
+{
+    double best = 1e30;
+    in.threads = threads;
+    for (int round = 0; round < ROUNDS; round++) {
+        decimate_output out;
+        double t0 = trace_seconds();
+        if (decimate_mesh(&in, method, &out)) {
+            fprintf(stderr, "bench_decimation: %s\n", error_message());
+            exit(1);
+        }
+        best = best_of(best, trace_seconds() - t0);
+        *vertices = out.mesh.vertex_count;
+        decimate_output_free(&out);
+    }
+    return best;
+}
 
 static void bench_dragon(void)
 {
@@ -41,48 +62,48 @@ static void bench_dragon(void)
                          .indices = mesh.indices,
                          .triangle_count = mesh.triangle_count,
                          .vertex_importance = importance,
-                         .max_normal_angle = 60.0};
+                         .max_normal_angle = 60.0,
+                         .uv_weight = DECIMATE_UV_WEIGHT,
+                         .normal_weight = DECIMATE_NORMAL_WEIGHT};
     uint32_t start, uncollapsible;
     if (decimate_measure(&in, &start, &uncollapsible)) {
         fprintf(stderr, "bench_decimation: %s\n", error_message());
         exit(1);
     }
     in.target_vertices = start / 10;
-    double ours = 1e30, stock = 1e30, meshopt = 1e30;
-    uint32_t ours_vertices = 0;
-    long stock_vertices = 0;
+    uint32_t combined_vertices, importance_vertices, quadric_vertices, two_vertices;
+    double combined = time_engine(in, DECIMATE_COMBINED, 1, &combined_vertices);
+    double by_importance = time_engine(in, DECIMATE_IMPORTANCE, 1, &importance_vertices);
+    double quadric = time_engine(in, DECIMATE_QUADRIC, 1, &quadric_vertices);
+    double combined_two = time_engine(in, DECIMATE_COMBINED, 2, &two_vertices);
+
+    double meshopt = 1e30;
     size_t meshopt_triangles = 0;
     unsigned int *destination = malloc(3 * sizeof(unsigned int) * mesh.triangle_count);
-    for (int round = 0; round < DRAGON_ROUNDS; round++) {
-        decimate_output out;
+    for (int round = 0; round < ROUNDS; round++) {
         double t0 = trace_seconds();
-        if (decimate_mesh(&in, DECIMATE_IMPORTANCE, &out)) {
-            fprintf(stderr, "bench_decimation: %s\n", error_message());
-            exit(1);
-        }
-        ours = best_of(ours, trace_seconds() - t0);
-        ours_vertices = out.mesh.vertex_count;
-        decimate_output_free(&out);
-
-        decimate_input stock_in = in;
-        stock_in.target_vertices = mesh.vertex_count / 10;
-        t0 = trace_seconds();
-        stock_vertices = decimate_stock_quadric(&stock_in);
-        stock = best_of(stock, trace_seconds() - t0);
-
-        t0 = trace_seconds();
         meshopt_triangles =
             meshopt_simplify(destination, mesh.indices, 3 * (size_t)mesh.triangle_count,
                              mesh.positions, mesh.vertex_count, 3 * sizeof(float),
                              3 * (size_t)(mesh.triangle_count / 10), 1.0f, 0, NULL) / 3;
         meshopt = best_of(meshopt, trace_seconds() - t0);
     }
-    printf("decimation: importance=%.2f quadric=%.2f ratio=%.2f meshopt=%.2f "
-           "importance/meshopt=%.1f vertices=%u target=%llu importance_vertices=%u "
-           "quadric_vertices=%ld meshopt_triangles=%zu\n",
-           ours, stock, ours / stock, meshopt, ours / meshopt, mesh.vertex_count,
-           (unsigned long long)in.target_vertices, ours_vertices, stock_vertices,
-           meshopt_triangles);
+    decimate_input stock_in = in;
+    stock_in.target_vertices = mesh.vertex_count / 10;
+    double t0 = trace_seconds();
+    long stock_vertices = decimate_stock_quadric(&stock_in);
+    double stock = trace_seconds() - t0;
+
+    printf("decimation: mesh=dragon target=0.1 threads=1 combined=%.3f importance=%.3f "
+           "quadric=%.3f openmesh=%.2f meshopt=%.3f combined/meshopt=%.2f quadric/meshopt=%.2f "
+           "vertices=%u target_vertices=%llu combined_vertices=%u importance_vertices=%u "
+           "quadric_vertices=%u openmesh_vertices=%ld meshopt_triangles=%zu\n",
+           combined, by_importance, quadric, stock, meshopt, combined / meshopt, quadric / meshopt,
+           mesh.vertex_count, (unsigned long long)in.target_vertices, combined_vertices,
+           importance_vertices, quadric_vertices, stock_vertices, meshopt_triangles);
+    printf("decimation-parallel: mesh=dragon threads=2 method=combined one=%.3f two=%.3f "
+           "speedup=%.2f\n",
+           combined, combined_two, combined / combined_two);
     fflush(stdout);
     free(destination);
     free(importance);
@@ -113,7 +134,7 @@ static void bench_parallel(void)
                                  .max_normal_angle = 60.0};
     }
     double seconds[2] = {1e30, 1e30};
-    for (int round = 0; round < ROUNDS; round++)
+    for (int round = 0; round < 2; round++)
         for (unsigned int threads = 1; threads <= 2; threads++) {
             double t0 = trace_seconds();
             if (decimate_many(in, out, status, NULL, n, DECIMATE_QUADRIC, threads, NULL)) {

@@ -33,7 +33,8 @@ enum {
 
 #define BOUNDARY_WEIGHT 10.0 /* COMBINED: an open edge's plane, per length² (decimate_modules) */
 #define FLOOR_SHARE 0.01     /* COMBINED: the importance floor, a share of the mean */
-#define PASS_COST_FACTOR 1.5f /* a pass stops at this x the median candidate's cost */
+#define PASS_COST_FACTOR 1.5f /* a pass stops at this x the cost of the candidate ranked at a
+                                 quarter of the list */
 #define MAX_CHANNELS 5 /* uv and normal */
 #define SCORE_BLOCK 512 /* vertices a thread takes at a time */
 
@@ -1066,7 +1067,7 @@ static uint32_t run_pass(engine *e, candidate *list, candidate *spare, uint32_t 
         return 0;
     int full_ties = e->o->method == DECIMATE_IMPORTANCE || e->m->distance;
     rank_candidates(list, spare, count, full_ties);
-    float cost_limit = list[count / 2].cost * PASS_COST_FACTOR;
+    float cost_limit = list[count / 4].cost * PASS_COST_FACTOR;
     for (uint32_t v = 0; v < e->n; v++) {
         e->flags[v] &= (uint8_t)~FLAG_TOUCHED;
         e->donor[v] = COLLAPSE_NONE;

@@ -13,10 +13,13 @@
  *                  was touched by a collapse taken earlier in the pass; taking v0 -> v1 touches v0
  *                  and v0's whole one-ring. So every collapse taken sees exactly the neighbourhood
  *                  it was scored on, and its legality still holds. The pass stops at the
- *                  target, or at 1.5 x the cost of the median candidate (after meshoptimizer's
- *                  rule: cheap collapses left for the next pass are cheaper than expensive ones
- *                  taken now). The target only stops passes, it does not shape them: reducing
- *                  to one vertex fewer takes the same collapses and one more.
+ *                  target, or at 1.5 x the cost of the candidate ranked at a quarter of the list
+ *                  (after meshoptimizer's rule, which ranks at the target: cheap collapses left
+ *                  for the next pass are cheaper than expensive ones taken now; a quarter, about
+ *                  what the locks let a pass take, keeps a cheap region from being outrun by an
+ *                  expensive one, as the reference's heap would not). The target only stops
+ *                  passes, it does not shape them: reducing to one vertex fewer takes the same
+ *                  collapses and one more.
  * Passes repeat until the target is met or no vertex has a legal collapse.
  *
  * The rules (each is collapse_legal's, on the current mesh; v0 is removed into its neighbour v1;
