@@ -28,6 +28,7 @@ enum {
     FLAG_LOCKED = 1,  /* the caller's lock: never removed */
     FLAG_REMOVED = 2, /* collapsed into another vertex */
     FLAG_TOUCHED = 4, /* a collapse taken in this pass changed its triangles */
+    FLAG_TAKEN = 16,  /* an end of a collapse taken in this pass */
     FLAG_STALE = 8,   /* its score must be computed again (it or a neighbour was touched) */
 };
 
@@ -38,16 +39,38 @@ enum {
 #define MAX_CHANNELS 5 /* uv and normal */
 #define SCORE_BLOCK 512 /* vertices a thread takes at a time */
 
-/* A vertex's one-ring: each neighbour and how many live triangles hold the edge to it (at most
- * 255 counted); a view into the pass's ring arrays. */
+/* A vertex's one-ring: each neighbour, how many live triangles hold the edge to it (at most 255
+ * counted), and the third corners of those triangles: left[i] of the triangle (v, vertex[i],
+ * left[i]), right[i] of (v, right[i], vertex[i]), counter-clockwise (COLLAPSE_NONE: none). For
+ * the collapse v -> vertex[i], left[i] and right[i] are vl and vr, and the pairs (vertex[i],
+ * left[i]) are v's triangles. A view into ring arrays (the pass's or a scratch's). */
 typedef struct ring {
-    const uint32_t *vertex;
+    const uint32_t *vertex, *left, *right;
     const uint8_t *count;
     uint32_t size;
 } ring;
 
+/* Where a ring is written. */
+typedef struct ring_store {
+    uint32_t *vertex, *left, *right;
+    uint8_t *held;
+} ring_store;
+
+/* The live triangles at a vertex: its slice of the pass's adjacency while it is untouched, or
+ * a list gathered from its current triangles (current_fan). */
+typedef struct fan {
+    const uint32_t *triangle;
+    uint32_t count;
+} fan;
+
+/* Where current_fan and current_ring write, one slot per vertex of a collapse (v0, v1, vl, vr). */
+enum { SLOT_V0, SLOT_V1, SLOT_VL, SLOT_VR, SLOTS };
+
 /* What a thread needs while it judges collapses. */
 typedef struct scratch {
+    uint32_t *fan_triangle[SLOTS];
+    ring_store rings[SLOTS];
+    size_t fan_capacity[SLOTS], ring_capacity[SLOTS];
     uint32_t *ids, *mapped; /* the removed vertex's distinct corner ids and their images */
     size_t ids_capacity;
     struct target_key *targets;
@@ -86,9 +109,10 @@ typedef struct engine {
     uint32_t n, t;
     uint8_t *flags;
     uint32_t *adjacency_start, *adjacency;
-    /* the rings of this pass: v's at ring_vertex[2 * adjacency_start[v] ..], ring_size[v] long */
-    uint32_t *ring_vertex, *ring_size;
-    uint8_t *ring_held;
+    /* the rings of this pass: v's from slot adjacency_start[v] + v on (room for one neighbour
+     * more than its triangles, as many as a vertex of one fan has), ring_size[v] long */
+    ring_store rings;
+    uint32_t *ring_size;
     double *quadric;
     double *importance;
     uint32_t *donor;
@@ -116,6 +140,13 @@ static uint32_t ring_count(const ring *r, uint32_t v)
 
 static void scratch_free(scratch *s)
 {
+    for (int k = 0; k < SLOTS; k++) {
+        free(s->fan_triangle[k]);
+        free(s->rings[k].vertex);
+        free(s->rings[k].left);
+        free(s->rings[k].right);
+        free(s->rings[k].held);
+    }
     free(s->ids);
     free(s->mapped);
     free(s->targets);
@@ -192,38 +223,133 @@ static void build_adjacency(engine *e)
     start[0] = 0;
 }
 
-/* Builds v's one-ring from its pass-start triangles into the ring arrays (v's slot holds twice
- * its triangles, the most neighbours it can have). */
-static void build_ring(engine *e, uint32_t v)
+/* v's triangles in this pass's adjacency: all live and current while v is untouched. */
+static fan pass_fan(const engine *e, uint32_t v)
 {
-    uint32_t base = 2 * e->adjacency_start[v], size = 0;
-    uint32_t *vertex = &e->ring_vertex[base];
-    uint8_t *held = &e->ring_held[base];
-    for (uint32_t i = e->adjacency_start[v]; i < e->adjacency_start[v + 1]; i++) {
-        uint32_t t = e->adjacency[i];
-        const uint32_t *c = corners(e, t);
-        int k = corner_at(e, t, v);
-        for (int side = 1; side <= 2; side++) {
-            uint32_t w = c[(k + side) % 3], j = 0;
-            while (j < size && vertex[j] != w)
-                j++;
-            if (j == size) {
-                vertex[size] = w;
-                held[size++] = 1;
-            } else if (held[j] < 255) {
-                held[j]++;
-            }
+    fan f = {&e->adjacency[e->adjacency_start[v]],
+             e->adjacency_start[v + 1] - e->adjacency_start[v]};
+    return f;
+}
+
+static void reserve(void **buffer, size_t *capacity, size_t count, size_t size)
+{
+    if (*capacity >= count)
+        return;
+    *capacity = 2 * count + 16;
+    *buffer = xrealloc(*buffer, size * *capacity);
+}
+
+/* v's live triangles now, into slot `slot` of the scratch: those of its pass-start adjacency
+ * and its donor's that still hold it (a vertex receives at most once in a pass). */
+static fan current_fan(const engine *e, uint32_t v, scratch *s, int slot)
+{
+    uint32_t sources[2] = {v, e->donor[v]}, count = 0;
+    for (int k = 0; k < 2; k++) {
+        if (sources[k] == COLLAPSE_NONE)
+            continue;
+        fan from = pass_fan(e, sources[k]);
+        reserve((void **)&s->fan_triangle[slot], &s->fan_capacity[slot], count + from.count,
+                sizeof(uint32_t));
+        for (uint32_t i = 0; i < from.count; i++) {
+            uint32_t t = from.triangle[i];
+            if (corners(e, t)[0] != COLLAPSE_NONE && corner_at(e, t, v) < 3)
+                s->fan_triangle[slot][count++] = t;
         }
     }
-    e->ring_size[v] = size;
+    fan f = {s->fan_triangle[slot], count};
+    return f;
+}
+
+/* Adds neighbour w to the ring being written (size so far *size, room for `capacity`); its
+ * slot. A ring that would outgrow its room is marked complex (an edge counted 255 times):
+ * only a vertex of more than one fan has more neighbours than triangles plus one. */
+static uint32_t ring_add(ring_store *r, uint32_t *size, uint32_t capacity, uint32_t w)
+{
+    uint32_t j = 0;
+    while (j < *size && r->vertex[j] != w)
+        j++;
+    if (j < *size) {
+        if (r->held[j] < 255)
+            r->held[j]++;
+        return j;
+    }
+    if (*size == capacity) {
+        r->held[0] = 255;
+        return 0;
+    }
+    r->vertex[j] = w;
+    r->held[j] = 1;
+    r->left[j] = r->right[j] = COLLAPSE_NONE;
+    (*size)++;
+    return j;
+}
+
+/* Writes v's one-ring from the triangles of fan f (room for `capacity` neighbours); returns its
+ * size. */
+static uint32_t fill_ring(const engine *e, uint32_t v, fan f, ring_store r, uint32_t capacity)
+{
+    uint32_t size = 0;
+    for (uint32_t i = 0; i < f.count; i++) {
+        uint32_t t = f.triangle[i];
+        const uint32_t *c = corners(e, t);
+        int k = corner_at(e, t, v);
+        uint32_t next = c[(k + 1) % 3], previous = c[(k + 2) % 3];
+        r.left[ring_add(&r, &size, capacity, next)] = previous;
+        r.right[ring_add(&r, &size, capacity, previous)] = next;
+    }
+    return size;
+}
+
+static ring_store ring_store_at(const ring_store *r, size_t base)
+{
+    ring_store at = {r->vertex + base, r->left + base, r->right + base, r->held + base};
+    return at;
+}
+
+static ring view_of(ring_store r, uint32_t size)
+{
+    ring view = {r.vertex, r.left, r.right, r.held, size};
+    return view;
+}
+
+/* Builds v's one-ring from its pass-start triangles into the pass's ring arrays. */
+static void build_ring(engine *e, uint32_t v)
+{
+    uint32_t degree = e->adjacency_start[v + 1] - e->adjacency_start[v];
+    e->ring_size[v] = fill_ring(e, v, pass_fan(e, v),
+                                ring_store_at(&e->rings, (size_t)e->adjacency_start[v] + v),
+                                degree + 1);
+}
+
+/* v's one-ring now, into slot `slot` of the scratch (its fan too). */
+static ring current_ring(const engine *e, uint32_t v, scratch *s, int slot, fan *f)
+{
+    *f = current_fan(e, v, s, slot);
+    size_t capacity = 2 * (size_t)f->count + 1;
+    if (s->ring_capacity[slot] < capacity) {
+        s->ring_capacity[slot] = 2 * capacity;
+        ring_store *r = &s->rings[slot];
+        r->vertex = xrealloc(r->vertex, sizeof(uint32_t) * s->ring_capacity[slot]);
+        r->left = xrealloc(r->left, sizeof(uint32_t) * s->ring_capacity[slot]);
+        r->right = xrealloc(r->right, sizeof(uint32_t) * s->ring_capacity[slot]);
+        r->held = xrealloc(r->held, s->ring_capacity[slot]);
+    }
+    return view_of(s->rings[slot], fill_ring(e, v, *f, s->rings[slot], (uint32_t)capacity));
 }
 
 /* The one-ring of v in this pass (built by build_ring). */
 static ring ring_of(const engine *e, uint32_t v)
 {
-    uint32_t base = 2 * e->adjacency_start[v];
-    ring r = {&e->ring_vertex[base], &e->ring_held[base], e->ring_size[v]};
-    return r;
+    return view_of(ring_store_at(&e->rings, (size_t)e->adjacency_start[v] + v), e->ring_size[v]);
+}
+
+/* The slot of neighbour w in the ring, or r->size. */
+static uint32_t ring_find(const ring *r, uint32_t w)
+{
+    uint32_t i = 0;
+    while (i < r->size && r->vertex[i] != w)
+        i++;
+    return i;
 }
 
 /* Whether the ring is one fan of manifold edges: every edge in at most two triangles and at most
@@ -243,22 +369,21 @@ static int ring_simple(const ring *r, int *boundary)
 /* A fan of one vertex: the triangles at v around it, for the seam rule. Counts how often the
  * corner id at v changes between triangles that follow each other around v (cyclically for an
  * inner vertex). v's triangles form one fan (a free vertex). */
-static unsigned seam_changes(const engine *e, uint32_t v, int inner)
+static unsigned seam_changes(const engine *e, fan f, uint32_t v, int inner)
 {
-    uint32_t begin = e->adjacency_start[v], end = e->adjacency_start[v + 1], count = end - begin;
     /* Start: for a boundary vertex the triangle whose first edge from v (to its next corner) no
      * other triangle closes; for an inner one, any. */
-    uint32_t start = e->adjacency[begin];
+    uint32_t start = f.triangle[0];
     if (!inner)
-        for (uint32_t i = begin; i < end; i++) {
-            uint32_t t = e->adjacency[i];
+        for (uint32_t i = 0; i < f.count; i++) {
+            uint32_t t = f.triangle[i];
             const uint32_t *c = corners(e, t);
             uint32_t next = c[(corner_at(e, t, v) + 1) % 3];
             int closed = 0;
-            for (uint32_t j = begin; j < end && !closed; j++) {
-                uint32_t s = e->adjacency[j];
-                const uint32_t *d = corners(e, s);
-                closed = s != t && d[(corner_at(e, s, v) + 2) % 3] == next;
+            for (uint32_t j = 0; j < f.count && !closed; j++) {
+                uint32_t other = f.triangle[j];
+                const uint32_t *d = corners(e, other);
+                closed = other != t && d[(corner_at(e, other, v) + 2) % 3] == next;
             }
             if (!closed) {
                 start = t;
@@ -267,14 +392,14 @@ static unsigned seam_changes(const engine *e, uint32_t v, int inner)
         }
     unsigned changes = 0;
     uint32_t t = start, first_id = id_at(e, start, v), previous = first_id;
-    for (uint32_t step = 1; step < count; step++) {
+    for (uint32_t step = 1; step < f.count; step++) {
         const uint32_t *c = corners(e, t);
         uint32_t far = c[(corner_at(e, t, v) + 2) % 3], following = COLLAPSE_NONE;
-        for (uint32_t j = begin; j < end; j++) {
-            uint32_t s = e->adjacency[j];
-            const uint32_t *d = corners(e, s);
-            if (d[(corner_at(e, s, v) + 1) % 3] == far) {
-                following = s;
+        for (uint32_t j = 0; j < f.count; j++) {
+            uint32_t other = f.triangle[j];
+            const uint32_t *d = corners(e, other);
+            if (d[(corner_at(e, other, v) + 1) % 3] == far) {
+                following = other;
                 break;
             }
         }
@@ -290,18 +415,17 @@ static unsigned seam_changes(const engine *e, uint32_t v, int inner)
     return changes;
 }
 
-/* The distinct corner ids at v among its pass-start triangles (in triangle order). */
-static size_t ids_of(const engine *e, uint32_t v, scratch *s)
+/* The distinct corner ids at v among the triangles of its fan (in fan order). */
+static size_t ids_of(const engine *e, fan f, uint32_t v, scratch *s)
 {
     size_t count = 0;
-    uint32_t degree = e->adjacency_start[v + 1] - e->adjacency_start[v];
-    if (s->ids_capacity < degree) {
-        s->ids_capacity = 2 * degree;
+    if (s->ids_capacity < f.count) {
+        s->ids_capacity = 2 * (size_t)f.count;
         s->ids = xrealloc(s->ids, sizeof(uint32_t) * s->ids_capacity);
         s->mapped = xrealloc(s->mapped, sizeof(uint32_t) * s->ids_capacity);
     }
-    for (uint32_t i = e->adjacency_start[v]; i < e->adjacency_start[v + 1]; i++) {
-        uint32_t id = id_at(e, e->adjacency[i], v);
+    for (uint32_t i = 0; i < f.count; i++) {
+        uint32_t id = id_at(e, f.triangle[i], v);
         size_t k = 0;
         while (k < count && s->ids[k] != id)
             k++;
@@ -311,11 +435,11 @@ static size_t ids_of(const engine *e, uint32_t v, scratch *s)
     return count;
 }
 
-static edge_sides sides_of(const engine *e, uint32_t v0, uint32_t v1)
+static edge_sides sides_of(const engine *e, fan f0, uint32_t v0, uint32_t v1)
 {
     edge_sides sides = {COLLAPSE_NONE, COLLAPSE_NONE, COLLAPSE_NONE, COLLAPSE_NONE};
-    for (uint32_t i = e->adjacency_start[v0]; i < e->adjacency_start[v0 + 1]; i++) {
-        uint32_t t = e->adjacency[i];
+    for (uint32_t i = 0; i < f0.count; i++) {
+        uint32_t t = f0.triangle[i];
         const uint32_t *c = corners(e, t);
         int k = corner_at(e, t, v0);
         if (c[(k + 1) % 3] == v1) {
@@ -588,19 +712,15 @@ static void build_quadrics(engine *e)
 /* ---- the rules ---- */
 
 /* No triangle of v0 that moves (one without v1) turns by more than the limit or degenerates. */
-static int normals_kept(const engine *e, uint32_t v0, uint32_t v1)
+static int normals_kept(const engine *e, const ring *r0, uint32_t v0, uint32_t v1)
 {
     const float *p1 = position(e, v1);
-    for (uint32_t i = e->adjacency_start[v0]; i < e->adjacency_start[v0 + 1]; i++) {
-        uint32_t t = e->adjacency[i];
-        if (corner_at(e, t, v1) < 3)
+    for (uint32_t i = 0; i < r0->size; i++) { /* v0's triangles: (v0, vertex[i], left[i]) */
+        uint32_t a = r0->vertex[i], b = r0->left[i];
+        if (b == COLLAPSE_NONE || a == v1 || b == v1)
             continue;
-        const uint32_t *c = corners(e, t);
-        const float *before[3], *after[3];
-        for (int k = 0; k < 3; k++) {
-            before[k] = position(e, c[k]);
-            after[k] = c[k] == v0 ? p1 : before[k];
-        }
+        const float *before[3] = {position(e, v0), position(e, a), position(e, b)};
+        const float *after[3] = {p1, before[1], before[2]};
         double nb[3], na[3];
         normal_of(before, nb);
         normal_of(after, na);
@@ -640,30 +760,31 @@ static int outline_kept(const engine *e, uint32_t v0, uint32_t v1, const ring *r
 }
 
 /* The seam rules of decimate.h ("Attributes"). */
-static int seams_kept(const engine *e, uint32_t v0, uint32_t v1, const edge_sides *sides,
-                      int inner, scratch *s)
+static int seams_kept(const engine *e, fan f0, uint32_t v0, uint32_t v1,
+                      const edge_sides *sides, int inner, scratch *s)
 {
     if (e->o->seams_free)
         return 1;
-    size_t wedges = ids_of(e, v0, s);
+    size_t wedges = ids_of(e, f0, v0, s);
     int left = sides->fl != COLLAPSE_NONE, right = sides->fr != COLLAPSE_NONE;
     if (wedges == 1)
         return !(left && right && id_at(e, sides->fl, v1) != id_at(e, sides->fr, v1));
-    if (wedges != 2 || !left || !right || seam_changes(e, v0, inner) != 2)
+    if (wedges != 2 || !left || !right || seam_changes(e, f0, v0, inner) != 2)
         return 0;
     return id_at(e, sides->fl, v0) != id_at(e, sides->fr, v0) &&
            id_at(e, sides->fl, v1) != id_at(e, sides->fr, v1);
 }
 
 /* With normals: every moved triangle keeps each corner's normal on its front side. */
-static int normals_face_out(const engine *e, uint32_t v0, uint32_t v1, const mapping *map)
+static int normals_face_out(const engine *e, fan f0, uint32_t v0, uint32_t v1,
+                            const mapping *map)
 {
     const collapse_mesh *m = e->m;
     if (!m->normal_floats)
         return 1;
     int stride = m->uv_floats + m->normal_floats;
-    for (uint32_t i = e->adjacency_start[v0]; i < e->adjacency_start[v0 + 1]; i++) {
-        uint32_t t = e->adjacency[i];
+    for (uint32_t i = 0; i < f0.count; i++) {
+        uint32_t t = f0.triangle[i];
         if (corner_at(e, t, v1) < 3)
             continue;
         const uint32_t *c = corners(e, t);
@@ -687,69 +808,82 @@ static int normals_face_out(const engine *e, uint32_t v0, uint32_t v1, const map
     return 1;
 }
 
-/* Whether v0 -> v1 is legal; r0 is v0's ring, v0 free and with more than two neighbours. *rule
- * names the first rule that forbids it. */
-static int collapse_legal(const engine *e, uint32_t v0, uint32_t v1, const ring *r0,
-                          int boundary0, scratch *s, const char **rule)
+/* The ring of v (not v0) for collapse_legal: the pass's, which stays exact while v is untouched,
+ * or v's ring now in `slot`. */
+static ring ring_for(const engine *e, uint32_t v, int current, scratch *s, int slot)
 {
-    uint32_t held = ring_count(r0, v1);
-    if (held == 0)
+    if (!current || !(e->flags[v] & FLAG_TOUCHED))
+        return ring_of(e, v);
+    fan f;
+    return current_ring(e, v, s, slot, &f);
+}
+
+/* Whether v0 -> v1 is legal; f0 and r0 are v0's fan and ring, v0 free and with more than two
+ * neighbours. `current`: judge the mesh as it is now, in a pass where collapses were taken
+ * (the other rings are gathered again), not as the pass found it. *rule names the first rule
+ * that forbids it. */
+static int collapse_legal(const engine *e, uint32_t v0, uint32_t v1, fan f0, const ring *r0,
+                          int boundary0, int current, scratch *s, const char **rule)
+{
+    uint32_t slot = ring_find(r0, v1);
+    if (slot == r0->size)
         return *rule = "not an edge", 0;
+    uint32_t held = r0->count[slot];
     if (e->flags[v1] & FLAG_LOCKED)
         return *rule = "locked", 0;
-    ring ring1 = ring_of(e, v1), *r1 = &ring1;
+    ring ring1 = ring_for(e, v1, current, s, SLOT_V1), *r1 = &ring1;
     int boundary1;
     if (!ring_simple(r1, &boundary1))
         return *rule = "complex vertex", 0;
-    edge_sides sides = sides_of(e, v0, v1);
+    uint32_t vl = r0->left[slot], vr = r0->right[slot];
     /* A triangle of the edge whose other two edges are open would leave a dangling edge. */
-    if (sides.fl != COLLAPSE_NONE && ring_count(r1, sides.vl) == 1 &&
-        ring_count(r0, sides.vl) == 1)
+    if (vl != COLLAPSE_NONE && ring_count(r1, vl) == 1 && ring_count(r0, vl) == 1)
         return *rule = "dangling edge", 0;
-    if (sides.fr != COLLAPSE_NONE && ring_count(r1, sides.vr) == 1 &&
-        ring_count(r0, sides.vr) == 1)
+    if (vr != COLLAPSE_NONE && ring_count(r1, vr) == 1 && ring_count(r0, vr) == 1)
         return *rule = "dangling edge", 0;
-    if (sides.vl == sides.vr)
+    if (vl == vr)
         return *rule = "one opposite vertex", 0;
-    int both_sides = sides.fl != COLLAPSE_NONE && sides.fr != COLLAPSE_NONE;
+    int both_sides = vl != COLLAPSE_NONE && vr != COLLAPSE_NONE;
     if (boundary0 && boundary1 && held == 2)
         return *rule = "interior edge between boundaries", 0;
     if (boundary0 && (!boundary1 || both_sides))
         return *rule = "boundary vertex off the boundary", 0;
     for (uint32_t i = 0; i < r0->size; i++) {
         uint32_t w = r0->vertex[i];
-        if (w != v1 && w != sides.vl && w != sides.vr && ring_count(r1, w))
+        if (w != v1 && w != vl && w != vr && ring_count(r1, w))
             return *rule = "link condition", 0;
     }
     if (both_sides) {
-        ring ring_l = ring_of(e, sides.vl);
-        if (ring_l.size == 3 && e->ring_size[sides.vr] == 3 && ring_count(&ring_l, sides.vr))
+        ring ring_l = ring_for(e, vl, current, s, SLOT_VL);
+        if (ring_l.size == 3 && ring_count(&ring_l, vr) &&
+            ring_for(e, vr, current, s, SLOT_VR).size == 3)
             return *rule = "two joined valence-3 vertices", 0;
     }
-    if (!normals_kept(e, v0, v1))
+    if (!normals_kept(e, r0, v0, v1))
         return *rule = "normal limit", 0;
     if (e->o->method == DECIMATE_COMBINED && boundary0 && !isinf(e->boundary_tolerance) &&
         !outline_kept(e, v0, v1, r0))
         return *rule = "boundary lock", 0;
     if (e->m->corner_ids) {
-        if (!seams_kept(e, v0, v1, &sides, !boundary0, s))
+        edge_sides sides = sides_of(e, f0, v0, v1);
+        if (!seams_kept(e, f0, v0, v1, &sides, !boundary0, s))
             return *rule = "seam", 0;
         mapping map = mapping_of(e, v0, v1, &sides);
-        if (!normals_face_out(e, v0, v1, &map))
+        if (!normals_face_out(e, f0, v0, v1, &map))
             return *rule = "normal behind its triangle", 0;
     }
     return 1;
 }
 
 /* The cost of v0 -> v1 for QUADRIC and COMBINED. */
-static double collapse_cost(const engine *e, uint32_t v0, uint32_t v1, scratch *s)
+static double collapse_cost(const engine *e, fan f0, uint32_t v0, uint32_t v1, scratch *s)
 {
     const float *p1 = position(e, v1);
     double error = quadric_error(&e->quadric[10 * (size_t)v0], &e->quadric[10 * (size_t)v1], p1);
     if (e->attributes_weighted) {
-        edge_sides sides = sides_of(e, v0, v1);
+        edge_sides sides = sides_of(e, f0, v0, v1);
         mapping map = mapping_of(e, v0, v1, &sides);
-        size_t count = ids_of(e, v0, s);
+        size_t count = ids_of(e, f0, v0, s);
         for (size_t k = 0; k < count; k++) {
             s->mapped[k] = mapped_id(&map, s->ids[k]);
             error += attribute_error(e, s->ids[k], p1, s->mapped[k]);
@@ -788,6 +922,7 @@ static void score_vertex(engine *e, uint32_t v, scratch *s)
     if (e->adjacency_start[v] == e->adjacency_start[v + 1])
         return;
     ring ring0 = ring_of(e, v), *r0 = &ring0;
+    fan f0 = pass_fan(e, v);
     int boundary0;
     if (!ring_simple(r0, &boundary0) || r0->size <= 2)
         return;
@@ -800,7 +935,7 @@ static void score_vertex(engine *e, uint32_t v, scratch *s)
         uint32_t u = r0->vertex[i];
         s->targets[i].vertex = u;
         s->targets[i].distance = distance_of(e, u);
-        s->targets[i].key = by_importance ? e->importance[u] : collapse_cost(e, v, u, s);
+        s->targets[i].key = by_importance ? e->importance[u] : collapse_cost(e, f0, v, u, s);
     }
     size_t count = r0->size;
     for (size_t i = 1; i < count; i++) { /* an insertion sort: a ring is short */
@@ -815,7 +950,7 @@ static void score_vertex(engine *e, uint32_t v, scratch *s)
     for (size_t i = 0; i < count; i++) {
         const char *rule;
         uint32_t u = s->targets[i].vertex;
-        if (!collapse_legal(e, v, u, r0, boundary0, s, &rule))
+        if (!collapse_legal(e, v, u, f0, r0, boundary0, 0, s, &rule))
             continue;
         double priority = s->targets[i].key;
         if (by_importance) {
@@ -976,13 +1111,14 @@ static uint32_t current_wedges(const engine *e, uint32_t v, scratch *s)
     return count ? (uint32_t)count : 1;
 }
 
-/* Takes v0 -> v1 (both untouched in this pass): moves v0's triangles onto v1, removes the two of
- * the edge, merges the quadrics (or the importance), records the history and touches v0's ring.
- * Returns the vertices (counted once per wedge) the mesh lost. */
-static uint64_t apply_collapse(engine *e, uint32_t v0, uint32_t v1, uint32_t *history,
+/* Takes v0 -> v1 (neither an end of a collapse taken in this pass; f0 holds v0's live
+ * triangles): moves v0's triangles onto v1, removes the two of the edge, merges the quadrics (or
+ * the importance), records the history and touches v0's ring. Returns the vertices (counted once
+ * per wedge) the mesh lost. */
+static uint64_t apply_collapse(engine *e, fan f0, uint32_t v0, uint32_t v1, uint32_t *history,
                                scratch *s)
 {
-    edge_sides sides = sides_of(e, v0, v1);
+    edge_sides sides = sides_of(e, f0, v0, v1);
     int attributes = e->m->corner_ids != NULL;
     mapping map = {0, 0, 0, 0, 0};
     uint64_t before = 1;
@@ -994,13 +1130,13 @@ static uint64_t apply_collapse(engine *e, uint32_t v0, uint32_t v1, uint32_t *hi
         if (sides.vr != COLLAPSE_NONE)
             before += current_wedges(e, sides.vr, s);
         if (e->attributes_weighted) {
-            size_t count = ids_of(e, v0, s);
+            size_t count = ids_of(e, f0, v0, s);
             for (size_t k = 0; k < count; k++)
                 attribute_merge(e, s->ids[k], mapped_id(&map, s->ids[k]));
         }
     }
-    for (uint32_t i = e->adjacency_start[v0]; i < e->adjacency_start[v0 + 1]; i++) {
-        uint32_t t = e->adjacency[i];
+    for (uint32_t i = 0; i < f0.count; i++) {
+        uint32_t t = f0.triangle[i];
         uint32_t *c = corners(e, t);
         for (int k = 0; k < 3; k++)
             e->flags[c[k]] |= FLAG_TOUCHED;
@@ -1019,7 +1155,8 @@ static uint64_t apply_collapse(engine *e, uint32_t v0, uint32_t v1, uint32_t *hi
             e->quadric[10 * (size_t)v1 + k] += e->quadric[10 * (size_t)v0 + k];
     if (e->o->method == DECIMATE_IMPORTANCE)
         e->importance[v1] += e->importance[v0];
-    e->flags[v0] |= FLAG_REMOVED;
+    e->flags[v0] |= FLAG_REMOVED | FLAG_TAKEN;
+    e->flags[v1] |= FLAG_TAKEN;
     e->donor[v1] = v0;
     history[v0] = v1;
     if (!attributes)
@@ -1052,6 +1189,18 @@ static void mark_stale(engine *e)
             e->best_target[v] = COLLAPSE_NONE;
 }
 
+/* Whether a collapse taken earlier in this pass changed the triangles that v0 -> v1 was judged
+ * on: those of v0, v1, vl and vr. */
+static int neighbourhood_touched(const engine *e, uint32_t v0, uint32_t v1)
+{
+    if ((e->flags[v0] | e->flags[v1]) & FLAG_TOUCHED)
+        return 1;
+    ring r0 = ring_of(e, v0); /* exact: v0 is untouched */
+    uint32_t slot = ring_find(&r0, v1), vl = r0.left[slot], vr = r0.right[slot];
+    return (vl != COLLAPSE_NONE && (e->flags[vl] & FLAG_TOUCHED)) ||
+           (vr != COLLAPSE_NONE && (e->flags[vr] & FLAG_TOUCHED));
+}
+
 /* One pass; returns the collapses it took. */
 static uint32_t run_pass(engine *e, candidate *list, candidate *spare, uint32_t *history,
                          scratch *s)
@@ -1069,7 +1218,7 @@ static uint32_t run_pass(engine *e, candidate *list, candidate *spare, uint32_t 
     rank_candidates(list, spare, count, full_ties);
     float cost_limit = list[count / 4].cost * PASS_COST_FACTOR;
     for (uint32_t v = 0; v < e->n; v++) {
-        e->flags[v] &= (uint8_t)~FLAG_TOUCHED;
+        e->flags[v] &= (uint8_t) ~(FLAG_TOUCHED | FLAG_TAKEN);
         e->donor[v] = COLLAPSE_NONE;
     }
     uint32_t taken = 0;
@@ -1077,9 +1226,22 @@ static uint32_t run_pass(engine *e, candidate *list, candidate *spare, uint32_t 
         if (list[i].cost > cost_limit && taken > 0)
             break;
         uint32_t v0 = list[i].vertex, v1 = e->best_target[v0];
-        if ((e->flags[v0] | e->flags[v1]) & FLAG_TOUCHED)
+        if ((e->flags[v0] | e->flags[v1]) & FLAG_TAKEN)
             continue;
-        uint64_t lost = apply_collapse(e, v0, v1, history, s);
+        fan f0 = pass_fan(e, v0);
+        if (neighbourhood_touched(e, v0, v1)) {
+            /* Judged again on the mesh as it is now: the rings of the touched ones among v0, v1,
+             * vl and vr gathered anew. The cost stands (v0 and v1 received nothing: their
+             * quadrics are as scored). */
+            const char *rule;
+            int boundary0;
+            ring r0 = e->flags[v0] & FLAG_TOUCHED ? current_ring(e, v0, s, SLOT_V0, &f0)
+                                                  : ring_of(e, v0);
+            if (!ring_simple(&r0, &boundary0) || r0.size <= 2 ||
+                !collapse_legal(e, v0, v1, f0, &r0, boundary0, 1, s, &rule))
+                continue;
+        }
+        uint64_t lost = apply_collapse(e, f0, v0, v1, history, s);
         e->alive = e->alive > lost ? e->alive - lost : 0;
         taken++;
     }
@@ -1094,8 +1256,10 @@ static void engine_free(engine *e)
     free(e->flags);
     free(e->adjacency_start);
     free(e->adjacency);
-    free(e->ring_vertex);
-    free(e->ring_held);
+    free(e->rings.vertex);
+    free(e->rings.left);
+    free(e->rings.right);
+    free(e->rings.held);
     free(e->ring_size);
     free(e->quadric);
     free(e->importance);
@@ -1134,8 +1298,11 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     e->flags = xcalloc(n, 1);
     e->adjacency_start = xmalloc(sizeof(uint32_t) * (n + 1));
     e->adjacency = xmalloc(sizeof(uint32_t) * (3 * (size_t)e->t + 1));
-    e->ring_vertex = xmalloc(sizeof(uint32_t) * (6 * (size_t)e->t + 1));
-    e->ring_held = xmalloc(6 * (size_t)e->t + 1);
+    size_t ring_slots = 3 * (size_t)e->t + n;
+    e->rings.vertex = xmalloc(sizeof(uint32_t) * ring_slots);
+    e->rings.left = xmalloc(sizeof(uint32_t) * ring_slots);
+    e->rings.right = xmalloc(sizeof(uint32_t) * ring_slots);
+    e->rings.held = xmalloc(ring_slots);
     e->ring_size = xcalloc(n, sizeof(uint32_t));
     e->donor = xmalloc(sizeof(uint32_t) * n);
     e->best_target = xmalloc(sizeof(uint32_t) * n);
@@ -1168,13 +1335,15 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
 size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_method method)
 {
     /* flags, adjacency_start, ring_size, donor, best_target, best, importance, the ranking's list
-     * and spare, the quadric */
+     * and spare, the quadric; a ring slot (vertex, left, right, held) */
     size_t per_vertex = 1 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
                         2 * sizeof(candidate) +
                         (method != DECIMATE_IMPORTANCE ? 10 * sizeof(double) : 0);
-    /* per corner: the adjacency (4), the rings (2 x 5) */
-    size_t per_corner = 4 + 2 * (4 + 1);
-    return per_vertex * ((size_t)vertex_count + 1) + per_corner * 3 * (size_t)triangle_count;
+    size_t ring_slot = 3 * sizeof(uint32_t) + 1;
+    /* per corner: the adjacency and a ring slot */
+    size_t per_corner = sizeof(uint32_t) + ring_slot;
+    return (per_vertex + ring_slot) * ((size_t)vertex_count + 1) +
+           per_corner * 3 * (size_t)triangle_count;
 }
 
 int collapse_run(collapse_mesh *m, const collapse_options *o, collapse_result *result)
@@ -1230,6 +1399,7 @@ int collapse_evaluate(const collapse_mesh *mesh, const collapse_options *options
     scratch s;
     memset(&s, 0, sizeof s);
     ring r0 = ring_of(&e, v0);
+    fan f0 = pass_fan(&e, v0);
     int boundary0;
     if (e.flags[v0] & FLAG_LOCKED)
         *rule = "locked";
@@ -1237,14 +1407,14 @@ int collapse_evaluate(const collapse_mesh *mesh, const collapse_options *options
         *rule = "complex vertex";
     else if (r0.size <= 2)
         *rule = "two neighbours";
-    else if (collapse_legal(&e, v0, v1, &r0, boundary0, &s, rule)) {
+    else if (collapse_legal(&e, v0, v1, f0, &r0, boundary0, 0, &s, rule)) {
         status = 1;
         if (options->method == DECIMATE_IMPORTANCE) {
             *cost = e.importance[v0];
             for (uint32_t k = 0; k < r0.size; k++)
                 *cost += e.importance[r0.vertex[k]];
         } else {
-            *cost = collapse_cost(&e, v0, v1, &s);
+            *cost = collapse_cost(&e, f0, v0, v1, &s);
         }
     }
     scratch_free(&s);

@@ -1,6 +1,7 @@
 // decimate.cc — decimate_mesh() and decimate_measure() (see decimate.h), the product path: the
-// welded rebuild (decimate_weld.cc, OpenMesh), its mesh laid out on flat arrays, the collapse
-// engine (collapse.h) on them, and the result split per wedge into a decimate_output.
+// input welded on flat arrays (weld.h), or, where that finds the surface non-manifold, the
+// OpenMesh rebuild (decimate_weld.cc) laid out flat; the collapse engine (collapse.h) on them;
+// and the result split per wedge into a decimate_output.
 #include <algorithm>
 #include <cstring>
 #include <exception>
@@ -11,17 +12,22 @@
 extern "C" {
 #include "core/error.h"
 #include "reduce/collapse.h"
+#include "reduce/weld.h"
 }
 
 using namespace idmr_decimate;
 
 namespace {
 
-// The welded mesh on flat arrays, as the engine takes it.
+// The welded mesh on flat arrays, as the engine takes it, with its attribute table.
 struct FlatMesh {
     std::vector<float> positions;
     std::vector<uint32_t> triangles, corner_ids;
     std::vector<uint8_t> locked;
+    std::vector<double> importance;
+    int uv_floats = 0, normal_floats = 0;
+    std::vector<float> attributes; // uv_floats + normal_floats per id
+    int stride() const { return uv_floats + normal_floats; }
 };
 
 // Lays the welded mesh out flat: vertex i is mesh vertex i; a face's corners in the order it
@@ -29,6 +35,9 @@ struct FlatMesh {
 void flatten(Mesh &mesh, const AttributeTable &attributes, FlatMesh &flat)
 {
     size_t n = mesh.n_vertices();
+    flat.uv_floats = attributes.uv_floats;
+    flat.normal_floats = attributes.normal_floats;
+    flat.attributes = attributes.values;
     flat.positions.resize(3 * n);
     flat.locked.assign(n, 0);
     for (auto v : mesh.all_vertices()) {
@@ -57,10 +66,10 @@ void flatten(Mesh &mesh, const AttributeTable &attributes, FlatMesh &flat)
 // The reduced mesh into out->mesh: every vertex of a live triangle once per wedge (distinct
 // corner id), in vertex order, its wedges in the order its corners come in the triangle list;
 // out->output_index[v] is v's first output vertex, or DECIMATE_REMOVED.
-void write_output(const FlatMesh &flat, const AttributeTable &attributes, decimate_output *out)
+void write_output(const FlatMesh &flat, decimate_output *out)
 {
     size_t n = flat.locked.size(), corners = flat.triangles.size();
-    bool split = attributes.present();
+    bool split = flat.stride() > 0;
     // Per vertex, its live corners in triangle order (a counting sort).
     std::vector<uint32_t> start(n + 1, 0), corner_of;
     size_t live = 0;
@@ -112,49 +121,83 @@ void write_output(const FlatMesh &flat, const AttributeTable &attributes, decima
             m->indices[written++] = output_of[c];
     if (!split)
         return;
-    int stride = attributes.stride();
-    if (attributes.uv_floats)
+    int stride = flat.stride();
+    if (flat.uv_floats)
         m->texcoords = (float *)xmalloc(2 * sizeof(float) * (count + 1));
-    if (attributes.normal_floats)
+    if (flat.normal_floats)
         m->normals = (float *)xmalloc(3 * sizeof(float) * (count + 1));
     for (size_t i = 0; i < count; i++) {
-        const float *value = &attributes.values[(size_t)stride * id_of[i]];
-        for (int k = 0; k < attributes.uv_floats; k++)
+        const float *value = &flat.attributes[(size_t)stride * id_of[i]];
+        for (int k = 0; k < flat.uv_floats; k++)
             m->texcoords[2 * i + k] = value[k];
-        for (int k = 0; k < attributes.normal_floats; k++)
-            m->normals[3 * i + k] = value[attributes.uv_floats + k];
+        for (int k = 0; k < flat.normal_floats; k++)
+            m->normals[3 * i + k] = value[flat.uv_floats + k];
     }
+}
+
+// The flat weld's result as the engine's input (it was found manifold: nothing is patched or
+// locked). Takes welded_of into out.
+void from_weld(weld_result &weld, FlatMesh &flat, decimate_output *out)
+{
+    size_t n = weld.vertex_count, corners = 3 * (size_t)weld.triangle_count;
+    flat.positions.assign(weld.positions, weld.positions + 3 * n);
+    flat.triangles.assign(weld.triangles, weld.triangles + corners);
+    if (weld.corner_ids)
+        flat.corner_ids.assign(weld.corner_ids, weld.corner_ids + corners);
+    flat.locked.assign(n, 0);
+    flat.importance.assign(weld.importance, weld.importance + n);
+    flat.uv_floats = weld.uv_floats;
+    flat.normal_floats = weld.normal_floats;
+    if (weld.attributes)
+        flat.attributes.assign(weld.attributes,
+                               weld.attributes + (size_t)flat.stride() * weld.attribute_count);
+    out->welded_of = weld.welded_of;
+    weld.welded_of = nullptr;
+    out->vertices_welded = weld.vertices_counted;
+    out->faces_dropped = weld.triangles_dropped;
+}
+
+// The welded mesh the engine starts from: the flat weld where the surface is manifold, else the
+// OpenMesh rebuild (which fills out's welding figures itself).
+void prepare(const decimate_input *in, FlatMesh &flat, decimate_output *out)
+{
+    weld_result weld;
+    weld_flat(in, &weld);
+    if (weld.non_manifold_vertices == 0) {
+        from_weld(weld, flat, out);
+        weld_result_free(&weld);
+        return;
+    }
+    weld_result_free(&weld);
+    Mesh mesh;
+    AttributeTable attributes;
+    build_welded_mesh(in, mesh, out, flat.importance, attributes);
+    flatten(mesh, attributes, flat);
 }
 
 // decimate_mesh() without the exception boundary.
 int decimate_welded(const decimate_input *in, decimate_method method, decimate_output *out)
 {
     FlatMesh flat;
-    std::vector<double> importance;
-    AttributeTable attributes;
-    {
-        Mesh mesh;
-        build_welded_mesh(in, mesh, out, importance, attributes);
-        flatten(mesh, attributes, flat);
-    } // the OpenMesh mesh is freed before the engine runs
+    prepare(in, flat, out); // an OpenMesh mesh is freed before the engine runs
     size_t n = flat.locked.size();
     std::vector<uint32_t> distance = welded_distances(in, out, n);
-    importance.resize(n, 0.0);
+    flat.importance.resize(n, 0.0);
     collapse_mesh cm;
     std::memset(&cm, 0, sizeof cm);
     cm.vertex_count = (uint32_t)n;
     cm.positions = flat.positions.data();
     cm.triangle_count = (uint32_t)(flat.triangles.size() / 3);
     cm.triangles = flat.triangles.data();
-    if (attributes.present()) {
+    if (flat.stride() > 0) {
         cm.corner_ids = flat.corner_ids.data();
-        cm.attributes = attributes.values.data();
-        cm.attribute_count = (uint32_t)(attributes.values.size() / attributes.stride());
-        cm.uv_floats = attributes.uv_floats;
-        cm.normal_floats = attributes.normal_floats;
+        cm.attributes = flat.attributes.data();
+        cm.attribute_count = (uint32_t)(flat.attributes.size() / flat.stride());
+        cm.uv_floats = flat.uv_floats;
+        cm.normal_floats = flat.normal_floats;
     }
     cm.locked = flat.locked.data();
-    cm.importance = in->vertex_importance ? importance.data() : nullptr;
+    cm.importance = in->vertex_importance ? flat.importance.data() : nullptr;
     cm.distance = distance.empty() ? nullptr : distance.data();
 
     collapse_options options;
@@ -183,7 +226,7 @@ int decimate_welded(const decimate_input *in, decimate_method method, decimate_o
     }
     out->collapses = result.collapses;
     out->passes = result.passes;
-    write_output(flat, attributes, out);
+    write_output(flat, out);
     return 0;
 }
 
@@ -210,10 +253,8 @@ extern "C" int decimate_measure(const decimate_input *in, uint32_t *vertices,
     decimate_output out;
     std::memset(&out, 0, sizeof out);
     try {
-        Mesh mesh;
-        std::vector<double> importance;
-        AttributeTable attributes;
-        build_welded_mesh(in, mesh, &out, importance, attributes);
+        FlatMesh flat;
+        prepare(in, flat, &out);
     } catch (const std::exception &e) {
         decimate_output_free(&out);
         return error_set(IDMR_EXIT_FAILURE, "mesh '%s': OpenMesh failed: %s", in->name, e.what());
