@@ -38,6 +38,9 @@ enum {
                                  quarter of the list */
 #define MAX_CHANNELS 5 /* uv and normal */
 #define SCORE_BLOCK 512 /* vertices a thread takes at a time */
+#define MAX_THREADS 64
+
+typedef struct worker_pool worker_pool;
 
 /* A vertex's one-ring: each neighbour, how many live triangles hold the edge to it (at most 255
  * counted), and the third corners of those triangles: left[i] of the triangle (v, vertex[i],
@@ -125,6 +128,7 @@ typedef struct engine {
     double *attribute_terms;
     double min_cos, boundary_tolerance;
     uint64_t alive;
+    worker_pool *pool;
 } engine;
 
 /* ---- small helpers ---- */
@@ -969,52 +973,121 @@ static void score_vertex(engine *e, uint32_t v, scratch *s)
 
 /* ---- the per-vertex steps, in parallel ---- */
 
-/* Each vertex's step writes only that vertex's records, so the blocks may go to any thread. */
+/* The engine's threads: started once per run, each with its own scratch, handed one step at a
+ * time. Each vertex's step writes only that vertex's records, so the blocks of vertices may go
+ * to any thread and the result does not depend on which. */
 typedef enum vertex_step { STEP_RINGS, STEP_SCORES } vertex_step;
 
-typedef struct vertex_job {
+typedef struct worker_start {
+    worker_pool *pool;
+    unsigned int index;
+} worker_start;
+
+struct worker_pool {
     engine *e;
+    pthread_t thread[MAX_THREADS];
+    worker_start start[MAX_THREADS];
+    scratch scratch[MAX_THREADS + 1]; /* [0]: the calling thread's */
+    unsigned int count;               /* threads started besides the caller */
+    pthread_mutex_t lock;
+    pthread_cond_t wake, done;
+    unsigned int generation, finished;
+    int quit;
     vertex_step step;
     atomic_uint_fast32_t next;
-} vertex_job;
+};
 
-static void *vertex_worker(void *arg)
+/* Takes blocks of vertices until none is left. */
+static void run_step(worker_pool *pool, scratch *s)
 {
-    vertex_job *job = arg;
-    engine *e = job->e;
-    scratch s;
-    memset(&s, 0, sizeof s);
+    engine *e = pool->e;
     for (;;) {
-        uint32_t begin = (uint32_t)atomic_fetch_add(&job->next, SCORE_BLOCK);
+        uint32_t begin = (uint32_t)atomic_fetch_add(&pool->next, SCORE_BLOCK);
         if (begin >= e->n)
-            break;
+            return;
         uint32_t end = begin + SCORE_BLOCK < e->n ? begin + SCORE_BLOCK : e->n;
         for (uint32_t v = begin; v < end; v++) {
-            if (job->step == STEP_RINGS)
+            if (pool->step == STEP_RINGS)
                 build_ring(e, v);
             else if (e->flags[v] & FLAG_STALE)
-                score_vertex(e, v, &s);
+                score_vertex(e, v, s);
         }
     }
-    scratch_free(&s);
+}
+
+static void *worker_main(void *arg)
+{
+    worker_pool *pool = ((worker_start *)arg)->pool;
+    scratch *s = &pool->scratch[((worker_start *)arg)->index + 1];
+    unsigned int seen = 0;
+    pthread_mutex_lock(&pool->lock);
+    for (;;) {
+        while (pool->generation == seen && !pool->quit)
+            pthread_cond_wait(&pool->wake, &pool->lock);
+        if (pool->quit)
+            break;
+        seen = pool->generation;
+        pthread_mutex_unlock(&pool->lock);
+        run_step(pool, s);
+        pthread_mutex_lock(&pool->lock);
+        if (++pool->finished == pool->count)
+            pthread_cond_signal(&pool->done);
+    }
+    pthread_mutex_unlock(&pool->lock);
     return NULL;
 }
 
+static void pool_start(worker_pool *pool, engine *e, unsigned int threads)
+{
+    memset(pool, 0, sizeof *pool);
+    pool->e = e;
+    pthread_mutex_init(&pool->lock, NULL);
+    pthread_cond_init(&pool->wake, NULL);
+    pthread_cond_init(&pool->done, NULL);
+    if (threads > MAX_THREADS)
+        threads = MAX_THREADS;
+    /* No more threads than blocks of vertices to share. */
+    while (threads > 1 && (size_t)(threads - 1) * SCORE_BLOCK >= e->n)
+        threads--;
+    for (unsigned int i = 0; i + 1 < threads; i++) {
+        pool->start[i] = (worker_start){pool, i};
+        if (pthread_create(&pool->thread[i], NULL, worker_main, &pool->start[i]) != 0)
+            break; /* fewer threads: the same result, later */
+        pool->count++;
+    }
+}
+
+/* Runs one step over every vertex on all the pool's threads and the caller's. */
 static void for_each_vertex(engine *e, vertex_step step)
 {
-    vertex_job job = {.e = e, .step = step};
-    atomic_init(&job.next, 0);
-    unsigned int threads = e->o->threads ? e->o->threads : 1;
-    if (threads > 64)
-        threads = 64;
-    pthread_t pool[64];
-    unsigned int started = 0;
-    for (unsigned int i = 1; i < threads && (size_t)i * SCORE_BLOCK < e->n; i++)
-        if (pthread_create(&pool[started], NULL, vertex_worker, &job) == 0)
-            started++;
-    vertex_worker(&job);
-    for (unsigned int i = 0; i < started; i++)
-        pthread_join(pool[i], NULL);
+    worker_pool *pool = e->pool;
+    pthread_mutex_lock(&pool->lock);
+    pool->step = step;
+    atomic_store(&pool->next, 0);
+    pool->finished = 0;
+    pool->generation++;
+    pthread_cond_broadcast(&pool->wake);
+    pthread_mutex_unlock(&pool->lock);
+    run_step(pool, &pool->scratch[0]);
+    pthread_mutex_lock(&pool->lock);
+    while (pool->finished < pool->count)
+        pthread_cond_wait(&pool->done, &pool->lock);
+    pthread_mutex_unlock(&pool->lock);
+}
+
+static void pool_stop(worker_pool *pool)
+{
+    pthread_mutex_lock(&pool->lock);
+    pool->quit = 1;
+    pthread_cond_broadcast(&pool->wake);
+    pthread_mutex_unlock(&pool->lock);
+    for (unsigned int i = 0; i < pool->count; i++)
+        pthread_join(pool->thread[i], NULL);
+    for (unsigned int i = 0; i <= MAX_THREADS; i++)
+        scratch_free(&pool->scratch[i]);
+    pthread_mutex_destroy(&pool->lock);
+    pthread_cond_destroy(&pool->wake);
+    pthread_cond_destroy(&pool->done);
 }
 
 /* ---- ranking ---- */
@@ -1253,6 +1326,10 @@ static uint32_t run_pass(engine *e, candidate *list, candidate *spare, uint32_t 
 
 static void engine_free(engine *e)
 {
+    if (e->pool) {
+        pool_stop(e->pool);
+        free(e->pool);
+    }
     free(e->flags);
     free(e->adjacency_start);
     free(e->adjacency);
@@ -1319,6 +1396,8 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
         if (m->locked && m->locked[v])
             e->flags[v] |= FLAG_LOCKED;
     }
+    e->pool = xmalloc(sizeof *e->pool);
+    pool_start(e->pool, e, o->threads ? o->threads : 1);
     build_adjacency(e);
     for_each_vertex(e, STEP_RINGS);
     if (e->quadric)

@@ -11,6 +11,7 @@
 
 extern "C" {
 #include "core/error.h"
+#include "core/progress.h"
 #include "reduce/collapse.h"
 #include "reduce/weld.h"
 }
@@ -19,57 +20,80 @@ using namespace idmr_decimate;
 
 namespace {
 
-// The welded mesh on flat arrays, as the engine takes it, with its attribute table.
-struct FlatMesh {
-    std::vector<float> positions;
-    std::vector<uint32_t> triangles, corner_ids;
-    std::vector<uint8_t> locked;
-    std::vector<double> importance;
-    int uv_floats = 0, normal_floats = 0;
-    std::vector<float> attributes; // uv_floats + normal_floats per id
-    int stride() const { return uv_floats + normal_floats; }
-};
-
-// Lays the welded mesh out flat: vertex i is mesh vertex i; a face's corners in the order it
-// was added (its corner set where the mesh has attributes).
-void flatten(Mesh &mesh, const AttributeTable &attributes, FlatMesh &flat)
+// Lays the OpenMesh rebuild out flat, as the flat weld gives its result: vertex i is mesh vertex
+// i (its loose copies locked); a face's corners in the order it was added (its corner set where
+// the mesh has attributes). Takes the importance.
+void flatten(Mesh &mesh, const AttributeTable &attributes, std::vector<double> &importance,
+             weld_result *flat)
 {
-    size_t n = mesh.n_vertices();
-    flat.uv_floats = attributes.uv_floats;
-    flat.normal_floats = attributes.normal_floats;
-    flat.attributes = attributes.values;
-    flat.positions.resize(3 * n);
-    flat.locked.assign(n, 0);
+    size_t n = mesh.n_vertices(), faces = mesh.n_faces();
+    std::memset(flat, 0, sizeof *flat);
+    flat->vertex_count = (uint32_t)n;
+    flat->positions = (float *)xmalloc(3 * sizeof(float) * (n + 1));
+    flat->locked = (uint8_t *)xcalloc(n + 1, 1);
+    flat->importance = (double *)xcalloc(n + 1, sizeof(double));
+    std::copy(importance.begin(), importance.begin() + std::min(n, importance.size()),
+              flat->importance);
     for (auto v : mesh.all_vertices()) {
         const Mesh::Point &p = mesh.point(v);
         for (int k = 0; k < 3; k++)
-            flat.positions[3 * (size_t)v.idx() + k] = p[k];
-        flat.locked[v.idx()] = mesh.status(v).locked();
+            flat->positions[3 * (size_t)v.idx() + k] = p[k];
+        flat->locked[v.idx()] = mesh.status(v).locked();
     }
-    flat.triangles.reserve(3 * mesh.n_faces());
-    if (attributes.present())
-        flat.corner_ids.reserve(3 * mesh.n_faces());
+    flat->triangle_count = (uint32_t)faces;
+    flat->triangles = (uint32_t *)xmalloc(3 * sizeof(uint32_t) * (faces + 1));
+    if (attributes.present()) {
+        flat->corner_ids = (uint32_t *)xmalloc(3 * sizeof(uint32_t) * (faces + 1));
+        flat->uv_floats = attributes.uv_floats;
+        flat->normal_floats = attributes.normal_floats;
+        flat->attribute_count = (uint32_t)(attributes.values.size() / attributes.stride());
+        flat->attributes = (float *)xmalloc(sizeof(float) * (attributes.values.size() + 1));
+        std::copy(attributes.values.begin(), attributes.values.end(), flat->attributes);
+    }
+    size_t corner = 0;
     for (auto f : mesh.faces()) {
         if (attributes.present()) {
             const CornerSet &set = mesh.property(attributes.corners, f);
-            for (int k = 0; k < 3; k++) {
-                flat.triangles.push_back((uint32_t)set.vertex[k]);
-                flat.corner_ids.push_back(set.id[k]);
+            for (int k = 0; k < 3; k++, corner++) {
+                flat->triangles[corner] = (uint32_t)set.vertex[k];
+                flat->corner_ids[corner] = set.id[k];
             }
             continue;
         }
         for (auto v : mesh.fv_range(f))
-            flat.triangles.push_back((uint32_t)v.idx());
+            flat->triangles[corner++] = (uint32_t)v.idx();
     }
+}
+
+// The welded mesh the engine starts from: the flat weld where the surface is manifold (its
+// welding figures into out), else the OpenMesh rebuild (which fills them itself). out takes
+// welded_of either way.
+void prepare(const decimate_input *in, weld_result *flat, decimate_output *out)
+{
+    weld_flat(in, flat);
+    if (flat->non_manifold_vertices == 0) {
+        out->welded_of = flat->welded_of;
+        flat->welded_of = nullptr;
+        out->vertices_welded = flat->vertices_counted;
+        out->faces_dropped = flat->triangles_dropped;
+        return;
+    }
+    weld_result_free(flat);
+    Mesh mesh;
+    AttributeTable attributes;
+    std::vector<double> importance;
+    build_welded_mesh(in, mesh, out, importance, attributes);
+    flatten(mesh, attributes, importance, flat);
 }
 
 // The reduced mesh into out->mesh: every vertex of a live triangle once per wedge (distinct
 // corner id), in vertex order, its wedges in the order its corners come in the triangle list;
 // out->output_index[v] is v's first output vertex, or DECIMATE_REMOVED.
-void write_output(const FlatMesh &flat, decimate_output *out)
+void write_output(const weld_result &flat, decimate_output *out)
 {
-    size_t n = flat.locked.size(), corners = flat.triangles.size();
-    bool split = flat.stride() > 0;
+    size_t n = flat.vertex_count, corners = 3 * (size_t)flat.triangle_count;
+    int stride = flat.uv_floats + flat.normal_floats;
+    bool split = flat.corner_ids != nullptr;
     // Per vertex, its live corners in triangle order (a counting sort).
     std::vector<uint32_t> start(n + 1, 0), corner_of;
     size_t live = 0;
@@ -121,7 +145,6 @@ void write_output(const FlatMesh &flat, decimate_output *out)
             m->indices[written++] = output_of[c];
     if (!split)
         return;
-    int stride = flat.stride();
     if (flat.uv_floats)
         m->texcoords = (float *)xmalloc(2 * sizeof(float) * (count + 1));
     if (flat.normal_floats)
@@ -135,69 +158,27 @@ void write_output(const FlatMesh &flat, decimate_output *out)
     }
 }
 
-// The flat weld's result as the engine's input (it was found manifold: nothing is patched or
-// locked). Takes welded_of into out.
-void from_weld(weld_result &weld, FlatMesh &flat, decimate_output *out)
-{
-    size_t n = weld.vertex_count, corners = 3 * (size_t)weld.triangle_count;
-    flat.positions.assign(weld.positions, weld.positions + 3 * n);
-    flat.triangles.assign(weld.triangles, weld.triangles + corners);
-    if (weld.corner_ids)
-        flat.corner_ids.assign(weld.corner_ids, weld.corner_ids + corners);
-    flat.locked.assign(n, 0);
-    flat.importance.assign(weld.importance, weld.importance + n);
-    flat.uv_floats = weld.uv_floats;
-    flat.normal_floats = weld.normal_floats;
-    if (weld.attributes)
-        flat.attributes.assign(weld.attributes,
-                               weld.attributes + (size_t)flat.stride() * weld.attribute_count);
-    out->welded_of = weld.welded_of;
-    weld.welded_of = nullptr;
-    out->vertices_welded = weld.vertices_counted;
-    out->faces_dropped = weld.triangles_dropped;
-}
-
-// The welded mesh the engine starts from: the flat weld where the surface is manifold, else the
-// OpenMesh rebuild (which fills out's welding figures itself).
-void prepare(const decimate_input *in, FlatMesh &flat, decimate_output *out)
-{
-    weld_result weld;
-    weld_flat(in, &weld);
-    if (weld.non_manifold_vertices == 0) {
-        from_weld(weld, flat, out);
-        weld_result_free(&weld);
-        return;
-    }
-    weld_result_free(&weld);
-    Mesh mesh;
-    AttributeTable attributes;
-    build_welded_mesh(in, mesh, out, flat.importance, attributes);
-    flatten(mesh, attributes, flat);
-}
-
 // decimate_mesh() without the exception boundary.
 int decimate_welded(const decimate_input *in, decimate_method method, decimate_output *out)
 {
-    FlatMesh flat;
-    prepare(in, flat, out); // an OpenMesh mesh is freed before the engine runs
-    size_t n = flat.locked.size();
+    double start = monotonic_seconds();
+    weld_result flat;
+    prepare(in, &flat, out); // an OpenMesh mesh is freed before the engine runs
+    size_t n = flat.vertex_count;
     std::vector<uint32_t> distance = welded_distances(in, out, n);
-    flat.importance.resize(n, 0.0);
     collapse_mesh cm;
     std::memset(&cm, 0, sizeof cm);
     cm.vertex_count = (uint32_t)n;
-    cm.positions = flat.positions.data();
-    cm.triangle_count = (uint32_t)(flat.triangles.size() / 3);
-    cm.triangles = flat.triangles.data();
-    if (flat.stride() > 0) {
-        cm.corner_ids = flat.corner_ids.data();
-        cm.attributes = flat.attributes.data();
-        cm.attribute_count = (uint32_t)(flat.attributes.size() / flat.stride());
-        cm.uv_floats = flat.uv_floats;
-        cm.normal_floats = flat.normal_floats;
-    }
-    cm.locked = flat.locked.data();
-    cm.importance = in->vertex_importance ? flat.importance.data() : nullptr;
+    cm.positions = flat.positions;
+    cm.triangle_count = flat.triangle_count;
+    cm.triangles = flat.triangles;
+    cm.corner_ids = flat.corner_ids;
+    cm.attributes = flat.attributes;
+    cm.attribute_count = flat.attribute_count;
+    cm.uv_floats = flat.uv_floats;
+    cm.normal_floats = flat.normal_floats;
+    cm.locked = flat.locked;
+    cm.importance = in->vertex_importance ? flat.importance : nullptr;
     cm.distance = distance.empty() ? nullptr : distance.data();
 
     collapse_options options;
@@ -219,14 +200,21 @@ int decimate_welded(const decimate_input *in, decimate_method method, decimate_o
     collapse_result result;
     std::memset(&result, 0, sizeof result);
     result.collapsed_into = out->collapsed_into;
+    out->seconds_weld = monotonic_seconds() - start;
+    start = monotonic_seconds();
     if (collapse_run(&cm, &options, &result)) {
         error_prefix("mesh '%s'", in->name);
+        weld_result_free(&flat);
         decimate_output_free(out);
         return -1;
     }
+    out->seconds_collapse = monotonic_seconds() - start;
     out->collapses = result.collapses;
     out->passes = result.passes;
+    start = monotonic_seconds();
     write_output(flat, out);
+    weld_result_free(&flat);
+    out->seconds_output = monotonic_seconds() - start;
     return 0;
 }
 
@@ -253,8 +241,9 @@ extern "C" int decimate_measure(const decimate_input *in, uint32_t *vertices,
     decimate_output out;
     std::memset(&out, 0, sizeof out);
     try {
-        FlatMesh flat;
-        prepare(in, flat, &out);
+        weld_result flat;
+        prepare(in, &flat, &out);
+        weld_result_free(&flat);
     } catch (const std::exception &e) {
         decimate_output_free(&out);
         return error_set(IDMR_EXIT_FAILURE, "mesh '%s': OpenMesh failed: %s", in->name, e.what());

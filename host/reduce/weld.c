@@ -243,5 +243,6 @@ void weld_result_free(weld_result *out)
     free(out->triangles);
     free(out->corner_ids);
     free(out->attributes);
+    free(out->locked);
     memset(out, 0, sizeof *out);
 }

@@ -35,6 +35,8 @@ typedef struct weld_result {
     uint32_t attribute_count;
     float *attributes;         /* uv_floats + normal_floats per id */
     int uv_floats, normal_floats;
+    uint8_t *locked;           /* per welded vertex, or NULL: never moved (decimate.cc fills it
+                                  for the OpenMesh rebuild's loose copies) */
     uint32_t non_manifold_vertices; /* vertices where the check failed (0: manifold) */
     uint32_t vertices_counted; /* vertices with triangles, once per wedge */
 } weld_result;
@@ -42,6 +44,7 @@ typedef struct weld_result {
 /* Welds `in` and checks the result (see above). Returns 0 (allocation failure exits, as xmalloc
  * does). */
 int weld_flat(const decimate_input *in, weld_result *out);
+/* Frees every array of the result (welded_of too, unless the caller took it and set it NULL). */
 void weld_result_free(weld_result *out);
 
 #ifdef __cplusplus
