@@ -123,6 +123,7 @@ typedef struct scene {
     float bbox_min[3];
     float bbox_max[3];
     unsigned int features; /* IDMR_FEATURE_* bits */
+    double load_seconds;   /* set by scene_load(): reading the file and its meshes */
 } scene;
 
 scene *scene_create(const char *file);

@@ -43,11 +43,25 @@ static void add_totals(cJSON *root, const reduce_state *st)
 
 static void add_seconds(cJSON *seconds, const reduce_state *st)
 {
+    cJSON_AddNumberToObject(seconds, "load", st->scene->load_seconds);
     cJSON_AddNumberToObject(seconds, "initial", st->seconds_initial);
     cJSON_AddNumberToObject(seconds, "importance", st->seconds_importance);
     cJSON_AddNumberToObject(seconds, "budget", st->seconds_budget);
     cJSON_AddNumberToObject(seconds, "decimation", st->seconds_decimation);
     cJSON_AddNumberToObject(seconds, "write", st->seconds_write);
+    /* The decimation's parts, summed over the meshes' last decimations (thread-seconds: meshes
+     * run side by side, so they may add up to more than the decimation's wall time). */
+    double weld = 0, collapse = 0, output = 0;
+    for (size_t m = 0; m < st->count; m++)
+        if (st->plan.decimate && st->plan.decimate[m]) {
+            weld += st->output[m].seconds_weld;
+            collapse += st->output[m].seconds_collapse;
+            output += st->output[m].seconds_output;
+        }
+    cJSON *parts = cJSON_AddObjectToObject(seconds, "decimation_parts");
+    cJSON_AddNumberToObject(parts, "weld", weld);
+    cJSON_AddNumberToObject(parts, "collapse", collapse);
+    cJSON_AddNumberToObject(parts, "output", output);
 }
 
 /* The reduction's figures of mesh m, added to its entry (created when the report has none). */
@@ -91,6 +105,9 @@ static void add_mesh(cJSON *meshes, const reduce_state *st, size_t m)
         cJSON_AddStringToObject(mesh, "seams", decimated_from->seams_free ? "free" : "kept");
     }
     if (decimated) {
+        cJSON_AddNumberToObject(mesh, "passes", out->passes);
+        cJSON_AddNumberToObject(mesh, "decimation_seconds",
+                                out->seconds_weld + out->seconds_collapse + out->seconds_output);
         cJSON_AddNumberToObject(mesh, "vertices_welded", out->vertices_welded);
         cJSON_AddNumberToObject(mesh, "vertices_uncollapsible", out->vertices_uncollapsible);
         cJSON_AddNumberToObject(mesh, "faces_patched", out->faces_patched);
