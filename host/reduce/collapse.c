@@ -18,6 +18,7 @@
 #include <float.h>
 #include <math.h>
 #include <pthread.h>
+#include <sched.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -39,6 +40,10 @@ enum {
 #define MAX_CHANNELS 5 /* uv and normal */
 #define SCORE_BLOCK 512 /* vertices a thread takes at a time */
 #define MAX_THREADS 64
+#define CHUNK 1024 /* candidates judged at a time when taking collapses */
+#define JUDGE_BLOCK 8  /* candidates a thread judges at a time */
+#define APPLY_BLOCK 16 /* collapses a thread takes at a time */
+#define SPIN_LIMIT 20000 /* pauses a thread spins before it sleeps or yields */
 
 typedef struct worker_pool worker_pool;
 
@@ -95,6 +100,18 @@ typedef struct candidate {
     uint32_t vertex;
 } candidate;
 
+/* A candidate judged on the mesh as it is, ahead of taking it (judge): its verdict, the
+ * vertices its verdict read (v0, v1, vl, vr) and those taking it writes (v0 and its ring; more
+ * than WRITES_MAX: the ring is gathered again when needed), and the vertices it removes. */
+#define WRITES_MAX 30
+enum { VERDICT_SKIP, VERDICT_ILLEGAL, VERDICT_LEGAL };
+typedef struct judgement {
+    uint32_t v0, v1, vl, vr;
+    uint8_t verdict, write_count; /* write_count > WRITES_MAX: too many to hold */
+    uint64_t removes;
+    uint32_t writes[WRITES_MAX];
+} judgement;
+
 /* Where the corners of the removed vertex go (decimate_attributes.hh, CollapseMapping). */
 typedef struct mapping {
     uint32_t left_from, left_to, right_from, right_to, nearest_to;
@@ -129,6 +146,14 @@ typedef struct engine {
     double min_cos, boundary_tolerance;
     uint64_t alive;
     worker_pool *pool;
+    /* taking collapses in chunks (take_in_chunks) */
+    const candidate *chunk;         /* the ranked candidates of the pass */
+    uint32_t *chunk_items;          /* the chunk: positions in it, deferred ones first */
+    struct judgement *judgements;   /* per item of the chunk */
+    uint32_t *accepted;             /* the chunk's items taken */
+    uint32_t *deferred;             /* positions deferred to the next chunk */
+    uint32_t *stamp, chunk_stamp;   /* per vertex: the last chunk that wrote it */
+    uint32_t *history;
 } engine;
 
 /* ---- small helpers ---- */
@@ -976,7 +1001,7 @@ static void score_vertex(engine *e, uint32_t v, scratch *s)
 /* The engine's threads: started once per run, each with its own scratch, handed one step at a
  * time. Each vertex's step writes only that vertex's records, so the blocks of vertices may go
  * to any thread and the result does not depend on which. */
-typedef enum vertex_step { STEP_RINGS, STEP_SCORES } vertex_step;
+typedef enum vertex_step { STEP_RINGS, STEP_SCORES, STEP_JUDGE, STEP_APPLY } vertex_step;
 
 typedef struct worker_start {
     worker_pool *pool;
@@ -989,30 +1014,57 @@ struct worker_pool {
     worker_start start[MAX_THREADS];
     scratch scratch[MAX_THREADS + 1]; /* [0]: the calling thread's */
     unsigned int count;               /* threads started besides the caller */
-    pthread_mutex_t lock;
-    pthread_cond_t wake, done;
-    unsigned int generation, finished;
-    int quit;
+    pthread_mutex_t lock; /* with `wake`: for the workers that sleep between steps */
+    pthread_cond_t wake;
+    unsigned int sleepers;
+    atomic_uint generation, finished;
+    atomic_int quit;
     vertex_step step;
+    uint32_t items, block; /* STEP_JUDGE and STEP_APPLY: items of the chunk, taken `block` at a
+                              time */
     atomic_uint_fast32_t next;
 };
 
-/* Takes blocks of vertices until none is left. */
+static void judge_item(engine *e, uint32_t item, scratch *s);
+static void apply_item(engine *e, uint32_t item, scratch *s);
+
+/* Takes blocks of items (vertices, or a chunk's candidates) until none is left. */
 static void run_step(worker_pool *pool, scratch *s)
 {
     engine *e = pool->e;
+    int per_vertex = pool->step == STEP_RINGS || pool->step == STEP_SCORES;
+    uint32_t items = per_vertex ? e->n : pool->items, block = per_vertex ? SCORE_BLOCK : pool->block;
     for (;;) {
-        uint32_t begin = (uint32_t)atomic_fetch_add(&pool->next, SCORE_BLOCK);
-        if (begin >= e->n)
+        uint32_t begin = (uint32_t)atomic_fetch_add(&pool->next, block);
+        if (begin >= items)
             return;
-        uint32_t end = begin + SCORE_BLOCK < e->n ? begin + SCORE_BLOCK : e->n;
-        for (uint32_t v = begin; v < end; v++) {
-            if (pool->step == STEP_RINGS)
-                build_ring(e, v);
-            else if (e->flags[v] & FLAG_STALE)
-                score_vertex(e, v, s);
+        uint32_t end = begin + block < items ? begin + block : items;
+        for (uint32_t i = begin; i < end; i++) {
+            switch (pool->step) {
+            case STEP_RINGS:
+                build_ring(e, i);
+                break;
+            case STEP_SCORES:
+                if (e->flags[i] & FLAG_STALE)
+                    score_vertex(e, i, s);
+                break;
+            case STEP_JUDGE:
+                judge_item(e, i, s);
+                break;
+            case STEP_APPLY:
+                apply_item(e, i, s);
+                break;
+            }
         }
     }
+}
+
+/* A short wait in a spin loop. */
+static void spin_pause(void)
+{
+#if defined(__x86_64__) || defined(__i386__)
+    __builtin_ia32_pause();
+#endif
 }
 
 static void *worker_main(void *arg)
@@ -1020,21 +1072,31 @@ static void *worker_main(void *arg)
     worker_pool *pool = ((worker_start *)arg)->pool;
     scratch *s = &pool->scratch[((worker_start *)arg)->index + 1];
     unsigned int seen = 0;
-    pthread_mutex_lock(&pool->lock);
     for (;;) {
-        while (pool->generation == seen && !pool->quit)
-            pthread_cond_wait(&pool->wake, &pool->lock);
-        if (pool->quit)
-            break;
-        seen = pool->generation;
-        pthread_mutex_unlock(&pool->lock);
+        /* Spin a while for the next step (the chunks of a pass follow each other within
+         * microseconds), then sleep until woken. */
+        unsigned int generation;
+        for (unsigned int spins = 0;
+             (generation = atomic_load_explicit(&pool->generation, memory_order_acquire)) == seen &&
+             !atomic_load(&pool->quit);
+             spins++) {
+            if (spins < SPIN_LIMIT) {
+                spin_pause();
+                continue;
+            }
+            pthread_mutex_lock(&pool->lock);
+            pool->sleepers++;
+            while (atomic_load(&pool->generation) == seen && !atomic_load(&pool->quit))
+                pthread_cond_wait(&pool->wake, &pool->lock);
+            pool->sleepers--;
+            pthread_mutex_unlock(&pool->lock);
+        }
+        if (atomic_load(&pool->quit))
+            return NULL;
+        seen = generation;
         run_step(pool, s);
-        pthread_mutex_lock(&pool->lock);
-        if (++pool->finished == pool->count)
-            pthread_cond_signal(&pool->done);
+        atomic_fetch_add_explicit(&pool->finished, 1, memory_order_release);
     }
-    pthread_mutex_unlock(&pool->lock);
-    return NULL;
 }
 
 static void pool_start(worker_pool *pool, engine *e, unsigned int threads)
@@ -1043,7 +1105,9 @@ static void pool_start(worker_pool *pool, engine *e, unsigned int threads)
     pool->e = e;
     pthread_mutex_init(&pool->lock, NULL);
     pthread_cond_init(&pool->wake, NULL);
-    pthread_cond_init(&pool->done, NULL);
+    atomic_init(&pool->generation, 0);
+    atomic_init(&pool->finished, 0);
+    atomic_init(&pool->quit, 0);
     if (threads > MAX_THREADS)
         threads = MAX_THREADS;
     /* No more threads than blocks of vertices to share. */
@@ -1057,28 +1121,33 @@ static void pool_start(worker_pool *pool, engine *e, unsigned int threads)
     }
 }
 
-/* Runs one step over every vertex on all the pool's threads and the caller's. */
-static void for_each_vertex(engine *e, vertex_step step)
+/* Runs one step over its items on all the pool's threads and the caller's. */
+static void run_on_pool(engine *e, vertex_step step, uint32_t items, uint32_t block)
 {
     worker_pool *pool = e->pool;
-    pthread_mutex_lock(&pool->lock);
     pool->step = step;
+    pool->items = items;
+    pool->block = block;
     atomic_store(&pool->next, 0);
-    pool->finished = 0;
-    pool->generation++;
-    pthread_cond_broadcast(&pool->wake);
+    atomic_store(&pool->finished, 0);
+    atomic_fetch_add_explicit(&pool->generation, 1, memory_order_release);
+    pthread_mutex_lock(&pool->lock);
+    if (pool->sleepers)
+        pthread_cond_broadcast(&pool->wake);
     pthread_mutex_unlock(&pool->lock);
     run_step(pool, &pool->scratch[0]);
-    pthread_mutex_lock(&pool->lock);
-    while (pool->finished < pool->count)
-        pthread_cond_wait(&pool->done, &pool->lock);
-    pthread_mutex_unlock(&pool->lock);
+    for (unsigned int spins = 0;
+         atomic_load_explicit(&pool->finished, memory_order_acquire) < pool->count; spins++)
+        if (spins < SPIN_LIMIT)
+            spin_pause();
+        else
+            sched_yield(); /* a worker is off its core: let it run */
 }
 
 static void pool_stop(worker_pool *pool)
 {
     pthread_mutex_lock(&pool->lock);
-    pool->quit = 1;
+    atomic_store(&pool->quit, 1);
     pthread_cond_broadcast(&pool->wake);
     pthread_mutex_unlock(&pool->lock);
     for (unsigned int i = 0; i < pool->count; i++)
@@ -1087,8 +1156,9 @@ static void pool_stop(worker_pool *pool)
         scratch_free(&pool->scratch[i]);
     pthread_mutex_destroy(&pool->lock);
     pthread_cond_destroy(&pool->wake);
-    pthread_cond_destroy(&pool->done);
 }
+
+static void for_each_vertex(engine *e, vertex_step step) { run_on_pool(e, step, e->n, SCORE_BLOCK); }
 
 /* ---- ranking ---- */
 
@@ -1151,57 +1221,95 @@ static void rank_candidates(candidate *list, candidate *spare, size_t count, int
 
 /* ---- applying collapses ---- */
 
-/* The distinct corner ids at v among its current triangles (its pass-start ones and its
- * donor's): its wedge count, 1 without attributes. */
-static uint32_t current_wedges(const engine *e, uint32_t v, scratch *s)
+/* Adds id to the distinct ids s->ids[0 .. count); returns the new count. */
+static size_t add_id(scratch *s, size_t count, uint32_t id)
+{
+    for (size_t j = 0; j < count; j++)
+        if (s->ids[j] == id)
+            return count;
+    if (count == s->ids_capacity) {
+        s->ids_capacity = s->ids_capacity ? 2 * s->ids_capacity : 32;
+        s->ids = xrealloc(s->ids, sizeof(uint32_t) * s->ids_capacity);
+        s->mapped = xrealloc(s->mapped, sizeof(uint32_t) * s->ids_capacity);
+    }
+    s->ids[count] = id;
+    return count + 1;
+}
+
+/* Adds the corner ids at v among its current triangles (its pass-start ones and its donor's),
+ * but triangles without_a and without_b, to s->ids[0 .. count); returns the new count. */
+static size_t current_ids(const engine *e, uint32_t v, uint32_t without_a, uint32_t without_b,
+                          scratch *s, size_t count)
+{
+    uint32_t sources[2] = {v, e->donor[v]};
+    for (int k = 0; k < 2; k++) {
+        if (sources[k] == COLLAPSE_NONE)
+            continue;
+        fan f = pass_fan(e, sources[k]);
+        for (uint32_t i = 0; i < f.count; i++) {
+            uint32_t t = f.triangle[i];
+            if (corners(e, t)[0] == COLLAPSE_NONE || corner_at(e, t, v) == 3 ||
+                t == without_a || t == without_b)
+                continue;
+            count = add_id(s, count, id_at(e, t, v));
+        }
+    }
+    return count;
+}
+
+/* v's wedge count now: 1 without attributes (or without triangles). */
+static uint64_t current_wedges(const engine *e, uint32_t v, scratch *s)
 {
     if (!e->m->corner_ids)
         return 1;
-    size_t count = 0;
-    uint32_t sources[2] = {v, e->donor[v]};
-    for (int k = 0; k < 2; k++) {
-        uint32_t source = sources[k];
-        if (source == COLLAPSE_NONE)
+    size_t count = current_ids(e, v, COLLAPSE_NONE, COLLAPSE_NONE, s, 0);
+    return count ? count : 1;
+}
+
+/* The vertices (counted once per wedge) that taking v0 -> v1 would remove, the mesh as it is:
+ * v0's wedges, and those that v1, vl and vr lose with the two triangles of the edge (v0's
+ * corners go into wedges v1 has). Without attributes, 1. */
+static uint64_t collapse_removes(const engine *e, fan f0, uint32_t v0, uint32_t v1, scratch *s)
+{
+    if (!e->m->corner_ids)
+        return 1;
+    edge_sides sides = sides_of(e, f0, v0, v1);
+    mapping map = mapping_of(e, v0, v1, &sides);
+    uint64_t removed = current_wedges(e, v0, s);
+    uint32_t kept[3] = {v1, sides.vl, sides.vr};
+    for (int k = 0; k < 3; k++) {
+        if (kept[k] == COLLAPSE_NONE)
             continue;
-        for (uint32_t i = e->adjacency_start[source]; i < e->adjacency_start[source + 1]; i++) {
-            uint32_t t = e->adjacency[i];
-            if (corners(e, t)[0] == COLLAPSE_NONE || corner_at(e, t, v) == 3)
-                continue;
-            uint32_t id = id_at(e, t, v);
-            size_t j = 0;
-            while (j < count && s->ids[j] != id)
-                j++;
-            if (j < count)
-                continue;
-            if (count == s->ids_capacity) {
-                s->ids_capacity = s->ids_capacity ? 2 * s->ids_capacity : 32;
-                s->ids = xrealloc(s->ids, sizeof(uint32_t) * s->ids_capacity);
-                s->mapped = xrealloc(s->mapped, sizeof(uint32_t) * s->ids_capacity);
+        uint64_t before = current_wedges(e, kept[k], s);
+        size_t after = current_ids(e, kept[k], sides.fl, sides.fr, s, 0);
+        if (k == 0) /* v1 also gets v0's corners, in the wedges they map to */
+            for (uint32_t i = 0; i < f0.count; i++) {
+                uint32_t t = f0.triangle[i];
+                if (t != sides.fl && t != sides.fr)
+                    after = add_id(s, after, mapped_id(&map, id_at(e, t, v0)));
             }
-            s->ids[count++] = id;
-        }
+        removed += before > after ? before - after : 0;
     }
-    return count ? (uint32_t)count : 1;
+    return removed;
+}
+
+/* Sets bits of a vertex's flags; atomic, as collapses taken side by side may touch one vertex. */
+static void flag(engine *e, uint32_t v, uint8_t bits)
+{
+    __atomic_fetch_or(&e->flags[v], bits, __ATOMIC_RELAXED);
 }
 
 /* Takes v0 -> v1 (neither an end of a collapse taken in this pass; f0 holds v0's live
  * triangles): moves v0's triangles onto v1, removes the two of the edge, merges the quadrics (or
- * the importance), records the history and touches v0's ring. Returns the vertices (counted once
- * per wedge) the mesh lost. */
-static uint64_t apply_collapse(engine *e, fan f0, uint32_t v0, uint32_t v1, uint32_t *history,
-                               scratch *s)
+ * the importance), records the history and touches v0's ring. */
+static void apply_collapse(engine *e, fan f0, uint32_t v0, uint32_t v1, uint32_t *history,
+                           scratch *s)
 {
     edge_sides sides = sides_of(e, f0, v0, v1);
     int attributes = e->m->corner_ids != NULL;
     mapping map = {0, 0, 0, 0, 0};
-    uint64_t before = 1;
     if (attributes) {
         map = mapping_of(e, v0, v1, &sides);
-        before = current_wedges(e, v0, s) + current_wedges(e, v1, s);
-        if (sides.vl != COLLAPSE_NONE)
-            before += current_wedges(e, sides.vl, s);
-        if (sides.vr != COLLAPSE_NONE)
-            before += current_wedges(e, sides.vr, s);
         if (e->attributes_weighted) {
             size_t count = ids_of(e, f0, v0, s);
             for (size_t k = 0; k < count; k++)
@@ -1212,7 +1320,7 @@ static uint64_t apply_collapse(engine *e, fan f0, uint32_t v0, uint32_t v1, uint
         uint32_t t = f0.triangle[i];
         uint32_t *c = corners(e, t);
         for (int k = 0; k < 3; k++)
-            e->flags[c[k]] |= FLAG_TOUCHED;
+            flag(e, c[k], FLAG_TOUCHED);
         if (t == sides.fl || t == sides.fr) {
             c[0] = c[1] = c[2] = COLLAPSE_NONE;
             continue;
@@ -1228,18 +1336,10 @@ static uint64_t apply_collapse(engine *e, fan f0, uint32_t v0, uint32_t v1, uint
             e->quadric[10 * (size_t)v1 + k] += e->quadric[10 * (size_t)v0 + k];
     if (e->o->method == DECIMATE_IMPORTANCE)
         e->importance[v1] += e->importance[v0];
-    e->flags[v0] |= FLAG_REMOVED | FLAG_TAKEN;
-    e->flags[v1] |= FLAG_TAKEN;
+    flag(e, v0, FLAG_REMOVED | FLAG_TAKEN);
+    flag(e, v1, FLAG_TAKEN);
     e->donor[v1] = v0;
     history[v0] = v1;
-    if (!attributes)
-        return 1;
-    uint64_t after = current_wedges(e, v1, s);
-    if (sides.vl != COLLAPSE_NONE)
-        after += current_wedges(e, sides.vl, s);
-    if (sides.vr != COLLAPSE_NONE)
-        after += current_wedges(e, sides.vr, s);
-    return before > after ? before - after : 0;
 }
 
 /* A vertex's score depends on its triangles, its neighbours' triangles, quadrics and importance:
@@ -1274,9 +1374,137 @@ static int neighbourhood_touched(const engine *e, uint32_t v0, uint32_t v1)
            (vr != COLLAPSE_NONE && (e->flags[vr] & FLAG_TOUCHED));
 }
 
+/* Judges v0 -> v1 on the mesh as it is, as the pass's greedy order would when it comes to it:
+ * skipped where an end was taken in this pass; legal as scored where no collapse taken touched
+ * its neighbourhood; otherwise judged again on the rings gathered anew (the cost stands: v0 and
+ * v1 received nothing, so their quadrics are as scored). */
+static void judge(const engine *e, uint32_t v0, uint32_t v1, scratch *s, judgement *j)
+{
+    j->v0 = v0, j->v1 = v1, j->vl = j->vr = COLLAPSE_NONE;
+    j->write_count = 0;
+    j->removes = 0;
+    j->verdict = VERDICT_SKIP;
+    if ((e->flags[v0] | e->flags[v1]) & FLAG_TAKEN)
+        return;
+    fan f0 = pass_fan(e, v0);
+    ring r0 = e->flags[v0] & FLAG_TOUCHED ? current_ring(e, v0, s, SLOT_V0, &f0) : ring_of(e, v0);
+    uint32_t slot = ring_find(&r0, v1);
+    j->verdict = VERDICT_ILLEGAL;
+    if (slot == r0.size)
+        return; /* no longer neighbours */
+    j->vl = r0.left[slot], j->vr = r0.right[slot];
+    if (neighbourhood_touched(e, v0, v1)) {
+        const char *rule;
+        int boundary0;
+        if (!ring_simple(&r0, &boundary0) || r0.size <= 2 ||
+            !collapse_legal(e, v0, v1, f0, &r0, boundary0, 1, s, &rule))
+            return;
+    }
+    j->verdict = VERDICT_LEGAL;
+    j->removes = collapse_removes(e, f0, v0, v1, s);
+    j->writes[0] = v0;
+    j->write_count = r0.size + 1 <= WRITES_MAX ? (uint8_t)(r0.size + 1) : WRITES_MAX + 1;
+    for (uint32_t i = 0; i < r0.size && i + 1 < WRITES_MAX; i++)
+        j->writes[i + 1] = r0.vertex[i];
+}
+
+/* Takes a judged collapse: v0's live triangles gathered again (no collapse taken since touched
+ * them), then apply_collapse. */
+static void take(engine *e, const judgement *j, scratch *s)
+{
+    fan f0 = current_fan(e, j->v0, s, SLOT_V0);
+    apply_collapse(e, f0, j->v0, j->v1, e->history, s);
+}
+
+static void judge_item(engine *e, uint32_t item, scratch *s)
+{
+    uint32_t v0 = e->chunk[e->chunk_items[item]].vertex;
+    judge(e, v0, e->best_target[v0], s, &e->judgements[item]);
+}
+
+static void apply_item(engine *e, uint32_t item, scratch *s)
+{
+    take(e, &e->judgements[e->accepted[item]], s);
+}
+
+/* Whether a collapse accepted earlier in this chunk wrote vertex v. */
+static int stamped(const engine *e, uint32_t v)
+{
+    return v != COLLAPSE_NONE && e->stamp[v] == e->chunk_stamp;
+}
+
+/* Marks what taking the judged collapse writes: v0 and its ring. */
+static void stamp_writes(engine *e, const judgement *j, scratch *s)
+{
+    if (j->write_count <= WRITES_MAX) {
+        for (uint32_t i = 0; i < j->write_count; i++)
+            e->stamp[j->writes[i]] = e->chunk_stamp;
+        return;
+    }
+    fan f0;
+    ring r0 = current_ring(e, j->v0, s, SLOT_V0, &f0);
+    e->stamp[j->v0] = e->chunk_stamp;
+    for (uint32_t i = 0; i < r0.size; i++)
+        e->stamp[r0.vertex[i]] = e->chunk_stamp;
+}
+
+/* Takes the ranked candidates list[0 .. count) in order, greedily, in chunks of CHUNK
+ * candidates whose judging and taking run on the pool's threads. A chunk's candidates are judged
+ * side by side on the mesh as the chunk found it (judge). Then, in order, each is accepted as
+ * judged, unless an earlier one accepted in the chunk wrote a vertex its verdict read: that one
+ * is deferred to the head of the next chunk and judged again there. The accepted ones write
+ * disjoint triangles and vertices (apply_collapse: v0's triangles, v0's ring's flags, v1's
+ * quadric) and are taken side by side. Every collapse taken is legal on the mesh it is applied
+ * to, and which ones are taken depends only on the ranking and the chunks, never on the threads:
+ * the same bytes on any number of them. Against the strict order, a deferred candidate may come
+ * after costlier ones of its chunk (a relaxed order, as a relaxed priority queue's). Returns the
+ * collapses taken. */
+static uint32_t take_in_chunks(engine *e, const candidate *list, size_t count, float cost_limit,
+                               scratch *s)
+{
+    uint32_t taken = 0, *items = e->chunk_items, deferred = 0;
+    size_t next = 0;
+    int stop = 0;
+    e->chunk = list;
+    while (!stop && (deferred || next < count) && e->alive > e->o->target_vertices) {
+        uint32_t n = deferred; /* the deferred ones are at the head already */
+        while (n < CHUNK && next < count)
+            items[n++] = (uint32_t)next++;
+        run_on_pool(e, STEP_JUDGE, n, JUDGE_BLOCK);
+        e->chunk_stamp++;
+        uint32_t accepted = 0;
+        deferred = 0;
+        for (uint32_t i = 0; i < n; i++) {
+            const judgement *j = &e->judgements[i];
+            if (list[items[i]].cost > cost_limit && taken > 0) {
+                stop = 1;
+                break;
+            }
+            if (stamped(e, j->v0) || stamped(e, j->v1) || stamped(e, j->vl) ||
+                stamped(e, j->vr)) {
+                e->deferred[deferred++] = items[i];
+                continue;
+            }
+            if (j->verdict != VERDICT_LEGAL)
+                continue;
+            e->accepted[accepted++] = i;
+            stamp_writes(e, j, s);
+            e->alive = e->alive > j->removes ? e->alive - j->removes : 0;
+            taken++;
+            if (e->alive <= e->o->target_vertices) {
+                stop = 1;
+                break;
+            }
+        }
+        if (accepted)
+            run_on_pool(e, STEP_APPLY, accepted, APPLY_BLOCK);
+        memcpy(items, e->deferred, sizeof(uint32_t) * deferred);
+    }
+    return taken;
+}
+
 /* One pass; returns the collapses it took. */
-static uint32_t run_pass(engine *e, candidate *list, candidate *spare, uint32_t *history,
-                         scratch *s)
+static uint32_t run_pass(engine *e, candidate *list, candidate *spare, scratch *s)
 {
     build_adjacency(e);
     for_each_vertex(e, STEP_RINGS);
@@ -1294,30 +1522,7 @@ static uint32_t run_pass(engine *e, candidate *list, candidate *spare, uint32_t 
         e->flags[v] &= (uint8_t) ~(FLAG_TOUCHED | FLAG_TAKEN);
         e->donor[v] = COLLAPSE_NONE;
     }
-    uint32_t taken = 0;
-    for (size_t i = 0; i < count && e->alive > e->o->target_vertices; i++) {
-        if (list[i].cost > cost_limit && taken > 0)
-            break;
-        uint32_t v0 = list[i].vertex, v1 = e->best_target[v0];
-        if ((e->flags[v0] | e->flags[v1]) & FLAG_TAKEN)
-            continue;
-        fan f0 = pass_fan(e, v0);
-        if (neighbourhood_touched(e, v0, v1)) {
-            /* Judged again on the mesh as it is now: the rings of the touched ones among v0, v1,
-             * vl and vr gathered anew. The cost stands (v0 and v1 received nothing: their
-             * quadrics are as scored). */
-            const char *rule;
-            int boundary0;
-            ring r0 = e->flags[v0] & FLAG_TOUCHED ? current_ring(e, v0, s, SLOT_V0, &f0)
-                                                  : ring_of(e, v0);
-            if (!ring_simple(&r0, &boundary0) || r0.size <= 2 ||
-                !collapse_legal(e, v0, v1, f0, &r0, boundary0, 1, s, &rule))
-                continue;
-        }
-        uint64_t lost = apply_collapse(e, f0, v0, v1, history, s);
-        e->alive = e->alive > lost ? e->alive - lost : 0;
-        taken++;
-    }
+    uint32_t taken = take_in_chunks(e, list, count, cost_limit, s);
     mark_stale(e);
     return taken;
 }
@@ -1344,6 +1549,11 @@ static void engine_free(engine *e)
     free(e->best_target);
     free(e->best);
     free(e->attribute_terms);
+    free(e->judgements);
+    free(e->chunk_items);
+    free(e->accepted);
+    free(e->deferred);
+    free(e->stamp);
     memset(e, 0, sizeof *e);
 }
 
@@ -1413,9 +1623,9 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
 
 size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_method method)
 {
-    /* flags, adjacency_start, ring_size, donor, best_target, best, importance, the ranking's list
-     * and spare, the quadric; a ring slot (vertex, left, right, held) */
-    size_t per_vertex = 1 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
+    /* flags, adjacency_start, ring_size, donor, best_target, stamp, best, importance, the
+     * ranking's list and spare, the quadric; a ring slot (vertex, left, right, held) */
+    size_t per_vertex = 1 + 4 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
                         2 * sizeof(candidate) +
                         (method != DECIMATE_IMPORTANCE ? 10 * sizeof(double) : 0);
     size_t ring_slot = 3 * sizeof(uint32_t) + 1;
@@ -1437,10 +1647,16 @@ int collapse_run(collapse_mesh *m, const collapse_options *o, collapse_result *r
     result->passes = 0;
     candidate *list = xmalloc(sizeof(candidate) * ((size_t)e.n + 1));
     candidate *spare = xmalloc(sizeof(candidate) * ((size_t)e.n + 1));
+    e.history = result->collapsed_into;
+    e.judgements = xmalloc(sizeof(judgement) * CHUNK);
+    e.chunk_items = xmalloc(sizeof(uint32_t) * CHUNK);
+    e.accepted = xmalloc(sizeof(uint32_t) * CHUNK);
+    e.deferred = xmalloc(sizeof(uint32_t) * CHUNK);
+    e.stamp = xcalloc((size_t)e.n + 1, sizeof(uint32_t));
     scratch s;
     memset(&s, 0, sizeof s);
     while (e.alive > o->target_vertices) {
-        uint32_t taken = run_pass(&e, list, spare, result->collapsed_into, &s);
+        uint32_t taken = run_pass(&e, list, spare, &s);
         if (!taken)
             break;
         result->collapses += taken;

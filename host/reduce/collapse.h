@@ -9,14 +9,20 @@
  *                  on the thread count
  *   3. rank        the candidates sorted by cost (ties broken by a total order, so the order is
  *                  the same on any run)
- *   4. apply       in that order, greedily: a collapse is taken only when neither of its vertices
- *                  was touched by a collapse taken earlier in the pass; taking v0 -> v1 touches v0
- *                  and v0's whole one-ring. So every collapse taken sees exactly the neighbourhood
- *                  it was scored on, and its legality still holds. The pass stops at the
- *                  target, or at 1.5 x the cost of the candidate ranked at a quarter of the list
- *                  (after meshoptimizer's rule, which ranks at the target: cheap collapses left
- *                  for the next pass are cheaper than expensive ones taken now; a quarter, about
- *                  what the locks let a pass take, keeps a cheap region from being outrun by an
+ *   4. apply       in that order, greedily, in chunks of 1,024 candidates: the chunk's candidates
+ *                  are judged side by side on the mesh as the chunk found it (skipped where an end
+ *                  was already taken in this pass; legal as scored where no collapse taken has
+ *                  touched the triangles of v0, v1, vl or vr; judged again on their rings
+ *                  gathered anew otherwise); then, in order, each is accepted as judged unless a
+ *                  collapse accepted earlier in the chunk wrote a vertex its verdict read (v0,
+ *                  v1, vl, vr): that one moves to the head of the next chunk and is judged again.
+ *                  The accepted collapses write disjoint triangles and vertices and are taken
+ *                  side by side. So every collapse is legal on the mesh it is applied to, and
+ *                  which are taken depends on the ranking and the chunks, never on the threads.
+ *                  The pass stops at the target, or at 1.5 x the cost of the candidate ranked
+ *                  at a quarter of the list (after meshoptimizer's rule, which ranks at the
+ *                  target: cheap collapses left for the next pass are cheaper than expensive
+ *                  ones taken now; a quarter keeps a cheap region from being outrun by an
  *                  expensive one, as the reference's heap would not). The target only stops
  *                  passes, it does not shape them: reducing to one vertex fewer takes the same
  *                  collapses and one more.
