@@ -144,6 +144,7 @@ typedef struct engine {
     double uv_scale, normal_scale, centre[3];
     double *attribute_terms;
     double min_cos, boundary_tolerance;
+    double importance_floor; /* COMBINED (importance_floor()) */
     uint64_t alive;
     worker_pool *pool;
     /* taking collapses in chunks (take_in_chunks) */
@@ -543,7 +544,10 @@ static double attribute_value(const engine *e, uint32_t id, int channel)
     return v * (channel < e->m->uv_floats ? e->uv_scale : e->normal_scale);
 }
 
-static void attribute_add_face(engine *e, const float *p[3], const uint32_t id[3], double w)
+/* The terms one face with corners at p[k] and ids id[k], weighted w, adds to the attribute
+ * quadric of each of its corners' ids, into face[]; 0 for a degenerate face. */
+static int attribute_face_terms(const engine *e, const float *p[3], const uint32_t id[3],
+                                double w, double *face)
 {
     double e1[3], e2[3], n[3];
     difference(p[1], p[0], e1);
@@ -551,7 +555,7 @@ static void attribute_add_face(engine *e, const float *p[3], const uint32_t id[3
     cross(e1, e2, n);
     double n2 = dot(n, n);
     if (!(n2 > 0) || !(w > 0))
-        return;
+        return 0;
     double dual1[3], dual2[3], p0[3];
     cross(e2, n, dual1);
     cross(n, e1, dual2);
@@ -560,8 +564,8 @@ static void attribute_add_face(engine *e, const float *p[3], const uint32_t id[3
         dual2[k] /= n2;
         p0[k] = p[0][k] - e->centre[k];
     }
-    int channels = e->channels, stride = attribute_stride(channels);
-    double face[6 + 3 * MAX_CHANNELS + 1 + 3 + MAX_CHANNELS + 1] = {0};
+    int channels = e->channels;
+    memset(face, 0, sizeof(double) * attribute_stride(channels));
     double *matrix = face, *gradient = face + 6, *weight = gradient + 3 * channels,
            *linear = weight + 1, *offset = linear + 3, *constant = offset + channels;
     *weight = w;
@@ -581,11 +585,7 @@ static void attribute_add_face(engine *e, const float *p[3], const uint32_t id[3
         offset[ch] += w * d;
         *constant += w * d * d;
     }
-    for (int k = 0; k < 3; k++) {
-        double *q = &e->attribute_terms[(size_t)id[k] * stride];
-        for (int i = 0; i < stride; i++)
-            q[i] += face[i];
-    }
+    return 1;
 }
 
 /* E_id at `point` with the attribute values of id `at`. */
@@ -631,15 +631,6 @@ static double triangle_points(const engine *e, uint32_t t, const float *p[3])
     return sum / 3.0;
 }
 
-/* Whether the edge a-b (of a live triangle) is open: held by one live triangle. */
-static int edge_open(const engine *e, uint32_t a, uint32_t b)
-{
-    uint32_t held = 0;
-    for (uint32_t i = e->adjacency_start[a]; i < e->adjacency_start[a + 1]; i++)
-        held += corner_at(e, e->adjacency[i], b) < 3;
-    return held == 1;
-}
-
 /* COMBINED's attribute quadrics, where the mesh has an attribute with a weight. */
 static void start_attribute_quadrics(engine *e)
 {
@@ -672,37 +663,43 @@ static void start_attribute_quadrics(engine *e)
         xcalloc((size_t)m->attribute_count * attribute_stride(e->channels) + 1, sizeof(double));
 }
 
-/* The plane quadrics: QUADRIC, each face's plane weighted by its area (OpenMesh's ModQuadricT);
- * COMBINED, weighted by area x (importance + floor), with planes across open edges and the
- * attribute quadrics. Needs the adjacency. */
-static void build_quadrics(engine *e)
+/* COMBINED's importance floor: FLOOR_SHARE of the area-weighted mean importance of the faces (a
+ * face's the mean of its vertices'), 1 when the mesh has none. */
+static double importance_floor(const engine *e)
 {
-    int combined = e->o->method == DECIMATE_COMBINED;
-    double floor = 0;
-    if (combined) {
-        start_attribute_quadrics(e);
-        double weighted = 0, area = 0;
-        for (uint32_t t = 0; t < e->t; t++) {
-            if (corners(e, t)[0] == COLLAPSE_NONE)
-                continue;
-            const float *p[3];
-            double face_importance = triangle_points(e, t, p), n[3];
-            normal_of(p, n);
-            double a = 0.5 * sqrt(dot(n, n));
-            weighted += a * face_importance;
-            area += a;
-        }
-        double mean = area > 0 ? weighted / area : 0;
-        floor = mean > 0 && isfinite(mean) ? FLOOR_SHARE * mean : 1.0;
-    }
+    double weighted = 0, area = 0;
     for (uint32_t t = 0; t < e->t; t++) {
-        const uint32_t *c = corners(e, t);
-        if (c[0] == COLLAPSE_NONE)
+        if (corners(e, t)[0] == COLLAPSE_NONE)
             continue;
         const float *p[3];
-        double face_importance = combined ? triangle_points(e, t, p) + floor : 1.0, n[3];
+        double face_importance = triangle_points(e, t, p), n[3];
+        normal_of(p, n);
+        double a = 0.5 * sqrt(dot(n, n));
+        weighted += a * face_importance;
+        area += a;
+    }
+    double mean = area > 0 ? weighted / area : 0;
+    return mean > 0 && isfinite(mean) ? FLOOR_SHARE * mean : 1.0;
+}
+
+/* The plane quadric of v (and, COMBINED with attributes, the attribute quadrics of its corner
+ * ids) from its triangles, in triangle order: QUADRIC, each face's plane weighted by its area
+ * (OpenMesh's ModQuadricT); COMBINED, weighted by area x (importance + floor), with the plane
+ * across each open edge of the face at v. Each vertex sums its own, so the vertices may go to any
+ * thread; every sum is taken in the order a loop over the triangles would take it. */
+static void build_quadric(engine *e, uint32_t v)
+{
+    int combined = e->o->method == DECIMATE_COMBINED;
+    double *quadric = &e->quadric[10 * (size_t)v];
+    fan f = pass_fan(e, v);
+    ring r = ring_of(e, v);
+    for (uint32_t i = 0; i < f.count; i++) {
+        uint32_t t = f.triangle[i];
+        const uint32_t *c = corners(e, t);
+        const float *p[3];
+        double face_importance = triangle_points(e, t, p) + e->importance_floor, n[3];
         if (!combined)
-            triangle_points(e, t, p);
+            face_importance = 1.0;
         normal_of(p, n);
         double twice_area = sqrt(dot(n, n));
         if (!(twice_area > 0))
@@ -711,30 +708,34 @@ static void build_quadrics(engine *e)
             n[k] /= twice_area;
         double d = -(n[0] * p[0][0] + n[1] * p[0][1] + n[2] * p[0][2]);
         double weight = 0.5 * twice_area * face_importance;
-        for (int k = 0; k < 3; k++)
-            quadric_add_plane(&e->quadric[10 * (size_t)c[k]], n, d, weight);
+        quadric_add_plane(quadric, n, d, weight);
         if (!combined)
             continue;
         for (int k = 0; k < 3; k++) {
             uint32_t a = c[k], b = c[(k + 1) % 3];
-            if (!edge_open(e, a, b))
-                continue;
+            if ((a != v && b != v) || ring_count(&r, a == v ? b : a) != 1)
+                continue; /* not an edge at v, or not open */
             double edge[3], across[3];
             difference(position(e, b), position(e, a), edge);
             cross(edge, n, across);
             double length = sqrt(dot(across, across));
             if (!(length > 0))
                 continue;
-            for (int i = 0; i < 3; i++)
-                across[i] /= length;
+            for (int m = 0; m < 3; m++)
+                across[m] /= length;
             const float *pa = position(e, a);
             double da = -(across[0] * pa[0] + across[1] * pa[1] + across[2] * pa[2]);
-            double w = BOUNDARY_WEIGHT * dot(edge, edge) * face_importance;
-            quadric_add_plane(&e->quadric[10 * (size_t)a], across, da, w);
-            quadric_add_plane(&e->quadric[10 * (size_t)b], across, da, w);
+            quadric_add_plane(quadric, across, da,
+                              BOUNDARY_WEIGHT * dot(edge, edge) * face_importance);
         }
-        if (e->attributes_weighted)
-            attribute_add_face(e, p, &e->m->corner_ids[3 * (size_t)t], weight);
+        double face[6 + 3 * MAX_CHANNELS + 1 + 3 + MAX_CHANNELS + 1];
+        if (e->attributes_weighted &&
+            attribute_face_terms(e, p, &e->m->corner_ids[3 * (size_t)t], weight, face)) {
+            int stride = attribute_stride(e->channels);
+            double *q = &e->attribute_terms[(size_t)id_at(e, t, v) * stride];
+            for (int m = 0; m < stride; m++)
+                q[m] += face[m];
+        }
     }
 }
 
@@ -1001,7 +1002,13 @@ static void score_vertex(engine *e, uint32_t v, scratch *s)
 /* The engine's threads: started once per run, each with its own scratch, handed one step at a
  * time. Each vertex's step writes only that vertex's records, so the blocks of vertices may go
  * to any thread and the result does not depend on which. */
-typedef enum vertex_step { STEP_RINGS, STEP_SCORES, STEP_JUDGE, STEP_APPLY } vertex_step;
+typedef enum vertex_step {
+    STEP_RINGS,
+    STEP_QUADRICS,
+    STEP_SCORES,
+    STEP_JUDGE,
+    STEP_APPLY
+} vertex_step;
 
 typedef struct worker_start {
     worker_pool *pool;
@@ -1032,7 +1039,7 @@ static void apply_item(engine *e, uint32_t item, scratch *s);
 static void run_step(worker_pool *pool, scratch *s)
 {
     engine *e = pool->e;
-    int per_vertex = pool->step == STEP_RINGS || pool->step == STEP_SCORES;
+    int per_vertex = pool->step != STEP_JUDGE && pool->step != STEP_APPLY;
     uint32_t items = per_vertex ? e->n : pool->items, block = per_vertex ? SCORE_BLOCK : pool->block;
     for (;;) {
         uint32_t begin = (uint32_t)atomic_fetch_add(&pool->next, block);
@@ -1043,6 +1050,9 @@ static void run_step(worker_pool *pool, scratch *s)
             switch (pool->step) {
             case STEP_RINGS:
                 build_ring(e, i);
+                break;
+            case STEP_QUADRICS:
+                build_quadric(e, i);
                 break;
             case STEP_SCORES:
                 if (e->flags[i] & FLAG_STALE)
@@ -1610,8 +1620,13 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     pool_start(e->pool, e, o->threads ? o->threads : 1);
     build_adjacency(e);
     for_each_vertex(e, STEP_RINGS);
-    if (e->quadric)
-        build_quadrics(e);
+    if (e->quadric) {
+        if (o->method == DECIMATE_COMBINED) {
+            start_attribute_quadrics(e);
+            e->importance_floor = importance_floor(e);
+        }
+        for_each_vertex(e, STEP_QUADRICS);
+    }
     scratch s;
     memset(&s, 0, sizeof s);
     for (uint32_t v = 0; v < e->n; v++)
