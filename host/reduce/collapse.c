@@ -134,6 +134,7 @@ typedef struct engine {
     ring_store rings;
     uint32_t *ring_size;
     double *quadric;
+    double *self_error; /* per vertex: its quadric at its own position (the quadric methods) */
     double *importance;
     uint32_t *donor;
     /* the scoring's results, per vertex */
@@ -223,6 +224,14 @@ static void normal_of(const float *p[3], double n[3])
     difference(p[1], p[0], e1);
     difference(p[2], p[0], e2);
     cross(e1, e2, n);
+}
+
+/* q(p) */
+static double quadric_error(const double *q, const float *point)
+{
+    double x = point[0], y = point[1], z = point[2];
+    return q[0] * x * x + 2 * q[1] * x * y + 2 * q[2] * x * z + q[3] * y * y + 2 * q[4] * y * z +
+           q[5] * z * z + 2 * (q[6] * x + q[7] * y + q[8] * z) + q[9];
 }
 
 /* ---- adjacency and rings ---- */
@@ -345,6 +354,8 @@ static ring view_of(ring_store r, uint32_t size)
 /* Builds v's one-ring from its pass-start triangles into the pass's ring arrays. */
 static void build_ring(engine *e, uint32_t v)
 {
+    if (e->quadric) /* the quadrics are as the last pass left them: v's own error with them */
+        e->self_error[v] = quadric_error(&e->quadric[10 * (size_t)v], position(e, v));
     uint32_t degree = e->adjacency_start[v + 1] - e->adjacency_start[v];
     e->ring_size[v] = fill_ring(e, v, pass_fan(e, v),
                                 ring_store_at(&e->rings, (size_t)e->adjacency_start[v] + v),
@@ -522,16 +533,6 @@ static void quadric_add_plane(double *q, const double n[3], double d, double wei
     q[9] += weight * d * d;
 }
 
-/* (q0 + q1)(p) */
-static double quadric_error(const double *q0, const double *q1, const float *point)
-{
-    double q[10];
-    for (int k = 0; k < 10; k++)
-        q[k] = q0[k] + q1[k];
-    double x = point[0], y = point[1], z = point[2];
-    return q[0] * x * x + 2 * q[1] * x * y + 2 * q[2] * x * z + q[3] * y * y + 2 * q[4] * y * z +
-           q[5] * z * z + 2 * (q[6] * x + q[7] * y + q[8] * z) + q[9];
-}
 
 /* Attribute quadrics (decimate_attributes.hh, AttributeQuadrics): per id, the upper triangle of
  * sum w g g' (6), per channel sum w g (3 each), sum w (1), sum over channels of w d g (3), per
@@ -687,12 +688,23 @@ static double importance_floor(const engine *e)
  * (OpenMesh's ModQuadricT); COMBINED, weighted by area x (importance + floor), with the plane
  * across each open edge of the face at v. Each vertex sums its own, so the vertices may go to any
  * thread; every sum is taken in the order a loop over the triangles would take it. */
+static void build_quadric_sums(engine *e, uint32_t v, double *quadric, fan f, ring r,
+                               int combined);
+
 static void build_quadric(engine *e, uint32_t v)
 {
     int combined = e->o->method == DECIMATE_COMBINED;
     double *quadric = &e->quadric[10 * (size_t)v];
     fan f = pass_fan(e, v);
     ring r = ring_of(e, v);
+    build_quadric_sums(e, v, quadric, f, r, combined);
+    e->self_error[v] = quadric_error(quadric, position(e, v));
+}
+
+/* build_quadric's sums. */
+static void build_quadric_sums(engine *e, uint32_t v, double *quadric, fan f, ring r,
+                               int combined)
+{
     for (uint32_t i = 0; i < f.count; i++) {
         uint32_t t = f.triangle[i];
         const uint32_t *c = corners(e, t);
@@ -754,12 +766,14 @@ static int normals_kept(const engine *e, const ring *r0, uint32_t v0, uint32_t v
         double nb[3], na[3];
         normal_of(before, nb);
         normal_of(after, na);
-        double lb = sqrt(dot(nb, nb)), la = sqrt(dot(na, na));
-        if (!(la > 0))
+        /* cos(turn) >= min_cos, without square roots: dot >= min_cos |nb| |na| */
+        double lb2 = dot(nb, nb), la2 = dot(na, na), d = dot(nb, na);
+        if (!(la2 > 0))
             return 0;
-        if (!(lb > 0))
+        if (!(lb2 > 0))
             continue; /* already degenerate: any direction is an improvement */
-        if (dot(nb, na) < e->min_cos * lb * la)
+        double bound2 = e->min_cos * e->min_cos * lb2 * la2;
+        if (e->min_cos >= 0 ? (d < 0 || d * d < bound2) : (d < 0 && d * d > bound2))
             return 0;
     }
     return 1;
@@ -909,7 +923,8 @@ static int collapse_legal(const engine *e, uint32_t v0, uint32_t v1, fan f0, con
 static double collapse_cost(const engine *e, fan f0, uint32_t v0, uint32_t v1, scratch *s)
 {
     const float *p1 = position(e, v1);
-    double error = quadric_error(&e->quadric[10 * (size_t)v0], &e->quadric[10 * (size_t)v1], p1);
+    /* (Q0 + Q1)(p1) = Q0(p1) + Q1(p1), the second v1's own error, kept per pass */
+    double error = quadric_error(&e->quadric[10 * (size_t)v0], p1) + e->self_error[v1];
     if (e->attributes_weighted) {
         edge_sides sides = sides_of(e, f0, v0, v1);
         mapping map = mapping_of(e, v0, v1, &sides);
@@ -1418,11 +1433,12 @@ static void judge(const engine *e, uint32_t v0, uint32_t v1, scratch *s, judgeme
         j->writes[i + 1] = r0.vertex[i];
 }
 
-/* Takes a judged collapse: v0's live triangles gathered again (no collapse taken since touched
- * them), then apply_collapse. */
+/* Takes a judged collapse (no collapse taken since touched v0's triangles): apply_collapse on
+ * v0's live triangles, the pass's while v0 is untouched. */
 static void take(engine *e, const judgement *j, scratch *s)
 {
-    fan f0 = current_fan(e, j->v0, s, SLOT_V0);
+    fan f0 = e->flags[j->v0] & FLAG_TOUCHED ? current_fan(e, j->v0, s, SLOT_V0)
+                                             : pass_fan(e, j->v0);
     apply_collapse(e, f0, j->v0, j->v1, e->history, s);
 }
 
@@ -1554,6 +1570,7 @@ static void engine_free(engine *e)
     free(e->rings.held);
     free(e->ring_size);
     free(e->quadric);
+    free(e->self_error);
     free(e->importance);
     free(e->donor);
     free(e->best_target);
@@ -1607,8 +1624,10 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     e->importance = xcalloc(n, sizeof(double));
     if (m->importance)
         memcpy(e->importance, m->importance, sizeof(double) * e->n);
-    if (o->method != DECIMATE_IMPORTANCE)
+    if (o->method != DECIMATE_IMPORTANCE) {
         e->quadric = xcalloc(10 * n, sizeof(double));
+        e->self_error = xcalloc(n, sizeof(double));
+    }
     for (uint32_t v = 0; v < e->n; v++) {
         e->donor[v] = COLLAPSE_NONE;
         e->best_target[v] = COLLAPSE_NONE;
@@ -1639,10 +1658,11 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
 size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_method method)
 {
     /* flags, adjacency_start, ring_size, donor, best_target, stamp, best, importance, the
-     * ranking's list and spare, the quadric; a ring slot (vertex, left, right, held) */
+     * ranking's list and spare, the quadric and its own error; a ring slot (vertex, left,
+     * right, held) */
     size_t per_vertex = 1 + 4 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
                         2 * sizeof(candidate) +
-                        (method != DECIMATE_IMPORTANCE ? 10 * sizeof(double) : 0);
+                        (method != DECIMATE_IMPORTANCE ? 11 * sizeof(double) : 0);
     size_t ring_slot = 3 * sizeof(uint32_t) + 1;
     /* per corner: the adjacency and a ring slot */
     size_t per_corner = sizeof(uint32_t) + ring_slot;
