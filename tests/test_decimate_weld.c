@@ -1,8 +1,13 @@
-/* test_decimate_weld.c — non-manifold input in the decimation bridge
+/* test_decimate_weld.c — welding in the decimation bridge: the flat weld and its manifold
+ * check (host/reduce/weld.c), and, where that check fails, the OpenMesh rebuild
  * (host/reduce/decimate_weld.cc): vertices at one position welded, faces that cannot attach
  * patched onto copies or left loose and locked, faces that weld into zero area dropped; the
  * accounting of all that checked from outside. One case a test; the helpers are in
  * decimate_common.h.
+ *
+ *   flat weld    the bunny and the dragon at resolution 4 welded flat: the bunny is manifold
+ *                (the fast path), the fin, the two tetrahedra and a bowtie are not (each found
+ *                at the vertex where it fails), and the flat weld's counts are decimate_measure's
  *
  *   dragon       the dragon at resolution 2 (OpenMesh splits it to 112,484 vertices), decimated
  *                to 10 %
@@ -21,6 +26,7 @@
 #include <cmocka.h>
 
 #include "decimate_common.h"
+#include "reduce/weld.h"
 
 
 /* Faces whose corners fall on fewer than three distinct positions (welding drops them). */
@@ -180,9 +186,66 @@ static void test_non_manifold_seam(void **state)
     decimate_output_free(&full);
 }
 
+/* The flat weld of a mesh: how many vertices fail the manifold check. */
+static uint32_t non_manifold(const mesh_data *m, weld_result *w)
+{
+    decimate_input in = input_of("flat", m, NULL, 0);
+    assert_int_equal(weld_flat(&in, w), 0);
+    return w->non_manifold_vertices;
+}
+
+/* A manifold mesh takes the fast path: its welded count is decimate_measure's, nothing is
+ * dropped that the OpenMesh rebuild keeps. Non-manifold meshes are found: the fin (its edge has
+ * three triangles: both its ends), two tetrahedra on one vertex (two closed fans there), a bowtie
+ * (two triangles on one vertex: two open fans), a triangle flipped against its neighbour (an
+ * edge twice in one direction). */
+static void test_flat_weld(void **state)
+{
+    model_fixture bunny;
+    model_open(&bunny, "bunny.ply", 0);
+    weld_result w;
+    assert_int_equal(non_manifold(&bunny.mesh, &w), 0);
+    assert_int_equal(w.vertices_counted, bunny.measured);
+    assert_int_equal(w.triangle_count + w.triangles_dropped, bunny.mesh.triangle_count);
+    print_message("  bunny: %u vertices welded to %u, %u triangles, manifold\n",
+                  bunny.mesh.vertex_count, w.vertex_count, w.triangle_count);
+    weld_result_free(&w);
+    model_close(&bunny);
+
+    float fin_positions[] = {0, 0, 0, 1, 0, 0, 0.5f, 1, 0, 0.5f, -1, 0, 0.5f, 0, 1};
+    uint32_t fin_indices[] = {0, 1, 2, 1, 0, 3, 0, 1, 4};
+    mesh_data fin = {5, 3, fin_positions, fin_indices, NULL, NULL};
+    assert_int_equal(non_manifold(&fin, &w), 2);
+    weld_result_free(&w);
+
+    float tetra_positions[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, -1, 0, 0, 0, -1, 0, 0, 0, -1};
+    uint32_t tetra_indices[] = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3,
+                                0, 4, 5, 0, 6, 4, 0, 5, 6, 4, 6, 5};
+    mesh_data tetra = {7, 8, tetra_positions, tetra_indices, NULL, NULL};
+    assert_int_equal(non_manifold(&tetra, &w), 1);
+    weld_result_free(&w);
+
+    float bowtie_positions[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, -1, 0, 0, -1, -1, 0};
+    uint32_t bowtie_indices[] = {0, 1, 2, 0, 3, 4};
+    mesh_data bowtie = {5, 2, bowtie_positions, bowtie_indices, NULL, NULL};
+    assert_int_equal(non_manifold(&bowtie, &w), 1);
+    weld_result_free(&w);
+
+    float square_positions[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+    uint32_t flipped_indices[] = {0, 1, 2, 0, 2, 3, 0, 3, 2};
+    mesh_data flipped = {4, 3, square_positions, flipped_indices, NULL, NULL};
+    assert_true(non_manifold(&flipped, &w) > 0);
+    weld_result_free(&w);
+    uint32_t square_indices[] = {0, 1, 2, 0, 2, 3};
+    mesh_data square = {4, 2, square_positions, square_indices, NULL, NULL};
+    assert_int_equal(non_manifold(&square, &w), 0);
+    weld_result_free(&w);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_flat_weld),
         cmocka_unit_test(test_non_manifold_dragon),
         cmocka_unit_test(test_non_manifold_fin),
         cmocka_unit_test(test_non_manifold_tetrahedra),
