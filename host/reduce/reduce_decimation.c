@@ -74,34 +74,6 @@ static int larger_first(const void *a, const void *b)
     return (x < y) - (x > y);
 }
 
-/* The host memory one mesh takes while it is decimated, per input vertex: read again, welded
- * into OpenMesh with the modules' quadrics and the heap, and copied out. Measured on the full
- * dragon (437,645 vertices, its computed normals carried): about 500 bytes with the quadric
- * method, 640 with the combined one's weighted and attribute quadrics. */
-#define IN_FLIGHT_BYTES_PER_VERTEX 700.0
-
-/* How many of the `left` meshes in `next` (largest first) one streaming group decimates at once:
- * up to `most`; under a memory budget on a device that shares the host's memory
- * (reduce_memory.c), only as many as keep the process's resident memory with theirs in flight
- * within the budget, and at least one. */
-static size_t group_size(const reduce_state *st, const sized_mesh *next, size_t left,
-                         size_t most)
-{
-    size_t count = left < most ? left : most;
-    uint64_t budget = st->options->memory_budget;
-    if (!budget || !st->device->info.host_unified)
-        return count;
-    double held = (double)resident_bytes();
-    size_t fitting = 1;
-    while (fitting < count) {
-        held += IN_FLIGHT_BYTES_PER_VERTEX * (double)next[fitting - 1].vertices;
-        if (held + IN_FLIGHT_BYTES_PER_VERTEX * (double)next[fitting].vertices > (double)budget)
-            break;
-        fitting++;
-    }
-    return fitting;
-}
-
 /* The job of mesh m: inputs[m] with its target, its geometry read again first where it is
  * released (streaming: then *restored is set, and it is released again after the job). */
 static int job_of(reduce_state *st, const decimate_input *inputs, const uint64_t *targets,
@@ -157,7 +129,16 @@ int reduce_decimate_meshes(reduce_state *st, const decimate_input *inputs,
          * the next group neither stacks on it nor counts it as held. */
         if (streaming)
             malloc_trim(0);
-        count = streaming ? group_size(st, order + first, n - first, group) : n;
+        if (streaming) {
+            count = n - first < group ? n - first : group;
+            uint32_t *sizes = xcalloc(count + 1, sizeof *sizes);
+            for (size_t j = 0; j < count; j++)
+                sizes[j] = order[first + j].vertices;
+            count = reduce_memory_meshes_in_flight(st, sizes, count);
+            free(sizes);
+        } else {
+            count = n;
+        }
         if (count < group && count < n - first && !narrowed++ && o->importance.sppm.progress)
             fprintf(stderr, "idmr: %s: meshes go %zu at a time, not %zu, to stay within the "
                             "memory budget (the device shares the host's memory)\n",

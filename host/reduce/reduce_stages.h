@@ -152,6 +152,12 @@ int reduce_decimate_meshes(reduce_state *st, const decimate_input *inputs,
 /* The memory plan and fit stages (reduce_memory.c); nothing without a budget. 0, or -1 with the
  * error set. */
 int reduce_memory_plan(reduce_state *st);
+/* How many of the next meshes (their input vertices, largest first; `count` of them) one
+ * streaming group decimates at once: all, but under a memory budget on a device that shares the
+ * host's memory only as many as keep the process's resident memory with theirs in flight within
+ * the budget, and at least one. */
+size_t reduce_memory_meshes_in_flight(const reduce_state *st, const uint32_t *vertices,
+                                      size_t count);
 int reduce_memory_fit(reduce_state *st);
 
 /* What mesh m is decimated from (reduce.c): the scene's mesh, its attributes as reduce.h says,
