@@ -411,17 +411,11 @@ static void print_summary(const reduce_state *st)
 static void state_free(reduce_state *st)
 {
     importance_vertex_values_free(st->vertex_importance, st->simulated);
-    for (size_t m = 0; m < st->count; m++) {
-        if (st->output)
-            decimate_output_free(&st->output[m]);
-        free(st->ply ? st->ply[m] : NULL);
-    }
-    free(st->checkpoints);
-    free(st->input);
-    free(st->budget);
-    free(st->output);
+    for (size_t m = 0; st->ply && m < st->count; m++)
+        free(st->ply[m]);
     free(st->ply);
-    budget_plan_free(&st->plan);
+    free(st->checkpoints);
+    reduce_decimation_forget(st);
     importance_result_free(&st->importance);
     reduce_passes_free(st);
 }
@@ -466,7 +460,18 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
                  reduce_initial(&st);
     for (unsigned int pass = 1; !status && pass <= o->passes; pass++)
         status = run_pass(&st, pass);
-    status = status || reduce_memory_fit(&st) || write_reduced_scene(&st) || write_report(&st);
+    /* Under a memory budget, the reduced scene decimated again at a lower target while its
+     * render does not fit (the fit says so). */
+    for (int again = 1; !status && again;) {
+        status = reduce_memory_fit(&st, &again);
+        if (status || !again)
+            break;
+        reduce_decimation_forget(&st);
+        status = reduce_plan_budget(&st) || reduce_decimation(&st);
+        if (!status && st.pass_count) /* the last pass's reduction is this one now */
+            st.passes[st.pass_count - 1].vertices_after = st.vertices_after;
+    }
+    status = status || write_reduced_scene(&st) || write_report(&st);
     status = reduce_outdir_finish(&st, !status);
     if (!status)
         print_summary(&st);

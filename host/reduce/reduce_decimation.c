@@ -361,6 +361,20 @@ static void warn_missed(const reduce_state *st)
          stuck);
 }
 
+void reduce_decimation_forget(reduce_state *st)
+{
+    for (size_t m = 0; st->output && m < st->count; m++)
+        decimate_output_free(&st->output[m]);
+    free(st->output);
+    free(st->input);
+    free(st->budget);
+    st->output = NULL;
+    st->input = NULL;
+    st->budget = NULL;
+    budget_plan_free(&st->plan);
+    st->compensation_rounds = st->locks_relaxed = st->seams_freed = 0;
+}
+
 int reduce_decimation(reduce_state *st)
 {
     const reduce_options *o = st->options;

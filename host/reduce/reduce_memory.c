@@ -253,19 +253,6 @@ static int measure_reduced(reduce_state *st)
 }
 
 /* Frees the plan and the decimation, to run them again for a lower target. */
-static void forget_decimation(reduce_state *st)
-{
-    for (size_t m = 0; st->output && m < st->count; m++)
-        decimate_output_free(&st->output[m]);
-    free(st->output);
-    free(st->input);
-    free(st->budget);
-    st->output = NULL;
-    st->input = NULL;
-    st->budget = NULL;
-    budget_plan_free(&st->plan);
-    st->compensation_rounds = st->locks_relaxed = st->seams_freed = 0;
-}
 
 size_t reduce_memory_meshes_in_flight(const reduce_state *st, const uint32_t *vertices,
                                       size_t count)
@@ -284,39 +271,33 @@ size_t reduce_memory_meshes_in_flight(const reduce_state *st, const uint32_t *ve
     return fitting;
 }
 
-int reduce_memory_fit(reduce_state *st)
+int reduce_memory_fit(reduce_state *st, int *again)
 {
     uint64_t budget = st->options->memory_budget;
+    *again = 0;
     if (!budget)
         return 0;
     /* On a device that shares the host's memory the BVH build (about 160 bytes per triangle
      * while it runs) would sit beside the remapped importance, which only a further decimation
      * needs: it waits on disk meanwhile. */
-    int spill = st->device->info.host_unified;
-    for (;;) {
-        if ((spill && reduce_remapped_spill(st)) || measure_reduced(st))
-            return -1;
-        double total = (double)sppm_memory_total(&st->render_memory);
-        if (total <= (double)budget)
-            return 0;
-        double fixed = st->render_fixed_bytes;
-        if (st->fit_rounds == FIT_ROUNDS || total <= fixed)
-            return error_set(IDMR_EXIT_FAILURE,
-                             "--memory-budget %.1f MiB: the reduced scene still needs %.1f MiB "
-                             "to render after %u smaller targets (now %.4g); give a smaller "
-                             "--target",
-                             MIB(budget), MIB(total), st->fit_rounds, st->target);
-        st->fit_rounds++;
-        st->target *= (REDUCE_MEMORY_MARGIN * (double)budget - fixed) / (total - fixed);
-        if (st->options->importance.sppm.progress)
-            fprintf(stderr,
-                    "idmr: the reduced scene needs %.1f MiB to render, above the budget of %.1f "
-                    "MiB: decimating again to %.4g\n",
-                    MIB(total), MIB(budget), st->target);
-        forget_decimation(st);
-        if (reduce_remapped_restore(st) || reduce_plan_budget(st) || reduce_decimation(st))
-            return -1;
-        if (st->pass_count) /* the last pass's reduction is this one now */
-            st->passes[st->pass_count - 1].vertices_after = st->vertices_after;
-    }
+    if ((st->device->info.host_unified && reduce_remapped_spill(st)) || measure_reduced(st))
+        return -1;
+    double total = (double)sppm_memory_total(&st->render_memory);
+    if (total <= (double)budget)
+        return 0;
+    double fixed = st->render_fixed_bytes;
+    if (st->fit_rounds == FIT_ROUNDS || total <= fixed)
+        return error_set(IDMR_EXIT_FAILURE,
+                         "--memory-budget %.1f MiB: the reduced scene still needs %.1f MiB to "
+                         "render after %u smaller targets (now %.4g); give a smaller --target",
+                         MIB(budget), MIB(total), st->fit_rounds, st->target);
+    st->fit_rounds++;
+    st->target *= (REDUCE_MEMORY_MARGIN * (double)budget - fixed) / (total - fixed);
+    if (st->options->importance.sppm.progress)
+        fprintf(stderr,
+                "idmr: the reduced scene needs %.1f MiB to render, above the budget of %.1f MiB: "
+                "decimating again to %.4g\n",
+                MIB(total), MIB(budget), st->target);
+    *again = 1;
+    return reduce_remapped_restore(st);
 }

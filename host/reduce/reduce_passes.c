@@ -218,15 +218,8 @@ int reduce_next_pass(reduce_state *st)
      * it did not decimate have no output, and are simulated as they are. */
     st->history = st->output;
     st->output = NULL;
-    free(st->input);
-    free(st->budget);
-    st->input = NULL;
-    st->budget = NULL;
-    budget_plan_free(&st->plan);
+    reduce_decimation_forget(st);
     st->stopped_at = 0;
-    st->compensation_rounds = 0;
-    st->locks_relaxed = 0;
-    st->seams_freed = 0;
     return build_view(st);
 }
 

@@ -29,10 +29,10 @@
  *   next pass    with --passes K, between passes: this pass's output becomes the history and
  *                the view the next pass simulates; the per-pass state is reset (reduce_passes.c)
  *   memory fit   with --memory-budget: the reduced scene's exact render memory (its BVH built);
- *                above the budget, the target is lowered and the budget and decimation stages
- *                run again: render_bytes, fit_rounds; on a device sharing the host's memory
- *                the remapped importance waits on disk meanwhile: spill
- *                (reduce_memory.c)
+ *                above the budget, the target is lowered: render_bytes, fit_rounds, target; on
+ *                a device sharing the host's memory the remapped importance waits on disk
+ *                meanwhile: spill (reduce_memory.c); reduce_run() then forgets the decimation
+ *                and runs the budget and decimation stages again, and the fit after them
  *   write        meshes/NAME.ply and scene.xml: ply, meshes_written (reduce.c)
  *   report       report.json (with the importance outputs) and the closing line (reduce.c; the
  *                JSON is built in reduce_report.c)
@@ -158,7 +158,10 @@ int reduce_memory_plan(reduce_state *st);
  * the budget, and at least one. */
 size_t reduce_memory_meshes_in_flight(const reduce_state *st, const uint32_t *vertices,
                                       size_t count);
-int reduce_memory_fit(reduce_state *st);
+/* The fit: the reduced scene's exact render memory; above the budget, a lower st->target and
+ * *again set (the remapped importance read back: reduce_run() decimates again); after
+ * FIT_ROUNDS such rounds, an error. */
+int reduce_memory_fit(reduce_state *st, int *again);
 
 /* What mesh m is decimated from (reduce.c): the scene's mesh, its attributes as reduce.h says,
  * and its per-vertex importance (remapped where there is a history). A released mesh (core/
@@ -204,6 +207,9 @@ int reduce_outdir_finish(reduce_state *st, int success);
  * floors meshes reached and relaxes locks where the request cannot be met otherwise. Returns 0,
  * or -1 with the error set. */
 int reduce_decimation(reduce_state *st);
+/* Frees what the budget and decimation stages left (inputs, plan, outputs, their counts), so
+ * that they can run again. */
+void reduce_decimation_forget(reduce_state *st);
 
 /* report.json's content: the importance report's keys (method importance) or the scene name,
  * then the reduction's options, totals, seconds and per-mesh figures. The caller deletes it. */
