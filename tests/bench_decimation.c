@@ -2,9 +2,9 @@
  * (../shared/data/models/dragon_vrip.ply, 437,645 vertices) to 10 %, every method on the
  * collapse engine (host/reduce/collapse.h) beside stock OpenMesh and meshoptimizer, in one run:
  *
- *   decimation: mesh=dragon target=0.1 threads=1 combined=<s> importance=<s> quadric=<s>
- *               openmesh=<s> meshopt=<s> combined/meshopt=<r> quadric/meshopt=<r>
- *   decimation-parallel: mesh=dragon threads=2 one=<s> two=<s> speedup=<one/two>
+ *   decimation: mesh=dragon target=0.1 threads=<1, then 2> combined=<s> importance=<s>
+ *               quadric=<s> openmesh=<s> meshopt=<s> combined/meshopt=<r> quadric/meshopt=<r>
+ *   decimation-parallel: mesh=dragon threads=2 method=combined one=<s> two=<s> speedup=<x>
  *
  * combined, importance: a synthetic importance field (high on one side of the dragon); openmesh:
  * stock DecimaterT + ModQuadricT as Debian ships it (one run, 20-40 s); meshopt: meshoptimizer's
@@ -71,11 +71,13 @@ static void bench_dragon(void)
         exit(1);
     }
     in.target_vertices = start / 10;
-    uint32_t combined_vertices, importance_vertices, quadric_vertices, two_vertices;
-    double combined = time_engine(in, DECIMATE_COMBINED, 1, &combined_vertices);
-    double by_importance = time_engine(in, DECIMATE_IMPORTANCE, 1, &importance_vertices);
-    double quadric = time_engine(in, DECIMATE_QUADRIC, 1, &quadric_vertices);
-    double combined_two = time_engine(in, DECIMATE_COMBINED, 2, &two_vertices);
+    uint32_t combined_vertices[2], importance_vertices[2], quadric_vertices[2];
+    double combined[2], by_importance[2], quadric[2];
+    for (int t = 0; t < 2; t++) {
+        combined[t] = time_engine(in, DECIMATE_COMBINED, t + 1, &combined_vertices[t]);
+        by_importance[t] = time_engine(in, DECIMATE_IMPORTANCE, t + 1, &importance_vertices[t]);
+        quadric[t] = time_engine(in, DECIMATE_QUADRIC, t + 1, &quadric_vertices[t]);
+    }
 
     double meshopt = 1e30;
     size_t meshopt_triangles = 0;
@@ -94,16 +96,19 @@ static void bench_dragon(void)
     long stock_vertices = decimate_stock_quadric(&stock_in);
     double stock = trace_seconds() - t0;
 
-    printf("decimation: mesh=dragon target=0.1 threads=1 combined=%.3f importance=%.3f "
-           "quadric=%.3f openmesh=%.2f meshopt=%.3f combined/meshopt=%.2f quadric/meshopt=%.2f "
-           "vertices=%u target_vertices=%llu combined_vertices=%u importance_vertices=%u "
-           "quadric_vertices=%u openmesh_vertices=%ld meshopt_triangles=%zu\n",
-           combined, by_importance, quadric, stock, meshopt, combined / meshopt, quadric / meshopt,
-           mesh.vertex_count, (unsigned long long)in.target_vertices, combined_vertices,
-           importance_vertices, quadric_vertices, stock_vertices, meshopt_triangles);
+    for (int t = 0; t < 2; t++)
+        printf("decimation: mesh=dragon target=0.1 threads=%d combined=%.3f importance=%.3f "
+               "quadric=%.3f openmesh=%.2f meshopt=%.3f combined/meshopt=%.2f "
+               "quadric/meshopt=%.2f vertices=%u target_vertices=%llu combined_vertices=%u "
+               "importance_vertices=%u quadric_vertices=%u openmesh_vertices=%ld "
+               "meshopt_triangles=%zu\n",
+               t + 1, combined[t], by_importance[t], quadric[t], stock, meshopt,
+               combined[t] / meshopt, quadric[t] / meshopt, mesh.vertex_count,
+               (unsigned long long)in.target_vertices, combined_vertices[t],
+               importance_vertices[t], quadric_vertices[t], stock_vertices, meshopt_triangles);
     printf("decimation-parallel: mesh=dragon threads=2 method=combined one=%.3f two=%.3f "
            "speedup=%.2f\n",
-           combined, combined_two, combined / combined_two);
+           combined[0], combined[1], combined[0] / combined[1]);
     fflush(stdout);
     free(destination);
     free(importance);
