@@ -92,7 +92,6 @@ void prepare(const decimate_input *in, weld_result *flat, decimate_output *out)
 void write_output(const weld_result &flat, decimate_output *out)
 {
     size_t n = flat.vertex_count, corners = 3 * (size_t)flat.triangle_count;
-    int stride = flat.uv_floats + flat.normal_floats;
     bool split = flat.corner_ids != nullptr;
     // Per vertex, its live corners in triangle order (a counting sort).
     std::vector<uint32_t> start(n + 1, 0), corner_of;
@@ -143,19 +142,8 @@ void write_output(const weld_result &flat, decimate_output *out)
     for (size_t c = 0; c < corners; c++)
         if (flat.triangles[c - c % 3] != COLLAPSE_NONE)
             m->indices[written++] = output_of[c];
-    if (!split)
-        return;
-    if (flat.uv_floats)
-        m->texcoords = (float *)xmalloc(2 * sizeof(float) * (count + 1));
-    if (flat.normal_floats)
-        m->normals = (float *)xmalloc(3 * sizeof(float) * (count + 1));
-    for (size_t i = 0; i < count; i++) {
-        const float *value = &flat.attributes[(size_t)stride * id_of[i]];
-        for (int k = 0; k < flat.uv_floats; k++)
-            m->texcoords[2 * i + k] = value[k];
-        for (int k = 0; k < flat.normal_floats; k++)
-            m->normals[3 * i + k] = value[flat.uv_floats + k];
-    }
+    if (split)
+        copy_attribute_values(flat.uv_floats, flat.normal_floats, flat.attributes, id_of, m);
 }
 
 // decimate_mesh() without the exception boundary.
@@ -223,16 +211,7 @@ int decimate_welded(const decimate_input *in, decimate_method method, decimate_o
 extern "C" int decimate_mesh(const decimate_input *in, decimate_method method,
                              decimate_output *out)
 {
-    std::memset(out, 0, sizeof *out);
-    if (method != DECIMATE_QUADRIC && !in->vertex_importance)
-        return error_set(IDMR_EXIT_FAILURE, "mesh '%s': importance decimation without importance",
-                         in->name);
-    try {
-        return decimate_welded(in, method, out);
-    } catch (const std::exception &e) {
-        decimate_output_free(out);
-        return error_set(IDMR_EXIT_FAILURE, "mesh '%s': OpenMesh failed: %s", in->name, e.what());
-    }
+    return decimate_guarded(in, method, out, decimate_welded);
 }
 
 extern "C" int decimate_measure(const decimate_input *in, uint32_t *vertices,

@@ -39,6 +39,17 @@ typedef OpenMesh::Decimater::CollapseInfoT<Mesh> CollapseInfo;
 void build_welded_mesh(const decimate_input *in, Mesh &mesh, decimate_output *out,
                        std::vector<double> &importance, AttributeTable &attributes);
 
+// The output vertices' texture coordinates and normals from an attribute table (uv_floats +
+// normal_floats per id, uv first): output vertex i takes id_of[i]'s.
+void copy_attribute_values(int uv_floats, int normal_floats, const float *values,
+                           const std::vector<uint32_t> &id_of, mesh_data *out);
+
+// decimate_mesh() and decimate_reference_mesh() around their work (`decimate`): the output
+// cleared, importance required by the methods that read it, and what OpenMesh throws turned
+// into the error path.
+int decimate_guarded(const decimate_input *in, decimate_method method, decimate_output *out,
+                     int (*decimate)(const decimate_input *, decimate_method, decimate_output *));
+
 // Per mesh vertex (n of them), the least vertex_distance of the input vertices welded into it;
 // empty when the input has no distances.
 std::vector<uint32_t> welded_distances(const decimate_input *in, const decimate_output *out,

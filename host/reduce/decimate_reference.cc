@@ -117,24 +117,6 @@ void split_wedges(Mesh &mesh, const AttributeTable &attributes,
     }
 }
 
-// Copies the output vertices' attributes from the table (uv first, then the normal).
-void copy_attributes(const AttributeTable &attributes, const std::vector<uint32_t> &id_of,
-                     mesh_data *out)
-{
-    size_t n = id_of.size();
-    int stride = attributes.stride();
-    if (attributes.uv_floats)
-        out->texcoords = (float *)xmalloc(2 * sizeof(float) * (n + 1));
-    if (attributes.normal_floats)
-        out->normals = (float *)xmalloc(3 * sizeof(float) * (n + 1));
-    for (size_t i = 0; i < n; i++) {
-        const float *value = &attributes.values[(size_t)stride * id_of[i]];
-        for (int k = 0; k < attributes.uv_floats; k++)
-            out->texcoords[2 * i + k] = value[k];
-        for (int k = 0; k < attributes.normal_floats; k++)
-            out->normals[3 * i + k] = value[attributes.uv_floats + k];
-    }
-}
 
 // Compacts the mesh and copies its vertices and faces into out->mesh (a vertex once per wedge
 // where the mesh has attributes); out->output_index maps the decimater's vertices to their
@@ -186,7 +168,8 @@ void copy_out(Mesh &mesh, const AttributeTable &attributes, decimate_output *out
             out->mesh.indices[corner++] = (uint32_t)v.idx();
     }
     if (attributes.present())
-        copy_attributes(attributes, id_of, &out->mesh);
+        copy_attribute_values(attributes.uv_floats, attributes.normal_floats,
+                              attributes.values.data(), id_of, &out->mesh);
 }
 
 // decimate_mesh() without the exception boundary.
@@ -229,15 +212,6 @@ int decimate_welded(const decimate_input *in, decimate_method method, decimate_o
 extern "C" int decimate_reference_mesh(const decimate_input *in, decimate_method method,
                                        decimate_output *out)
 {
-    std::memset(out, 0, sizeof *out);
-    if (method != DECIMATE_QUADRIC && !in->vertex_importance)
-        return error_set(IDMR_EXIT_FAILURE, "mesh '%s': importance decimation without importance",
-                         in->name);
-    try {
-        return decimate_welded(in, method, out);
-    } catch (const std::exception &e) {
-        decimate_output_free(out);
-        return error_set(IDMR_EXIT_FAILURE, "mesh '%s': OpenMesh failed: %s", in->name, e.what());
-    }
+    return decimate_guarded(in, method, out, decimate_welded);
 }
 

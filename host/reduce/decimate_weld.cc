@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <exception>
 #include <unordered_map>
 
 extern "C" {
@@ -258,6 +259,39 @@ void build_welded_mesh(const decimate_input *in, Mesh &mesh, decimate_output *ou
     std::vector<uint32_t> loose = patch_faces(b, pending);
     add_loose_faces(b, loose);
     remove_isolated_vertices(b);
+}
+
+void copy_attribute_values(int uv_floats, int normal_floats, const float *values,
+                           const std::vector<uint32_t> &id_of, mesh_data *out)
+{
+    size_t n = id_of.size();
+    int stride = uv_floats + normal_floats;
+    if (uv_floats)
+        out->texcoords = (float *)xmalloc(2 * sizeof(float) * (n + 1));
+    if (normal_floats)
+        out->normals = (float *)xmalloc(3 * sizeof(float) * (n + 1));
+    for (size_t i = 0; i < n; i++) {
+        const float *value = &values[(size_t)stride * id_of[i]];
+        for (int k = 0; k < uv_floats; k++)
+            out->texcoords[2 * i + k] = value[k];
+        for (int k = 0; k < normal_floats; k++)
+            out->normals[3 * i + k] = value[uv_floats + k];
+    }
+}
+
+int decimate_guarded(const decimate_input *in, decimate_method method, decimate_output *out,
+                     int (*decimate)(const decimate_input *, decimate_method, decimate_output *))
+{
+    std::memset(out, 0, sizeof *out);
+    if (method != DECIMATE_QUADRIC && !in->vertex_importance)
+        return error_set(IDMR_EXIT_FAILURE, "mesh '%s': importance decimation without importance",
+                         in->name);
+    try {
+        return decimate(in, method, out);
+    } catch (const std::exception &e) {
+        decimate_output_free(out);
+        return error_set(IDMR_EXIT_FAILURE, "mesh '%s': OpenMesh failed: %s", in->name, e.what());
+    }
 }
 
 std::vector<uint32_t> welded_distances(const decimate_input *in, const decimate_output *out,
