@@ -1,18 +1,24 @@
 /* collapse.c — the collapse engine (collapse.h): passes of adjacency, scoring, ranking and greedy
  * application over flat arrays.
  *
- * State, per vertex: flags (locked by the caller, removed, touched in this pass), the plane
- * quadric (10 doubles: the upper triangle of A, then b, then c, for p'Ap + 2b'p + c), the
- * importance, the best collapse the scoring found (target, cost, tie keys) and the donor (the
- * vertex that went into it in this pass). Per triangle: its three vertices and corner ids (the
- * caller's arrays, rewritten). Per attribute id (COMBINED with attributes): its attribute
- * quadric (see "Attribute quadrics" below). The adjacency is rebuilt at the start of each pass:
- * adjacency[adjacency_start[v] ..] lists the live triangles at v.
+ * State, per vertex: flags (locked by the caller, removed, touched or an end of a collapse taken
+ * in this pass, to be scored again), the plane quadric (10 doubles: the upper triangle of A,
+ * then b, then c, for p'Ap + 2b'p + c) and its error at the vertex itself, the importance, the
+ * best collapse the scoring found (target, cost, tie keys) and the donor (the vertex that went
+ * into it in this pass). Per triangle: its three vertices and corner ids (the caller's arrays,
+ * rewritten). Per attribute id (COMBINED with attributes): its attribute quadric (see
+ * "Attribute quadrics" below). At the start of each pass the adjacency (adjacency[
+ * adjacency_start[v] ..]: the live triangles at v) and the rings (ring_of) are built again.
  *
  * Why a vertex's pass-start triangles stay exact until it is touched: a triangle changes only
  * when one of its vertices is removed (it then moves to the kept vertex, or dies with the edge),
  * and every vertex of the removed vertex's triangles is touched. The current triangles of a
- * touched vertex are its pass-start ones plus its donor's (current_wedges). */
+ * touched vertex are its pass-start ones plus its donor's (current_fan); a vertex receives at
+ * most once in a pass, as an end of a taken collapse is not taken again.
+ *
+ * Threads: one pool per run (worker_pool) takes the per-vertex steps (rings, quadrics, scores)
+ * and the chunks' judging and taking (take_in_chunks); each writes only its own vertex's or
+ * collapse's records, so the result is the same on any number of threads. */
 #include "reduce/collapse.h"
 
 #include <float.h>

@@ -25,15 +25,17 @@
  * importance to 20 % ended with one inward face in 5 of 20 random importance fields).
  *
  * The collapses run on our engine (collapse.h): passes over flat arrays, each scoring every
- * vertex's best collapse in parallel, ranking them, and taking them greedily where no earlier
- * collapse of the pass touched their neighbourhood; the result does not depend on the thread
- * count. The engine enforces every rule above. The previous implementation, OpenMesh's
- * BaseDecimaterT running our modules under a heap that re-scores the kept vertex's whole
- * one-ring after each collapse (decimate_reference_mesh), stays as the reference the tests
- * compare the engine with; it takes one collapse at a time and is about 100x slower.
+ * vertex's best collapse in parallel, ranking them, and taking them greedily in that order, each
+ * judged on the mesh as it is when taken; the result does not depend on the thread count. The
+ * engine enforces every rule above. The previous implementation, OpenMesh's BaseDecimaterT
+ * running our modules under a heap that re-scores the kept vertex's whole one-ring after each
+ * collapse (decimate_reference_mesh), stays as the reference the tests compare the engine with;
+ * it takes one collapse at a time, about 30 times slower on the full dragon.
  *
- * Non-manifold input: OpenMesh's reader splits vertices where the surface is not manifold and
- * adds faces it cannot attach as loose triangles with copied vertices. Here the mesh is rebuilt:
+ * Welding: the input is welded on flat arrays first (weld.h); a manifold result goes to the
+ * engine as it is. Non-manifold input: OpenMesh's reader splits vertices where the surface is not
+ * manifold and adds faces it cannot attach as loose triangles with copied vertices. Here the mesh
+ * is rebuilt (with OpenMesh, where the flat weld found it non-manifold):
  * vertices at identical positions are welded, faces are attached in order and those that fail
  * are retried until no more attach; faces that still cannot be attached keep copied vertices,
  * which are locked (they cannot be collapsed) and counted apart, so the collapsible surface
@@ -70,8 +72,9 @@
  * affine and the normals follow the planes (a textured wall), the term is zero. IMPORTANCE keeps
  * the paper's order and QUADRIC stays OpenMesh's geometric baseline; both have no such term.
  *
- * Files: collapse.h/.c (the engine, C); the C++ files share decimate_openmesh.hh: decimate.cc
- * (decimate_mesh, decimate_measure: the welded rebuild handed to the engine),
+ * Files: collapse.h/.c (the engine, C), weld.h/.c (the flat weld, C); the C++ files share
+ * decimate_openmesh.hh: decimate.cc (decimate_mesh, decimate_measure: the weld handed to the
+ * engine),
  * decimate_weld.cc (the welded rebuild), decimate_parallel.cc (decimate_many),
  * decimate_stock.cc (decimate_stock_quadric), and the reference: decimate_reference.cc
  * (decimate_reference_mesh), decimate_modules.hh (its modules), decimate_attributes.hh (the
