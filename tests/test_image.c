@@ -188,7 +188,7 @@ static void test_paired_through_files(void **state)
 static void test_paired_size_mismatch_names_both_files(void **state)
 {
     float *small = flat(4, 5, 0.5f, 0.5f, 0.5f), *large = flat(16, 16, 0.5f, 0.5f, 0.5f);
-    write_pair(path_of("small.exr"), small, path_of("large.exr"), large, 16, 16);
+    assert_int_equal(image_write_rgb_float(path_of("large.exr"), 16, 16, large), 0);
     assert_int_equal(image_write_rgb_float(path_of("small.exr"), 4, 5, small), 0);
     image_paired_error e;
     assert_int_equal(image_compare_paired(path_of("large.exr"), path_of("large.exr"),

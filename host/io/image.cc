@@ -19,13 +19,24 @@ extern "C" {
 extern "C" int image_read_rgb(const char *path, int *width, int *height, float **rgb)
 {
     *rgb = nullptr;
-    OIIO::ImageBuf source(path);
-    if (!source.read(0, 0, true, OIIO::TypeDesc::FLOAT))
+    // Read through ImageInput, not an ImageBuf on a file name: that goes through OpenImageIO's
+    // shared ImageCache, which keeps a file's size from its first reading, so a file written
+    // again in this process (a render overwritten, a test's image rewritten at another size)
+    // was read into a buffer of its old size, past its end.
+    auto in = OIIO::ImageInput::open(path);
+    if (!in)
         return error_set(IDMR_EXIT_INPUT, "cannot read image '%s': %s", path,
-                         source.geterror().c_str());
-    const OIIO::ImageSpec &spec = source.spec();
+                         OIIO::geterror().c_str());
+    const OIIO::ImageSpec spec = in->spec();
     if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
         return error_set(IDMR_EXIT_INPUT, "image '%s' is empty", path);
+    OIIO::ImageSpec float_spec(spec.width, spec.height, spec.nchannels, OIIO::TypeDesc::FLOAT);
+    float_spec.channelnames = spec.channelnames;
+    OIIO::ImageBuf source(float_spec);
+    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, source.localpixels()))
+        return error_set(IDMR_EXIT_INPUT, "cannot read image '%s': %s", path,
+                         in->geterror().c_str());
+    in->close();
 
     // 8-bit and 16-bit integer files hold sRGB-encoded colour; float files are linear.
     OIIO::ImageBuf linear;
