@@ -151,9 +151,11 @@ int reduce_remapped_spill(reduce_state *st)
     int written = 1;
     for (size_t m = 0; m < st->count; m++) {
         unsigned char present = st->remapped[m] != NULL;
-        size_t n = present ? st->scene->meshes[m].vertex_count : 0;
-        written = written && fwrite(&present, 1, 1, f) == 1 &&
-                  fwrite(st->remapped[m], sizeof *st->remapped[m], n, f) == n &&
+        written = written && fwrite(&present, 1, 1, f) == 1;
+        if (!present) /* no values: nothing more (fwrite takes no null pointer, even for 0) */
+            continue;
+        size_t n = st->scene->meshes[m].vertex_count;
+        written = written && fwrite(st->remapped[m], sizeof *st->remapped[m], n, f) == n &&
                   fwrite(st->distance[m], sizeof *st->distance[m], n, f) == n;
     }
     if (!written || fflush(f)) {
