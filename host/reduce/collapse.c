@@ -1590,6 +1590,30 @@ static void engine_free(engine *e)
     memset(e, 0, sizeof *e);
 }
 
+/* Whether an attribute id is used by two vertices (an error set: each vertex's ids are its own,
+ * collapse.h). */
+static int attribute_ids_shared(const collapse_mesh *m)
+{
+    uint32_t *owner = xmalloc(sizeof(uint32_t) * ((size_t)m->attribute_count + 1));
+    for (uint32_t id = 0; id < m->attribute_count; id++)
+        owner[id] = COLLAPSE_NONE;
+    int shared = 0;
+    for (size_t i = 0; i < 3 * (size_t)m->triangle_count && !shared; i++) {
+        uint32_t v = m->triangles[i], id = m->corner_ids[i];
+        if (v == COLLAPSE_NONE)
+            continue;
+        if (owner[id] == COLLAPSE_NONE)
+            owner[id] = v;
+        if (owner[id] != v)
+            shared = error_set(IDMR_EXIT_FAILURE,
+                               "collapse: attribute id %u is used by vertices %u and %u (each "
+                               "vertex needs ids of its own)",
+                               id, owner[id], v) != 0;
+    }
+    free(owner);
+    return shared;
+}
+
 static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
 {
     memset(e, 0, sizeof *e);
@@ -1607,6 +1631,8 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
                              "collapse: triangle %zu names vertex %u or attribute id %u, out of "
                              "range",
                              i / 3, m->triangles[i], m->corner_ids ? m->corner_ids[i] : 0);
+    if (m->corner_ids && attribute_ids_shared(m))
+        return -1;
     e->m = m;
     e->o = o;
     e->n = m->vertex_count;

@@ -73,7 +73,8 @@ typedef struct collapse_mesh {
     uint32_t *triangles;    /* 3 vertex indices per triangle, counter-clockwise; the engine
                                rewrites them: a removed triangle gets COLLAPSE_NONE in all three */
     uint32_t *corner_ids;   /* attribute id per corner (3 per triangle), rewritten with the
-                               triangles; NULL: no attributes */
+                               triangles; NULL: no attributes. An id belongs to one vertex: the
+                               corners of one vertex only (collapse_run refuses other input) */
     const float *attributes; /* attribute_stride floats per id: uv (2) then normal (3), as
                                 uv_floats and normal_floats say */
     uint32_t attribute_count;
