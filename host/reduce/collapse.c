@@ -35,8 +35,8 @@ enum {
     FLAG_LOCKED = 1,  /* the caller's lock: never removed */
     FLAG_REMOVED = 2, /* collapsed into another vertex */
     FLAG_TOUCHED = 4, /* a collapse taken in this pass changed its triangles */
-    FLAG_TAKEN = 16,  /* an end of a collapse taken in this pass */
     FLAG_STALE = 8,   /* its score must be computed again (it or a neighbour was touched) */
+    FLAG_TAKEN = 16,  /* an end of a collapse taken in this pass */
 };
 
 #define BOUNDARY_WEIGHT 10.0 /* COMBINED: an open edge's plane, per length² (decimate_modules) */
@@ -166,13 +166,20 @@ typedef struct engine {
 
 /* ---- small helpers ---- */
 
-/* How many triangles hold the edge to v (0: v is not a neighbour). */
-static uint32_t ring_count(const ring *r, uint32_t v)
+/* The slot of neighbour w in the ring, or r->size. */
+static uint32_t ring_find(const ring *r, uint32_t w)
 {
-    for (uint32_t i = 0; i < r->size; i++)
-        if (r->vertex[i] == v)
-            return r->count[i];
-    return 0;
+    uint32_t i = 0;
+    while (i < r->size && r->vertex[i] != w)
+        i++;
+    return i;
+}
+
+/* How many triangles hold the edge to w (0: w is not a neighbour). */
+static uint32_t ring_count(const ring *r, uint32_t w)
+{
+    uint32_t i = ring_find(r, w);
+    return i < r->size ? r->count[i] : 0;
 }
 
 static void scratch_free(scratch *s)
@@ -390,17 +397,10 @@ static ring ring_of(const engine *e, uint32_t v)
     return view_of(ring_store_at(&e->rings, (size_t)e->adjacency_start[v] + v), e->ring_size[v]);
 }
 
-/* The slot of neighbour w in the ring, or r->size. */
-static uint32_t ring_find(const ring *r, uint32_t w)
-{
-    uint32_t i = 0;
-    while (i < r->size && r->vertex[i] != w)
-        i++;
-    return i;
-}
-
-/* Whether the ring is one fan of manifold edges: every edge in at most two triangles and at most
- * two open edges. Also gives whether it has an open edge. */
+/* Whether the ring can be one fan of manifold edges: every edge in at most two triangles and at
+ * most two open edges (two closed fans on one vertex pass this, but neither the weld nor the
+ * OpenMesh rebuild gives one, and the link condition makes none). Also gives whether it has an
+ * open edge. */
 static int ring_simple(const ring *r, int *boundary)
 {
     int open = 0;
@@ -538,7 +538,6 @@ static void quadric_add_plane(double *q, const double n[3], double d, double wei
     q[8] += weight * n[2] * d;
     q[9] += weight * d * d;
 }
-
 
 /* Attribute quadrics (decimate_attributes.hh, AttributeQuadrics): per id, the upper triangle of
  * sum w g g' (6), per channel sum w g (3 each), sum w (1), sum over channels of w d g (3), per
@@ -694,23 +693,12 @@ static double importance_floor(const engine *e)
  * (OpenMesh's ModQuadricT); COMBINED, weighted by area x (importance + floor), with the plane
  * across each open edge of the face at v. Each vertex sums its own, so the vertices may go to any
  * thread; every sum is taken in the order a loop over the triangles would take it. */
-static void build_quadric_sums(engine *e, uint32_t v, double *quadric, fan f, ring r,
-                               int combined);
-
 static void build_quadric(engine *e, uint32_t v)
 {
     int combined = e->o->method == DECIMATE_COMBINED;
     double *quadric = &e->quadric[10 * (size_t)v];
     fan f = pass_fan(e, v);
     ring r = ring_of(e, v);
-    build_quadric_sums(e, v, quadric, f, r, combined);
-    e->self_error[v] = quadric_error(quadric, position(e, v));
-}
-
-/* build_quadric's sums. */
-static void build_quadric_sums(engine *e, uint32_t v, double *quadric, fan f, ring r,
-                               int combined)
-{
     for (uint32_t i = 0; i < f.count; i++) {
         uint32_t t = f.triangle[i];
         const uint32_t *c = corners(e, t);
@@ -755,6 +743,7 @@ static void build_quadric_sums(engine *e, uint32_t v, double *quadric, fan f, ri
                 q[m] += face[m];
         }
     }
+    e->self_error[v] = quadric_error(quadric, position(e, v));
 }
 
 /* ---- the rules ---- */

@@ -3,9 +3,9 @@
 // OpenMesh rebuild (decimate_weld.cc) laid out flat; the collapse engine (collapse.h) on them;
 // and the result split per wedge into a decimate_output.
 #include <algorithm>
-#include <unordered_map>
 #include <cstring>
 #include <exception>
+#include <unordered_map>
 #include <vector>
 
 #include "reduce/decimate_openmesh.hh"
@@ -21,12 +21,46 @@ using namespace idmr_decimate;
 
 namespace {
 
-void own_attribute_ids(weld_result *flat);
+// The engine needs every attribute id used by one vertex (collapse.h), but the rebuild's patch
+// and loose copies carry the ids of the welded vertex they copy: such an id gets a copy of its
+// values for each further vertex that uses it.
+void own_attribute_ids(weld_result *flat)
+{
+    int stride = flat->uv_floats + flat->normal_floats;
+    std::vector<uint32_t> owner(flat->attribute_count, COLLAPSE_NONE);
+    std::vector<float> values(flat->attributes, flat->attributes + (size_t)stride *
+                                                                   flat->attribute_count);
+    std::unordered_map<uint64_t, uint32_t> copy_of; // (vertex << 32 | id) -> its own id
+    for (size_t c = 0; c < 3 * (size_t)flat->triangle_count; c++) {
+        uint32_t v = flat->triangles[c], id = flat->corner_ids[c];
+        if (owner[id] == COLLAPSE_NONE)
+            owner[id] = v;
+        if (owner[id] == v)
+            continue;
+        uint64_t key = (uint64_t)v << 32 | id;
+        auto found = copy_of.find(key);
+        if (found == copy_of.end()) {
+            uint32_t fresh = (uint32_t)(values.size() / stride);
+            for (int k = 0; k < stride; k++) {
+                float value = values[(size_t)stride * id + k]; // (the vector may move)
+                values.push_back(value);
+            }
+            found = copy_of.emplace(key, fresh).first;
+        }
+        flat->corner_ids[c] = found->second;
+    }
+    if (copy_of.empty())
+        return;
+    std::free(flat->attributes);
+    flat->attributes = (float *)xmalloc(sizeof(float) * (values.size() + 1));
+    std::copy(values.begin(), values.end(), flat->attributes);
+    flat->attribute_count = (uint32_t)(values.size() / stride);
+}
 
 // Lays the OpenMesh rebuild out flat, as the flat weld gives its result: vertex i is mesh vertex
 // i (its loose copies locked); a face's corners in the order it was added (its corner set where
-// the mesh has attributes). Takes the importance.
-void flatten(Mesh &mesh, const AttributeTable &attributes, std::vector<double> &importance,
+// the mesh has attributes), each attribute id its vertex's own.
+void flatten(Mesh &mesh, const AttributeTable &attributes, const std::vector<double> &importance,
              weld_result *flat)
 {
     size_t n = mesh.n_vertices(), faces = mesh.n_faces();
@@ -70,39 +104,6 @@ void flatten(Mesh &mesh, const AttributeTable &attributes, std::vector<double> &
         own_attribute_ids(flat);
 }
 
-// The engine needs every attribute id used by one vertex (collapse.h), but the rebuild's patch
-// and loose copies carry the ids of the welded vertex they copy: such an id gets a copy of its
-// values for each further vertex that uses it.
-void own_attribute_ids(weld_result *flat)
-{
-    int stride = flat->uv_floats + flat->normal_floats;
-    std::vector<uint32_t> owner(flat->attribute_count, COLLAPSE_NONE);
-    std::vector<float> values(flat->attributes, flat->attributes + (size_t)stride *
-                                                                   flat->attribute_count);
-    std::unordered_map<uint64_t, uint32_t> copy_of; // (vertex << 32 | id) -> its own id
-    for (size_t c = 0; c < 3 * (size_t)flat->triangle_count; c++) {
-        uint32_t v = flat->triangles[c], id = flat->corner_ids[c];
-        if (owner[id] == COLLAPSE_NONE)
-            owner[id] = v;
-        if (owner[id] == v)
-            continue;
-        uint64_t key = (uint64_t)v << 32 | id;
-        auto found = copy_of.find(key);
-        if (found == copy_of.end()) {
-            uint32_t fresh = (uint32_t)(values.size() / stride);
-            for (int k = 0; k < stride; k++) // (values may move as it grows: index, not iterators)
-                values.push_back(values[(size_t)stride * id + k]);
-            found = copy_of.emplace(key, fresh).first;
-        }
-        flat->corner_ids[c] = found->second;
-    }
-    if (copy_of.empty())
-        return;
-    std::free(flat->attributes);
-    flat->attributes = (float *)xmalloc(sizeof(float) * (values.size() + 1));
-    std::copy(values.begin(), values.end(), flat->attributes);
-    flat->attribute_count = (uint32_t)(values.size() / stride);
-}
 
 // The welded mesh the engine starts from: the flat weld where the surface is manifold (its
 // welding figures into out), else the OpenMesh rebuild (which fills them itself). out takes
