@@ -97,7 +97,7 @@ static inline scene_mesh *imp_add_quad(scene *s, const char *name, uint32_t mate
     uint32_t *ix = malloc(6 * sizeof *ix);
     const uint32_t quad[6] = {0, 1, 2, 0, 2, 3};
     memcpy(ix, quad, sizeof quad);
-    mesh_data mesh = {4, 2, p, ix, NULL, NULL};
+    mesh_data mesh = {4, 2, p, ix, NULL, NULL, 0};
     return imp_add_mesh_data(s, name, "rectangle", material, &mesh);
 }
 

@@ -354,7 +354,7 @@ static void test_no_collapse(void **state)
 /* Nothing at all. */
 static void test_no_vertices(void **state)
 {
-    mesh_data empty = {0, 0, NULL, NULL, NULL, NULL};
+    mesh_data empty = {0, 0, NULL, NULL, NULL, NULL, 0};
     double importance[1] = {0};
     decimate_input in = input_of("empty", &empty, importance, 0);
     uint32_t measured = 7, uncollapsible = 7;

@@ -224,7 +224,7 @@ static double check_moved_face(const collapse_step *step, const uint32_t f[3], u
     assert_non_null(bsearch(key, step->previous_faces, step->previous_count, 3 * sizeof(uint32_t),
                             compare_face));
     double a[3], b[3];
-    mesh_data one = {step->input->vertex_count, 1, step->input->positions, (uint32_t *)f, NULL, NULL};
+    mesh_data one = {step->input->vertex_count, 1, step->input->positions, (uint32_t *)f, NULL, NULL, 0};
     face_normal(&one, 0, a);
     one.indices = before;
     face_normal(&one, 0, b);

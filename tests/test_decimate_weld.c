@@ -9,11 +9,14 @@
  *                (the fast path), the fin, the two tetrahedra and a bowtie are not (each found
  *                at the vertex where it fails), and the flat weld's counts are decimate_measure's
  *
- *   dragon       the dragon at resolution 2 (OpenMesh splits it to 112,484 vertices), decimated
+ *   dragon       the dragon at resolution 2 (100,250 vertices, not manifold everywhere), decimated
  *                to 10 %
  *   fin          three triangles on one edge
  *   tetrahedra   two tetrahedra touching at a vertex
- *   seam         a square whose diagonal's ends are duplicated */
+ *   seam         a square whose diagonal's ends are duplicated
+ *   turned half  a grid whose right half is wound the other way: turned for the engine, back
+ *                in the output, no copies
+ *   double-sided a grid with every triangle again reversed: one layer decimated, twins kept */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -93,7 +96,7 @@ static void test_non_manifold_dragon(void **state)
 {
     model_fixture dragon;
     model_open(&dragon, "dragon_vrip_res2.ply", 6);
-    assert_int_equal(dragon.mesh.vertex_count, 112484);
+    assert_int_equal(dragon.mesh.vertex_count, 100250);
     decimate_output full;
     check_accounting("dragon_res2", &dragon.mesh, dragon.importance, &full);
     uint32_t measured = full.vertices_welded, uncollapsible = full.vertices_uncollapsible;
@@ -142,7 +145,7 @@ static void test_non_manifold_fin(void **state)
 {
     float positions[] = {0, 0, 0, 1, 0, 0, 0.5f, 1, 0, 0.5f, -1, 0, 0.5f, 0, 1};
     uint32_t indices[] = {0, 1, 2, 1, 0, 3, 0, 1, 4};
-    mesh_data fin = {5, 3, positions, indices, NULL, NULL};
+    mesh_data fin = {5, 3, positions, indices, NULL, NULL, 0};
     double importance[5] = {1, 2, 3, 4, 5};
     decimate_output full;
     check_accounting("fin", &fin, importance, &full);
@@ -159,7 +162,7 @@ static void test_non_manifold_tetrahedra(void **state)
 {
     float positions[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, -1, 0, 0, 0, -1, 0, 0, 0, -1};
     uint32_t indices[] = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3, 0, 4, 5, 0, 6, 4, 0, 5, 6, 4, 6, 5};
-    mesh_data tetra = {7, 8, positions, indices, NULL, NULL};
+    mesh_data tetra = {7, 8, positions, indices, NULL, NULL, 0};
     double importance[7] = {1, 2, 3, 4, 5, 6, 7};
     decimate_output full;
     check_accounting("tetrahedra", &tetra, importance, &full);
@@ -176,7 +179,7 @@ static void test_non_manifold_seam(void **state)
 {
     float positions[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 0, 0, 1, 1, 0, 0, 1, 0};
     uint32_t indices[] = {0, 1, 2, 3, 4, 5};
-    mesh_data seam = {6, 2, positions, indices, NULL, NULL};
+    mesh_data seam = {6, 2, positions, indices, NULL, NULL, 0};
     double importance[6] = {1, 1, 1, 1, 1, 1};
     decimate_output full;
     check_accounting("seam", &seam, importance, &full);
@@ -197,8 +200,8 @@ static uint32_t non_manifold(const mesh_data *m, weld_result *w)
 /* A manifold mesh takes the fast path: its welded count is decimate_measure's, nothing is
  * dropped that the OpenMesh rebuild keeps. Non-manifold meshes are found: the fin (its edge has
  * three triangles: both its ends), two tetrahedra on one vertex (two closed fans there), a bowtie
- * (two triangles on one vertex: two open fans), a triangle flipped against its neighbour (an
- * edge twice in one direction). */
+ * (two triangles on one vertex: two open fans), a Moebius band (no winding agrees); a triangle
+ * flipped against its neighbour and a double-sided square are repaired into manifolds. */
 static void test_flat_weld(void **state)
 {
     model_fixture bunny;
@@ -214,32 +217,201 @@ static void test_flat_weld(void **state)
 
     float fin_positions[] = {0, 0, 0, 1, 0, 0, 0.5f, 1, 0, 0.5f, -1, 0, 0.5f, 0, 1};
     uint32_t fin_indices[] = {0, 1, 2, 1, 0, 3, 0, 1, 4};
-    mesh_data fin = {5, 3, fin_positions, fin_indices, NULL, NULL};
+    mesh_data fin = {5, 3, fin_positions, fin_indices, NULL, NULL, 0};
     assert_int_equal(non_manifold(&fin, &w), 2);
     weld_result_free(&w);
 
     float tetra_positions[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, -1, 0, 0, 0, -1, 0, 0, 0, -1};
     uint32_t tetra_indices[] = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3,
                                 0, 4, 5, 0, 6, 4, 0, 5, 6, 4, 6, 5};
-    mesh_data tetra = {7, 8, tetra_positions, tetra_indices, NULL, NULL};
+    mesh_data tetra = {7, 8, tetra_positions, tetra_indices, NULL, NULL, 0};
     assert_int_equal(non_manifold(&tetra, &w), 1);
     weld_result_free(&w);
 
     float bowtie_positions[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, -1, 0, 0, -1, -1, 0};
     uint32_t bowtie_indices[] = {0, 1, 2, 0, 3, 4};
-    mesh_data bowtie = {5, 2, bowtie_positions, bowtie_indices, NULL, NULL};
+    mesh_data bowtie = {5, 2, bowtie_positions, bowtie_indices, NULL, NULL, 0};
     assert_int_equal(non_manifold(&bowtie, &w), 1);
     weld_result_free(&w);
 
+    /* Repaired (weld.h): a triangle flipped against its neighbour (an edge twice in one
+     * direction) is turned for the engine; triangles on the vertices of another (a
+     * double-sided square) are set aside as its twins. A Moebius band cannot agree. */
     float square_positions[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
-    uint32_t flipped_indices[] = {0, 1, 2, 0, 2, 3, 0, 3, 2};
-    mesh_data flipped = {4, 3, square_positions, flipped_indices, NULL, NULL};
-    assert_true(non_manifold(&flipped, &w) > 0);
+    uint32_t flipped_indices[] = {0, 1, 2, 0, 3, 2};
+    mesh_data flipped = {4, 2, square_positions, flipped_indices, NULL, NULL, 0};
+    assert_int_equal(non_manifold(&flipped, &w), 0);
+    assert_int_equal(w.triangles_turned, 1);
+    assert_true(w.turned && !w.turned[0] && w.turned[1]);
+    assert_int_equal(w.triangles[3 + 1], 2); /* (0 3 2) as the engine holds it: (0 2 3) */
+    weld_result_free(&w);
+    uint32_t twin_indices[] = {0, 1, 2, 0, 2, 3, 0, 3, 2, 2, 1, 0};
+    mesh_data twins = {4, 4, square_positions, twin_indices, NULL, NULL, 0};
+    assert_int_equal(non_manifold(&twins, &w), 0);
+    assert_int_equal(w.triangle_count, 2);
+    assert_int_equal(w.twin_count, 2);
+    assert_int_equal(w.triangles_turned, 0);
+    /* (0 3 2) is (0 2 3)'s corners 0, 2, 1; (2 1 0) is (0 1 2)'s 2, 1, 0. */
+    assert_int_equal(w.twins[0].primary, 1);
+    assert_int_equal(w.twins[0].source, 2);
+    assert_true(w.twins[0].corner[0] == 0 && w.twins[0].corner[1] == 2 &&
+                w.twins[0].corner[2] == 1);
+    assert_int_equal(w.twins[1].primary, 0);
+    assert_true(w.twins[1].corner[0] == 2 && w.twins[1].corner[1] == 1 &&
+                w.twins[1].corner[2] == 0);
+    weld_result_free(&w);
+    float band_positions[] = {1, 0, 0, 0.3f, 1, 0.2f, -0.8f, 0.6f, -0.2f, -0.8f, -0.6f, 0.2f,
+                              0.3f, -1, -0.2f};
+    uint32_t band_indices[] = {0, 1, 2, 1, 2, 3, 2, 3, 4, 3, 4, 0, 4, 0, 1};
+    mesh_data band = {5, 5, band_positions, band_indices, NULL, NULL, 0};
+    assert_true(non_manifold(&band, &w) > 0);
     weld_result_free(&w);
     uint32_t square_indices[] = {0, 1, 2, 0, 2, 3};
-    mesh_data square = {4, 2, square_positions, square_indices, NULL, NULL};
+    mesh_data square = {4, 2, square_positions, square_indices, NULL, NULL, 0};
     assert_int_equal(non_manifold(&square, &w), 0);
     weld_result_free(&w);
+}
+
+/* The corners of output triangle t of m and of input triangle u of `in` are at the same
+ * positions, in the same order (the same winding). */
+static int same_triangle(const mesh_data *m, uint32_t t, const mesh_data *in, uint32_t u)
+{
+    for (int k = 0; k < 3; k++)
+        if (memcmp(&m->positions[3 * (size_t)m->indices[3 * t + k]],
+                   &in->positions[3 * (size_t)in->indices[3 * u + k]], 3 * sizeof(float)) != 0)
+            return 0;
+    return 1;
+}
+
+/* Whether m holds input triangle u of `in`: a triangle on its corners' positions, in the same
+ * cyclic order (the same winding). */
+static int holds_triangle(const mesh_data *m, const mesh_data *in, uint32_t u)
+{
+    for (uint32_t t = 0; t < m->triangle_count; t++)
+        for (int r = 0; r < 3; r++) {
+            int all = 1;
+            for (int k = 0; k < 3 && all; k++)
+                all = memcmp(&m->positions[3 * (size_t)m->indices[3 * t + (k + r) % 3]],
+                             &in->positions[3 * (size_t)in->indices[3 * u + k]],
+                             3 * sizeof(float)) == 0;
+            if (all)
+                return 1;
+        }
+    return 0;
+}
+
+/* Whether m holds the triangle with t's corners in the other winding. */
+static int has_reverse(const mesh_data *m, uint32_t t)
+{
+    const uint32_t *ix = &m->indices[3 * (size_t)t];
+    for (uint32_t u = 0; u < m->triangle_count; u++) {
+        const uint32_t *other = &m->indices[3 * (size_t)u];
+        for (int r = 0; r < 3; r++)
+            if (other[r] == ix[0] && other[(r + 1) % 3] == ix[2] && other[(r + 2) % 3] == ix[1])
+                return 1;
+    }
+    return 0;
+}
+
+/* A 9 x 9 grid whose right half (x > 4) is wound the other way: the weld turns that half for the
+ * engine, so nothing is patched onto copies; with nothing to remove every triangle comes out as
+ * it went in, winding included, and at 20 vertices the grid meets its target. (The OpenMesh
+ * rebuild patched the turned half onto copies: more vertices than the grid has.) */
+static void test_turned_half(void **state)
+{
+    mesh_data grid;
+    make_grid(9, 0, &grid);
+    for (uint32_t t = 0; t < grid.triangle_count; t++) {
+        uint32_t *ix = &grid.indices[3 * (size_t)t];
+        float x = grid.positions[3 * ix[0]] + grid.positions[3 * ix[1]] + grid.positions[3 * ix[2]];
+        if (x > 12) {
+            uint32_t swap = ix[1];
+            ix[1] = ix[2], ix[2] = swap;
+        }
+    }
+    decimate_input in = input_of("turned half", &grid, NULL, grid.vertex_count);
+    decimate_output out;
+    assert_int_equal(decimate_mesh(&in, DECIMATE_QUADRIC, &out), 0);
+    assert_int_equal(out.faces_patched + out.faces_loose, 0);
+    assert_int_equal(out.mesh.vertex_count, 81);
+    assert_int_equal(out.mesh.triangle_count, grid.triangle_count);
+    for (uint32_t t = 0; t < grid.triangle_count; t++)
+        if (!same_triangle(&out.mesh, t, &grid, t))
+            fail_msg("triangle %u changed its corners or winding", t);
+    decimate_output_free(&out);
+    /* The reference (OpenMesh's decimater) starts from the same repaired mesh. */
+    assert_int_equal(decimate_reference_mesh(&in, DECIMATE_QUADRIC, &out), 0);
+    assert_int_equal(out.mesh.vertex_count, 81);
+    assert_int_equal(out.mesh.triangle_count, grid.triangle_count);
+    for (uint32_t t = 0; t < grid.triangle_count; t++)
+        if (!holds_triangle(&out.mesh, &grid, t))
+            fail_msg("the reference lost triangle %u or its winding", t);
+    decimate_output_free(&out);
+
+    in.target_vertices = 20;
+    assert_int_equal(decimate_mesh(&in, DECIMATE_QUADRIC, &out), 0);
+    print_message("  turned half: 81 -> %u vertices, %u triangles\n", out.mesh.vertex_count,
+                  out.mesh.triangle_count);
+    assert_int_equal(out.mesh.vertex_count, 20);
+    check_indices(&out.mesh);
+    assert_int_equal(degenerate_faces(&out.mesh), 0);
+    check_history(&out);
+    decimate_output_free(&out);
+    mesh_data_free(&grid);
+}
+
+/* A double-sided 9 x 9 grid (every triangle again, reversed): one layer is decimated and every
+ * surviving triangle comes out with its twin, on the same 81 vertices at most, never the 162 of
+ * a second layer of copies. */
+static void test_double_sided(void **state)
+{
+    mesh_data grid;
+    make_grid(9, 0, &grid);
+    uint32_t n = grid.triangle_count;
+    grid.indices = realloc(grid.indices, 2 * 3 * sizeof(uint32_t) * n);
+    for (uint32_t t = 0; t < n; t++) {
+        const uint32_t *ix = &grid.indices[3 * (size_t)t];
+        uint32_t *twin = &grid.indices[3 * (size_t)(n + t)];
+        twin[0] = ix[0], twin[1] = ix[2], twin[2] = ix[1];
+    }
+    grid.triangle_count = 2 * n;
+    decimate_input in = input_of("double-sided", &grid, NULL, grid.vertex_count);
+    decimate_output out;
+    assert_int_equal(decimate_mesh(&in, DECIMATE_QUADRIC, &out), 0);
+    assert_int_equal(out.vertices_welded, 81);
+    assert_int_equal(out.mesh.vertex_count, 81);
+    assert_int_equal(out.mesh.triangle_count, 2 * n);
+    for (uint32_t t = 0; t < n; t++)
+        if (!same_triangle(&out.mesh, t, &grid, t) || !same_triangle(&out.mesh, n + t, &grid, n + t))
+            fail_msg("triangle %u or its twin changed", t);
+    decimate_output_free(&out);
+    assert_int_equal(decimate_reference_mesh(&in, DECIMATE_QUADRIC, &out), 0);
+    assert_int_equal(out.mesh.vertex_count, 81);
+    assert_int_equal(out.mesh.triangle_count, 2 * n);
+    for (uint32_t t = 0; t < 2 * n; t++)
+        if (!holds_triangle(&out.mesh, &grid, t))
+            fail_msg("the reference lost triangle %u or its winding", t);
+    decimate_output_free(&out);
+
+    in.target_vertices = 20;
+    assert_int_equal(decimate_mesh(&in, DECIMATE_QUADRIC, &out), 0);
+    print_message("  double-sided: 81 -> %u vertices, %u triangles\n", out.mesh.vertex_count,
+                  out.mesh.triangle_count);
+    assert_int_equal(out.mesh.vertex_count, 20);
+    assert_int_equal(out.mesh.triangle_count % 2, 0);
+    for (uint32_t t = 0; t < out.mesh.triangle_count; t++)
+        if (!has_reverse(&out.mesh, t))
+            fail_msg("output triangle %u has no twin", t);
+    check_indices(&out.mesh);
+    check_history(&out);
+    decimate_output_free(&out);
+    assert_int_equal(decimate_reference_mesh(&in, DECIMATE_QUADRIC, &out), 0);
+    assert_int_equal(out.mesh.vertex_count, 20);
+    for (uint32_t t = 0; t < out.mesh.triangle_count; t++)
+        if (!has_reverse(&out.mesh, t))
+            fail_msg("reference output triangle %u has no twin", t);
+    decimate_output_free(&out);
+    mesh_data_free(&grid);
 }
 
 int main(void)
@@ -250,6 +422,8 @@ int main(void)
         cmocka_unit_test(test_non_manifold_fin),
         cmocka_unit_test(test_non_manifold_tetrahedra),
         cmocka_unit_test(test_non_manifold_seam),
+        cmocka_unit_test(test_turned_half),
+        cmocka_unit_test(test_double_sided),
     };
     return cmocka_run_group_tests_name("decimate_weld", tests, NULL, NULL);
 }

@@ -133,7 +133,11 @@ static scene *degenerate_scene(void)
     uint32_t *indices = malloc(sizeof ix);
     memcpy(positions, p, sizeof p);
     memcpy(indices, ix, sizeof ix);
-    scene_add_mesh(s, "floor", "ply", NULL, 0, 9, positions, 6, indices, NULL)->material = white;
+    /* Set directly: scene_add_mesh() drops T1 and T4 (they repeat a vertex), and what is
+     * tested is that the passes give zero-area triangles nothing whatever lets them in. */
+    scene_mesh *floor_mesh = scene_add_mesh(s, "floor", "ply", NULL, 0, 0, NULL, 0, NULL, NULL);
+    scene_mesh_set_geometry(floor_mesh, 9, positions, 6, indices, NULL, NULL);
+    floor_mesh->material = white;
     imp_point_light(s, V3(0, 2, 0.5f), 1.0f);
     imp_look_at(s, V3(0, 2, 3), V3(0, 0, 0), V3(0, 1, 0), 48, 48, 0.6f);
     return test_finalize_scene(s);

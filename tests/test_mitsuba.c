@@ -115,7 +115,7 @@ static void triangle_normal(const scene_mesh *m, uint32_t t, double n[3])
 
 static double mesh_volume(const scene_mesh *m)
 {
-    mesh_data data = {m->vertex_count, m->triangle_count, m->positions, m->indices, NULL, NULL};
+    mesh_data data = {m->vertex_count, m->triangle_count, m->positions, m->indices, NULL, NULL, 0};
     return shapes_signed_volume(&data);
 }
 

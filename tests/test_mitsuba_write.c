@@ -176,7 +176,7 @@ static void write_tetrahedron_ply(const char *name)
 {
     float positions[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
     uint32_t indices[] = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
-    mesh_data data = {4, 4, positions, indices, NULL, NULL};
+    mesh_data data = {4, 4, positions, indices, NULL, NULL, 0};
     write_ply(path_in(in_dir, name), &data);
 }
 
@@ -214,7 +214,7 @@ static void assert_same_mesh(const scene_mesh *a, const scene_mesh *b)
  * receives the outdir-relative name (must outlive the write). */
 static void replace_mesh(const scene_mesh *m, mitsuba_replacement *r, char *ply, size_t size)
 {
-    mesh_data data = {m->vertex_count, m->triangle_count, m->positions, m->indices, NULL, NULL};
+    mesh_data data = {m->vertex_count, m->triangle_count, m->positions, m->indices, NULL, NULL, 0};
     snprintf(ply, size, "meshes/%s.ply", m->name);
     write_ply(path_in(out_dir, ply), &data);
     r->xml_file = m->xml_file;

@@ -10,7 +10,10 @@
  *                a seen one keeps some (it keeps covering what it covered)
  *   file names   two mesh names that make the same PLY name get distinct files
  *   no area      a mesh whose points coincide, and one whose points lie on a line, are kept as
- *                they are (decimated, they became PLYs without faces no reader loads) */
+ *                they are (decimated, they became PLYs without faces no reader loads)
+ *   never larger a double-sided sheet and a strip wound every other way round come out with no
+ *                more vertices than they have; one that cannot be reduced is kept, and the
+ *                report says why */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -173,8 +176,8 @@ static const char CONFETTI_SHAPE[] = "    <shape type=\"obj\" id=\"confetti\">\n
                                      "    </shape>\n";
 
 /* The confetti beside the knot, reduced with uniform factors: the confetti keeps all 600
- * vertices, and the compensation rounds take them from the knot, so the total still meets the
- * target exactly. */
+ * vertices (it is kept as it is, and the report says why), and the compensation rounds take
+ * them from the knot, so the total still meets the target exactly. */
 static void test_compensation(void **state)
 {
     char in_dir[64];
@@ -192,6 +195,11 @@ static void test_compensation(void **state)
     assert_true(number(confetti, "vertices_after") == 600);
     assert_true(number(r.report, "compensation_rounds") >= 1);
     assert_true(number(r.report, "vertices_after") == number(r.report, "vertices_requested"));
+    /* No collapse is legal on it: its input is kept (not rewritten), and the report says why. */
+    const cJSON *why = cJSON_GetObjectItemCaseSensitive(confetti, "not_reduced");
+    assert_true(cJSON_IsString(why) && strstr(why->valuestring, "no collapse"));
+    assert_false(is_decimated(confetti));
+    assert_same_mesh(test_find_mesh(s, "confetti"), test_find_mesh(r.out, "confetti"));
     reduction_free(&r);
     scene_free(s);
     remove_tree(in_dir);
@@ -371,6 +379,137 @@ static void test_meshes_without_area_are_kept(void **state)
     remove_tree(in_dir);
 }
 
+/* ---- never larger ---- */
+
+/* DIR/sheet.obj: a double-sided sheet, a wavy 13 x 13 grid at the back of the box with every
+ * triangle again, reversed (169 vertices, 576 triangles); DIR/strip.obj: a zigzag strip of 129
+ * vertices written as the strip's vertex triples without turning every other one (127
+ * triangles, each wound against its neighbours). */
+static void write_sheet_and_strip(const char *dir)
+{
+    char path[4200];
+    snprintf(path, sizeof path, "%s/sheet.obj", dir);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    const int n = 12;
+    for (int j = 0; j <= n; j++)
+        for (int i = 0; i <= n; i++)
+            fprintf(f, "v %g %g %g\n", 1.2 * i / n - 0.6, 1.2 * j / n - 0.4,
+                    -0.5 + 0.02 * ((i * 7 + j * 3) % 5));
+    for (int j = 0; j < n; j++)
+        for (int i = 0; i < n; i++) {
+            int a = j * (n + 1) + i + 1, b = a + 1, c = a + n + 1, d = c + 1;
+            fprintf(f, "f %d %d %d\nf %d %d %d\nf %d %d %d\nf %d %d %d\n", a, b, d, a, d, c, a,
+                    d, b, a, c, d);
+        }
+    assert_int_equal(fclose(f), 0);
+    snprintf(path, sizeof path, "%s/strip.obj", dir);
+    f = fopen(path, "w");
+    assert_non_null(f);
+    for (int i = 0; i < 129; i++)
+        fprintf(f, "v %g %g %g\n", 1.6 * (i / 2) / 64.0 - 0.8, i % 2 ? -0.5 : -0.7,
+                0.1 * sin(i));
+    for (int i = 1; i <= 127; i++)
+        fprintf(f, "f %d %d %d\n", i, i + 1, i + 2);
+    assert_int_equal(fclose(f), 0);
+}
+
+static const char SHEET_AND_STRIP[] = "    <shape type=\"obj\" id=\"sheet\">\n"
+                                      "        <string name=\"filename\" value=\"sheet.obj\"/>\n"
+                                      "        <ref id=\"white\"/>\n"
+                                      "    </shape>\n"
+                                      "    <shape type=\"obj\" id=\"strip\">\n"
+                                      "        <string name=\"filename\" value=\"strip.obj\"/>\n"
+                                      "        <ref id=\"white\"/>\n"
+                                      "    </shape>\n";
+
+/* The counts in the header of the PLY the report names for mesh `name` of reduction r. */
+static void ply_counts(const reduction *r, const char *name, unsigned *vertices, unsigned *faces)
+{
+    const cJSON *file = cJSON_GetObjectItemCaseSensitive(mesh_entry(r->report, name), "file");
+    assert_true(cJSON_IsString(file));
+    char path[4200];
+    size_t size;
+    snprintf(path, sizeof path, "%s/%s", r->dir, file->valuestring);
+    char *text = read_file(path, &size);
+    const char *v = strstr(text, "element vertex "), *f = strstr(text, "element face ");
+    assert_true(v && f && sscanf(v, "element vertex %u", vertices) == 1 &&
+                sscanf(f, "element face %u", faces) == 1);
+    free(text);
+}
+
+/* The sheet and the strip beside the knot (kept), reduced by quadric to 0.3 of what may go:
+ * neither comes out with more vertices than it has (before: made of the copies the OpenMesh
+ * rebuild gave the faces it could not attach, both grew). The smooth normals computed on load
+ * cancel between the sheet's two layers and between the strip's opposed triangles, so they
+ * point behind most triangles and hold most collapses; where a mesh is kept as it is, the
+ * report says why. Without normals carried (--recompute-normals) both are reduced to their
+ * targets, the sheet one layer with every triangle's twin, in the written files too. */
+static void test_never_larger(void **state)
+{
+    char in_dir[64], scene_path[4200];
+    temp_dir(in_dir, sizeof in_dir);
+    write_sheet_and_strip(in_dir);
+    write_cornell_plus(in_dir, SHEET_AND_STRIP, scene_path, sizeof scene_path);
+    scene *s = test_load_scene(scene_path);
+    reduce_options o;
+    small_options(&o);
+    o.method = REDUCE_QUADRIC;
+    o.target = 0.3;
+    const char *keep[] = {"knot"};
+    o.keep = keep;
+    o.keep_count = 1;
+    for (int recompute = 0; recompute < 2; recompute++) {
+        o.recompute_normals = recompute;
+        reduction r;
+        warn_silence(1);
+        reduction_run(&r, s, &o);
+        warn_silence(0);
+        const char *names[] = {"sheet", "strip"};
+        for (int i = 0; i < 2; i++) {
+            const cJSON *entry = mesh_entry(r.report, names[i]);
+            const cJSON *why = cJSON_GetObjectItemCaseSensitive(entry, "not_reduced");
+            print_message("  %s%s: %g -> %g vertices (target %g)%s%s\n", names[i],
+                          recompute ? " (normals recomputed)" : "",
+                          number(entry, "vertices_before"), number(entry, "vertices_after"),
+                          number(entry, "vertices_target"), why ? ": " : "",
+                          why ? why->valuestring : "");
+            assert_true(number(entry, "vertices_after") <= number(entry, "vertices_before"));
+            if (recompute) {
+                assert_true(number(entry, "vertices_after") <= number(entry, "vertices_target"));
+                assert_null(why);
+            }
+        }
+        const cJSON *sheet = mesh_entry(r.report, "sheet");
+        if (!recompute) {
+            for (int i = 0; i < 2; i++) {
+                const cJSON *entry = mesh_entry(r.report, names[i]);
+                const cJSON *why = cJSON_GetObjectItemCaseSensitive(entry, "not_reduced");
+                assert_true(!why || (cJSON_IsString(why) && strstr(why->valuestring, "normal")));
+                if (why)
+                    assert_same_mesh(test_find_mesh(s, names[i]), test_find_mesh(r.out, names[i]));
+                else
+                    assert_true(test_find_mesh(r.out, names[i])->vertex_count ==
+                                number(entry, "vertices_after"));
+            }
+        } else {
+            unsigned vertices, faces;
+            ply_counts(&r, "sheet", &vertices, &faces);
+            assert_true(vertices == number(sheet, "vertices_after"));
+            assert_true(faces == number(sheet, "triangles_after") && faces % 2 == 0);
+            ply_counts(&r, "strip", &vertices, &faces);
+            assert_true(vertices == number(mesh_entry(r.report, "strip"), "vertices_after"));
+            /* Read back, the files hold what the report says (a half-edge reader would split
+             * the sheet's twins onto copies). */
+            assert_true(test_find_mesh(r.out, "sheet")->vertex_count ==
+                        number(sheet, "vertices_after"));
+        }
+        reduction_free(&r);
+    }
+    scene_free(s);
+    remove_tree(in_dir);
+}
+
 /* Two meshes whose names make the same file name ("knot x" and "knot_x") get two files. */
 static void test_file_name_collision(void **state)
 {
@@ -416,6 +555,7 @@ int main(void)
         cmocka_unit_test(test_locks_yield_where_unseen),
         cmocka_unit_test(test_file_name_collision),
         cmocka_unit_test(test_meshes_without_area_are_kept),
+        cmocka_unit_test(test_never_larger),
     };
     return DEVICE_TEST_RUN("reduce_scenes", tests, NULL, NULL) != 0;
 }

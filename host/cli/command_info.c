@@ -3,12 +3,13 @@
  * (geometry and BVH bytes, the BVH's shape). The scene is described once, as a JSON object;
  * --json prints that object, the text form is printed from it (info_text.h).
  *
- * The object: {scene, meshes: [{name, shape, file?, vertices, triangles, material,
- * material_kind, emitter}], materials: [{name, bsdf, kind}], lights: [{type, emission, power,
+ * The object: {scene, meshes: [{name, shape, file?, vertices, triangles, triangles_dropped,
+ * material, material_kind, emitter}], materials: [{name, bsdf, kind}], lights: [{type, emission, power,
  * area?, map?: {file?, width, height}}] (emission: an environment's mean radiance), camera?: {origin, forward, up, fov, fov_axis, width, height}, bbox: {min, max},
- * features: [name], vertices, triangles, device_memory: {geometry, bvh?, total?}, bvh?: {nodes,
+ * features: [name], vertices, triangles, triangles_dropped, device_memory: {geometry, bvh?, total?}, bvh?: {nodes,
  * leaves, triangle_references, degenerate_triangles, depth, build_seconds}}; the keys marked ?
- * are left out when the scene has no such thing (or --no-bvh). */
+ * are left out when the scene has no such thing (or --no-bvh). triangles_dropped counts the
+ * triangles of the mesh files that repeat a vertex, left out on load (core/scene.h). */
 #include <getopt.h>
 
 #include "cli/commands.h"
@@ -32,6 +33,7 @@ static cJSON *meshes_json(const scene *s)
             cJSON_AddStringToObject(o, "file", m->file);
         cJSON_AddNumberToObject(o, "vertices", m->vertex_count);
         cJSON_AddNumberToObject(o, "triangles", m->triangle_count);
+        cJSON_AddNumberToObject(o, "triangles_dropped", m->triangles_dropped);
         cJSON_AddStringToObject(o, "material", s->material_info[m->material].name);
         cJSON_AddStringToObject(o, "material_kind",
                                 scene_material_kind_name(s->materials[m->material].kind));
@@ -134,6 +136,10 @@ static cJSON *info_json(const scene *s, const bvh *b)
     cJSON_AddItemToObject(root, "features", features_json(s->features));
     cJSON_AddNumberToObject(root, "vertices", (double)s->vertex_count);
     cJSON_AddNumberToObject(root, "triangles", (double)s->triangle_count);
+    uint64_t dropped = 0;
+    for (size_t m = 0; m < s->mesh_count; m++)
+        dropped += s->meshes[m].triangles_dropped;
+    cJSON_AddNumberToObject(root, "triangles_dropped", (double)dropped);
     add_device_json(root, s, b);
     return root;
 }

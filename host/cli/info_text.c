@@ -32,17 +32,25 @@ static double component(const cJSON *object, const char *key, int k)
 static void print_meshes(const cJSON *info)
 {
     const cJSON *meshes = item(info, "meshes"), *m;
-    printf("meshes (%d): %llu vertices, %llu triangles\n", cJSON_GetArraySize(meshes),
+    printf("meshes (%d): %llu vertices, %llu triangles", cJSON_GetArraySize(meshes),
            (unsigned long long)number(info, "vertices"),
            (unsigned long long)number(info, "triangles"));
+    unsigned long long dropped_in_all = (unsigned long long)number(info, "triangles_dropped");
+    if (dropped_in_all)
+        printf(" (%llu more in the files repeat a vertex: dropped)", dropped_in_all);
+    printf("\n");
     printf("  %-24s %-10s %10s %10s  %-22s %s\n", "name", "shape", "vertices", "triangles",
            "material", "kind");
     cJSON_ArrayForEach(m, meshes)
     {
-        printf("  %-24.24s %-10.10s %10u %10u  %-22.22s %s%s\n", string(m, "name"),
+        printf("  %-24.24s %-10.10s %10u %10u  %-22.22s %s%s", string(m, "name"),
                string(m, "shape"), (unsigned)number(m, "vertices"),
                (unsigned)number(m, "triangles"), string(m, "material"), string(m, "material_kind"),
                cJSON_IsTrue(item(m, "emitter")) ? ", emitter" : "");
+        unsigned int dropped = (unsigned int)number(m, "triangles_dropped");
+        if (dropped)
+            printf("; %u triangle%s dropped (a repeated vertex)", dropped, dropped == 1 ? "" : "s");
+        printf("\n");
     }
 }
 

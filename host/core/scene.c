@@ -110,6 +110,22 @@ static char *unique_mesh_name(const scene *s, const char *name)
     }
 }
 
+uint32_t scene_triangles_drop_repeating(uint32_t *indices, uint32_t *triangle_count)
+{
+    uint32_t kept = 0;
+    for (uint32_t t = 0; t < *triangle_count; t++) {
+        const uint32_t *ix = &indices[3 * (size_t)t];
+        if (ix[0] == ix[1] || ix[1] == ix[2] || ix[0] == ix[2])
+            continue;
+        if (kept != t)
+            memmove(&indices[3 * (size_t)kept], ix, 3 * sizeof *ix);
+        kept++;
+    }
+    uint32_t dropped = *triangle_count - kept;
+    *triangle_count = kept;
+    return dropped;
+}
+
 scene_mesh *scene_add_mesh(scene *s, const char *name, const char *shape_type, const char *file,
                            int xml_line, uint32_t vertex_count, float *positions,
                            uint32_t triangle_count, uint32_t *indices, float *texcoords)
@@ -122,6 +138,8 @@ scene_mesh *scene_add_mesh(scene *s, const char *name, const char *shape_type, c
     m->shape_type = xstrdup(shape_type ? shape_type : "");
     m->file = file ? xstrdup(file) : NULL;
     m->xml_line = xml_line;
+    if (indices)
+        m->triangles_dropped = scene_triangles_drop_repeating(indices, &triangle_count);
     scene_mesh_set_geometry(m, vertex_count, positions, triangle_count, indices, texcoords, NULL);
     m->light = -1;
     index_mesh_name(s, s->mesh_count - 1);

@@ -41,6 +41,9 @@ typedef struct scene_mesh {
                         * ones to the reader: reduce.h, recompute_normals) */
     int flat_normals;  /* the file's normals shade the mesh flat (io/shapes.h:
                         * shapes_normals_flat): a reduced mesh says face_normals instead */
+    uint32_t triangles_dropped; /* triangles the file gave that repeat a vertex (f 1 2 1, the
+                                   joins of a triangle strip), left out on load (io/mesh_io.h)
+                                   and so in no numbering: `idmr info` counts them */
     uint32_t material; /* index into scene.materials */
     int light;         /* index into scene.lights if the shape is an area emitter, else -1 */
     uint32_t first_triangle; /* set by scene_finalize() */
@@ -130,10 +133,17 @@ scene *scene_create(const char *file);
 void scene_free(scene *s);
 
 /* Adds a mesh and takes ownership of positions, indices and texcoords (malloc'd, may be NULL
- * when the counts are 0). name is copied and made unique. Returns the new mesh. */
+ * when the counts are 0). name is copied and made unique. Triangles that repeat a vertex are
+ * left out (scene_triangles_drop_repeating) and counted in the mesh's triangles_dropped; the
+ * vertices stay as given. Returns the new mesh. */
 scene_mesh *scene_add_mesh(scene *s, const char *name, const char *shape_type, const char *file,
                            int xml_line, uint32_t vertex_count, float *positions,
                            uint32_t triangle_count, uint32_t *indices, float *texcoords);
+
+/* Removes from the `*triangle_count` triangles of `indices` those that name one vertex twice
+ * (no area; no half-edge mesh, OpenMesh's included, can hold one), keeping the others in
+ * order; sets *triangle_count to what remains and returns how many went. */
+uint32_t scene_triangles_drop_repeating(uint32_t *indices, uint32_t *triangle_count);
 
 /* Adds a material; returns its index. */
 uint32_t scene_add_material(scene *s, const char *name, const char *bsdf_type,

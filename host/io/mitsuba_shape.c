@@ -281,6 +281,7 @@ int mitsuba_load_shape(loader *ld, xmlNodePtr node)
                                        (int)xmlGetLineNo(node), mesh.vertex_count, mesh.positions,
                                        mesh.triangle_count, mesh.indices, mesh.texcoords);
     added->normals = mesh.normals;
+    added->triangles_dropped += mesh.triangles_dropped;
     added->file_normals = file_normals;
     added->flat_normals = flat_normals;
     added->source = source; /* the scene frees it (scene_mesh_release can read it again) */

@@ -1,5 +1,7 @@
-/* ply_check.c — reads a PLY file once, without keeping anything, to prove it well formed before
- * OpenMesh reads it (see ply_check.h for what is checked and why). */
+/* ply_check.c — idmr's PLY reader (see ply_check.h): the header parsed into elements and
+ * properties, the body read value by value (ascii tokens or binary of either byte order), each
+ * checked; ply_read() keeps what a mesh needs on the way (the vertex element's roles, the face
+ * element's index lists fan-triangulated), ply_check() keeps nothing. */
 #include "io/ply_check.h"
 
 #include <ctype.h>
@@ -12,6 +14,7 @@
 #include <sys/types.h>
 
 #include "core/error.h"
+#include "io/mesh_io.h"
 
 #define PLY_HEADER_MAX (1 << 16) /* bytes of header read at most */
 #define PLY_PROPERTIES_MAX 64    /* per element */
@@ -40,10 +43,27 @@ static ply_type type_named(const char *name)
     return PLY_TYPE_NONE;
 }
 
+/* What a vertex property is to the mesh (ply_read keeps these, and nothing else). */
+typedef enum ply_role {
+    ROLE_NONE, ROLE_X, ROLE_Y, ROLE_Z, ROLE_NX, ROLE_NY, ROLE_NZ, ROLE_U, ROLE_V, ROLE_COUNT
+} ply_role;
+
+static const struct {
+    const char *name;
+    ply_role role;
+} ply_role_names[] = {
+    {"x", ROLE_X},          {"y", ROLE_Y},          {"z", ROLE_Z},
+    {"nx", ROLE_NX},        {"ny", ROLE_NY},        {"nz", ROLE_NZ},
+    {"u", ROLE_U},          {"v", ROLE_V},          {"s", ROLE_U},
+    {"t", ROLE_V},          {"texture_u", ROLE_U},  {"texture_v", ROLE_V},
+    {"texture_s", ROLE_U},  {"texture_t", ROLE_V},
+};
+
 typedef struct ply_property {
     ply_type type;
     ply_type count_type; /* PLY_TYPE_NONE unless a list */
     int is_face_indices; /* the face element's vertex_indices (or vertex_index) list */
+    ply_role role;       /* of a scalar property of the vertex element, the first of its role */
 } ply_property;
 
 typedef struct ply_element {
@@ -63,6 +83,12 @@ typedef struct ply_reader {
     int element_count;
     long line; /* ascii: the line of the body being read */
     uint64_t vertices; /* the vertex element's count; UINT64_MAX without one */
+    unsigned roles;    /* bit per ply_role the vertex element has */
+    /* ply_read: what is kept (mesh NULL: ply_check keeps nothing). */
+    mesh_data *mesh;
+    size_t vertex_capacity, corner_capacity, index_capacity;
+    uint32_t *corners; /* the face being read */
+    uint64_t index_count;
 } ply_reader;
 
 /* An error about header line `number`; returns -1. */
@@ -152,6 +178,14 @@ static int header_line(ply_reader *r, char *line, long number, int *seen_format,
         p->type = count == 3 ? type_named(words[1]) : PLY_TYPE_NONE;
         if (p->type == PLY_TYPE_NONE)
             return header_fail(r, number, "expected \"property TYPE NAME\"");
+        p->role = ROLE_NONE;
+        if (strcmp(e->name, "vertex") == 0)
+            for (size_t i = 0; i < sizeof ply_role_names / sizeof *ply_role_names; i++)
+                if (strcmp(words[2], ply_role_names[i].name) == 0 &&
+                    !(r->roles & 1u << ply_role_names[i].role)) {
+                    p->role = ply_role_names[i].role;
+                    r->roles |= 1u << p->role;
+                }
         return 0;
     }
     return header_fail(r, number, "unknown PLY header line");
@@ -287,8 +321,62 @@ static int read_value(ply_reader *r, ply_type type, const ply_element *e, uint64
     return 0;
 }
 
+/* Makes room for `needed` elements of `size` bytes in *array (capacity doubling, so a header
+ * that promises more than the file holds costs only what is read). */
+static void reserve(void **array, size_t *capacity, size_t needed, size_t size)
+{
+    if (needed <= *capacity)
+        return;
+    size_t grown = *capacity ? *capacity : 256;
+    while (grown < needed)
+        grown *= 2;
+    *array = xrealloc(*array, grown * size);
+    *capacity = grown;
+}
+
+/* ply_read: vertex `index`'s values by role into the mesh's arrays. */
+static void keep_vertex(ply_reader *r, uint64_t index, const float value[ROLE_COUNT])
+{
+    mesh_data *m = r->mesh;
+    size_t capacity = r->vertex_capacity;
+    reserve((void **)&m->positions, &capacity, (size_t)index + 1, 3 * sizeof(float));
+    if (capacity != r->vertex_capacity) {
+        if (m->normals)
+            m->normals = xrealloc(m->normals, capacity * 3 * sizeof(float));
+        if (m->texcoords)
+            m->texcoords = xrealloc(m->texcoords, capacity * 2 * sizeof(float));
+        r->vertex_capacity = capacity;
+    }
+    memcpy(&m->positions[3 * index], &value[ROLE_X], 3 * sizeof(float));
+    if (m->normals)
+        memcpy(&m->normals[3 * index], &value[ROLE_NX], 3 * sizeof(float));
+    if (m->texcoords)
+        memcpy(&m->texcoords[2 * index], &value[ROLE_U], 2 * sizeof(float));
+    m->vertex_count = (uint32_t)(index + 1);
+}
+
+/* ply_read: the face's `count` corners fan-triangulated into the mesh. */
+static int keep_face(ply_reader *r, const uint32_t *corners, size_t count)
+{
+    mesh_data *m = r->mesh;
+    if (r->index_count + 3 * (uint64_t)(count - 2) > 3 * (uint64_t)(UINT32_MAX / 3))
+        return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': more than %u triangles",
+                         r->path, UINT32_MAX / 3);
+    reserve((void **)&m->indices, &r->index_capacity,
+            (size_t)r->index_count + 3 * (count - 2), sizeof(uint32_t));
+    for (size_t i = 1; i + 1 < count; i++) {
+        m->indices[r->index_count++] = corners[0];
+        m->indices[r->index_count++] = corners[i];
+        m->indices[r->index_count++] = corners[i + 1];
+    }
+    m->triangle_count = (uint32_t)(r->index_count / 3);
+    return 0;
+}
+
 static int read_element(ply_reader *r, const ply_element *e, uint64_t index)
 {
+    float kept[ROLE_COUNT] = {0};
+    int is_vertex = r->mesh && strcmp(e->name, "vertex") == 0;
     for (int k = 0; k < e->property_count; k++) {
         const ply_property *p = &e->properties[k];
         double value, count = 1;
@@ -305,9 +393,66 @@ static int read_element(ply_reader *r, const ply_element *e, uint64_t index)
                                  "index %.0f is out of range (%llu vertices)", r->path,
                                  (unsigned long long)index, value,
                                  (unsigned long long)r->vertices);
+            if (p->is_face_indices && r->mesh) {
+                reserve((void **)&r->corners, &r->corner_capacity, (size_t)i + 1,
+                        sizeof *r->corners);
+                r->corners[(size_t)i] = (uint32_t)value;
+            }
+            if (is_vertex && p->role != ROLE_NONE) {
+                kept[p->role] = (float)value;
+                if (!isfinite(kept[p->role]))
+                    return value_fail(r, e, index, "a value beyond the range of a float");
+            }
         }
+        if (p->is_face_indices && r->mesh && keep_face(r, r->corners, (size_t)count))
+            return -1;
     }
+    if (is_vertex)
+        keep_vertex(r, index, kept);
     return 0;
+}
+
+/* Reads the whole file; with r->mesh set, keeps the mesh (its arrays freed on failure). */
+static int read_file(ply_reader *r)
+{
+    r->vertices = UINT64_MAX;
+    r->f = fopen(r->path, "rb");
+    if (!r->f)
+        return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': %s", r->path, strerror(errno));
+    int status = read_header(r);
+    if (status == 0 && r->mesh) {
+        const unsigned position = 1u << ROLE_X | 1u << ROLE_Y | 1u << ROLE_Z;
+        const unsigned normal = 1u << ROLE_NX | 1u << ROLE_NY | 1u << ROLE_NZ;
+        const unsigned uv = 1u << ROLE_U | 1u << ROLE_V;
+        if (r->vertices == UINT64_MAX)
+            status = error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': no \"element vertex\" "
+                               "in its header", r->path);
+        else if ((r->roles & position) != position)
+            status = error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': its vertex element has "
+                               "no x, y and z properties", r->path);
+        /* Arrays of one element, grown with the vertices: normals and uv only where the
+         * header gives every component. */
+        if ((r->roles & normal) == normal)
+            r->mesh->normals = xmalloc(3 * sizeof(float));
+        if ((r->roles & uv) == uv)
+            r->mesh->texcoords = xmalloc(2 * sizeof(float));
+        r->mesh->positions = xmalloc(3 * sizeof(float));
+        r->vertex_capacity = 1;
+        r->mesh->indices = xmalloc(3 * sizeof(uint32_t));
+        r->index_capacity = 3;
+    }
+    /* An element without properties holds no bytes, however many it counts (a loop over 2^31
+     * of nothing was a hang the fuzzer found). */
+    for (int e = 0; status == 0 && e < r->element_count; e++)
+        for (uint64_t i = 0; status == 0 && r->elements[e].property_count > 0 &&
+                             i < r->elements[e].count;
+             i++)
+            status = read_element(r, &r->elements[e], i);
+    fclose(r->f);
+    free(r->corners);
+    if (status && r->mesh)
+        mesh_data_free(r->mesh);
+    return status;
 }
 
 int ply_check(const char *path)
@@ -315,14 +460,15 @@ int ply_check(const char *path)
     ply_reader r;
     memset(&r, 0, sizeof r);
     r.path = path;
-    r.vertices = UINT64_MAX;
-    r.f = fopen(path, "rb");
-    if (!r.f)
-        return error_set(IDMR_EXIT_INPUT, "cannot read mesh '%s': %s", path, strerror(errno));
-    int status = read_header(&r);
-    for (int e = 0; status == 0 && e < r.element_count; e++)
-        for (uint64_t i = 0; status == 0 && i < r.elements[e].count; i++)
-            status = read_element(&r, &r.elements[e], i);
-    fclose(r.f);
-    return status;
+    return read_file(&r);
+}
+
+int ply_read(const char *path, mesh_data *out)
+{
+    ply_reader r;
+    memset(&r, 0, sizeof r);
+    memset(out, 0, sizeof *out);
+    r.path = path;
+    r.mesh = out;
+    return read_file(&r);
 }

@@ -182,7 +182,7 @@ static int write_mesh_files(const char *dir, const scene *s, double *const *valu
         importance_file_name(mesh->name, name, sizeof name);
         snprintf(path, sizeof path, "%s/importance/%s.ply", dir, name);
         mesh_data data = {mesh->vertex_count, mesh->triangle_count, mesh->positions,
-                          mesh->indices, NULL, NULL};
+                          mesh->indices, NULL, NULL, 0};
         status = mesh_io_write_ply(path, &data, property, "importance", colours);
         free(property);
         free(colours);

@@ -105,9 +105,25 @@ void flatten(Mesh &mesh, const AttributeTable &attributes, const std::vector<dou
 }
 
 
+// The rebuild's input: the flat weld's kept triangles, turned as it turned them, in its order
+// (its twins and the triangles that weld into zero area left out), over the input's vertices.
+std::vector<uint32_t> repaired_indices(const decimate_input *in, const weld_result &flat)
+{
+    std::vector<uint32_t> indices(3 * (size_t)flat.triangle_count);
+    for (uint32_t k = 0; k < flat.triangle_count; k++) {
+        const uint32_t *ix = &in->indices[3 * (size_t)flat.kept_from[k]];
+        bool turned = flat.turned && flat.turned[k];
+        indices[3 * (size_t)k] = ix[0];
+        indices[3 * (size_t)k + 1] = ix[turned ? 2 : 1];
+        indices[3 * (size_t)k + 2] = ix[turned ? 1 : 2];
+    }
+    return indices;
+}
+
 // The welded mesh the engine starts from: the flat weld where the surface is manifold (its
-// welding figures into out), else the OpenMesh rebuild (which fills them itself). out takes
-// welded_of either way.
+// welding figures into out), else the OpenMesh rebuild of the flat weld's repaired triangles
+// (which fills them itself; weld.h), with the flat weld's turns and twins carried over to its
+// faces. out takes welded_of either way.
 void prepare(const decimate_input *in, weld_result *flat, decimate_output *out)
 {
     weld_flat(in, flat);
@@ -118,17 +134,46 @@ void prepare(const decimate_input *in, weld_result *flat, decimate_output *out)
         out->faces_dropped = flat->triangles_dropped;
         return;
     }
-    weld_result_free(flat);
+    weld_result repaired = *flat; // what the rebuild carries over (freed below)
+    std::memset(flat, 0, sizeof *flat);
+    std::vector<uint32_t> indices = repaired_indices(in, repaired);
+    decimate_input rebuilt_from = *in;
+    rebuilt_from.indices = indices.data();
+    rebuilt_from.triangle_count = repaired.triangle_count;
     Mesh mesh;
     AttributeTable attributes;
     std::vector<double> importance;
-    build_welded_mesh(in, mesh, out, importance, attributes);
+    std::vector<uint32_t> face_triangle;
+    build_welded_mesh(&rebuilt_from, mesh, out, importance, attributes, &face_triangle);
+    out->faces_dropped = repaired.triangles_dropped;
     flatten(mesh, attributes, importance, flat);
+    // Every repaired triangle is one face (none welds into zero area): face i was triangle
+    // face_triangle[i].
+    std::vector<uint32_t> face_of(repaired.triangle_count, COLLAPSE_NONE);
+    for (size_t i = 0; i < face_triangle.size(); i++)
+        face_of[face_triangle[i]] = (uint32_t)i;
+    flat->kept_from = (uint32_t *)xmalloc(sizeof(uint32_t) * (flat->triangle_count + 1));
+    for (uint32_t i = 0; i < flat->triangle_count; i++)
+        flat->kept_from[i] = repaired.kept_from[face_triangle[i]];
+    if (repaired.turned) {
+        flat->turned = (uint8_t *)xcalloc(flat->triangle_count + 1, 1);
+        for (uint32_t i = 0; i < flat->triangle_count; i++)
+            flat->turned[i] = repaired.turned[face_triangle[i]];
+        flat->triangles_turned = repaired.triangles_turned;
+    }
+    flat->twins = repaired.twins;
+    flat->twin_count = repaired.twin_count;
+    repaired.twins = nullptr;
+    for (uint32_t i = 0; i < flat->twin_count; i++)
+        flat->twins[i].primary = face_of[flat->twins[i].primary];
+    weld_result_free(&repaired);
 }
 
 // The reduced mesh into out->mesh: every vertex of a live triangle once per wedge (distinct
 // corner id), in vertex order, its wedges in the order its corners come in the triangle list;
-// out->output_index[v] is v's first output vertex, or DECIMATE_REMOVED.
+// out->output_index[v] is v's first output vertex, or DECIMATE_REMOVED. The live triangles keep
+// their order, each wound as the input had it (a turned one turned back), followed by the twins
+// of the live ones (weld.h), each on its triangle's corners in its own winding.
 void write_output(const weld_result &flat, decimate_output *out)
 {
     size_t n = flat.vertex_count, corners = 3 * (size_t)flat.triangle_count;
@@ -170,18 +215,33 @@ void write_output(const weld_result &flat, decimate_output *out)
             out->output_index[v] = (uint32_t)first;
     }
     size_t count = vertex_of.size();
+    size_t twins = 0;
+    for (uint32_t i = 0; i < flat.twin_count; i++)
+        twins += flat.triangles[3 * (size_t)flat.twins[i].primary] != COLLAPSE_NONE;
     mesh_data *m = &out->mesh;
     m->vertex_count = (uint32_t)count;
-    m->triangle_count = (uint32_t)live;
+    m->triangle_count = (uint32_t)(live + twins);
     m->positions = (float *)xmalloc(3 * sizeof(float) * (count + 1));
-    m->indices = (uint32_t *)xmalloc(3 * sizeof(uint32_t) * (live + 1));
+    m->indices = (uint32_t *)xmalloc(3 * sizeof(uint32_t) * (live + twins + 1));
     for (size_t i = 0; i < count; i++)
         std::memcpy(&m->positions[3 * i], &flat.positions[3 * (size_t)vertex_of[i]],
                     3 * sizeof(float));
     size_t written = 0;
-    for (size_t c = 0; c < corners; c++)
-        if (flat.triangles[c - c % 3] != COLLAPSE_NONE)
-            m->indices[written++] = output_of[c];
+    for (size_t c = 0; c < corners; c += 3) {
+        if (flat.triangles[c] == COLLAPSE_NONE)
+            continue;
+        bool turned = flat.turned && flat.turned[c / 3];
+        m->indices[written++] = output_of[c];
+        m->indices[written++] = output_of[c + (turned ? 2 : 1)];
+        m->indices[written++] = output_of[c + (turned ? 1 : 2)];
+    }
+    for (uint32_t i = 0; i < flat.twin_count; i++) {
+        size_t c = 3 * (size_t)flat.twins[i].primary;
+        if (flat.triangles[c] == COLLAPSE_NONE)
+            continue;
+        for (int k = 0; k < 3; k++)
+            m->indices[written++] = output_of[c + flat.twins[i].corner[k]];
+    }
     if (split)
         copy_attribute_values(flat.uv_floats, flat.normal_floats, flat.attributes, id_of, m);
 }

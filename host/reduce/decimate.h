@@ -33,9 +33,13 @@
  * it takes one collapse at a time, about 30 times slower on the full dragon.
  *
  * Welding: the input is welded on flat arrays first (weld.h); a manifold result goes to the
- * engine as it is. Non-manifold input: OpenMesh's reader splits vertices where the surface is not
- * manifold and adds faces it cannot attach as loose triangles with copied vertices. Here the mesh
- * is rebuilt (with OpenMesh, where the flat weld found it non-manifold):
+ * engine as it is. Where it is not, twins (a triangle again on the same vertices: a double-sided
+ * sheet) are set aside and repeated in the output after their triangle, and triangles wound
+ * against their neighbours are turned for the engine and back in the output (weld.h), so
+ * neither costs copied vertices. Non-manifold input: a half-edge mesh splits vertices where the
+ * surface is not manifold and adds faces it cannot attach as loose triangles with copied
+ * vertices. Here the mesh is rebuilt (with OpenMesh, where the repaired weld is still
+ * non-manifold):
  * vertices at identical positions are welded, faces are attached in order and those that fail
  * are retried until no more attach; faces that still cannot be attached keep copied vertices,
  * which are locked (they cannot be collapsed) and counted apart, so the collapsible surface

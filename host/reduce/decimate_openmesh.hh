@@ -35,9 +35,11 @@ typedef OpenMesh::Decimater::CollapseInfoT<Mesh> CollapseInfo;
 // (vertices_welded, vertices_uncollapsible, faces_patched, faces_loose, faces_dropped), and
 // `importance` per mesh vertex (the largest of the input vertices welded into it), and, where the
 // input has texture coordinates or normals, `attributes` (its table and the faces' corners).
-// Throws what OpenMesh throws.
+// face_triangle (may be null) gets, per mesh face in index order, the input triangle it was made
+// from. Throws what OpenMesh throws.
 void build_welded_mesh(const decimate_input *in, Mesh &mesh, decimate_output *out,
-                       std::vector<double> &importance, AttributeTable &attributes);
+                       std::vector<double> &importance, AttributeTable &attributes,
+                       std::vector<uint32_t> *face_triangle = nullptr);
 
 // The output vertices' texture coordinates and normals from an attribute table (uv_floats +
 // normal_floats per id, uv first): output vertex i takes id_of[i]'s.

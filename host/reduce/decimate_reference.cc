@@ -1,7 +1,9 @@
 // decimate_reference.cc — decimate_reference_mesh() (see decimate.h): the reference the collapse
-// engine is tested against. The welded rebuild (decimate_weld.cc), OpenMesh's decimater with our
+// engine is tested against. The welded rebuild (decimate_weld.cc) of the flat weld's repaired
+// triangles (weld.h: twins set aside, windings turned to agree), OpenMesh's decimater with our
 // modules (decimate_modules.hh) and our heap-ordered collapse loop (decimate_collapse.cc), one
-// collapse at a time, and the copy of the result into a decimate_output.
+// collapse at a time, and the copy of the result into a decimate_output, turned faces turned
+// back and twins repeated after the faces.
 #include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
 
 #include <algorithm>
@@ -16,6 +18,7 @@
 
 extern "C" {
 #include "core/error.h"
+#include "reduce/weld.h"
 }
 
 using namespace idmr_decimate;
@@ -118,10 +121,19 @@ void split_wedges(Mesh &mesh, const AttributeTable &attributes,
 }
 
 
+// What the flat weld's repairs leave on each face: turned for the decimater, and how many
+// twins repeat it in its winding and against it (weld.h).
+struct FaceRepairs {
+    bool turned = false;
+    uint32_t same = 0, reversed = 0;
+};
+
 // Compacts the mesh and copies its vertices and faces into out->mesh (a vertex once per wedge
-// where the mesh has attributes); out->output_index maps the decimater's vertices to their
+// where the mesh has attributes), each face in the winding of its input triangle, then every
+// face again for each of its twins; out->output_index maps the decimater's vertices to their
 // (first) place in it (garbage collection does not keep their order).
-void copy_out(Mesh &mesh, const AttributeTable &attributes, decimate_output *out)
+void copy_out(Mesh &mesh, const AttributeTable &attributes,
+              OpenMesh::FPropHandleT<FaceRepairs> repairs, decimate_output *out)
 {
     size_t n = mesh.n_vertices();
     out->history_count = (uint32_t)n;
@@ -149,27 +161,91 @@ void copy_out(Mesh &mesh, const AttributeTable &attributes, decimate_output *out
     for (auto v : mesh.vertices())
         out->output_index[mesh.property(before, v)] = first_of[v.idx()];
     mesh.remove_property(before);
-    size_t count = vertex_of.size();
+    size_t count = vertex_of.size(), triangles = 0;
+    for (auto f : mesh.faces()) {
+        const FaceRepairs &r = mesh.property(repairs, f);
+        triangles += 1 + r.same + r.reversed;
+    }
     out->mesh.vertex_count = (uint32_t)count;
-    out->mesh.triangle_count = (uint32_t)mesh.n_faces();
+    out->mesh.triangle_count = (uint32_t)triangles;
     out->mesh.positions = (float *)xmalloc(3 * sizeof(float) * (count + 1));
-    out->mesh.indices = (uint32_t *)xmalloc(3 * sizeof(uint32_t) * (mesh.n_faces() + 1));
+    out->mesh.indices = (uint32_t *)xmalloc(3 * sizeof(uint32_t) * (triangles + 1));
     for (size_t i = 0; i < count; i++)
         for (int k = 0; k < 3; k++)
             out->mesh.positions[3 * i + k] = mesh.point(Mesh::VertexHandle((int)vertex_of[i]))[k];
-    size_t corner = 0;
-    for (auto f : mesh.faces()) {
+    // The face's output vertices as the decimater winds it.
+    auto corners_of = [&](Mesh::FaceHandle f, uint32_t c[3]) {
         if (attributes.present()) {
             for (int k = 0; k < 3; k++)
-                out->mesh.indices[corner++] = corner_out[f.idx()][k];
-            continue;
+                c[k] = corner_out[f.idx()][k];
+            return;
         }
+        int k = 0;
         for (auto v : mesh.fv_range(f))
-            out->mesh.indices[corner++] = (uint32_t)v.idx();
+            c[k++] = (uint32_t)v.idx();
+    };
+    size_t corner = 0;
+    auto put = [&](const uint32_t c[3], bool reverse) {
+        out->mesh.indices[corner++] = c[0];
+        out->mesh.indices[corner++] = c[reverse ? 2 : 1];
+        out->mesh.indices[corner++] = c[reverse ? 1 : 2];
+    };
+    for (auto f : mesh.faces()) {
+        uint32_t c[3];
+        corners_of(f, c);
+        put(c, mesh.property(repairs, f).turned);
+    }
+    for (auto f : mesh.faces()) {
+        const FaceRepairs &r = mesh.property(repairs, f);
+        uint32_t c[3];
+        corners_of(f, c);
+        for (uint32_t i = 0; i < r.same + r.reversed; i++)
+            put(c, i >= r.same);
     }
     if (attributes.present())
         copy_attribute_values(attributes.uv_floats, attributes.normal_floats,
                               attributes.values.data(), id_of, &out->mesh);
+}
+
+// Whether the permutation of a twin's corner map is odd: the twin runs against its triangle.
+bool reverses(const uint8_t corner[3])
+{
+    return (corner[0] + 1) % 3 != corner[1];
+}
+
+// The welded rebuild of the flat weld's repaired triangles, each face with its repairs.
+void build_repaired(const decimate_input *in, Mesh &mesh, decimate_output *out,
+                    std::vector<double> &importance, AttributeTable &attributes,
+                    OpenMesh::FPropHandleT<FaceRepairs> &repairs)
+{
+    weld_result flat;
+    weld_flat(in, &flat);
+    std::vector<uint32_t> indices(3 * (size_t)flat.triangle_count);
+    for (uint32_t k = 0; k < flat.triangle_count; k++) {
+        const uint32_t *ix = &in->indices[3 * (size_t)flat.kept_from[k]];
+        bool turned = flat.turned && flat.turned[k];
+        indices[3 * (size_t)k] = ix[0];
+        indices[3 * (size_t)k + 1] = ix[turned ? 2 : 1];
+        indices[3 * (size_t)k + 2] = ix[turned ? 1 : 2];
+    }
+    decimate_input repaired = *in;
+    repaired.indices = indices.data();
+    repaired.triangle_count = flat.triangle_count;
+    std::vector<uint32_t> face_triangle;
+    build_welded_mesh(&repaired, mesh, out, importance, attributes, &face_triangle);
+    out->faces_dropped = flat.triangles_dropped;
+    std::vector<int> face_of(flat.triangle_count, -1);
+    for (size_t i = 0; i < face_triangle.size(); i++)
+        face_of[face_triangle[i]] = (int)i;
+    mesh.add_property(repairs);
+    for (size_t i = 0; i < face_triangle.size(); i++)
+        mesh.property(repairs, Mesh::FaceHandle((int)i)).turned =
+            flat.turned && flat.turned[face_triangle[i]];
+    for (uint32_t i = 0; i < flat.twin_count; i++) {
+        FaceRepairs &r = mesh.property(repairs, Mesh::FaceHandle(face_of[flat.twins[i].primary]));
+        (reverses(flat.twins[i].corner) ? r.reversed : r.same)++;
+    }
+    weld_result_free(&flat);
 }
 
 // decimate_mesh() without the exception boundary.
@@ -178,7 +254,8 @@ int decimate_welded(const decimate_input *in, decimate_method method, decimate_o
     Mesh mesh;
     std::vector<double> importance;
     AttributeTable attributes;
-    build_welded_mesh(in, mesh, out, importance, attributes);
+    OpenMesh::FPropHandleT<FaceRepairs> repairs;
+    build_repaired(in, mesh, out, importance, attributes, repairs);
     size_t n = mesh.n_vertices();
     out->collapsed_into = (uint32_t *)xmalloc(sizeof(uint32_t) * (n + 1));
     for (size_t v = 0; v < n; v++)
@@ -203,7 +280,7 @@ int decimate_welded(const decimate_input *in, decimate_method method, decimate_o
     out->collapses = (uint32_t)decimater.decimate_to(target, in->verify_heap != 0,
                                                      in->reheap_removed_ring_only != 0,
                                                      &out->heap_violations);
-    copy_out(mesh, attributes, out); // the history, collapsed_into, is in welded indices already
+    copy_out(mesh, attributes, repairs, out); // collapsed_into is in welded indices already
     return 0;
 }
 

@@ -26,6 +26,8 @@ extern "C" long decimate_stock_quadric(const decimate_input *in)
         }
         for (uint32_t t = 0; t < in->triangle_count; t++) {
             const uint32_t *ix = &in->indices[3 * (size_t)t];
+            if (ix[0] == ix[1] || ix[1] == ix[2] || ix[0] == ix[2])
+                continue; // add_face aborts on a face that repeats a vertex
             mesh.add_face(handles[ix[0]], handles[ix[1]], handles[ix[2]]);
         }
         OpenMesh::Decimater::DecimaterT<Mesh> decimater(mesh);

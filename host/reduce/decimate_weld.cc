@@ -70,6 +70,7 @@ struct WeldedBuild {
     AttributeTable &attributes;
     std::vector<Mesh::VertexHandle> handles;
     std::vector<uint32_t> attribute_of;
+    std::vector<uint32_t> face_triangle; // per face added, its input triangle
 
     // The welded vertex of corner k of input triangle t.
     uint32_t welded_corner(uint32_t t, int k) const
@@ -83,6 +84,8 @@ struct WeldedBuild {
                               Mesh::VertexHandle c)
     {
         Mesh::FaceHandle f = mesh.add_face(a, b, c);
+        if (f.is_valid())
+            face_triangle.push_back(t);
         if (f.is_valid() && attributes.present()) {
             CornerSet &set = mesh.property(attributes.corners, f);
             Mesh::VertexHandle corner[3] = {a, b, c};
@@ -249,16 +252,19 @@ void remove_isolated_vertices(WeldedBuild &b)
 } // namespace
 
 void build_welded_mesh(const decimate_input *in, Mesh &mesh, decimate_output *out,
-                       std::vector<double> &importance, AttributeTable &attributes)
+                       std::vector<double> &importance, AttributeTable &attributes,
+                       std::vector<uint32_t> *face_triangle)
 {
     mesh_io_silence_openmesh_logs(); // failed add_face calls would each log a line
-    WeldedBuild b{in, mesh, out, importance, attributes, {}, {}};
+    WeldedBuild b{in, mesh, out, importance, attributes, {}, {}, {}};
     weld_vertices(b);
     number_attributes(b);
     std::vector<uint32_t> pending = attach_faces(b);
     std::vector<uint32_t> loose = patch_faces(b, pending);
     add_loose_faces(b, loose);
     remove_isolated_vertices(b);
+    if (face_triangle)
+        face_triangle->swap(b.face_triangle);
 }
 
 void copy_attribute_values(int uv_floats, int normal_floats, const float *values,

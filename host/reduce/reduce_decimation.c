@@ -23,7 +23,12 @@
  *
  * A plan made again may also raise targets (a relaxed mesh now gives more than planned): every
  * mesh whose target changed is decimated again, so the total meets the request wherever the
- * floors allow. */
+ * floors allow.
+ *
+ * Last, a mesh whose decimation is not smaller than it is, where the first plan asked for
+ * fewer vertices, keeps its input (keep_unreduced): a reduction never writes a mesh larger.
+ * report.json's not_reduced and a warning say why (copies its non-manifold parts need, normals
+ * that point behind its triangles, or no legal collapse at all). */
 #include <malloc.h>
 #include <math.h>
 #include <stdio.h>
@@ -35,6 +40,7 @@
 #include "reduce/reduce_stages.h"
 
 #define COMPENSATION_ROUNDS 4
+#define NOT_REDUCED_WARNINGS 5 /* meshes kept as they are named one by one, the rest counted */
 
 /* A mesh carries importance when its importance per vertex is at least this share of the
  * scene's mean (the weighted quadric's floor, decimate_modules.hh, is the same share); its
@@ -352,17 +358,109 @@ static void warn_missed(const reduce_state *st)
         return;
     size_t stuck = 0;
     for (size_t m = 0; m < st->count; m++)
-        stuck += st->plan.decimate[m] && st->budget[m].floor > 0;
+        stuck += (st->plan.decimate[m] && st->budget[m].floor > 0) ||
+                 (st->not_reduced && st->not_reduced[m]);
     warn("the reduced scene keeps %llu vertices, %llu more than the %llu requested: %zu meshes "
          "cannot lose more without tearing open their outlines, seams or pieces (report.json: "
-         "per mesh vertices_floor)",
+         "per mesh vertices_floor, not_reduced)",
          (unsigned long long)st->vertices_after,
          (unsigned long long)(st->vertices_after - requested), (unsigned long long)requested,
          stuck);
 }
 
+/* The share of mesh m's triangle corners whose shading normal does not point to the front
+ * of the triangle (a non-positive dot with its geometric normal; a zero normal included): the
+ * engine moves no such triangle (decimate.h, "Attributes"). 0 for a mesh out of memory. */
+static double normals_behind(const scene_mesh *mesh)
+{
+    if (!mesh->normals || mesh->released || !mesh->triangle_count)
+        return 0.0;
+    uint64_t behind = 0;
+    for (uint32_t t = 0; t < mesh->triangle_count; t++) {
+        const uint32_t *ix = &mesh->indices[3 * (size_t)t];
+        const float *p0 = &mesh->positions[3 * (size_t)ix[0]],
+                    *p1 = &mesh->positions[3 * (size_t)ix[1]],
+                    *p2 = &mesh->positions[3 * (size_t)ix[2]];
+        double e1[3], e2[3], g[3];
+        for (int k = 0; k < 3; k++)
+            e1[k] = (double)p1[k] - p0[k], e2[k] = (double)p2[k] - p0[k];
+        g[0] = e1[1] * e2[2] - e1[2] * e2[1];
+        g[1] = e1[2] * e2[0] - e1[0] * e2[2];
+        g[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        for (int c = 0; c < 3; c++) {
+            const float *n = &mesh->normals[3 * (size_t)ix[c]];
+            behind += !(g[0] * n[0] + g[1] * n[1] + g[2] * n[2] > 0);
+        }
+    }
+    return (double)behind / (3.0 * mesh->triangle_count);
+}
+
+/* Why mesh m's decimation kept `after` vertices of its `before`, in words (malloc'd). */
+static char *why_not_reduced(const reduce_state *st, size_t m, uint64_t before, uint64_t after)
+{
+    const decimate_output *out = &st->output[m];
+    const scene_mesh *mesh = &st->scene->meshes[m];
+    int texcoords, normals;
+    reduce_mesh_attributes(st, m, &texcoords, &normals);
+    double behind = normals ? normals_behind(mesh) : 0.0;
+    char why[512];
+    if (out->vertices_welded > before)
+        snprintf(why, sizeof why,
+                 "its non-manifold parts (%u faces on copied vertices, %u of them loose and "
+                 "locked) start the decimation at %u vertices, more than its %llu, and it could "
+                 "only reach %llu",
+                 out->faces_patched + out->faces_loose, out->faces_loose, out->vertices_welded,
+                 (unsigned long long)before, (unsigned long long)after);
+    else if (behind >= 0.1)
+        snprintf(why, sizeof why,
+                 "%.0f %% of its triangle corners have a shading normal%s that does not point to "
+                 "the triangle's front (a double-sided or inconsistently wound surface?), and no "
+                 "collapse may move such a triangle%s",
+                 100.0 * behind, mesh->file_normals ? "" : " (computed on load)",
+                 mesh->file_normals ? "" : "; --recompute-normals leaves normals to the reader");
+    else
+        snprintf(why, sizeof why,
+                 "no collapse that removes a vertex is legal on it (%u collapses; its outline, "
+                 "seams, pieces and the normal limit hold every vertex)",
+                 out->collapses);
+    return xstrdup(why);
+}
+
+/* A mesh whose decimation is not smaller than it is keeps its input (see reduce_stages.h);
+ * where the first plan asked for its whole count (nothing to remove), an output of that count
+ * is the mesh rewritten and stays. */
+static void keep_unreduced(reduce_state *st, const uint64_t *first_target)
+{
+    size_t kept = 0;
+    for (size_t m = 0; m < st->count; m++) {
+        if (!st->plan.decimate[m])
+            continue;
+        uint64_t before = st->scene->meshes[m].vertex_count;
+        uint64_t after = st->output[m].mesh.vertex_count;
+        if (after < before || (after == before && first_target[m] >= before))
+            continue;
+        if (!st->not_reduced)
+            st->not_reduced = xcalloc(st->count + 1, sizeof *st->not_reduced);
+        free(st->not_reduced[m]);
+        st->not_reduced[m] = why_not_reduced(st, m, before, after);
+        if (kept++ < NOT_REDUCED_WARNINGS)
+            warn("mesh '%s' is kept as it is (%llu vertices): %s", st->scene->meshes[m].name,
+                 (unsigned long long)before, st->not_reduced[m]);
+        decimate_output_free(&st->output[m]);
+        st->plan.decimate[m] = 0;
+    }
+    if (kept > NOT_REDUCED_WARNINGS)
+        warn("%zu more meshes are kept as they are (report.json: not_reduced)",
+             kept - NOT_REDUCED_WARNINGS);
+    st->vertices_after = vertices_after(st);
+}
+
 void reduce_decimation_forget(reduce_state *st)
 {
+    for (size_t m = 0; st->not_reduced && m < st->count; m++)
+        free(st->not_reduced[m]);
+    free(st->not_reduced);
+    st->not_reduced = NULL;
     for (size_t m = 0; st->output && m < st->count; m++)
         decimate_output_free(&st->output[m]);
     free(st->output);
@@ -420,6 +518,8 @@ int reduce_decimation(reduce_state *st)
         if (changed < 0)
             status = -1;
     }
+    if (!status)
+        keep_unreduced(st, first_target);
     free(first_target);
     free(redo);
     if (!status)

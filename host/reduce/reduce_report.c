@@ -86,7 +86,8 @@ static void add_mesh(cJSON *meshes, const reduce_state *st, size_t m)
                             decimated ? out->mesh.vertex_count : in->vertex_count);
     cJSON_AddNumberToObject(mesh, "triangles_after",
                             decimated ? out->mesh.triangle_count : in->triangle_count);
-    if (decimated && st->budget[m].floor > 0)
+    int not_reduced = st->not_reduced && st->not_reduced[m];
+    if ((decimated || not_reduced) && st->budget[m].floor > 0)
         cJSON_AddNumberToObject(mesh, "vertices_floor", (double)st->budget[m].floor);
     if (decimated && st->options->method == REDUCE_COMBINED) {
         double set = st->input[m].boundary_tolerance;
@@ -118,6 +119,10 @@ static void add_mesh(cJSON *meshes, const reduce_state *st, size_t m)
             cJSON_AddNumberToObject(mesh, "gltf_instance", in->xml_line);
     }
     cJSON_AddBoolToObject(mesh, "pinned", reduce_mesh_pinned(st->options, in));
+    if (not_reduced)
+        cJSON_AddStringToObject(mesh, "not_reduced", st->not_reduced[m]);
+    if (in->triangles_dropped)
+        cJSON_AddNumberToObject(mesh, "triangles_dropped", in->triangles_dropped);
 }
 
 /* The initial reduction (null without one) and one entry per importance pass: its seconds, the

@@ -110,6 +110,9 @@ typedef struct reduce_state {
     budget_plan plan;              /* budget: targets and factors; the decimation plans again
                                       with the floors it learns */
     decimate_output *output;       /* decimation: per mesh the plan decimates */
+    char **not_reduced;            /* decimation: per mesh, NULL, or why the plan decimated it
+                                      but its input is kept (its decimation was not smaller);
+                                      such a mesh is no longer flagged in plan.decimate */
     unsigned int compensation_rounds;
     unsigned int locks_relaxed;     /* decimation: meshes whose boundary lock was relaxed */
     unsigned int seams_freed;       /* decimation: meshes whose attribute seams were freed */
@@ -204,8 +207,10 @@ int reduce_outdir_prepare(reduce_state *st);
 int reduce_outdir_finish(reduce_state *st, int success);
 
 /* Decimates the meshes the plan decimates, in parallel, largest first, then plans again with the
- * floors meshes reached and relaxes locks where the request cannot be met otherwise. Returns 0,
- * or -1 with the error set. */
+ * floors meshes reached and relaxes locks where the request cannot be met otherwise. A mesh
+ * whose decimation keeps at least as many vertices as it has (below a target under its count)
+ * keeps its input instead, with the reason in st->not_reduced and a warning: a reduction never
+ * makes a mesh larger. Returns 0, or -1 with the error set. */
 int reduce_decimation(reduce_state *st);
 /* Frees what the budget and decimation stages left (inputs, plan, outputs, their counts), so
  * that they can run again. */

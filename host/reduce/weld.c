@@ -1,6 +1,8 @@
 /* weld.c — weld_flat() (weld.h): positions welded through an open-addressing table of welded
  * indices, attribute sets numbered through a second one, degenerate triangles dropped, and the
- * manifold check on a counting-sorted vertex -> triangle adjacency. */
+ * manifold check on a counting-sorted vertex -> triangle adjacency; where it fails, twins found
+ * through a table of vertex triples and windings made to agree by a walk across the edges of
+ * two triangles, and the check again. */
 #include "reduce/weld.h"
 
 #include <stdlib.h>
@@ -123,6 +125,7 @@ static uint32_t *number_attributes(const decimate_input *in, weld_result *out)
 
 static void keep_triangles(const decimate_input *in, const uint32_t *id_of, weld_result *out)
 {
+    out->kept_from = xmalloc(sizeof(uint32_t) * ((size_t)in->triangle_count + 1));
     out->triangles = xmalloc(3 * sizeof(uint32_t) * ((size_t)in->triangle_count + 1));
     if (id_of)
         out->corner_ids = xmalloc(3 * sizeof(uint32_t) * ((size_t)in->triangle_count + 1));
@@ -139,6 +142,7 @@ static void keep_triangles(const decimate_input *in, const uint32_t *id_of, weld
         if (id_of)
             for (int k = 0; k < 3; k++)
                 out->corner_ids[3 * (size_t)kept + k] = id_of[ix[k]];
+        out->kept_from[kept] = t;
         kept++;
     }
     out->triangle_count = kept;
@@ -179,8 +183,14 @@ static int one_fan(const uint32_t *next, const uint32_t *previous, uint32_t coun
     return steps == count;
 }
 
-/* The manifold check and the wedge count, on a vertex -> triangle adjacency. */
-static void check_manifold(weld_result *out)
+/* Per vertex its corners (c = 3 t + k), as a counting sort of the triangle list: vertex v's are
+ * corner_of[start[v] .. start[v + 1]); *largest gets the most any vertex has. */
+typedef struct vertex_corners {
+    uint32_t *start, *corner_of;
+    uint32_t largest;
+} vertex_corners;
+
+static void vertex_corners_build(const weld_result *out, vertex_corners *vc)
 {
     uint32_t n = out->vertex_count;
     uint32_t *start = xcalloc((size_t)n + 2, sizeof(uint32_t));
@@ -197,6 +207,26 @@ static void check_manifold(weld_result *out)
     memcpy(fill, start, sizeof(uint32_t) * n);
     for (size_t c = 0; c < 3 * (size_t)out->triangle_count; c++)
         corner_of[fill[out->triangles[c]]++] = (uint32_t)c;
+    free(fill);
+    vc->start = start;
+    vc->corner_of = corner_of;
+    vc->largest = largest;
+}
+
+static void vertex_corners_free(vertex_corners *vc)
+{
+    free(vc->start);
+    free(vc->corner_of);
+}
+
+/* The manifold check and the wedge count, on a vertex -> triangle adjacency. */
+static void check_manifold(weld_result *out)
+{
+    uint32_t n = out->vertex_count;
+    out->non_manifold_vertices = out->vertices_counted = 0;
+    vertex_corners vc;
+    vertex_corners_build(out, &vc);
+    uint32_t *start = vc.start, *corner_of = vc.corner_of, largest = vc.largest;
     uint32_t *next = xmalloc(sizeof(uint32_t) * (2 * (size_t)largest + 1)), *previous = next + largest;
     for (uint32_t v = 0; v < n; v++) {
         uint32_t count = start[v + 1] - start[v];
@@ -219,9 +249,160 @@ static void check_manifold(weld_result *out)
             out->non_manifold_vertices++;
     }
     free(next);
-    free(fill);
-    free(corner_of);
-    free(start);
+    vertex_corners_free(&vc);
+}
+
+/* ---- repairs (weld.h): twins, orientation ---- */
+
+/* The triangle's welded vertices in increasing order. */
+static void sorted_corners(const uint32_t *corner, uint32_t sorted[3])
+{
+    uint32_t a = corner[0], b = corner[1], c = corner[2], t;
+    if (a > b) t = a, a = b, b = t;
+    if (b > c) t = b, b = c, c = t;
+    if (a > b) t = a, a = b, b = t;
+    sorted[0] = a, sorted[1] = b, sorted[2] = c;
+}
+
+/* Whether kept triangle t can be the twin of kept triangle p (same welded vertices): each corner
+ * has the attribute id that p has at its vertex; fills the corner map. */
+static int twin_of(const weld_result *out, uint32_t t, uint32_t p, uint8_t corner[3])
+{
+    const uint32_t *tc = &out->triangles[3 * (size_t)t], *pc = &out->triangles[3 * (size_t)p];
+    for (int k = 0; k < 3; k++) {
+        int j = 0;
+        while (j < 3 && pc[j] != tc[k])
+            j++;
+        if (j == 3)
+            return 0;
+        if (out->corner_ids &&
+            out->corner_ids[3 * (size_t)t + k] != out->corner_ids[3 * (size_t)p + j])
+            return 0;
+        corner[k] = (uint8_t)j;
+    }
+    return 1;
+}
+
+/* Sets aside every kept triangle that is the twin of an earlier one (weld.h), compacting the
+ * kept triangles, their corner ids and sources in order. */
+static void set_aside_twins(weld_result *out)
+{
+    size_t size = table_size(out->triangle_count), mask = size - 1;
+    uint32_t *table = xmalloc(sizeof(uint32_t) * size);
+    memset(table, 0xff, sizeof(uint32_t) * size);
+    out->twins = xmalloc(sizeof(weld_twin) * ((size_t)out->triangle_count + 1));
+    uint32_t kept = 0;
+    for (uint32_t t = 0; t < out->triangle_count; t++) {
+        /* Move t to its place first: what the table names lies before `kept`, already final. */
+        if (kept != t) {
+            memmove(&out->triangles[3 * (size_t)kept], &out->triangles[3 * (size_t)t],
+                    3 * sizeof(uint32_t));
+            if (out->corner_ids)
+                memmove(&out->corner_ids[3 * (size_t)kept], &out->corner_ids[3 * (size_t)t],
+                        3 * sizeof(uint32_t));
+            out->kept_from[kept] = out->kept_from[t];
+        }
+        uint32_t key[3], other[3];
+        sorted_corners(&out->triangles[3 * (size_t)kept], key);
+        size_t slot = mix(mix(mix(0, key[0]), key[1]), key[2]) & mask;
+        int twin = 0, known = 0;
+        for (; table[slot] != EMPTY; slot = (slot + 1) & mask) {
+            sorted_corners(&out->triangles[3 * (size_t)table[slot]], other);
+            if (memcmp(key, other, sizeof key) == 0) {
+                weld_twin *w = &out->twins[out->twin_count];
+                known = 1;
+                if ((twin = twin_of(out, kept, table[slot], w->corner))) {
+                    w->primary = table[slot];
+                    w->source = out->kept_from[kept];
+                    out->twin_count++;
+                }
+                break;
+            }
+        }
+        if (twin)
+            continue;
+        if (!known)
+            table[slot] = kept;
+        kept++;
+    }
+    out->triangle_count = kept;
+    free(table);
+}
+
+/* The kept triangle other than t on the edge a -> b or b -> a of t, when exactly one is there:
+ * it, with *same set when it runs a -> b too; EMPTY otherwise. */
+static uint32_t edge_neighbour(const weld_result *out, const vertex_corners *vc, uint32_t t,
+                               uint32_t a, uint32_t b, int *same)
+{
+    uint32_t found = EMPTY;
+    for (uint32_t i = vc->start[a]; i < vc->start[a + 1]; i++) {
+        uint32_t c = vc->corner_of[i], u = c / 3, k = c % 3;
+        if (u == t)
+            continue;
+        const uint32_t *corner = &out->triangles[3 * (size_t)u];
+        int forward = corner[(k + 1) % 3] == b, backward = corner[(k + 2) % 3] == b;
+        if (!forward && !backward)
+            continue;
+        if (found != EMPTY)
+            return EMPTY; /* an edge of three or more triangles: not crossed */
+        found = u;
+        *same = forward;
+    }
+    return found;
+}
+
+/* Turns kept triangles to agree with their neighbours (weld.h), each piece after its first
+ * triangle; where a piece cannot agree (a Moebius band) the walk leaves what it met. */
+static void orient(weld_result *out)
+{
+    uint32_t n = out->triangle_count;
+    vertex_corners vc;
+    vertex_corners_build(out, &vc);
+    uint8_t *turn = xcalloc((size_t)n + 1, 1), *seen = xcalloc((size_t)n + 1, 1);
+    uint32_t *queue = xmalloc(sizeof(uint32_t) * ((size_t)n + 1));
+    for (uint32_t seed = 0; seed < n; seed++) {
+        if (seen[seed])
+            continue;
+        seen[seed] = 1;
+        size_t head = 0, tail = 0;
+        queue[tail++] = seed;
+        while (head < tail) {
+            uint32_t t = queue[head++];
+            const uint32_t *corner = &out->triangles[3 * (size_t)t];
+            for (int k = 0; k < 3; k++) {
+                int same = 0;
+                uint32_t u = edge_neighbour(out, &vc, t, corner[k], corner[(k + 1) % 3], &same);
+                if (u == EMPTY || seen[u])
+                    continue;
+                seen[u] = 1;
+                turn[u] = (uint8_t)(turn[t] ^ same);
+                queue[tail++] = u;
+            }
+        }
+    }
+    for (uint32_t t = 0; t < n; t++) {
+        if (!turn[t])
+            continue;
+        uint32_t *corner = &out->triangles[3 * (size_t)t], swap = corner[1];
+        corner[1] = corner[2], corner[2] = swap;
+        if (out->corner_ids) {
+            uint32_t *id = &out->corner_ids[3 * (size_t)t];
+            swap = id[1], id[1] = id[2], id[2] = swap;
+        }
+        out->triangles_turned++;
+    }
+    for (uint32_t i = 0; i < out->twin_count; i++)
+        if (turn[out->twins[i].primary])
+            for (int k = 0; k < 3; k++)
+                if (out->twins[i].corner[k])
+                    out->twins[i].corner[k] = (uint8_t)(3 - out->twins[i].corner[k]);
+    if (out->triangles_turned)
+        out->turned = turn;
+    else
+        free(turn);
+    free(seen);
+    free(queue);
+    vertex_corners_free(&vc);
 }
 
 int weld_flat(const decimate_input *in, weld_result *out)
@@ -232,6 +413,11 @@ int weld_flat(const decimate_input *in, weld_result *out)
     keep_triangles(in, id_of, out);
     free(id_of);
     check_manifold(out);
+    if (out->non_manifold_vertices) {
+        set_aside_twins(out);
+        orient(out);
+        check_manifold(out);
+    }
     return 0;
 }
 
@@ -244,5 +430,8 @@ void weld_result_free(weld_result *out)
     free(out->corner_ids);
     free(out->attributes);
     free(out->locked);
+    free(out->kept_from);
+    free(out->turned);
+    free(out->twins);
     memset(out, 0, sizeof *out);
 }

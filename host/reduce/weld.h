@@ -11,6 +11,19 @@
  * takes; where it does not, decimate_mesh() builds the OpenMesh rebuild instead, which splits the
  * non-manifold parts (decimate.h, "Non-manifold input").
  *
+ * Two causes of a failed check are repaired first, because the rebuild answers both with copies
+ * of whole layers (a double-sided sheet of 169 vertices became 338, and its reduction more
+ * vertices than its input):
+ *   twins        a triangle on the same three welded vertices as an earlier one (a double-sided
+ *                sheet: every face again, reversed), with the same attribute ids at them, is set
+ *                aside: the engine decimates one layer, and the output repeats each surviving
+ *                triangle for its twins, in the twin's winding (decimate.cc)
+ *   orientation  triangles wound against their neighbours (a strip converted without turning
+ *                every other triangle) are turned, for the engine only, to agree with the first
+ *                triangle of their piece, across every edge of exactly two triangles; the output
+ *                turns them back, so every triangle keeps the winding it had (its front side)
+ * What still fails the check after that goes to the rebuild, twins and turns included.
+ *
  * No per-element allocation: open-addressing tables and a counting sort. */
 #ifndef IDMR_WELD_H
 #define IDMR_WELD_H
@@ -22,6 +35,14 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* A triangle set aside as the twin of a kept one: its corner k is the kept triangle's corner
+ * corner[k] (as the engine holds it, turned or not). */
+typedef struct weld_twin {
+    uint32_t primary; /* the kept triangle */
+    uint32_t source;  /* the input triangle */
+    uint8_t corner[3];
+} weld_twin;
 
 typedef struct weld_result {
     uint32_t vertex_count;     /* welded vertices */
@@ -39,6 +60,12 @@ typedef struct weld_result {
                                   for the OpenMesh rebuild's loose copies) */
     uint32_t non_manifold_vertices; /* vertices where the check failed (0: manifold) */
     uint32_t vertices_counted; /* vertices with triangles, once per wedge */
+    uint32_t *kept_from;       /* per kept triangle: its input triangle */
+    uint8_t *turned;           /* per kept triangle: wound the other way for the engine (corners
+                                  1 and 2 swapped, their ids too); NULL when none is */
+    uint32_t triangles_turned;
+    weld_twin *twins;          /* triangles set aside as twins of kept ones, in input order */
+    uint32_t twin_count;
 } weld_result;
 
 /* Welds `in` and checks the result (see above). Returns 0 (allocation failure exits, as xmalloc

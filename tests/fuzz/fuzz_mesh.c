@@ -1,6 +1,6 @@
 /* fuzz_mesh.c — libFuzzer target: one mesh reader, chosen by FUZZ_MESH_EXTENSION (".obj" and
- * ".off": idmr's own readers, host/io/mesh_text.c; ".ply" and ".stl": OpenMesh's, behind idmr's
- * checks in host/io/mesh_io.cc). `make fuzz` builds it once per extension. */
+ * ".off": host/io/mesh_text.c; ".ply": host/io/ply_check.c; ".stl": host/io/mesh_stl.c; all
+ * idmr's own, behind mesh_io_read_oriented()). `make fuzz` builds it once per extension. */
 #include <stdlib.h>
 #include <unistd.h>
 
