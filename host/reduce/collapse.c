@@ -1,10 +1,17 @@
 /* collapse.c — the collapse engine (collapse.h): passes of adjacency, scoring, ranking and greedy
  * application over flat arrays.
  *
+ * A pass (run_pass): the adjacency and rings built again; every vertex whose neighbourhood
+ * changed scored by its cheapest target (no rule checked: a bound); the pass's cost limit set
+ * from those scores; only the vertices within it checked against the rules (most of a pass's
+ * candidates are never reached, and the rules cost more than the scores); the checked ones
+ * ranked and taken greedily in chunks (take_in_chunks).
+ *
  * State, per vertex: flags (locked by the caller, removed, touched or an end of a collapse taken
  * in this pass, to be scored again), the plane quadric (10 doubles: the upper triangle of A,
  * then b, then c, for p'Ap + 2b'p + c) and its error at the vertex itself, the importance, the
- * best collapse the scoring found (target, cost, tie keys) and the donor (the vertex that went
+ * scored collapse (target, cost, tie keys: its cheapest target until checked, then its best legal
+ * one) and the donor (the vertex that went
  * into it in this pass). Per triangle: its three vertices and corner ids (the caller's arrays,
  * rewritten). Per attribute id (COMBINED with attributes): its attribute quadric (see
  * "Attribute quadrics" below). At the start of each pass the adjacency (adjacency[
@@ -139,6 +146,7 @@ typedef struct engine {
      * more than its triangles, as many as a vertex of one fan has), ring_size[v] long */
     ring_store rings;
     uint32_t *ring_size;
+    int rings_current; /* the adjacency and rings are the mesh's as it is (after engine_init) */
     double *quadric;
     double *self_error; /* per vertex: its quadric at its own position (the quadric methods) */
     double *importance;
@@ -146,6 +154,8 @@ typedef struct engine {
     /* the scoring's results, per vertex */
     uint32_t *best_target;
     candidate *best;
+    uint8_t *checked; /* per vertex: best[v] is its best legal collapse (check_vertex) */
+    float cost_limit; /* the pass stops at a candidate costlier than this */
     /* attribute quadrics (COMBINED with attributes) */
     int attributes_weighted, channels;
     double uv_scale, normal_scale, centre[3];
@@ -953,21 +963,12 @@ static int compare_targets(const void *a, const void *b)
     return x->vertex < y->vertex ? -1 : x->vertex > y->vertex;
 }
 
-/* Scores v: its best legal collapse into best[v] and best_target[v] (COLLAPSE_NONE: none). */
-static void score_vertex(engine *e, uint32_t v, scratch *s)
+/* v's collapse targets (its ring's vertices; f0 and r0 its fan and ring) with their keys, into
+ * s->targets; their count. */
+static size_t target_keys(const engine *e, uint32_t v, fan f0, const ring *r0, scratch *s)
 {
-    e->best_target[v] = COLLAPSE_NONE;
-    if (e->flags[v] & (FLAG_LOCKED | FLAG_REMOVED))
-        return;
-    if (e->adjacency_start[v] == e->adjacency_start[v + 1])
-        return;
-    ring ring0 = ring_of(e, v), *r0 = &ring0;
-    fan f0 = pass_fan(e, v);
-    int boundary0;
-    if (!ring_simple(r0, &boundary0) || r0->size <= 2)
-        return;
     if (s->targets_capacity < r0->size) {
-        s->targets_capacity = 2 * r0->size;
+        s->targets_capacity = 2 * (size_t)r0->size;
         s->targets = xrealloc(s->targets, sizeof(target_key) * s->targets_capacity);
     }
     int by_importance = e->o->method == DECIMATE_IMPORTANCE;
@@ -977,7 +978,70 @@ static void score_vertex(engine *e, uint32_t v, scratch *s)
         s->targets[i].distance = distance_of(e, u);
         s->targets[i].key = by_importance ? e->importance[u] : collapse_cost(e, f0, v, u, s);
     }
-    size_t count = r0->size;
+    return r0->size;
+}
+
+/* v's candidate for collapsing into target t (r0 its ring): ranked by the cost (QUADRIC,
+ * COMBINED) or by the importance of v and its ring (IMPORTANCE, the paper's ring sum). */
+static void set_best(engine *e, uint32_t v, const ring *r0, const target_key *t)
+{
+    int by_importance = e->o->method == DECIMATE_IMPORTANCE;
+    double priority = t->key;
+    if (by_importance) {
+        priority = e->importance[v];
+        for (uint32_t k = 0; k < r0->size; k++)
+            priority += e->importance[r0->vertex[k]];
+        CHECK_FINITE(priority, "ring importance");
+    }
+    e->best_target[v] = t->vertex;
+    e->best[v] = (candidate){(float)fmin(priority, (double)FLT_MAX / 2), distance_of(e, v),
+                             by_importance ? e->importance[t->vertex] : 0.0, t->distance, v};
+}
+
+/* Whether v may be removed at all: free, one fan, more than two neighbours (r0 its ring). */
+static int removable(const engine *e, uint32_t v, const ring *r0, int *boundary0)
+{
+    return !(e->flags[v] & (FLAG_LOCKED | FLAG_REMOVED)) && r0->size > 2 &&
+           ring_simple(r0, boundary0);
+}
+
+/* Scores v by its preferred target, legal or not: a bound on its best legal collapse, which
+ * costs no less and ranks no earlier (best[v], best_target[v]; COLLAPSE_NONE where v cannot be
+ * removed). Legality is checked only for the candidates the pass may reach (check_vertex). */
+static void score_vertex(engine *e, uint32_t v, scratch *s)
+{
+    e->best_target[v] = COLLAPSE_NONE;
+    e->checked[v] = 0;
+    ring r0 = ring_of(e, v);
+    int boundary0;
+    if (!removable(e, v, &r0, &boundary0))
+        return;
+    size_t count = target_keys(e, v, pass_fan(e, v), &r0, s);
+    size_t best = 0;
+    for (size_t i = 1; i < count; i++)
+        if (compare_targets(&s->targets[i], &s->targets[best]) < 0)
+            best = i;
+    set_best(e, v, &r0, &s->targets[best]);
+}
+
+/* Checks v's scored candidate (if not checked yet and within the pass's cost limit): its best
+ * legal collapse into best[v] and best_target[v], the targets tried in the method's order
+ * (COLLAPSE_NONE: none is legal). */
+static void check_vertex(engine *e, uint32_t v, scratch *s)
+{
+    if (e->best_target[v] == COLLAPSE_NONE || e->checked[v] || e->best[v].cost > e->cost_limit)
+        return;
+    e->checked[v] = 1;
+    ring r0 = ring_of(e, v);
+    fan f0 = pass_fan(e, v);
+    int boundary0 = 0;
+    ring_simple(&r0, &boundary0); /* true: score_vertex found v removable */
+    const char *rule;
+    uint32_t preferred = e->best_target[v];
+    if (collapse_legal(e, v, preferred, f0, &r0, boundary0, 0, s, &rule))
+        return; /* the score stands */
+    e->best_target[v] = COLLAPSE_NONE;
+    size_t count = target_keys(e, v, f0, &r0, s);
     for (size_t i = 1; i < count; i++) { /* an insertion sort: a ring is short */
         target_key key = s->targets[i];
         size_t j = i;
@@ -988,22 +1052,11 @@ static void score_vertex(engine *e, uint32_t v, scratch *s)
         s->targets[j] = key;
     }
     for (size_t i = 0; i < count; i++) {
-        const char *rule;
-        uint32_t u = s->targets[i].vertex;
-        if (!collapse_legal(e, v, u, f0, r0, boundary0, 0, s, &rule))
-            continue;
-        double priority = s->targets[i].key;
-        if (by_importance) {
-            priority = e->importance[v];
-            for (uint32_t k = 0; k < r0->size; k++)
-                priority += e->importance[r0->vertex[k]];
-            CHECK_FINITE(priority, "ring importance");
+        if (s->targets[i].vertex != preferred &&
+            collapse_legal(e, v, s->targets[i].vertex, f0, &r0, boundary0, 0, s, &rule)) {
+            set_best(e, v, &r0, &s->targets[i]);
+            return;
         }
-        e->best_target[v] = u;
-        e->best[v] = (candidate){(float)fmin(priority, (double)FLT_MAX / 2), distance_of(e, v),
-                                 by_importance ? e->importance[u] : 0.0,
-                                 s->targets[i].distance, v};
-        return;
     }
 }
 
@@ -1016,6 +1069,7 @@ typedef enum vertex_step {
     STEP_RINGS,
     STEP_QUADRICS,
     STEP_SCORES,
+    STEP_CHECKS,
     STEP_JUDGE,
     STEP_APPLY
 } vertex_step;
@@ -1067,6 +1121,9 @@ static void run_step(worker_pool *pool, scratch *s)
             case STEP_SCORES:
                 if (e->flags[i] & FLAG_STALE)
                     score_vertex(e, i, s);
+                break;
+            case STEP_CHECKS:
+                check_vertex(e, i, s);
                 break;
             case STEP_JUDGE:
                 judge_item(e, i, s);
@@ -1524,11 +1581,31 @@ static uint32_t take_in_chunks(engine *e, const candidate *list, size_t count, f
     return taken;
 }
 
-/* One pass; returns the collapses it took. */
+/* The candidates of checked vertices within the pass's cost limit into list, ranked; their
+ * count. */
+static size_t ranked_checked(const engine *e, candidate *list, candidate *spare)
+{
+    size_t count = 0;
+    for (uint32_t v = 0; v < e->n; v++)
+        if (e->best_target[v] != COLLAPSE_NONE && e->checked[v] &&
+            e->best[v].cost <= e->cost_limit)
+            list[count++] = e->best[v];
+    rank_candidates(list, spare, count, e->o->method == DECIMATE_IMPORTANCE || e->m->distance);
+    return count;
+}
+
+/* One pass; returns the collapses it took. The candidates are scored by their preferred
+ * targets, which bound their costs from below; the cost limit is set from that ranking; only
+ * the candidates within it are checked for their best legal collapse, ranked again and taken.
+ * Where none of them could be taken, the limit is lifted once, so that a pass ends the
+ * decimation only when no collapse is legal. */
 static uint32_t run_pass(engine *e, candidate *list, candidate *spare, scratch *s)
 {
-    build_adjacency(e);
-    for_each_vertex(e, STEP_RINGS);
+    if (!e->rings_current) { /* the first pass has those engine_init built */
+        build_adjacency(e);
+        for_each_vertex(e, STEP_RINGS);
+    }
+    e->rings_current = 0;
     for_each_vertex(e, STEP_SCORES);
     size_t count = 0;
     for (uint32_t v = 0; v < e->n; v++)
@@ -1536,14 +1613,21 @@ static uint32_t run_pass(engine *e, candidate *list, candidate *spare, scratch *
             list[count++] = e->best[v];
     if (!count)
         return 0;
-    int full_ties = e->o->method == DECIMATE_IMPORTANCE || e->m->distance;
-    rank_candidates(list, spare, count, full_ties);
-    float cost_limit = list[count / 4].cost * PASS_COST_FACTOR;
+    rank_candidates(list, spare, count, 0);
+    e->cost_limit = list[count / 4].cost * PASS_COST_FACTOR;
+    for_each_vertex(e, STEP_CHECKS);
+    count = ranked_checked(e, list, spare);
     for (uint32_t v = 0; v < e->n; v++) {
         e->flags[v] &= (uint8_t) ~(FLAG_TOUCHED | FLAG_TAKEN);
         e->donor[v] = COLLAPSE_NONE;
     }
-    uint32_t taken = take_in_chunks(e, list, count, cost_limit, s);
+    uint32_t taken = take_in_chunks(e, list, count, e->cost_limit, s);
+    if (!taken && e->cost_limit < FLT_MAX) {
+        e->cost_limit = FLT_MAX;
+        for_each_vertex(e, STEP_CHECKS);
+        count = ranked_checked(e, list, spare);
+        taken = take_in_chunks(e, list, count, e->cost_limit, s);
+    }
     mark_stale(e);
     return taken;
 }
@@ -1570,6 +1654,7 @@ static void engine_free(engine *e)
     free(e->donor);
     free(e->best_target);
     free(e->best);
+    free(e->checked);
     free(e->attribute_terms);
     free(e->judgements);
     free(e->chunk_items);
@@ -1642,6 +1727,7 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     e->donor = xmalloc(sizeof(uint32_t) * n);
     e->best_target = xmalloc(sizeof(uint32_t) * n);
     e->best = xmalloc(sizeof(candidate) * n);
+    e->checked = xcalloc(n, 1);
     e->importance = xcalloc(n, sizeof(double));
     if (m->importance)
         memcpy(e->importance, m->importance, sizeof(double) * e->n);
@@ -1673,15 +1759,16 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
         if (e->adjacency_start[v] < e->adjacency_start[v + 1])
             e->alive += current_wedges(e, v, &s);
     scratch_free(&s);
+    e->rings_current = 1;
     return 0;
 }
 
 size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_method method)
 {
-    /* flags, adjacency_start, ring_size, donor, best_target, stamp, best, importance, the
-     * ranking's list and spare, the quadric and its own error; a ring slot (vertex, left,
+    /* flags, checked, adjacency_start, ring_size, donor, best_target, stamp, best, importance,
+     * the ranking's list and spare, the quadric and its own error; a ring slot (vertex, left,
      * right, held) */
-    size_t per_vertex = 1 + 4 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
+    size_t per_vertex = 1 + 1 + 4 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
                         2 * sizeof(candidate) +
                         (method != DECIMATE_IMPORTANCE ? 11 * sizeof(double) : 0);
     size_t ring_slot = 3 * sizeof(uint32_t) + 1;
