@@ -84,8 +84,8 @@ typedef struct fan {
     uint32_t count;
 } fan;
 
-/* Where current_fan and current_ring write, one slot per vertex of a collapse (v0, v1, vl, vr). */
-enum { SLOT_V0, SLOT_V1, SLOT_VL, SLOT_VR, SLOTS };
+/* Where current_fan and current_ring write: one slot for each end of a collapse. */
+enum { SLOT_V0, SLOT_V1, SLOTS };
 
 /* What a thread needs while it judges collapses. */
 typedef struct scratch {
@@ -867,6 +867,43 @@ static ring ring_for(const engine *e, uint32_t v, int current, scratch *s, int s
     return current_ring(e, v, s, slot, &f);
 }
 
+/* Whether v has exactly three neighbours, `holding` among them unless COLLAPSE_NONE (the mesh as
+ * the pass found it, or with `current` as it is now). The valence-3 rule asks this of vl and vr
+ * for every judged collapse; for a touched vertex the neighbours are counted from its live
+ * triangles, stopping at a fourth, without gathering its ring. */
+static int valence_three(const engine *e, uint32_t v, int current, uint32_t holding)
+{
+    if (!current || !(e->flags[v] & FLAG_TOUCHED)) {
+        ring r = ring_of(e, v);
+        return r.size == 3 && (holding == COLLAPSE_NONE || ring_count(&r, holding));
+    }
+    uint32_t seen[3], count = 0, sources[2] = {v, e->donor[v]};
+    for (int k = 0; k < 2; k++) {
+        if (sources[k] == COLLAPSE_NONE)
+            continue;
+        fan from = pass_fan(e, sources[k]);
+        for (uint32_t i = 0; i < from.count; i++) {
+            const uint32_t *c = corners(e, from.triangle[i]);
+            if (c[0] == COLLAPSE_NONE || corner_at(e, from.triangle[i], v) == 3)
+                continue;
+            for (int m = 0; m < 3; m++) {
+                uint32_t j = 0;
+                while (j < count && seen[j] != c[m])
+                    j++;
+                if (c[m] == v || j < count)
+                    continue;
+                if (count == 3)
+                    return 0;
+                seen[count++] = c[m];
+            }
+        }
+    }
+    if (count != 3)
+        return 0;
+    return holding == COLLAPSE_NONE || seen[0] == holding || seen[1] == holding ||
+           seen[2] == holding;
+}
+
 /* Whether v0 -> v1 is legal; f0 and r0 are v0's fan and ring, v0 free and with more than two
  * neighbours. `current`: judge the mesh as it is now, in a pass where collapses were taken
  * (the other rings are gathered again), not as the pass found it. *rule names the first rule
@@ -902,12 +939,9 @@ static int collapse_legal(const engine *e, uint32_t v0, uint32_t v1, fan f0, con
         if (w != v1 && w != vl && w != vr && ring_count(r1, w))
             return *rule = "link condition", 0;
     }
-    if (both_sides) {
-        ring ring_l = ring_for(e, vl, current, s, SLOT_VL);
-        if (ring_l.size == 3 && ring_count(&ring_l, vr) &&
-            ring_for(e, vr, current, s, SLOT_VR).size == 3)
-            return *rule = "two joined valence-3 vertices", 0;
-    }
+    if (both_sides && valence_three(e, vl, current, vr) &&
+        valence_three(e, vr, current, COLLAPSE_NONE))
+        return *rule = "two joined valence-3 vertices", 0;
     if (!normals_kept(e, r0, v0, v1))
         return *rule = "normal limit", 0;
     if (e->o->method == DECIMATE_COMBINED && boundary0 && !isinf(e->boundary_tolerance) &&
