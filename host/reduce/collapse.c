@@ -1058,6 +1058,19 @@ static void score_vertex(engine *e, uint32_t v, scratch *s)
     set_best(e, v, &r0, &s->targets[best]);
 }
 
+/* The scoring step's work on v at the start of a pass: scored again where the last pass made it
+ * stale (its score dropped where it was removed), and the last pass's marks cleared. */
+static void settle_vertex(engine *e, uint32_t v, scratch *s)
+{
+    uint8_t flags = e->flags[v];
+    if (flags & FLAG_REMOVED)
+        e->best_target[v] = COLLAPSE_NONE;
+    else if (flags & FLAG_STALE)
+        score_vertex(e, v, s);
+    e->flags[v] = flags & (uint8_t) ~(FLAG_STALE | FLAG_TOUCHED | FLAG_TAKEN);
+    e->donor[v] = COLLAPSE_NONE;
+}
+
 /* Checks v's scored candidate (if not checked yet and within the pass's cost limit): its best
  * legal collapse into best[v] and best_target[v], the targets tried in the method's order
  * (COLLAPSE_NONE: none is legal). */
@@ -1153,8 +1166,7 @@ static void run_step(worker_pool *pool, scratch *s)
                 build_quadric(e, i);
                 break;
             case STEP_SCORES:
-                if (e->flags[i] & FLAG_STALE)
-                    score_vertex(e, i, s);
+                settle_vertex(e, i, s);
                 break;
             case STEP_CHECKS:
                 check_vertex(e, i, s);
@@ -1407,7 +1419,9 @@ static uint64_t collapse_removes(const engine *e, fan f0, uint32_t v0, uint32_t 
 /* Sets bits of a vertex's flags; atomic, as collapses taken side by side may touch one vertex. */
 static void flag(engine *e, uint32_t v, uint8_t bits)
 {
-    __atomic_fetch_or(&e->flags[v], bits, __ATOMIC_RELAXED);
+    /* most corners are flagged twice or more: the locked read-modify-write only where needed */
+    if ((__atomic_load_n(&e->flags[v], __ATOMIC_RELAXED) & bits) != bits)
+        __atomic_fetch_or(&e->flags[v], bits, __ATOMIC_RELAXED);
 }
 
 /* Takes v0 -> v1 (neither an end of a collapse taken in this pass; f0 holds v0's live
@@ -1455,11 +1469,9 @@ static void apply_collapse(engine *e, fan f0, uint32_t v0, uint32_t v1, uint32_t
 
 /* A vertex's score depends on its triangles, its neighbours' triangles, quadrics and importance:
  * after a pass, the touched vertices and their neighbours are scored again, the rest keep their
- * scores. */
+ * scores. (The next pass's scoring step clears the marks: settle_vertex.) */
 static void mark_stale(engine *e)
 {
-    for (uint32_t v = 0; v < e->n; v++)
-        e->flags[v] &= (uint8_t)~FLAG_STALE;
     for (uint32_t t = 0; t < e->t; t++) {
         const uint32_t *c = corners(e, t);
         if (c[0] == COLLAPSE_NONE)
@@ -1468,9 +1480,6 @@ static void mark_stale(engine *e)
             for (int k = 0; k < 3; k++)
                 e->flags[c[k]] |= FLAG_STALE;
     }
-    for (uint32_t v = 0; v < e->n; v++)
-        if (e->flags[v] & FLAG_REMOVED)
-            e->best_target[v] = COLLAPSE_NONE;
 }
 
 /* Whether a collapse taken earlier in this pass changed the triangles that v0 -> v1 was judged
@@ -1615,6 +1624,45 @@ static uint32_t take_in_chunks(engine *e, const candidate *list, size_t count, f
     return taken;
 }
 
+/* The cost of the scored candidate a quarter down their order by cost into *cost; 0 where no
+ * vertex has one. Selected by the bits of the costs (not negative, so their bits order as they
+ * do): a histogram of the upper 16 bits finds the bucket that holds it, one of the lower 16
+ * bits within that bucket the cost itself. */
+static int scored_cost_at_quarter(const engine *e, float *cost)
+{
+    uint32_t *histogram = xcalloc(65536, sizeof(uint32_t));
+    size_t count = 0;
+    for (uint32_t v = 0; v < e->n; v++)
+        if (e->best_target[v] != COLLAPSE_NONE) {
+            uint32_t bits;
+            memcpy(&bits, &e->best[v].cost, sizeof bits);
+            histogram[bits >> 16]++;
+            count++;
+        }
+    if (!count) {
+        free(histogram);
+        return 0;
+    }
+    size_t rank = count / 4, upper = 0;
+    while (rank >= histogram[upper])
+        rank -= histogram[upper++];
+    memset(histogram, 0, 65536 * sizeof(uint32_t));
+    for (uint32_t v = 0; v < e->n; v++)
+        if (e->best_target[v] != COLLAPSE_NONE) {
+            uint32_t bits;
+            memcpy(&bits, &e->best[v].cost, sizeof bits);
+            if (bits >> 16 == upper)
+                histogram[bits & 0xffff]++;
+        }
+    size_t lower = 0;
+    while (rank >= histogram[lower])
+        rank -= histogram[lower++];
+    free(histogram);
+    uint32_t bits = (uint32_t)(upper << 16 | lower);
+    memcpy(cost, &bits, sizeof bits);
+    return 1;
+}
+
 /* The candidates of checked vertices within the pass's cost limit into list, ranked; their
  * count. */
 static size_t ranked_checked(const engine *e, candidate *list, candidate *spare)
@@ -1641,20 +1689,12 @@ static uint32_t run_pass(engine *e, candidate *list, candidate *spare, scratch *
     }
     e->rings_current = 0;
     for_each_vertex(e, STEP_SCORES);
-    size_t count = 0;
-    for (uint32_t v = 0; v < e->n; v++)
-        if (e->best_target[v] != COLLAPSE_NONE)
-            list[count++] = e->best[v];
-    if (!count)
+    float quarter;
+    if (!scored_cost_at_quarter(e, &quarter))
         return 0;
-    rank_candidates(list, spare, count, 0);
-    e->cost_limit = list[count / 4].cost * PASS_COST_FACTOR;
+    e->cost_limit = quarter * PASS_COST_FACTOR;
     for_each_vertex(e, STEP_CHECKS);
-    count = ranked_checked(e, list, spare);
-    for (uint32_t v = 0; v < e->n; v++) {
-        e->flags[v] &= (uint8_t) ~(FLAG_TOUCHED | FLAG_TAKEN);
-        e->donor[v] = COLLAPSE_NONE;
-    }
+    size_t count = ranked_checked(e, list, spare);
     uint32_t taken = take_in_chunks(e, list, count, e->cost_limit, s);
     if (!taken && e->cost_limit < FLT_MAX) {
         e->cost_limit = FLT_MAX;
