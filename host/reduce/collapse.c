@@ -1,17 +1,10 @@
 /* collapse.c — the collapse engine (collapse.h): passes of adjacency, scoring, ranking and greedy
  * application over flat arrays.
  *
- * A pass (run_pass): the adjacency and rings built again; every vertex whose neighbourhood
- * changed scored by its cheapest target (no rule checked: a bound); the pass's cost limit set
- * from those scores; only the vertices within it checked against the rules (most of a pass's
- * candidates are never reached, and the rules cost more than the scores); the checked ones
- * ranked and taken greedily in chunks (take_in_chunks).
- *
  * State, per vertex: flags (locked by the caller, removed, touched or an end of a collapse taken
  * in this pass, to be scored again), the plane quadric (10 doubles: the upper triangle of A,
  * then b, then c, for p'Ap + 2b'p + c) and its error at the vertex itself, the importance, the
- * scored collapse (target, cost, tie keys: its cheapest target until checked, then its best legal
- * one) and the donor (the vertex that went
+ * best collapse the scoring found (target, cost, tie keys) and the donor (the vertex that went
  * into it in this pass). Per triangle: its three vertices and corner ids (the caller's arrays,
  * rewritten). Per attribute id (COMBINED with attributes): its attribute quadric (see
  * "Attribute quadrics" below). At the start of each pass the adjacency (adjacency[
@@ -154,8 +147,6 @@ typedef struct engine {
     /* the scoring's results, per vertex */
     uint32_t *best_target;
     candidate *best;
-    uint8_t *checked; /* per vertex: best[v] is its best legal collapse (check_vertex) */
-    float cost_limit; /* the pass stops at a candidate costlier than this */
     /* attribute quadrics (COMBINED with attributes) */
     int attributes_weighted, channels;
     double uv_scale, normal_scale, centre[3];
@@ -1039,23 +1030,42 @@ static int removable(const engine *e, uint32_t v, const ring *r0, int *boundary0
            ring_simple(r0, boundary0);
 }
 
-/* Scores v by its preferred target, legal or not: a bound on its best legal collapse, which
- * costs no less and ranks no earlier (best[v], best_target[v]; COLLAPSE_NONE where v cannot be
- * removed). Legality is checked only for the candidates the pass may reach (check_vertex). */
+/* Scores v: its best legal collapse into best[v] and best_target[v] (COLLAPSE_NONE: none). The
+ * cheapest target (by the method's order) is tried first, as it is legal for most vertices;
+ * otherwise the targets are sorted and tried in order. */
 static void score_vertex(engine *e, uint32_t v, scratch *s)
 {
     e->best_target[v] = COLLAPSE_NONE;
-    e->checked[v] = 0;
     ring r0 = ring_of(e, v);
+    fan f0 = pass_fan(e, v);
     int boundary0;
     if (!removable(e, v, &r0, &boundary0))
         return;
-    size_t count = target_keys(e, v, pass_fan(e, v), &r0, s);
-    size_t best = 0;
+    size_t count = target_keys(e, v, f0, &r0, s);
+    size_t cheapest = 0;
     for (size_t i = 1; i < count; i++)
-        if (compare_targets(&s->targets[i], &s->targets[best]) < 0)
-            best = i;
-    set_best(e, v, &r0, &s->targets[best]);
+        if (compare_targets(&s->targets[i], &s->targets[cheapest]) < 0)
+            cheapest = i;
+    const char *rule;
+    uint32_t preferred = s->targets[cheapest].vertex;
+    if (collapse_legal(e, v, preferred, f0, &r0, boundary0, 0, s, &rule)) {
+        set_best(e, v, &r0, &s->targets[cheapest]);
+        return;
+    }
+    for (size_t i = 1; i < count; i++) { /* an insertion sort: a ring is short */
+        target_key key = s->targets[i];
+        size_t j = i;
+        while (j > 0 && compare_targets(&key, &s->targets[j - 1]) < 0) {
+            s->targets[j] = s->targets[j - 1];
+            j--;
+        }
+        s->targets[j] = key;
+    }
+    for (size_t i = 1; i < count; i++) /* targets[0] is the preferred one */
+        if (collapse_legal(e, v, s->targets[i].vertex, f0, &r0, boundary0, 0, s, &rule)) {
+            set_best(e, v, &r0, &s->targets[i]);
+            return;
+        }
 }
 
 /* The scoring step's work on v at the start of a pass: scored again where the last pass made it
@@ -1071,42 +1081,6 @@ static void settle_vertex(engine *e, uint32_t v, scratch *s)
     e->donor[v] = COLLAPSE_NONE;
 }
 
-/* Checks v's scored candidate (if not checked yet and within the pass's cost limit): its best
- * legal collapse into best[v] and best_target[v], the targets tried in the method's order
- * (COLLAPSE_NONE: none is legal). */
-static void check_vertex(engine *e, uint32_t v, scratch *s)
-{
-    if (e->best_target[v] == COLLAPSE_NONE || e->checked[v] || e->best[v].cost > e->cost_limit)
-        return;
-    e->checked[v] = 1;
-    ring r0 = ring_of(e, v);
-    fan f0 = pass_fan(e, v);
-    int boundary0 = 0;
-    ring_simple(&r0, &boundary0); /* true: score_vertex found v removable */
-    const char *rule;
-    uint32_t preferred = e->best_target[v];
-    if (collapse_legal(e, v, preferred, f0, &r0, boundary0, 0, s, &rule))
-        return; /* the score stands */
-    e->best_target[v] = COLLAPSE_NONE;
-    size_t count = target_keys(e, v, f0, &r0, s);
-    for (size_t i = 1; i < count; i++) { /* an insertion sort: a ring is short */
-        target_key key = s->targets[i];
-        size_t j = i;
-        while (j > 0 && compare_targets(&key, &s->targets[j - 1]) < 0) {
-            s->targets[j] = s->targets[j - 1];
-            j--;
-        }
-        s->targets[j] = key;
-    }
-    for (size_t i = 0; i < count; i++) {
-        if (s->targets[i].vertex != preferred &&
-            collapse_legal(e, v, s->targets[i].vertex, f0, &r0, boundary0, 0, s, &rule)) {
-            set_best(e, v, &r0, &s->targets[i]);
-            return;
-        }
-    }
-}
-
 /* ---- the per-vertex steps, in parallel ---- */
 
 /* The engine's threads: started once per run, each with its own scratch, handed one step at a
@@ -1116,7 +1090,6 @@ typedef enum vertex_step {
     STEP_RINGS,
     STEP_QUADRICS,
     STEP_SCORES,
-    STEP_CHECKS,
     STEP_JUDGE,
     STEP_APPLY
 } vertex_step;
@@ -1167,9 +1140,6 @@ static void run_step(worker_pool *pool, scratch *s)
                 break;
             case STEP_SCORES:
                 settle_vertex(e, i, s);
-                break;
-            case STEP_CHECKS:
-                check_vertex(e, i, s);
                 break;
             case STEP_JUDGE:
                 judge_item(e, i, s);
@@ -1624,63 +1594,9 @@ static uint32_t take_in_chunks(engine *e, const candidate *list, size_t count, f
     return taken;
 }
 
-/* The cost of the scored candidate a quarter down their order by cost into *cost; 0 where no
- * vertex has one. Selected by the bits of the costs (not negative, so their bits order as they
- * do): a histogram of the upper 16 bits finds the bucket that holds it, one of the lower 16
- * bits within that bucket the cost itself. */
-static int scored_cost_at_quarter(const engine *e, float *cost)
-{
-    uint32_t *histogram = xcalloc(65536, sizeof(uint32_t));
-    size_t count = 0;
-    for (uint32_t v = 0; v < e->n; v++)
-        if (e->best_target[v] != COLLAPSE_NONE) {
-            uint32_t bits;
-            memcpy(&bits, &e->best[v].cost, sizeof bits);
-            histogram[bits >> 16]++;
-            count++;
-        }
-    if (!count) {
-        free(histogram);
-        return 0;
-    }
-    size_t rank = count / 4, upper = 0;
-    while (rank >= histogram[upper])
-        rank -= histogram[upper++];
-    memset(histogram, 0, 65536 * sizeof(uint32_t));
-    for (uint32_t v = 0; v < e->n; v++)
-        if (e->best_target[v] != COLLAPSE_NONE) {
-            uint32_t bits;
-            memcpy(&bits, &e->best[v].cost, sizeof bits);
-            if (bits >> 16 == upper)
-                histogram[bits & 0xffff]++;
-        }
-    size_t lower = 0;
-    while (rank >= histogram[lower])
-        rank -= histogram[lower++];
-    free(histogram);
-    uint32_t bits = (uint32_t)(upper << 16 | lower);
-    memcpy(cost, &bits, sizeof bits);
-    return 1;
-}
-
-/* The candidates of checked vertices within the pass's cost limit into list, ranked; their
- * count. */
-static size_t ranked_checked(const engine *e, candidate *list, candidate *spare)
-{
-    size_t count = 0;
-    for (uint32_t v = 0; v < e->n; v++)
-        if (e->best_target[v] != COLLAPSE_NONE && e->checked[v] &&
-            e->best[v].cost <= e->cost_limit)
-            list[count++] = e->best[v];
-    rank_candidates(list, spare, count, e->o->method == DECIMATE_IMPORTANCE || e->m->distance);
-    return count;
-}
-
-/* One pass; returns the collapses it took. The candidates are scored by their preferred
- * targets, which bound their costs from below; the cost limit is set from that ranking; only
- * the candidates within it are checked for their best legal collapse, ranked again and taken.
- * Where none of them could be taken, the limit is lifted once, so that a pass ends the
- * decimation only when no collapse is legal. */
+/* One pass; returns the collapses it took. Every vertex whose neighbourhood changed is scored
+ * (its best legal collapse), the candidates ranked and taken greedily, the pass stopping at
+ * PASS_COST_FACTOR x the cost of the candidate a quarter down the ranking. */
 static uint32_t run_pass(engine *e, candidate *list, candidate *spare, scratch *s)
 {
     if (!e->rings_current) { /* the first pass has those engine_init built */
@@ -1689,19 +1605,15 @@ static uint32_t run_pass(engine *e, candidate *list, candidate *spare, scratch *
     }
     e->rings_current = 0;
     for_each_vertex(e, STEP_SCORES);
-    float quarter;
-    if (!scored_cost_at_quarter(e, &quarter))
+    size_t count = 0;
+    for (uint32_t v = 0; v < e->n; v++)
+        if (e->best_target[v] != COLLAPSE_NONE)
+            list[count++] = e->best[v];
+    if (!count)
         return 0;
-    e->cost_limit = quarter * PASS_COST_FACTOR;
-    for_each_vertex(e, STEP_CHECKS);
-    size_t count = ranked_checked(e, list, spare);
-    uint32_t taken = take_in_chunks(e, list, count, e->cost_limit, s);
-    if (!taken && e->cost_limit < FLT_MAX) {
-        e->cost_limit = FLT_MAX;
-        for_each_vertex(e, STEP_CHECKS);
-        count = ranked_checked(e, list, spare);
-        taken = take_in_chunks(e, list, count, e->cost_limit, s);
-    }
+    rank_candidates(list, spare, count, e->o->method == DECIMATE_IMPORTANCE || e->m->distance);
+    float cost_limit = list[count / 4].cost * PASS_COST_FACTOR;
+    uint32_t taken = take_in_chunks(e, list, count, cost_limit, s);
     mark_stale(e);
     return taken;
 }
@@ -1728,7 +1640,6 @@ static void engine_free(engine *e)
     free(e->donor);
     free(e->best_target);
     free(e->best);
-    free(e->checked);
     free(e->attribute_terms);
     free(e->judgements);
     free(e->chunk_items);
@@ -1801,7 +1712,6 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     e->donor = xmalloc(sizeof(uint32_t) * n);
     e->best_target = xmalloc(sizeof(uint32_t) * n);
     e->best = xmalloc(sizeof(candidate) * n);
-    e->checked = xcalloc(n, 1);
     e->importance = xcalloc(n, sizeof(double));
     if (m->importance)
         memcpy(e->importance, m->importance, sizeof(double) * e->n);
@@ -1839,10 +1749,10 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
 
 size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_method method)
 {
-    /* flags, checked, adjacency_start, ring_size, donor, best_target, stamp, best, importance,
-     * the ranking's list and spare, the quadric and its own error; a ring slot (vertex, left,
+    /* flags, adjacency_start, ring_size, donor, best_target, stamp, best, importance, the
+     * ranking's list and spare, the quadric and its own error; a ring slot (vertex, left,
      * right, held) */
-    size_t per_vertex = 1 + 1 + 4 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
+    size_t per_vertex = 1 + 4 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
                         2 * sizeof(candidate) +
                         (method != DECIMATE_IMPORTANCE ? 11 * sizeof(double) : 0);
     size_t ring_slot = 3 * sizeof(uint32_t) + 1;
