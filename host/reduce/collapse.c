@@ -906,7 +906,7 @@ static int collapse_legal(const engine *e, uint32_t v0, uint32_t v1, fan f0, con
     if (slot == r0->size)
         return *rule = "not an edge", 0;
     uint32_t held = r0->count[slot];
-    if (e->flags[v1] & FLAG_LOCKED)
+    if (e->m->locked && e->m->locked[v1]) /* the caller's (flags[v1] may be being rewritten) */
         return *rule = "locked", 0;
     ring ring1 = ring_for(e, v1, current, s, SLOT_V1), *r1 = &ring1;
     int boundary1;
@@ -1099,6 +1099,18 @@ typedef struct worker_start {
     unsigned int index;
 } worker_start;
 
+/* What one step is: set before its generation is published, read by the threads that claim its
+ * items. Two, by the generation's parity: a thread that wakes late reads the parameters of a
+ * step already over, but can no longer claim any of its items. */
+typedef struct step_parameters {
+    atomic_uint step, items, block;
+} step_parameters;
+
+/* A step runs as its items are claimed, `block` at a time, from `claim` (the generation in the
+ * upper 32 bits, the next item in the lower): a thread claims only within the generation whose
+ * parameters it read. The caller waits until every item is done (`done`), not for every worker:
+ * one that is not running (the machine is busy) or wakes after the items are gone costs
+ * nothing. */
 struct worker_pool {
     engine *e;
     pthread_t thread[MAX_THREADS];
@@ -1108,47 +1120,61 @@ struct worker_pool {
     pthread_mutex_t lock; /* with `wake`: for the workers that sleep between steps */
     pthread_cond_t wake;
     unsigned int sleepers;
-    atomic_uint generation, finished;
+    atomic_uint generation;
     atomic_int quit;
-    vertex_step step;
-    uint32_t items, block; /* STEP_JUDGE and STEP_APPLY: items of the chunk, taken `block` at a
-                              time */
-    atomic_uint_fast32_t next;
+    step_parameters parameters[2];
+    _Atomic uint64_t claim;
+    atomic_uint done;
 };
 
 static void judge_item(engine *e, uint32_t item, scratch *s);
 static void apply_item(engine *e, uint32_t item, scratch *s);
 
-/* Takes blocks of items (vertices, or a chunk's candidates) until none is left. */
-static void run_step(worker_pool *pool, scratch *s)
+static void run_item(engine *e, vertex_step step, uint32_t i, scratch *s)
 {
-    engine *e = pool->e;
-    int per_vertex = pool->step != STEP_JUDGE && pool->step != STEP_APPLY;
-    uint32_t items = per_vertex ? e->n : pool->items, block = per_vertex ? SCORE_BLOCK : pool->block;
+    switch (step) {
+    case STEP_RINGS:
+        build_ring(e, i);
+        break;
+    case STEP_QUADRICS:
+        build_quadric(e, i);
+        break;
+    case STEP_SCORES:
+        settle_vertex(e, i, s);
+        break;
+    case STEP_JUDGE:
+        judge_item(e, i, s);
+        break;
+    case STEP_APPLY:
+        apply_item(e, i, s);
+        break;
+    }
+}
+
+/* Claims blocks of the items of step `generation` (vertices, or a chunk's candidates) and runs
+ * them, until none is left or the step is over. */
+static void run_step(worker_pool *pool, scratch *s, unsigned int generation)
+{
+    const step_parameters *parameters = &pool->parameters[generation & 1];
     for (;;) {
-        uint32_t begin = (uint32_t)atomic_fetch_add(&pool->next, block);
+        uint64_t claim = atomic_load_explicit(&pool->claim, memory_order_acquire);
+        if ((uint32_t)(claim >> 32) != generation)
+            return;
+        uint32_t begin = (uint32_t)claim;
+        uint32_t items = atomic_load_explicit(&parameters->items, memory_order_relaxed);
+        uint32_t block = atomic_load_explicit(&parameters->block, memory_order_relaxed);
         if (begin >= items)
             return;
-        uint32_t end = begin + block < items ? begin + block : items;
-        for (uint32_t i = begin; i < end; i++) {
-            switch (pool->step) {
-            case STEP_RINGS:
-                build_ring(e, i);
-                break;
-            case STEP_QUADRICS:
-                build_quadric(e, i);
-                break;
-            case STEP_SCORES:
-                settle_vertex(e, i, s);
-                break;
-            case STEP_JUDGE:
-                judge_item(e, i, s);
-                break;
-            case STEP_APPLY:
-                apply_item(e, i, s);
-                break;
-            }
-        }
+        uint32_t end = items - begin > block ? begin + block : items;
+        if (!atomic_compare_exchange_weak_explicit(&pool->claim, &claim,
+                                                   (uint64_t)generation << 32 | end,
+                                                   memory_order_acquire, memory_order_relaxed))
+            continue;
+        /* claimed: the step cannot end, nor its parameters change, before these are done */
+        vertex_step step = atomic_load_explicit(&parameters->step, memory_order_relaxed);
+        for (uint32_t i = begin; i < end; i++)
+            run_item(pool->e, step, i, s);
+        atomic_fetch_add_explicit(&pool->done, end - begin, memory_order_release);
     }
 }
 
@@ -1187,8 +1213,7 @@ static void *worker_main(void *arg)
         if (atomic_load(&pool->quit))
             return NULL;
         seen = generation;
-        run_step(pool, s);
-        atomic_fetch_add_explicit(&pool->finished, 1, memory_order_release);
+        run_step(pool, s, generation);
     }
 }
 
@@ -1199,8 +1224,14 @@ static void pool_start(worker_pool *pool, engine *e, unsigned int threads)
     pthread_mutex_init(&pool->lock, NULL);
     pthread_cond_init(&pool->wake, NULL);
     atomic_init(&pool->generation, 0);
-    atomic_init(&pool->finished, 0);
     atomic_init(&pool->quit, 0);
+    atomic_init(&pool->claim, 0);
+    atomic_init(&pool->done, 0);
+    for (int k = 0; k < 2; k++) {
+        atomic_init(&pool->parameters[k].step, 0);
+        atomic_init(&pool->parameters[k].items, 0);
+        atomic_init(&pool->parameters[k].block, 1);
+    }
     if (threads > MAX_THREADS)
         threads = MAX_THREADS;
     /* No more threads than blocks of vertices to share. */
@@ -1214,27 +1245,30 @@ static void pool_start(worker_pool *pool, engine *e, unsigned int threads)
     }
 }
 
-/* Runs one step over its items on all the pool's threads and the caller's. */
+/* Runs one step over its items on the pool's threads and the caller's; returns when all are
+ * done. */
 static void run_on_pool(engine *e, vertex_step step, uint32_t items, uint32_t block)
 {
     worker_pool *pool = e->pool;
-    pool->step = step;
-    pool->items = items;
-    pool->block = block;
-    atomic_store(&pool->next, 0);
-    atomic_store(&pool->finished, 0);
-    atomic_fetch_add_explicit(&pool->generation, 1, memory_order_release);
+    unsigned int generation = atomic_load_explicit(&pool->generation, memory_order_relaxed) + 1;
+    step_parameters *parameters = &pool->parameters[generation & 1];
+    atomic_store_explicit(&parameters->step, step, memory_order_relaxed);
+    atomic_store_explicit(&parameters->items, items, memory_order_relaxed);
+    atomic_store_explicit(&parameters->block, block, memory_order_relaxed);
+    atomic_store_explicit(&pool->done, 0, memory_order_relaxed);
+    atomic_store_explicit(&pool->claim, (uint64_t)generation << 32, memory_order_release);
+    atomic_store_explicit(&pool->generation, generation, memory_order_release);
     pthread_mutex_lock(&pool->lock);
     if (pool->sleepers)
         pthread_cond_broadcast(&pool->wake);
     pthread_mutex_unlock(&pool->lock);
-    run_step(pool, &pool->scratch[0]);
+    run_step(pool, &pool->scratch[0], generation);
     for (unsigned int spins = 0;
-         atomic_load_explicit(&pool->finished, memory_order_acquire) < pool->count; spins++)
+         atomic_load_explicit(&pool->done, memory_order_acquire) < items; spins++)
         if (spins < SPIN_LIMIT)
             spin_pause();
         else
-            sched_yield(); /* a worker is off its core: let it run */
+            sched_yield(); /* a worker holding a block is off its core: let it run */
 }
 
 static void pool_stop(worker_pool *pool)
