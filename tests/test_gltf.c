@@ -134,6 +134,26 @@ static mesh_data world_mesh(const scene_mesh *m)
     return d;
 }
 
+/* A decimated copy of scene mesh `m` (about `share` of its vertices, at least 3) into *out, as
+ * `idmr reduce --method quadric` makes it. */
+static void decimate_to(const scene_mesh *m, double share, decimate_output *out)
+{
+    mesh_data in = world_mesh(m);
+    decimate_input d;
+    memset(&d, 0, sizeof d);
+    d.name = m->name;
+    d.positions = in.positions;
+    d.vertex_count = in.vertex_count;
+    d.indices = in.indices;
+    d.triangle_count = in.triangle_count;
+    d.texcoords = in.texcoords;
+    d.normals = in.normals;
+    d.target_vertices = (uint64_t)fmax(3, share * in.vertex_count);
+    d.max_normal_angle = 60;
+    if (decimate_mesh(&d, DECIMATE_QUADRIC, out))
+        fail_msg("%s", error_message());
+}
+
 /* Writes `s` (read from ENGINE) with every instance replaced by meshes[i] into a fresh
  * directory and reads it back. */
 static scene *write_and_read(const scene *s, const mesh_data *meshes, char *dir, size_t size)
@@ -190,20 +210,7 @@ static void test_engine_decimated_round_trip(void **state)
     mesh_data *meshes = calloc(s->mesh_count, sizeof *meshes);
     uint64_t total = 0;
     for (size_t i = 0; i < s->mesh_count; i++) {
-        mesh_data in = world_mesh(&s->meshes[i]);
-        decimate_input d;
-        memset(&d, 0, sizeof d);
-        d.name = s->meshes[i].name;
-        d.positions = in.positions;
-        d.vertex_count = in.vertex_count;
-        d.indices = in.indices;
-        d.triangle_count = in.triangle_count;
-        d.texcoords = in.texcoords;
-        d.normals = in.normals;
-        d.target_vertices = in.vertex_count / 4 > 4 ? in.vertex_count / 4 : 4;
-        d.max_normal_angle = 60;
-        if (decimate_mesh(&d, DECIMATE_QUADRIC, &outputs[i]))
-            fail_msg("%s", error_message());
+        decimate_to(&s->meshes[i], 0.25, &outputs[i]);
         meshes[i] = outputs[i].mesh;
         total += meshes[i].vertex_count;
     }
@@ -709,8 +716,9 @@ static cJSON *mesh_descriptions(const cJSON *doc)
 }
 
 /* What a reduced lit_scene() must keep: every node, camera, light, material, scene, asset and
- * mesh description as it went in; one vertex for each the report counts; fewer than before. */
-static void check_lit_scene_kept(const cJSON *input, const char *out, const char *output)
+ * mesh description as it went in; one vertex for each the report counts; fewer than before.
+ * Returns what gltf-check saw. */
+static cJSON *check_lit_scene_kept(const cJSON *input, const char *out, const char *output)
 {
     char path[192];
     snprintf(path, sizeof path, "%s/%s", out, output);
@@ -728,13 +736,27 @@ static void check_lit_scene_kept(const cJSON *input, const char *out, const char
     assert_true(after < report_number(out, "vertices_before"));
     assert_int_equal(cJSON_GetObjectItem(seen, "vertices")->valuedouble, after);
     assert_int_equal(cJSON_GetArraySize(cJSON_GetObjectItem(seen, "instances")), 2);
-    cJSON_Delete(seen);
     scene *back = load_or_fail(path); /* and Assimp reads it as idmr's loader does */
     assert_int_equal(back->vertex_count, after);
     assert_true(back->has_camera);
     assert_float_equal(back->camera.tan_half_y, tan(0.6981317007977318 / 2), 1e-6);
     assert_int_equal(back->light_count, 3); /* the point, the spot, the glowing panel */
     scene_free(back);
+    return seen;
+}
+
+/* lit_scene(vendor) written as dir/name (*doc, *bin) and reduced by `idmr reduce` into dir/out
+ * (a new dir, 64 bytes), checked by check_lit_scene_kept; returns what gltf-check saw. */
+static cJSON *reduce_lit_scene(int vendor, const char *name, char *dir, cJSON **doc,
+                               test_bin *bin)
+{
+    char out[96];
+    make_temp_dir(dir, "idmr-test-gltf");
+    *doc = lit_scene(vendor, bin);
+    const char *input = write_document(*doc, bin, dir, name);
+    snprintf(out, sizeof out, "%s/out", dir);
+    reduce_with_idmr(input, 0.7, out);
+    return check_lit_scene_kept(*doc, out, gltf_output_name(name));
 }
 
 /* A glTF with a light and object-valued extras on nodes (Assimp's exporter aborted in its
@@ -743,17 +765,10 @@ static void check_lit_scene_kept(const cJSON *input, const char *out, const char
 static void test_reduce_keeps_lights_camera_extras(void **state)
 {
     (void)state;
-    char dir[64], out[96];
-    make_temp_dir(dir, "idmr-test-gltf");
+    char dir[64];
     test_bin bin = {NULL, 0};
-    cJSON *doc = lit_scene(0, &bin);
-    const char *input = write_document(doc, &bin, dir, "lit.gltf");
-    snprintf(out, sizeof out, "%s/out", dir);
-    reduce_with_idmr(input, 0.7, out);
-    check_lit_scene_kept(doc, out, "scene.gltf");
-    char path[128];
-    snprintf(path, sizeof path, "%s/out/scene.gltf", dir);
-    cJSON *seen = inspect(path);
+    cJSON *doc;
+    cJSON *seen = reduce_lit_scene(0, "lit.gltf", dir, &doc, &bin);
     const cJSON *buffers = cJSON_GetObjectItem(cJSON_GetObjectItem(seen, "json"), "buffers");
     assert_int_equal(cJSON_GetArraySize(buffers), 1);
     assert_string_equal(cJSON_GetObjectItem(cJSON_GetArrayItem(buffers, 0), "uri")->valuestring,
@@ -769,19 +784,12 @@ static void test_reduce_keeps_lights_camera_extras(void **state)
 static void test_reduce_glb_with_unknown_extension(void **state)
 {
     (void)state;
-    char dir[64], out[96];
-    make_temp_dir(dir, "idmr-test-gltf");
+    char dir[64], path[128];
     test_bin bin = {NULL, 0};
-    cJSON *doc = lit_scene(1, &bin);
-    const char *input = write_document(doc, &bin, dir, "lit.glb");
-    snprintf(out, sizeof out, "%s/out", dir);
-    reduce_with_idmr(input, 0.7, out);
-    check_lit_scene_kept(doc, out, "scene.glb");
-    char path[128];
+    cJSON *doc;
+    cJSON *seen = reduce_lit_scene(1, "lit.glb", dir, &doc, &bin);
     snprintf(path, sizeof path, "%s/out/scene.bin", dir);
     assert_int_equal(access(path, F_OK), -1); /* all in the .glb */
-    snprintf(path, sizeof path, "%s/out/scene.glb", dir);
-    cJSON *seen = inspect(path);
     const cJSON *document = cJSON_GetObjectItem(seen, "json");
     const cJSON *buffers = cJSON_GetObjectItem(document, "buffers");
     assert_int_equal(cJSON_GetArraySize(buffers), 1);
@@ -801,25 +809,6 @@ static void test_reduce_glb_with_unknown_extension(void **state)
     cJSON_Delete(doc);
     free(bin.data);
     remove_tree(dir);
-}
-
-/* A decimated copy of scene mesh `m` (about `share` of its vertices) into *out. */
-static void decimate_to(const scene_mesh *m, double share, decimate_output *out)
-{
-    mesh_data in = world_mesh(m);
-    decimate_input d;
-    memset(&d, 0, sizeof d);
-    d.name = m->name;
-    d.positions = in.positions;
-    d.vertex_count = in.vertex_count;
-    d.indices = in.indices;
-    d.triangle_count = in.triangle_count;
-    d.texcoords = in.texcoords;
-    d.normals = in.normals;
-    d.target_vertices = (uint64_t)fmax(3, share * in.vertex_count);
-    d.max_normal_angle = 60;
-    if (decimate_mesh(&d, DECIMATE_QUADRIC, out))
-        fail_msg("%s", error_message());
 }
 
 /* The instance trimesh places at node `node` with `vertices` vertices (exactly one). */
