@@ -21,4 +21,10 @@
 
 int ply_check(const char *path);
 
+/* The same check on a PLY idmr has just written (mesh_io_write_ply): OpenMesh's writer does not
+ * report a failed write, so a file cut short by a full disk or a file size limit would pass as
+ * written. A file that fails the check is removed. 0, or -1 with the error set
+ * (IDMR_EXIT_FAILURE: "cannot write mesh", naming the file and what is wrong with it). */
+int ply_check_written(const char *path);
+
 #endif
