@@ -49,7 +49,7 @@ enum {
 #define CHUNK 1024 /* candidates judged at a time when taking collapses */
 #define JUDGE_BLOCK 8  /* candidates a thread judges at a time */
 #define APPLY_BLOCK 16 /* collapses a thread takes at a time */
-#define SPIN_LIMIT 20000 /* pauses a thread spins before it sleeps or yields */
+#define SPIN_LIMIT 4000 /* pauses (about 0.1 ms) a thread spins before it sleeps or yields */
 
 typedef struct worker_pool worker_pool;
 
