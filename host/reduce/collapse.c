@@ -250,7 +250,11 @@ static double quadric_error(const double *q, const float *point)
 
 /* ---- adjacency and rings ---- */
 
-/* The live triangles at each vertex, in triangle order. */
+/* The live triangles at each vertex, in triangle order. On the way, the corners of every
+ * triangle a collapse of the last pass touched are marked stale: a vertex's score depends on
+ * its triangles, its neighbours' triangles, quadrics and importance, so the touched vertices
+ * and their neighbours are scored again and the rest keep their scores (the scoring step clears
+ * the marks: settle_vertex). */
 static void build_adjacency(engine *e)
 {
     uint32_t *start = e->adjacency_start;
@@ -259,8 +263,12 @@ static void build_adjacency(engine *e)
         const uint32_t *c = corners(e, t);
         if (c[0] == COLLAPSE_NONE)
             continue;
-        for (int k = 0; k < 3; k++)
+        int touched = (e->flags[c[0]] | e->flags[c[1]] | e->flags[c[2]]) & FLAG_TOUCHED;
+        for (int k = 0; k < 3; k++) {
             start[c[k] + 1]++;
+            if (touched)
+                e->flags[c[k]] |= FLAG_STALE;
+        }
     }
     for (uint32_t v = 0; v < e->n; v++)
         start[v + 1] += start[v];
@@ -1471,21 +1479,6 @@ static void apply_collapse(engine *e, fan f0, uint32_t v0, uint32_t v1, uint32_t
     history[v0] = v1;
 }
 
-/* A vertex's score depends on its triangles, its neighbours' triangles, quadrics and importance:
- * after a pass, the touched vertices and their neighbours are scored again, the rest keep their
- * scores. (The next pass's scoring step clears the marks: settle_vertex.) */
-static void mark_stale(engine *e)
-{
-    for (uint32_t t = 0; t < e->t; t++) {
-        const uint32_t *c = corners(e, t);
-        if (c[0] == COLLAPSE_NONE)
-            continue;
-        if ((e->flags[c[0]] | e->flags[c[1]] | e->flags[c[2]]) & FLAG_TOUCHED)
-            for (int k = 0; k < 3; k++)
-                e->flags[c[k]] |= FLAG_STALE;
-    }
-}
-
 /* Whether a collapse taken earlier in this pass changed the triangles that v0 -> v1 was judged
  * on: those of v0, v1, vl and vr. */
 static int neighbourhood_touched(const engine *e, uint32_t v0, uint32_t v1)
@@ -1647,9 +1640,7 @@ static uint32_t run_pass(engine *e, candidate *list, candidate *spare, scratch *
         return 0;
     rank_candidates(list, spare, count, e->o->method == DECIMATE_IMPORTANCE || e->m->distance);
     float cost_limit = list[count / 4].cost * PASS_COST_FACTOR;
-    uint32_t taken = take_in_chunks(e, list, count, cost_limit, s);
-    mark_stale(e);
-    return taken;
+    return take_in_chunks(e, list, count, cost_limit, s);
 }
 
 /* ---- setup ---- */
