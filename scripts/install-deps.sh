@@ -6,7 +6,9 @@
 #                                      missing)
 #   scripts/install-deps.sh --python   also the Python tools of the evaluation, into .venv/ in
 #                                      the repository (Mitsuba 3, the second renderer; NVIDIA's
-#                                      FLIP evaluator), at the versions pinned below
+#                                      FLIP evaluator; trimesh, pygltflib and jsonschema, the
+#                                      glTF readers of scripts/gltf-check), at the versions
+#                                      pinned below
 #   scripts/install-deps.sh --fuzz     also clang and its libFuzzer runtime (make fuzz)
 set -eu
 cd "$(dirname "$0")/.."
@@ -16,7 +18,8 @@ libembree-dev libopenmesh-dev libopenimageio-dev libxml2-dev libcjson-dev libcmo
 libmeshoptimizer-dev libassimp-dev assimp-testmodels
 python3-matplotlib python3-numpy python3-venv"
 
-PYTHON_PACKAGES="mitsuba==3.9.1 drjit==1.5.0 flip-evaluator==1.7 numpy==2.4.6"
+PYTHON_PACKAGES="mitsuba==3.9.1 drjit==1.5.0 flip-evaluator==1.7 numpy==2.4.6 trimesh==4.12.2
+pygltflib==1.16.5 jsonschema==4.23.0"
 
 if [ "${1:-}" = "--fuzz" ]; then
     PACKAGES="$PACKAGES clang libclang-rt-14-dev"

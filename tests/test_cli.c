@@ -7,9 +7,11 @@
  * Each test is one case. The runs that several tests look at (the Cornell box's info, the two
  * reductions, the two renders) are made once, by the first test that needs them, and removed
  * by the group teardown. Runs from the repository root (as `make test` does). */
+#include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -483,6 +485,39 @@ static void test_refused(void **state)
     run_free(&r);
 }
 
+/* Mistakes in an option itself: one message that names the option and says what is wrong, not
+ * getopt's line followed by "unknown option" for an option that exists. */
+static const refusal OPTION_MISTAKES[] = {
+    {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x --target", "reduce: --target needs a value"},
+    {"bin/idmr importance data/cornell/scene.xml -o /tmp/x --photons",
+     "importance: --photons needs a value"},
+    {"bin/idmr render data/cornell/scene.xml -o", "render: -o needs a value"},
+    {"bin/idmr compare a.exr b.exr --diff", "compare: --diff needs a value"},
+    {"bin/idmr kernels --device", "kernels: --device needs a value"},
+    {"bin/idmr info --json=yes data/cornell/scene.xml", "info: --json takes no value"},
+    {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x --target 0.5 --s 1",
+     "--s is ambiguous (--seed, --shadow-weight, --simulation)"},
+    {"bin/idmr info -x data/cornell/scene.xml", "info: unknown option -x"},
+};
+
+/* state: the mistake. */
+static void test_option_mistake(void **state)
+{
+    const refusal *c = *state;
+    run_result r = run("%s", c->command);
+    const char *getopt_lines[] = {"requires an argument", "unrecognized option", "doesn't allow",
+                                  "invalid option"};
+    if (r.status != 2 || !strstr(r.err, c->expect))
+        fail_msg("'%s': exit %d, message '%s' (expected 2 and '%s')", c->command, r.status, r.err,
+                 c->expect);
+    for (size_t i = 0; i < sizeof getopt_lines / sizeof *getopt_lines; i++)
+        if (strstr(r.err, getopt_lines[i]))
+            fail_msg("'%s': getopt's own line in '%s'", c->command, r.err);
+    if (!strstr(c->expect, "unknown") && strstr(r.err, "unknown option"))
+        fail_msg("'%s': an option that exists called unknown: '%s'", c->command, r.err);
+    run_free(&r);
+}
+
 /* ---- reduce ---- */
 
 #define SHORT_PASS "--iterations 2 --photons 20000 --resolution 0.25 --quiet"
@@ -681,6 +716,17 @@ static void test_reduce_refuses_unusable_simulation(void **state)
          "--photons 1000 --resolution 0.1 --quiet # %s",
          "data/cornell/scene.xml", "--simulation %s/dark/simulation.bin",
          "no shadow importance"},
+        {"(printf IDMRSIM3; tail -c +9 %s/sim/simulation.bin) > %s/version3.bin",
+         "data/cornell/scene.xml", "--simulation %s/version3.bin", "without the checksum"},
+        /* One bit of the photon count (bytes 28 to 31, 20000 = 0x4e20) flipped: 0x14e20. */
+        {"cd %s && cp sim/simulation.bin photons.bin && printf '\\001' | dd of=photons.bin bs=1 "
+         "seek=30 conv=notrunc status=none # %s",
+         "data/cornell/scene.xml", "--simulation %s/photons.bin", "checksum does not match"},
+        /* The top byte of a camera sum (triangle 100, after the header's 80 bytes and the radii
+         * and changes of 6 iterations) changed. */
+        {"cd %s && cp sim/simulation.bin sums.bin && printf '\\177' | dd of=sums.bin bs=1 "
+         "seek=983 conv=notrunc status=none # %s",
+         "data/cornell/scene.xml", "--simulation %s/sums.bin", "checksum does not match"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
         run_result prepared = run(cases[i].prepare, dir, dir);
@@ -693,6 +739,163 @@ static void test_reduce_refuses_unusable_simulation(void **state)
         if (r.status != 2 || !strstr(r.err, cases[i].expect) || !strstr(r.err, dir))
             fail_msg("'%s': exit %d, '%s' (expected 2, the file and '%s')", r.command, r.status,
                      r.err, cases[i].expect);
+        run_free(&r);
+    }
+}
+
+/* FNV-1a, as the simulation file's checksum (passes/importance_file.h). */
+static uint64_t fnv1a(const unsigned char *bytes, size_t size)
+{
+    uint64_t hash = 0xcbf29ce484222325ull;
+    for (size_t i = 0; i < size; i++)
+        hash = (hash ^ bytes[i]) * 0x100000001b3ull;
+    return hash;
+}
+
+/* The saved simulation with `size` bytes at `offset` replaced by `value`, its checksum made
+ * again (a file no bit flip made, but a pass that went wrong, or one made by hand), as
+ * DIR/name. */
+static void write_edited_simulation(const char *dir, const char *name, size_t offset,
+                                    const void *value, size_t size)
+{
+    char path[256];
+    snprintf(path, sizeof path, "%s/sim/simulation.bin", dir);
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    unsigned char *bytes = malloc(1 << 24);
+    size_t length = fread(bytes, 1, 1 << 24, f);
+    fclose(f);
+    assert_true(length > offset + size + 8 && length < (1 << 24));
+    memcpy(bytes + offset, value, size);
+    uint64_t checksum = fnv1a(bytes, length - 8);
+    memcpy(bytes + length - 8, &checksum, 8);
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(bytes, 1, length, f), length);
+    fclose(f);
+    free(bytes);
+}
+
+/* A simulation whose checksum holds but whose values no pass writes (no photons, a NaN or a
+ * negative sum): refused, with the file and what is wrong named. */
+static void test_reduce_refuses_simulation_values(void **state)
+{
+    const char *dir = shared_runs_dir(&simulations);
+    uint32_t no_photons = 0;
+    double nan_sum = NAN, negative_sum = -1.0;
+    /* The header is 80 bytes; then 6 radii and 6 changes; then camera, light and shadow sums of
+     * the 96024 triangles. */
+    size_t sums = 80 + 2 * 6 * 8, triangles = 96024;
+    write_edited_simulation(dir, "no-photons.bin", 28, &no_photons, sizeof no_photons);
+    write_edited_simulation(dir, "nan-light.bin", sums + 8 * (triangles + 1), &nan_sum, 8);
+    write_edited_simulation(dir, "negative-camera.bin", sums + 8 * 95990, &negative_sum, 8);
+    const struct {
+        const char *file, *expect;
+    } cases[] = {
+        {"no-photons.bin", "photon count of 0"},
+        {"nan-light.bin", "light importance sum of triangle 1 (mesh 'floor'"},
+        {"negative-camera.bin", "camera importance sum of triangle 95990 (mesh 'knot'"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        run_result r = run("bin/idmr reduce data/cornell/scene.xml --target 0.1 -o %s/refused-%zu "
+                           "--simulation %s/%s --quiet",
+                           dir, i, dir, cases[i].file);
+        if (r.status != 2 || !strstr(r.err, cases[i].expect) || !strstr(r.err, cases[i].file))
+            fail_msg("'%s': exit %d, '%s' (expected 2, the file and '%s')", r.command, r.status,
+                     r.err, cases[i].expect);
+        run_free(&r);
+    }
+}
+
+/* --simulation on what is not a regular file: /dev/zero (read without end until memory ran
+ * out), a FIFO (blocked forever), a directory. Refused at once, named, and nothing of the run
+ * is left. The address space and the time are bounded, so that a failure here cannot take the
+ * machine's memory. */
+static void test_reduce_refuses_special_simulation_files(void **state)
+{
+    char dir[64];
+    make_temp_dir(dir, "idmr-cli-special");
+    run_result made = run("mkfifo %s/fifo", dir);
+    assert_succeeded(&made);
+    run_free(&made);
+    const struct {
+        const char *file, *expect;
+    } cases[] = {
+        {"/dev/zero", "is a character device"},
+        {"%s/fifo", "is a FIFO"},
+        {"%s", "is a directory"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        char file[128];
+        snprintf(file, sizeof file, cases[i].file, dir);
+        run_result r = run("ulimit -v 4000000; timeout 60 bin/idmr reduce data/cornell/scene.xml "
+                           "--target 0.1 -o %s/out --simulation %s --quiet",
+                           dir, file);
+        if (r.status != 2 || !strstr(r.err, cases[i].expect) || !strstr(r.err, file))
+            fail_msg("'%s': exit %d, '%s' (expected 2, the file and '%s')", r.command, r.status,
+                     r.err, cases[i].expect);
+        run_free(&r);
+        r = run("ls %s", dir);
+        if (strcmp(r.out, "fifo\n"))
+            fail_msg("'%s' left '%s' in %s", file, r.out, dir);
+        run_free(&r);
+    }
+    remove_tree(dir);
+}
+
+/* Writes that fail part-way (a file size limit of 1 MB with SIGXFSZ ignored, as a full disk
+ * fails writes with ENOSPC) in the reduced scene's outputs: the 2 MB importance PLY of the knot
+ * came out cut short and the run said it succeeded. Now: exit 1, the file named, and neither
+ * OUTDIR nor its staging directory left. */
+static void test_reduce_cut_short_by_full_disk(void **state)
+{
+    char dir[64];
+    make_temp_dir(dir, "idmr-cli-full");
+    run_result r = run("trap '' XFSZ; prlimit --fsize=1000000 bin/idmr reduce "
+                       "data/cornell/scene.xml --target 0.1 -o %s/out " SIMULATION_PASS,
+                       dir);
+    if (r.status != 1 || !strstr(r.err, "cannot write") || !strstr(r.err, "knot.ply"))
+        fail_msg("'%s': exit %d, '%s' (expected 1 and 'cannot write' naming knot.ply)",
+                 r.command, r.status, r.err);
+    if (strstr(r.err, "reduced scene in"))
+        fail_msg("'%s' says it succeeded: '%s'", r.command, r.err);
+    run_free(&r);
+    r = run("ls -A %s", dir);
+    if (r.out[0])
+        fail_msg("a failed write left '%s' in %s", r.out, dir);
+    run_free(&r);
+    remove_tree(dir);
+}
+
+/* A target missed because of meshes the user keeps: the warning says where the vertices are
+ * (not "0 meshes cannot lose more"). */
+static void test_reduce_keep_miss_is_explained(void **state)
+{
+    char dir[64];
+    make_temp_dir(dir, "idmr-cli-keep");
+    run_result r = run("bin/idmr reduce data/cornell/scene.xml --method quadric --keep knot "
+                       "--target 0.1 -o %s/out",
+                       dir);
+    assert_succeeded(&r);
+    if (!strstr(r.err, "48000 of them in meshes kept whole by --keep ('knot')") ||
+        strstr(r.err, " 0 meshes"))
+        fail_msg("'%s': the warning does not say where the vertices are: '%s'", r.command,
+                 r.err);
+    run_free(&r);
+    remove_tree(dir);
+}
+
+/* What a command prints that cannot be written (stdout on a full disk: /dev/full) fails it. */
+static void test_full_stdout_fails(void **state)
+{
+    const char *commands[] = {"bin/idmr info --json --no-bvh data/cornell/scene.xml",
+                              "bin/idmr devices --json", "bin/idmr --help"};
+    for (size_t i = 0; i < sizeof commands / sizeof *commands; i++) {
+        run_result r = run("%s > /dev/full", commands[i]);
+        if (r.status != 1 || !strstr(r.err, "cannot write standard output"))
+            fail_msg("'%s': exit %d, '%s' (expected 1 and 'cannot write standard output')",
+                     r.command, r.status, r.err);
         run_free(&r);
     }
 }
@@ -759,6 +962,26 @@ static void test_render_images_beside_each_other(void **state)
     assert_non_null(strstr(r.out, "b.png"));
     assert_non_null(strstr(r.out, "a.png"));
     run_free(&r);
+}
+
+/* A render whose files cannot be written (a file size limit, as a full disk) fails, and leaves
+ * neither a file nor the directory it made. */
+static void test_render_cut_short_leaves_nothing(void **state)
+{
+    char dir[64];
+    make_temp_dir(dir, "idmr-cli-render-full");
+    run_result r = run("trap '' XFSZ; prlimit --fsize=3000 bin/idmr render data/cornell/scene.xml "
+                       "-o %s/images/x --iterations 1 " SHORT_RENDER,
+                       dir);
+    if (r.status != 1 || !strstr(r.err, "cannot write") || !strstr(r.err, "x.exr"))
+        fail_msg("'%s': exit %d, '%s' (expected 1 and 'cannot write' naming x.exr)", r.command,
+                 r.status, r.err);
+    run_free(&r);
+    r = run("ls -A %s", dir);
+    if (r.out[0])
+        fail_msg("a failed render left '%s' in %s", r.out, dir);
+    run_free(&r);
+    remove_tree(dir);
 }
 
 /* `-o DIR/reduced.exr` beside a directory DIR/reduced (as `make demo` puts the render beside
@@ -836,12 +1059,18 @@ int main(void)
         cmocka_unit_test(test_reduce_factor_tolerance_zero_runs_all),
         cmocka_unit_test(test_reduce_from_saved_simulation),
         cmocka_unit_test(test_reduce_refuses_unusable_simulation),
+        cmocka_unit_test(test_reduce_refuses_simulation_values),
+        cmocka_unit_test(test_reduce_refuses_special_simulation_files),
+        cmocka_unit_test(test_reduce_cut_short_by_full_disk),
+        cmocka_unit_test(test_reduce_keep_miss_is_explained),
+        cmocka_unit_test(test_full_stdout_fails),
         cmocka_unit_test(test_render_prints_summary),
         cmocka_unit_test(test_render_report_figures),
         cmocka_unit_test(test_render_geometry_memory_is_infos),
         cmocka_unit_test(test_render_time_limit_stops_after_first_iteration),
         cmocka_unit_test(test_render_images_beside_each_other),
         cmocka_unit_test(test_render_beside_a_directory_of_its_name),
+        cmocka_unit_test(test_render_cut_short_leaves_nothing),
         cmocka_unit_test(test_compare_image_with_itself),
         cmocka_unit_test(test_compare_other_seed),
         cmocka_unit_test(test_command_help),
@@ -850,6 +1079,11 @@ int main(void)
     for (size_t i = 0; i < sizeof REFUSALS / sizeof *REFUSALS; i++)
         refused[i] = (struct CMUnitTest){REFUSALS[i].command, test_refused, NULL, NULL,
                                          (void *)&REFUSALS[i]};
+    struct CMUnitTest mistakes[sizeof OPTION_MISTAKES / sizeof *OPTION_MISTAKES];
+    for (size_t i = 0; i < sizeof OPTION_MISTAKES / sizeof *OPTION_MISTAKES; i++)
+        mistakes[i] = (struct CMUnitTest){OPTION_MISTAKES[i].command, test_option_mistake, NULL,
+                                          NULL, (void *)&OPTION_MISTAKES[i]};
     int failed = cmocka_run_group_tests_name("cli", tests, NULL, remove_shared_runs);
+    failed += cmocka_run_group_tests_name("cli option mistakes", mistakes, NULL, NULL);
     return failed + cmocka_run_group_tests_name("cli refusals", refused, NULL, NULL);
 }

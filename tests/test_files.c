@@ -1,11 +1,15 @@
 /* test_files.c — output files and directories (host/core/files.h): atomic files, copies that
  * refuse to overwrite their source, and staged output directories, published as a unit or
- * merged into a non-empty directory on success, removed on failure and on an interrupt. */
+ * merged into a non-empty directory on success, removed on failure, on an interrupt, on an
+ * abort and on every exit() (the out-of-memory path among them); a second run staged into the
+ * same missing directory is refused rather than merged; every write checked (a file size
+ * limit makes writes fail part-way, as a full disk does). */
 #include <setjmp.h>
 #include <signal.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -165,6 +169,138 @@ static void test_copy_refuses_its_source(void **state)
     free(text);
 }
 
+
+/* A staged child that ends through exit() — xmalloc's out-of-memory path, or any other exit
+ * that is not a signal — or through abort(): the staging directory is removed all the same.
+ * `how`: 0 exit(), 1 xmalloc of more than the address space, 2 abort(). */
+static void stage_then_end(const char *name, int how)
+{
+    char final[128];
+    snprintf(final, sizeof final, "%s/%s", temp_dir, name);
+    pid_t child = fork();
+    assert_true(child >= 0);
+    if (child == 0) {
+        char staging[256];
+        signal(SIGABRT, SIG_DFL);
+        if (files_stage_begin(final, staging, sizeof staging) ||
+            files_make_directory(path_in(staging, "meshes")) ||
+            files_write_atomic(path_in(staging, "meshes/half.ply"), "h", 1))
+            _exit(3);
+        if (how == 1) {
+#if defined(__SANITIZE_ADDRESS__)
+            exit(IDMR_EXIT_FAILURE); /* ASan ends a failed allocation itself, without exit() */
+#else
+            volatile size_t huge = SIZE_MAX / 4;
+            free(xmalloc(huge));
+            _exit(4); /* not reached: xmalloc exits */
+#endif
+        }
+        if (how == 2)
+            abort();
+        exit(IDMR_EXIT_FAILURE);
+    }
+    int status;
+    assert_int_equal(waitpid(child, &status, 0), child);
+    if (how == 2)
+        assert_true(WIFSIGNALED(status) && WTERMSIG(status) == SIGABRT);
+    else
+        assert_true(WIFEXITED(status) && WEXITSTATUS(status) == IDMR_EXIT_FAILURE);
+    assert_false(exists(final));
+    if (has_entry_prefixed(name))
+        fail_msg("'%s' left a staging directory behind in %s", name, temp_dir);
+}
+
+static void test_stage_exit_leaves_nothing(void **state)
+{
+    stage_then_end("exited", 0);
+}
+
+static void test_stage_out_of_memory_leaves_nothing(void **state)
+{
+    stage_then_end("out-of-memory", 1);
+}
+
+static void test_stage_abort_leaves_nothing(void **state)
+{
+    stage_then_end("aborted", 2);
+}
+
+/* Two runs staged into the same missing directory (two `idmr reduce -o OUT` at once): the first
+ * to finish publishes; the second is refused with a message, and its files are not mixed in. */
+static void test_stage_second_run_is_refused(void **state)
+{
+    char final[128], first[256], second[256];
+    snprintf(final, sizeof final, "%s/raced", temp_dir);
+    assert_int_equal(files_stage_begin(final, first, sizeof first), 0);
+    assert_int_equal(files_write_atomic(path_in(first, "scene.xml"), "first", 5), 0);
+    int staged[2];
+    assert_int_equal(pipe(staged), 0);
+    pid_t child = fork(); /* the second run: one staging directory per process */
+    assert_true(child >= 0);
+    if (child == 0) {
+        if (files_stage_begin(final, second, sizeof second) ||
+            files_write_atomic(path_in(second, "scene.xml"), "second", 6) ||
+            files_write_atomic(path_in(second, "only-second.ply"), "s", 1) ||
+            write(staged[1], "s", 1) != 1)
+            _exit(3);
+        while (!exists(final)) /* the first publishes meanwhile */
+            usleep(1000);
+        error_clear();
+        int refused = files_stage_end(second, final, 1) == -1 &&
+                      strstr(error_message(), "another run") && strstr(error_message(), final);
+        if (!refused)
+            fprintf(stderr, "second run: '%s'\n", error_message());
+        _exit(refused ? 0 : 5);
+    }
+    char byte;
+    assert_int_equal(read(staged[0], &byte, 1), 1); /* both started while OUT was missing */
+    close(staged[0]);
+    close(staged[1]);
+    assert_int_equal(files_stage_end(first, final, 1), 0);
+    int status;
+    assert_int_equal(waitpid(child, &status, 0), child);
+    assert_true(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+    size_t size;
+    char *text = read_all(path_in(final, "scene.xml"), &size);
+    assert_int_equal(size, 5);
+    assert_memory_equal(text, "first", 5);
+    free(text);
+    assert_false(exists(path_in(final, "only-second.ply")));
+    assert_int_equal(has_entry_prefixed("raced.partial"), 0);
+}
+
+/* In a child whose files may be at most `limit` bytes, with SIGXFSZ ignored (a write past the
+ * limit fails with EFBIG part-way, as one on a full disk fails with ENOSPC): writes `size` bytes
+ * to `path` through files_write_atomic() and exits with its status, 0 or 1. */
+static int write_limited(const char *path, size_t size, rlim_t limit)
+{
+    pid_t child = fork();
+    assert_true(child >= 0);
+    if (child == 0) {
+        struct rlimit file_size = {limit, limit};
+        signal(SIGXFSZ, SIG_IGN);
+        if (setrlimit(RLIMIT_FSIZE, &file_size))
+            _exit(3);
+        char *bytes = calloc(size, 1);
+        _exit(files_write_atomic(path, bytes, size) == 0 ? 0 : 1);
+    }
+    int status;
+    assert_int_equal(waitpid(child, &status, 0), child);
+    assert_true(WIFEXITED(status));
+    return WEXITSTATUS(status);
+}
+
+/* A write cut short fails, and leaves neither the file nor its temporary name. */
+static void test_write_cut_short_fails(void **state)
+{
+    const char *path = path_in(temp_dir, "limited.bin");
+    assert_int_equal(write_limited(path, 200000, 65536), 1);
+    assert_false(exists(path));
+    assert_int_equal(has_entry_prefixed("limited"), 0);
+    assert_int_equal(write_limited(path, 1000, 65536), 0);
+    assert_true(exists(path));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -174,6 +310,11 @@ int main(void)
         cmocka_unit_test(test_stage_interrupt_leaves_nothing),
         cmocka_unit_test(test_stage_keeps_ignored_signals_ignored),
         cmocka_unit_test(test_copy_refuses_its_source),
+        cmocka_unit_test(test_stage_exit_leaves_nothing),
+        cmocka_unit_test(test_stage_out_of_memory_leaves_nothing),
+        cmocka_unit_test(test_stage_abort_leaves_nothing),
+        cmocka_unit_test(test_stage_second_run_is_refused),
+        cmocka_unit_test(test_write_cut_short_fails),
     };
     return cmocka_run_group_tests(tests, make_temp_dir, remove_temp_dir);
 }

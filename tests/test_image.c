@@ -2,15 +2,21 @@
  * back EXR, and image comparison (host/io/image_compare.c) against hand-computed RMSE, PSNR and
  * relative MSE, the paired reduction error through files, images with NaN or infinite values
  * refused; plus `idmr compare` and `idmr compare --paired` from the command line. (The paired
- * estimator's statistics are tested in test_compare.c.) */
+ * estimator's statistics are tested in test_compare.c.) Writes that fail part-way (a file size
+ * limit, as a full disk) fail the call and leave no file. */
 #include <math.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include "io/image.h"
 #include "io/image_compare.h"
 #include "test_support.h"
 
 static char dir[] = "/tmp/idmr-test-image-XXXXXX";
+static const char *self_path; /* this program, run again for the writes under a size limit */
 
 static int group_setup(void **state) { return mkdtemp(dir) ? 0 : -1; }
 
@@ -224,8 +230,62 @@ static void test_non_finite_images_are_refused(void **state)
     free(good);
 }
 
-int main(void)
+
+/* `test_image --write-limited PATH png|exr`, run by test_image_write_cut_short_fails in a
+ * process of its own (a fork of this one would inherit OpenEXR's thread pool half-held): with
+ * files of at most 2 KiB and SIGXFSZ ignored (a write past the limit fails with EFBIG, as one on
+ * a full disk fails with ENOSPC), writes a 64x64 image of noise (which no format compresses below
+ * the limit) as 8-bit (PNG) or float (EXR). Exit status: 0 written, 1 refused. */
+static int write_limited_main(const char *path, const char *format)
 {
+    struct rlimit file_size = {2048, 2048};
+    signal(SIGXFSZ, SIG_IGN);
+    if (setrlimit(RLIMIT_FSIZE, &file_size))
+        return 3;
+    int w = 64, h = 64;
+    float *rgb = flat(w, h, 0, 0, 0);
+    unsigned char *bytes = malloc(3 * (size_t)w * h);
+    unsigned int seed = 1;
+    for (int i = 0; i < 3 * w * h; i++) {
+        seed = seed * 1103515245u + 12345u;
+        bytes[i] = (unsigned char)(seed >> 16);
+        rgb[i] = (float)(seed >> 8) / 16777216.0f;
+    }
+    int status = strcmp(format, "exr") ? image_write_rgb8(path, w, h, bytes)
+                                       : image_write_rgb_float(path, w, h, rgb);
+    if (status)
+        fprintf(stderr, "(as expected) %s\n", error_message());
+    free(rgb);
+    free(bytes);
+    return status ? 1 : 0;
+}
+
+/* A PNG or an EXR cut short by a full disk is an error, and no file is left (OpenImageIO alone
+ * reported a 0-byte PNG as written). */
+static void test_image_write_cut_short_fails(void **state)
+{
+    const char *names[2] = {"limited.png", "limited.exr"};
+    for (int as_float = 0; as_float < 2; as_float++) {
+        char command[512];
+        snprintf(command, sizeof command, "%s --write-limited %s %s", self_path,
+                 path_of(names[as_float]), as_float ? "exr" : "png");
+        int status = system(command);
+        if (!WIFEXITED(status) || WEXITSTATUS(status) != 1)
+            fail_msg("%s: written (status %d), though no file may hold more than 2 KiB",
+                     names[as_float], status);
+        struct stat info;
+        assert_int_not_equal(stat(path_of(names[as_float]), &info), 0);
+        snprintf(command, sizeof command, "ls %s | grep -q tmp", dir);
+        if (system(command) == 0)
+            fail_msg("%s: a temporary file was left in %s", names[as_float], dir);
+    }
+}
+
+int main(int argc, char **argv)
+{
+    if (argc == 4 && !strcmp(argv[1], "--write-limited"))
+        return write_limited_main(argv[2], argv[3]);
+    self_path = argv[0];
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_exr_round_trip),
         cmocka_unit_test(test_compare_against_formulas),
@@ -234,6 +294,7 @@ int main(void)
         cmocka_unit_test(test_paired_through_files),
         cmocka_unit_test(test_paired_size_mismatch_names_both_files),
         cmocka_unit_test(test_non_finite_images_are_refused),
+        cmocka_unit_test(test_image_write_cut_short_fails),
     };
     return cmocka_run_group_tests_name("image", tests, group_setup, group_teardown);
 }

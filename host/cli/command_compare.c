@@ -95,7 +95,7 @@ int command_compare(int argc, char **argv)
     double diff_max = 0;
     unsigned int tile = IMAGE_PAIRED_TILE;
     int json = 0, paired = 0, tile_given = 0, c;
-    while ((c = getopt_long(argc, argv, "", options, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":", options, NULL)) != -1) {
         if (c == 'd') {
             diff = optarg;
         } else if (c == 'm') {
@@ -110,7 +110,7 @@ int command_compare(int argc, char **argv)
         } else if (c == 'p') {
             paired = 1;
         } else {
-            return usage_error("compare: unknown option %s", argv[optind - 1]);
+            return option_error("compare", c, argv, options);
         }
     }
     if (paired) {

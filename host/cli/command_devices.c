@@ -46,11 +46,11 @@ int command_devices(int argc, char **argv)
     int json = 0;
     static const struct option options[] = {{"json", no_argument, NULL, 'j'}, {0, 0, 0, 0}};
     int c;
-    while ((c = getopt_long(argc, argv, "", options, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":", options, NULL)) != -1) {
         if (c == 'j')
             json = 1;
         else
-            return usage_error("devices: unknown option %s", argv[optind - 1]);
+            return option_error("devices", c, argv, options);
     }
     device_info *list;
     size_t count;

@@ -169,13 +169,13 @@ int command_info(int argc, char **argv)
     static const struct option options[] = {
         {"json", no_argument, NULL, 'j'}, {"no-bvh", no_argument, NULL, 'n'}, {0, 0, 0, 0}};
     int c;
-    while ((c = getopt_long(argc, argv, "", options, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":", options, NULL)) != -1) {
         if (c == 'j')
             json = 1;
         else if (c == 'n')
             build_bvh = 0;
         else
-            return usage_error("info: unknown option %s", argv[optind - 1]);
+            return option_error("info", c, argv, options);
     }
     int code = expect_one_scene("info", argc);
     if (code)

@@ -47,7 +47,7 @@ int command_kernels(int argc, char **argv)
                                           {0, 0, 0, 0}};
     int device_index = -1, quiet = 0, c;
     unsigned int index;
-    while ((c = getopt_long(argc, argv, "", table, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":", table, NULL)) != -1) {
         if (c == OPT_DEVICE) {
             if (parse_unsigned("--device", optarg, 0, 1000, &index))
                 return fail();
@@ -55,7 +55,7 @@ int command_kernels(int argc, char **argv)
         } else if (c == OPT_QUIET) {
             quiet = 1;
         } else {
-            return usage_error("kernels: unknown option %s", argv[optind - 1]);
+            return option_error("kernels", c, argv, table);
         }
     }
     if (optind != argc)

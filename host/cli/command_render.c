@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <string.h>
 #include <strings.h>
+#include <unistd.h>
 
 #include "cli/commands.h"
 #include "cli/options.h"
@@ -69,19 +70,42 @@ static enum option_parse parse_option(int c, void *context, pass_arguments *argu
     return parse_sppm_option(c, &job->options.sppm, &arguments->device_index);
 }
 
+/* The three files of the render, each written whole or not at all; where one cannot be written
+ * (a full disk), those this run wrote before it are removed, and the image's directory too if
+ * this run made it: a failed render leaves no part of itself. 0, or -1 with the error set. */
+static int write_outputs(render_cli_job *job, const scene *s, const device *d)
+{
+    const render_cli_paths *paths = &job->paths;
+    int made_directory = paths->directory[0] && access(paths->directory, F_OK) != 0;
+    const char *written[3];
+    size_t count = 0;
+    int status = paths->directory[0] && files_make_directory(paths->directory);
+    if (!status && !(status = render_write_images(&job->result, paths->exr, NULL, 0)))
+        written[count++] = paths->exr;
+    if (!status && !(status = render_write_images(&job->result, NULL, paths->png, job->exposure)))
+        written[count++] = paths->png;
+    if (!status) {
+        cJSON *report = render_report_json(s, d, &job->options, &job->result);
+        status = json_write(report, paths->json);
+        cJSON_Delete(report);
+    }
+    if (status) {
+        while (count > 0)
+            unlink(written[--count]);
+        if (made_directory)
+            rmdir(paths->directory);
+    }
+    return status;
+}
+
 /* The render and its outputs: this command's calls into passes/. The image's directory is made
  * only once the render is done, so an interrupted render leaves no empty one behind. */
 static int run_pass(device *d, const scene *s, const bvh *b, void *context)
 {
     render_cli_job *job = context;
-    if (render_run(d, s, b, &job->options, &job->result) ||
-        (job->paths.directory[0] && files_make_directory(job->paths.directory)) ||
-        render_write_images(&job->result, job->paths.exr, job->paths.png, job->exposure))
+    if (render_run(d, s, b, &job->options, &job->result))
         return -1;
-    cJSON *report = render_report_json(s, d, &job->options, &job->result);
-    int status = json_write(report, job->paths.json);
-    cJSON_Delete(report);
-    return status;
+    return write_outputs(job, s, d);
 }
 
 static void print_summary(const render_cli_job *job)

@@ -11,6 +11,7 @@
  * Each command lives in command_<name>.c (commands.h); what they share of their options, in
  * options.c. Exit codes (core/error.h): 0 success, 1 runtime failure, 2 bad input or usage.
  * Every failure prints one "idmr: ..." message naming the file, element or call that failed. */
+#include <errno.h>
 #include <getopt.h>
 #include <stdio.h>
 #include <string.h>
@@ -39,7 +40,8 @@ static int asks_for_help(int argc, char **argv)
     return 0;
 }
 
-int main(int argc, char **argv)
+/* The global options, then the command; its exit code. */
+static int dispatch(int argc, char **argv)
 {
     int first = 1;
     for (; first < argc && argv[first][0] == '-'; first++) {
@@ -73,6 +75,7 @@ int main(int argc, char **argv)
         return 0;
     }
     optind = 1;
+    opterr = 0; /* option_error() says what is wrong, once */
     for (size_t i = 0; i < sizeof COMMANDS / sizeof *COMMANDS; i++) {
         if (strcmp(command, COMMANDS[i].name))
             continue;
@@ -81,4 +84,17 @@ int main(int argc, char **argv)
         return COMMANDS[i].run(argc - first, argv + first);
     }
     return usage_error("unknown command '%s'", command);
+}
+
+/* What the command printed on stdout reaches it, or the run fails: `info --json > FILE` on a
+ * full disk must not end with exit 0 and half a JSON object. */
+int main(int argc, char **argv)
+{
+    int code = dispatch(argc, argv);
+    if (fflush(stdout) != 0 || ferror(stdout)) {
+        fprintf(stderr, "idmr: cannot write standard output: %s\n",
+                errno ? strerror(errno) : "write error");
+        return code ? code : IDMR_EXIT_FAILURE;
+    }
+    return code;
 }

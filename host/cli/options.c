@@ -150,6 +150,55 @@ enum option_parse parse_importance_option(int c, importance_options *o, int *dev
     }
 }
 
+/* The long option of `table` that `name` (without "--", up to a '=') names exactly, or else the
+ * only one it abbreviates; NULL when none, or several (*ambiguous set). */
+static const struct option *long_option_named(const struct option *table, const char *name,
+                                              int *ambiguous)
+{
+    size_t length = strcspn(name, "=");
+    const struct option *found = NULL;
+    int matches = 0;
+    *ambiguous = 0;
+    for (const struct option *o = table; o->name; o++) {
+        if (strncmp(o->name, name, length))
+            continue;
+        if (strlen(o->name) == length)
+            return o;
+        found = o, matches++;
+    }
+    *ambiguous = matches > 1;
+    return matches == 1 ? found : NULL;
+}
+
+int option_error(const char *command, int c, char **argv, const struct option *table)
+{
+    const char *arg = argv[optind - 1];
+    int is_long = !strncmp(arg, "--", 2) && arg[2];
+    if (c == ':')
+        return usage_error("%s: %s needs a value", command, arg);
+    if (!is_long) {
+        if (optopt && optopt < 256)
+            return usage_error("%s: unknown option -%c", command, optopt);
+        return usage_error("%s: unknown option %s", command, arg);
+    }
+    int ambiguous;
+    const struct option *o = long_option_named(table, arg + 2, &ambiguous);
+    int length = (int)strcspn(arg, "=");
+    if (o && o->has_arg == no_argument && strchr(arg, '='))
+        return usage_error("%s: --%s takes no value (given '%s')", command, o->name,
+                           strchr(arg, '=') + 1);
+    if (ambiguous) {
+        char names[512] = "";
+        size_t used = 0;
+        for (const struct option *each = table; each->name && used < sizeof names; each++)
+            if (!strncmp(each->name, arg + 2, (size_t)length - 2))
+                used += (size_t)snprintf(names + used, sizeof names - used, "%s--%s",
+                                         used ? ", " : "", each->name);
+        return usage_error("%s: %.*s is ambiguous (%s)", command, length, arg, names);
+    }
+    return usage_error("%s: unknown option %.*s", command, length, arg);
+}
+
 int expect_one_scene(const char *command, int argc)
 {
     if (optind != argc - 1)
@@ -163,7 +212,7 @@ int parse_pass_arguments(int argc, char **argv, const struct option *table,
     arguments->output = NULL;
     arguments->device_index = -1;
     int c;
-    while ((c = getopt_long(argc, argv, "o:", table, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":o:", table, NULL)) != -1) {
         if (c == 'o') {
             arguments->output = optarg;
             continue;
@@ -179,7 +228,7 @@ int parse_pass_arguments(int argc, char **argv, const struct option *table,
                                : c == OPT_SHADOW_WEIGHT ? "shadow-weight"
                                                         : "tolerance");
         case OPTION_UNKNOWN:
-            return usage_error("%s: unknown option %s", arguments->command, argv[optind - 1]);
+            return option_error(arguments->command, c, argv, table);
         }
     }
     int code = expect_one_scene(arguments->command, argc);

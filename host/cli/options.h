@@ -118,12 +118,19 @@ typedef enum option_parse (*pass_option_parser)(int c, void *context,
                                                 pass_arguments *arguments);
 
 /* Walks argv with getopt_long over `table`: -o into arguments->output, every other option to
- * parse(c, context, arguments); an option it does not know is "<command>: unknown option X",
+ * parse(c, context, arguments); one getopt or the parser does not take is option_error()'s,
  * one it calls OPTION_IMPORTANCE_ONLY "<command>: X is an importance pass option"; then the
  * one SCENE argument. Stops at the first failure; returns 0, or the exit code of the failure
  * it printed. */
 int parse_pass_arguments(int argc, char **argv, const struct option *table,
                          pass_option_parser parse, void *context, pass_arguments *arguments);
+
+/* The usage error for what getopt_long() returned as `c` when it took no option of `table`
+ * (the option strings start with ':', and main() sets opterr to 0, so that getopt prints
+ * nothing of its own): ':' an option without its value ("<command>: --target needs a value"),
+ * '?' an unknown option, an ambiguous abbreviation (with the options it may mean), or a value
+ * given to an option that takes none. Returns IDMR_EXIT_INPUT. */
+int option_error(const char *command, int c, char **argv, const struct option *table);
 
 /* The "<command>: expected one SCENE argument" check shared by the commands that load a
  * scene: 0, or the usage error's exit code. */

@@ -28,17 +28,26 @@ int files_copy_atomic(const char *source, const char *path);
 
 /* An output directory written as a unit. files_stage_begin() makes a staging directory beside
  * `final` (its parent created if missing), named final.partial-XXXXXX, into `staging` (size
- * bytes), and arranges for it to be removed if the process is interrupted (SIGINT, SIGTERM,
- * SIGHUP) before files_stage_end(). The run writes every file there. files_stage_end() with
- * success publishes it: renamed to `final` when final is missing or empty (one step: a reader
- * sees all of it or none), else (a non-empty final, written into with --force) each file moved
- * in by rename(), replacing one of the same name; without success it removes the staging
- * directory. Either way nothing half-written is left. 0, or -1 with the error set. */
+ * bytes), and arranges for it to be removed if the process ends before files_stage_end():
+ * through exit() (the out-of-memory path included) or a signal (SIGINT, SIGTERM, SIGHUP,
+ * SIGQUIT, SIGABRT, SIGPIPE, SIGXFSZ; one the process was started ignoring stays ignored). The
+ * run writes every file there. files_stage_end() with success publishes it: renamed to `final`
+ * when final is missing or empty (one step: a reader sees all of it or none); where final held
+ * something when the staging began (written into with --force), each file is moved in by
+ * rename(), replacing one of the same name; where final was missing or empty then but holds
+ * something now (another run on the same output published first), nothing is moved and the
+ * error says so. Without success it removes the staging directory. Either way nothing
+ * half-written is left. 0, or -1 with the error set. */
 int files_stage_begin(const char *final, char *staging, size_t size);
 int files_stage_end(const char *staging, const char *final, int success);
 
-/* Removes a file or a directory tree (not following links). 0, or -1 with errno set. */
+/* Removes a file or a directory tree (not following links), with system calls only (safe in a
+ * signal handler). 0, or -1 with errno set. */
 int files_remove_tree(const char *path);
+
+/* Whether `dir` is a directory that holds an entry (one that cannot be opened counts as
+ * empty). */
+int files_directory_has_entries(const char *dir);
 
 /* Creates `dir` (and parents) if missing; an existing non-directory is an error. Returns 0, or
  * -1 with the error set naming the directory. */

@@ -1,5 +1,5 @@
-// gltf.cc — glTF 2.0 scenes in and out through Assimp (the mapping is in gltf.h).
-#include <assimp/Exporter.hpp>
+// gltf.cc — glTF 2.0 scenes read through Assimp (the mapping is in gltf.h; the reduced scene is
+// written by gltf_write.c, from the file's own JSON).
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -9,14 +9,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <memory>
 #include <string>
 #include <strings.h>
 #include <vector>
 
 extern "C" {
 #include "core/error.h"
-#include "core/files.h"
 #include "io/gltf.h"
 #include "io/image.h"
 #include "io/mitsuba_paths.h"
@@ -25,7 +23,8 @@ extern "C" {
 
 namespace {
 
-// The same import both ways, so a mesh instance has the same number when written.
+// A primitive per aiMesh, triangulated; the instances' numbering (collect_instances) is the one
+// gltf_write.c's walk() makes again from the file's JSON when it writes the reduced meshes.
 const unsigned IMPORT_FLAGS =
     aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure;
 
@@ -46,7 +45,8 @@ bool is_triangle_mesh(const aiMesh *mesh)
            !(mesh->mPrimitiveTypes & (aiPrimitiveType_POINT | aiPrimitiveType_LINE));
 }
 
-// Depth-first from the root, the node's meshes in order: the instances' numbering.
+// Depth-first from the root, the node's meshes in order: the instances' numbering (gltf_write.c
+// walks the JSON the same way: keep the two together).
 void collect_instances(const aiScene *scene, aiNode *node, const aiMatrix4x4 &parent,
                        std::vector<Instance> &out)
 {
@@ -444,162 +444,6 @@ void warn_unsimulated(const Loader &ld)
         }
 }
 
-// ---- writing ----
-
-// A new Assimp mesh for `instance` holding `reduced` (world space) in the node's space.
-aiMesh *local_mesh(const aiMesh *original, const aiMatrix4x4 &world, const mesh_data *reduced)
-{
-    aiMatrix4x4 to_local = world;
-    to_local.Inverse();
-    aiMatrix3x3 normals = aiMatrix3x3(world).Transpose(); // (world^-T)^-1
-    bool mirrored = determinant3(world) < 0;
-    aiMesh *mesh = new aiMesh();
-    mesh->mName = original->mName;
-    mesh->mMaterialIndex = original->mMaterialIndex;
-    mesh->mPrimitiveTypes = aiPrimitiveType_TRIANGLE;
-    mesh->mNumVertices = reduced->vertex_count;
-    mesh->mVertices = new aiVector3D[reduced->vertex_count];
-    for (uint32_t v = 0; v < reduced->vertex_count; v++) {
-        const float *p = &reduced->positions[3 * (size_t)v];
-        mesh->mVertices[v] = to_local * aiVector3D(p[0], p[1], p[2]);
-    }
-    if (reduced->normals) {
-        mesh->mNormals = new aiVector3D[reduced->vertex_count];
-        for (uint32_t v = 0; v < reduced->vertex_count; v++) {
-            const float *n = &reduced->normals[3 * (size_t)v];
-            mesh->mNormals[v] = unit(normals * aiVector3D(n[0], n[1], n[2]));
-        }
-    }
-    if (reduced->texcoords) {
-        mesh->mTextureCoords[0] = new aiVector3D[reduced->vertex_count];
-        mesh->mNumUVComponents[0] = 2;
-        for (uint32_t v = 0; v < reduced->vertex_count; v++) {
-            const float *uv = &reduced->texcoords[2 * (size_t)v];
-            mesh->mTextureCoords[0][v] = aiVector3D(uv[0], 1.0f - uv[1], 0);
-        }
-    }
-    mesh->mNumFaces = reduced->triangle_count;
-    mesh->mFaces = new aiFace[reduced->triangle_count];
-    for (uint32_t t = 0; t < reduced->triangle_count; t++) {
-        const uint32_t *ix = &reduced->indices[3 * (size_t)t];
-        aiFace &face = mesh->mFaces[t];
-        face.mNumIndices = 3;
-        face.mIndices = new unsigned[3]{ix[0], ix[mirrored ? 2 : 1], ix[mirrored ? 1 : 2]};
-    }
-    return mesh;
-}
-
-// Drops the meshes no node uses and renumbers the nodes' references.
-void drop_unused_meshes(aiScene *scene)
-{
-    std::vector<bool> used(scene->mNumMeshes, false);
-    std::vector<aiNode *> stack{scene->mRootNode};
-    while (!stack.empty()) {
-        aiNode *node = stack.back();
-        stack.pop_back();
-        for (unsigned k = 0; k < node->mNumMeshes; k++)
-            used[node->mMeshes[k]] = true;
-        for (unsigned c = 0; c < node->mNumChildren; c++)
-            stack.push_back(node->mChildren[c]);
-    }
-    std::vector<unsigned> renumber(scene->mNumMeshes);
-    unsigned kept = 0;
-    for (unsigned i = 0; i < scene->mNumMeshes; i++) {
-        if (used[i]) {
-            renumber[i] = kept;
-            scene->mMeshes[kept++] = scene->mMeshes[i];
-        } else {
-            delete scene->mMeshes[i];
-        }
-    }
-    scene->mNumMeshes = kept;
-    stack.push_back(scene->mRootNode);
-    while (!stack.empty()) {
-        aiNode *node = stack.back();
-        stack.pop_back();
-        for (unsigned k = 0; k < node->mNumMeshes; k++)
-            node->mMeshes[k] = renumber[node->mMeshes[k]];
-        for (unsigned c = 0; c < node->mNumChildren; c++)
-            stack.push_back(node->mChildren[c]);
-    }
-}
-
-typedef std::vector<std::pair<std::string, std::string>> Copies; // source, name in outdir
-
-// Whether a copy is already named `name` (mitsuba_path_unique's test).
-int copy_name_taken(const char *name, const void *context)
-{
-    const Copies &copies = *static_cast<const Copies *>(context);
-    return std::any_of(copies.begin(), copies.end(),
-                       [&](const auto &c) { return c.second == name; });
-}
-
-// "assets/<base name>" for a copy of `source`, unique among `copies`.
-std::string copy_name(const std::string &source, const Copies &copies)
-{
-    char *unique = mitsuba_path_unique("assets", source.c_str(), copy_name_taken, &copies);
-    std::string name(unique);
-    free(unique);
-    return name;
-}
-
-// The texture paths, which the input names from its own directory: relative to outdir
-// (absolute where none exists), or, with bundle, copies under outdir/assets/ (one per file, a
-// base name made unique with -2, -3, ...). Returns 0, or -1 with the error set.
-int rewrite_texture_paths(aiScene *scene, const char *input_dir, const char *outdir, int bundle)
-{
-    char *out_real = mitsuba_path_real(outdir);
-    Copies copies;
-    int status = 0;
-    for (unsigned i = 0; i < scene->mNumMaterials && !status; i++) {
-        aiMaterial *m = scene->mMaterials[i];
-        for (int type = aiTextureType_NONE; type <= AI_TEXTURE_TYPE_MAX && !status; type++)
-            for (unsigned k = 0; k < m->GetTextureCount((aiTextureType)type) && !status; k++) {
-                aiString file;
-                if (m->GetTexture((aiTextureType)type, k, &file) != AI_SUCCESS ||
-                    file.length == 0 || file.data[0] == '*' ||
-                    scene->GetEmbeddedTexture(file.C_Str()))
-                    continue;
-                char *joined = mitsuba_path_join(input_dir, file.C_Str());
-                char *real = mitsuba_path_real(joined);
-                std::string source = real ? real : joined, name;
-                free(real);
-                free(joined);
-                if (bundle) {
-                    auto found = std::find_if(copies.begin(), copies.end(),
-                                              [&](const auto &c) { return c.first == source; });
-                    if (found == copies.end()) {
-                        name = copy_name(source, copies);
-                        std::string target = std::string(outdir) + "/" + name;
-                        status = files_make_directory((std::string(outdir) + "/assets").c_str());
-                        if (!status)
-                            status = files_copy_atomic(source.c_str(), target.c_str());
-                        copies.emplace_back(source, name);
-                    } else {
-                        name = found->second;
-                    }
-                } else if (file.data[0] == '/') {
-                    continue;
-                } else {
-                    char *relative =
-                        out_real ? mitsuba_path_relative(out_real, source.c_str()) : nullptr;
-                    name = relative ? relative : source;
-                    free(relative);
-                }
-                aiString rewritten(name);
-                m->AddProperty(&rewritten, AI_MATKEY_TEXTURE(type, k));
-            }
-    }
-    free(out_real);
-    return status;
-}
-
-bool has_dropped_channels(const aiMesh *mesh)
-{
-    return mesh->HasTangentsAndBitangents() || mesh->GetNumColorChannels() > 0 ||
-           mesh->GetNumUVChannels() > 1;
-}
-
 } // namespace
 
 extern "C" int gltf_is_scene_file(const char *path)
@@ -650,65 +494,4 @@ extern "C" const char *gltf_output_name(const char *scene_file)
 {
     const char *dot = strrchr(scene_file, '.');
     return dot && strcasecmp(dot, ".glb") == 0 ? "scene.glb" : "scene.gltf";
-}
-
-extern "C" int gltf_write_reduced(const char *scene_file, const char *outdir,
-                                  const gltf_replacement *replacements, size_t count, int bundle)
-{
-    try {
-        Assimp::Importer importer;
-        if (!import(importer, scene_file))
-            return -1;
-        std::unique_ptr<aiScene> ai(importer.GetOrphanedScene());
-        std::vector<Instance> instances;
-        collect_instances(ai.get(), ai->mRootNode, aiMatrix4x4(), instances);
-        std::vector<aiMesh *> added;
-        std::vector<bool> replaced(instances.size(), false);
-        for (size_t r = 0; r < count; r++) {
-            int number = replacements[r].instance;
-            if (number < 0 || (size_t)number >= instances.size() || replaced[number])
-                return error_set(IDMR_EXIT_INPUT,
-                                 "%s: mesh instance %d is not in the file, or replaced twice "
-                                 "(the file changed since it was read?)",
-                                 scene_file, number);
-            replaced[number] = true;
-        }
-        bool dropped = false;
-        for (size_t r = 0; r < count; r++) {
-            Instance &instance = instances[replacements[r].instance];
-            const aiMesh *original = ai->mMeshes[instance.node->mMeshes[instance.slot]];
-            dropped = dropped || has_dropped_channels(original);
-            added.push_back(local_mesh(original, instance.world, replacements[r].mesh));
-            instance.node->mMeshes[instance.slot] = ai->mNumMeshes + (unsigned)added.size() - 1;
-        }
-        aiMesh **meshes = new aiMesh *[ai->mNumMeshes + added.size()];
-        std::copy(ai->mMeshes, ai->mMeshes + ai->mNumMeshes, meshes);
-        std::copy(added.begin(), added.end(), meshes + ai->mNumMeshes);
-        delete[] ai->mMeshes;
-        ai->mMeshes = meshes;
-        ai->mNumMeshes += (unsigned)added.size();
-        drop_unused_meshes(ai.get());
-        if (dropped)
-            warn("%s: tangents, vertex colours and second uv sets of reduced meshes are not "
-                 "written (they no longer match the vertices)",
-                 scene_file);
-        char *input_dir = mitsuba_path_directory(scene_file);
-        char *absolute_dir = mitsuba_path_real(*input_dir ? input_dir : ".");
-        int status = rewrite_texture_paths(ai.get(), absolute_dir ? absolute_dir : input_dir,
-                                           outdir, bundle);
-        free(absolute_dir);
-        free(input_dir);
-        if (status)
-            return -1;
-        const char *output = gltf_output_name(scene_file);
-        bool binary = strcmp(output, "scene.glb") == 0;
-        std::string name = std::string(outdir) + "/" + output;
-        Assimp::Exporter exporter;
-        if (exporter.Export(ai.get(), binary ? "glb2" : "gltf2", name) != AI_SUCCESS)
-            return error_set(IDMR_EXIT_INPUT, "%s: Assimp could not write it: %s", name.c_str(),
-                             exporter.GetErrorString());
-        return 0;
-    } catch (const std::exception &e) {
-        return error_set(IDMR_EXIT_INPUT, "%s: Assimp failed: %s", scene_file, e.what());
-    }
 }

@@ -31,18 +31,21 @@
  *                                     from +z with a 45° yfov (warned)
  * Orthographic cameras, skins, morph targets and animations are not simulated (warned).
  *
- * Writing (gltf_write_reduced): the input is imported again the same way, each replaced
- * instance gets a mesh of its own holding the reduced triangles in the node's local space
- * (normals and uv with them; other vertex channels such as tangents and colours dropped, with
- * a warning, since they no longer match), meshes no node uses any more are dropped, relative
- * texture paths are rewritten relative to outdir (absolute where none exists; with bundle,
- * copies under outdir/assets/), and Assimp
- * exports outdir/scene.gltf (+ scene.bin) or outdir/scene.glb, as the input was (its glTF
- * exporter always welds vertices equal in position and attributes, so a mesh whose reduction
- * left two such copies is written with one: the textured box at --target 0.5, 14 of the 15
- * vertices the report counts). outdir is
- * the staging directory that `idmr reduce` publishes whole (reduce_stages.h), so no reader
- * sees a half-written file. */
+ * Writing (gltf_write_reduced, gltf_write.c): the input's own JSON document is rewritten
+ * (cJSON), not exported by Assimp: every node, camera, light, material, texture, sampler,
+ * animation, extension and extras comes out as it went in. Only the replaced instances change:
+ * each becomes its primitive's POSITION (with min and max), NORMAL and TEXCOORD_0 (where the
+ * reduced mesh has them) and indices, in its node's local space, every vertex the reduction
+ * kept written (nothing welded); other vertex channels such as tangents and colours, and
+ * morph targets, are dropped with a warning, since they no longer match. A mesh that nodes
+ * share stays shared by the nodes left alone; a node whose instances were replaced writes into
+ * a copy of its own unless every node naming the mesh was replaced. Data no longer referenced
+ * is dropped and the rest written into outdir/scene.bin beside outdir/scene.gltf, or the BIN
+ * chunk of outdir/scene.glb, as the input was (with an extension whose references are unknown,
+ * nothing is renumbered: the input's buffers stay and the new data is added). Relative texture
+ * paths are rewritten relative to outdir (absolute where none exists; with bundle, copies
+ * under outdir/assets/). outdir is the staging directory that `idmr reduce` publishes whole
+ * (reduce_stages.h), so no reader sees a half-written file. */
 #ifndef IDMR_GLTF_H
 #define IDMR_GLTF_H
 
@@ -70,9 +73,10 @@ typedef struct gltf_replacement {
 /* The reduced scene's name in outdir: "scene.glb" for a .glb input, else "scene.gltf". */
 const char *gltf_output_name(const char *scene_file);
 
-/* Writes outdir/gltf_output_name(scene_file) (see above); with `bundle`, every texture file is
- * copied to outdir/assets/ and named there. Returns 0, or -1 with the error set naming the
- * file. */
+/* Writes outdir/gltf_output_name(scene_file) (and outdir/scene.bin for a .gltf; see above);
+ * with `bundle`, every texture file is copied to outdir/assets/ and named there. Returns 0, or
+ * -1 with the error set naming the file (and the JSON path or byte offset where the input is at
+ * fault). */
 int gltf_write_reduced(const char *scene_file, const char *outdir,
                        const gltf_replacement *replacements, size_t count, int bundle);
 

@@ -1,12 +1,14 @@
 // image.cc — the OpenImageIO bridge behind image.h.
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
 #include <string>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <vector>
 
@@ -90,11 +92,32 @@ extern "C" void image_false_colour(float t, unsigned char rgb[3])
     }
 }
 
-// Writes through a temporary file that keeps the extension (the format is chosen by it).
+// Encodes the image in memory (the format chosen by the extension of `path`), then writes the
+// bytes through files_write_atomic(), which checks every write and the close: OpenImageIO's own
+// file output lets a failed write pass (on a full disk a 0-byte PNG came out as written). A
+// format whose writer takes no IOProxy goes to a temporary file of its extension instead, and
+// is accepted only where the file is not empty.
 static int write_image(const char *path, int width, int height, OIIO::TypeDesc file_type,
                        OIIO::TypeDesc pixel_type, const void *pixels)
 {
     std::string target(path);
+    OIIO::ImageSpec spec(width, height, 3, file_type);
+    std::vector<unsigned char> bytes;
+    OIIO::Filesystem::IOVecOutput memory(bytes);
+    auto out = OIIO::ImageOutput::create(target, &memory);
+    if (!out)
+        return error_set(IDMR_EXIT_FAILURE, "cannot write image '%s': %s", path,
+                         OIIO::geterror().c_str());
+    if (out->supports("ioproxy")) {
+        bool ok = out->open(target, spec) && out->write_image(pixel_type, pixels) && out->close();
+        std::string reason = out->geterror();
+        out.reset();
+        if (!ok)
+            return error_set(IDMR_EXIT_FAILURE, "cannot write image '%s': %s", path,
+                             reason.c_str());
+        return files_write_atomic(path, bytes.data(), bytes.size());
+    }
+    out.reset();
     size_t dot = target.find_last_of('.');
     std::string extension = dot == std::string::npos ? "" : target.substr(dot);
     std::vector<char> name(target.size() + extension.size() + 32);
@@ -102,16 +125,17 @@ static int write_image(const char *path, int width, int height, OIIO::TypeDesc f
     if (fd < 0)
         return -1;
     close(fd);
-    auto out = OIIO::ImageOutput::create(name.data());
+    out = OIIO::ImageOutput::create(name.data());
     if (!out) {
         unlink(name.data());
         return error_set(IDMR_EXIT_FAILURE, "cannot write image '%s': %s", path,
                          OIIO::geterror().c_str());
     }
-    OIIO::ImageSpec spec(width, height, 3, file_type);
     bool ok = out->open(name.data(), spec) && out->write_image(pixel_type, pixels) && out->close();
-    std::string reason = out->geterror();
+    std::string reason = ok ? "the file came out empty" : out->geterror();
     out.reset();
+    struct stat written;
+    ok = ok && stat(name.data(), &written) == 0 && written.st_size > 0;
     if (!ok || rename(name.data(), path) != 0) {
         unlink(name.data());
         return error_set(IDMR_EXIT_FAILURE, "cannot write image '%s': %s", path,

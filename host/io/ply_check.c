@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/types.h>
+#include <unistd.h>
 
 #include "core/error.h"
 #include "io/mesh_io.h"
@@ -471,4 +472,17 @@ int ply_read(const char *path, mesh_data *out)
     r.path = path;
     r.mesh = out;
     return read_file(&r);
+}
+
+int ply_check_written(const char *path)
+{
+    if (ply_check(path) == 0)
+        return 0;
+    char reason[1024];
+    snprintf(reason, sizeof reason, "%s", error_message());
+    unlink(path);
+    return error_set(IDMR_EXIT_FAILURE,
+                     "cannot write mesh '%s': the file came out incomplete (is the disk full, "
+                     "or a file size limit reached?): %s",
+                     path, reason);
 }

@@ -38,4 +38,10 @@ int ply_check(const char *path);
  * and z, is an error. Triangles that repeat a vertex are kept (mesh_io_read() drops them). */
 int ply_read(const char *path, mesh_data *out);
 
+/* The same check on a PLY idmr has just written (mesh_io_write_ply): a second line behind the
+ * writer's own checks: a file cut short by a full disk or a file size limit never passes as
+ * written. A file that fails the check is removed. 0, or -1 with the error set
+ * (IDMR_EXIT_FAILURE: "cannot write mesh", naming the file and what is wrong with it). */
+int ply_check_written(const char *path);
+
 #endif

@@ -160,6 +160,29 @@ double xform_determinant3(const xform *t)
            m[2] * (m[4] * m[9] - m[5] * m[8]);
 }
 
+int xform_invert_affine(const xform *t, xform *out)
+{
+    const double *m = t->m;
+    double det = xform_determinant3(t);
+    if (!(det != 0.0 && isfinite(det)))
+        return -1;
+    /* the inverse of the linear part: its cofactors, transposed, over the determinant */
+    double inverse[9] = {
+        m[5] * m[10] - m[6] * m[9], m[2] * m[9] - m[1] * m[10], m[1] * m[6] - m[2] * m[5],
+        m[6] * m[8] - m[4] * m[10], m[0] * m[10] - m[2] * m[8], m[2] * m[4] - m[0] * m[6],
+        m[4] * m[9] - m[5] * m[8],  m[1] * m[8] - m[0] * m[9],  m[0] * m[5] - m[1] * m[4]};
+    *out = xform_identity();
+    for (int row = 0; row < 3; row++) {
+        double translation = 0.0;
+        for (int col = 0; col < 3; col++) {
+            out->m[4 * row + col] = inverse[3 * row + col] / det;
+            translation -= out->m[4 * row + col] * m[4 * col + 3];
+        }
+        out->m[4 * row + 3] = translation;
+    }
+    return 0;
+}
+
 void xform_to_float(const xform *t, float out[16])
 {
     for (int i = 0; i < 16; i++)

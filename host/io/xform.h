@@ -46,6 +46,10 @@ void xform_apply_normals(const xform *t, float *xyz, unsigned long count);
 /* Determinant of the linear 3x3 part (negative: the transform mirrors). */
 double xform_determinant3(const xform *t);
 
+/* The inverse of an affine transform (the last row taken as 0 0 0 1) into *out: 0, or -1 when
+ * its linear part is singular (or not finite). */
+int xform_invert_affine(const xform *t, xform *out);
+
 void xform_to_float(const xform *t, float out[16]);
 
 /* Small 3-vector helpers shared by the loader. */

@@ -2,20 +2,26 @@
 #include "passes/importance_file.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "core/error.h"
 #include "core/files.h"
 
-static const char MAGIC[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '3'};
+static const char MAGIC[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '4'};
 /* Version 1's light sums left out the light seen through specular surfaces (importance.h). */
 static const char MAGIC_VERSION_1[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '1'};
 /* Version 2's weighted it IMPORTANCE_SEEN_LIGHT_WEIGHT times less. */
 static const char MAGIC_VERSION_2[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '2'};
+/* Version 3 had no checksum: a damaged file could pass for a good one. */
+static const char MAGIC_VERSION_3[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '3'};
 enum { KIND_CAMERA = 1, KIND_SHADOW = 2 };
+#define FNV_OFFSET 0xcbf29ce484222325ull
 
 /* The fixed-size part after the magic. */
 typedef struct simulation_header {
@@ -35,7 +41,7 @@ static uint64_t fnv1a(uint64_t hash, const void *bytes, size_t size)
 
 int importance_file_fingerprint(const scene *s, uint64_t *fingerprint)
 {
-    uint64_t hash = 0xcbf29ce484222325ull;
+    uint64_t hash = FNV_OFFSET;
     for (size_t m = 0; m < s->mesh_count; m++) {
         const scene_mesh *mesh = &s->meshes[m];
         hash = fnv1a(hash, mesh->positions, 3 * sizeof(float) * mesh->vertex_count);
@@ -89,7 +95,8 @@ int importance_file_write(const char *path, const scene *s, const importance_opt
                            .seen_light = r->seen_light};
     if (importance_file_fingerprint(s, &h.fingerprint))
         return -1;
-    size_t size = sizeof MAGIC + sizeof h + series_bytes(&h) + sums_bytes(&h) + pixels_bytes(&h);
+    size_t body = sizeof MAGIC + sizeof h + series_bytes(&h) + sums_bytes(&h) + pixels_bytes(&h);
+    size_t size = body + sizeof(uint64_t);
     unsigned char *bytes = xmalloc(size), *at = bytes;
     size_t per_series = sizeof(double) * h.iterations, per_kind = sizeof(double) * h.triangles;
     memcpy(at, MAGIC, sizeof MAGIC), at += sizeof MAGIC;
@@ -99,63 +106,199 @@ int importance_file_write(const char *path, const scene *s, const importance_opt
     memcpy(at, r->camera, per_kind), at += per_kind;
     memcpy(at, r->light, per_kind), at += per_kind;
     memcpy(at, r->shadow, per_kind), at += per_kind;
-    memcpy(at, r->pixel_triangle, pixels_bytes(&h));
+    memcpy(at, r->pixel_triangle, pixels_bytes(&h)), at += pixels_bytes(&h);
+    uint64_t checksum = fnv1a(FNV_OFFSET, bytes, body);
+    memcpy(at, &checksum, sizeof checksum);
     int status = files_write_atomic(path, bytes, size);
     free(bytes);
     return status;
 }
 
-/* The whole file into memory (*size bytes); NULL with the error set. */
-static unsigned char *read_all(const char *path, size_t *size)
+/* A file that does not start with MAGIC (`magic`: its first 8 bytes, NULL where it is shorter):
+ * one of an older version, each with what it lacked, or no simulation file. */
+static int refuse_other_file(const char *path, const unsigned char *magic)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f) {
+    static const struct {
+        const char *magic, *lacked;
+    } older[] = {
+        {MAGIC_VERSION_1, "whose light importance left out the light seen through glass and "
+                          "mirrors"},
+        {MAGIC_VERSION_2, "whose light importance weighted the light seen through glass and "
+                          "mirrors %g times less"},
+        {MAGIC_VERSION_3, "without the checksum that proves a simulation file undamaged"},
+    };
+    for (size_t i = 0; magic && i < sizeof older / sizeof *older; i++) {
+        if (memcmp(magic, older[i].magic, sizeof MAGIC))
+            continue;
+        char lacked[160];
+        snprintf(lacked, sizeof lacked, older[i].lacked, IMPORTANCE_SEEN_LIGHT_WEIGHT);
+        return error_set(IDMR_EXIT_INPUT,
+                         "--simulation: '%s' was written by an older idmr, %s; run `idmr "
+                         "importance SCENE -o DIR` again and pass DIR/simulation.bin",
+                         path, lacked);
+    }
+    return error_set(IDMR_EXIT_INPUT,
+                     "--simulation: '%s' is not a simulation file of idmr (the "
+                     "simulation.bin that `idmr importance` writes)",
+                     path);
+}
+
+/* What a file that is not a regular one is, for the message. */
+static const char *file_kind(mode_t mode)
+{
+    return S_ISDIR(mode)    ? "a directory"
+           : S_ISFIFO(mode) ? "a FIFO (named pipe)"
+           : S_ISCHR(mode)  ? "a character device"
+           : S_ISBLK(mode)  ? "a block device"
+           : S_ISSOCK(mode) ? "a socket"
+                            : "not a regular file";
+}
+
+/* The file's size that the header promises (magic, header, arrays, checksum), or 0 where it
+ * overflows. */
+static uint64_t promised_size(const simulation_header *h)
+{
+    uint64_t pixels = (uint64_t)h->width * h->height;
+    if (h->triangles > (UINT64_MAX >> 8) || pixels > (UINT64_MAX >> 8))
+        return 0;
+    uint64_t size = sizeof MAGIC + sizeof *h + 2 * sizeof(double) * (uint64_t)h->iterations +
+                    3 * sizeof(double) * h->triangles + sizeof(uint32_t) * pixels +
+                    sizeof(uint64_t);
+    return size > SIZE_MAX ? 0 : size;
+}
+
+/* Reads exactly `size` bytes at the file position; 0, or -1 with errno set (0: the file ended
+ * first). */
+static int read_exactly(int fd, void *bytes, size_t size)
+{
+    unsigned char *at = bytes;
+    while (size > 0) {
+        ssize_t got = read(fd, at, size);
+        if (got < 0 && errno == EINTR)
+            continue;
+        if (got == 0)
+            errno = 0;
+        if (got <= 0)
+            return -1;
+        at += got;
+        size -= (size_t)got;
+    }
+    return 0;
+}
+
+/* The error of a failed read_exactly(). */
+static int read_failure(const char *path)
+{
+    return error_set(IDMR_EXIT_INPUT, "--simulation: cannot read '%s': %s", path,
+                     errno ? strerror(errno) : "it ended before its size (changed while read?)");
+}
+
+/* The whole file into memory (*size bytes), checked before it is read: a regular file (a device
+ * such as /dev/zero would be read without end, a FIFO would block), a simulation file of this
+ * version whose header promises the file's size, whose checksum holds. NULL with the error set. */
+static unsigned char *read_checked(const char *path, size_t *size)
+{
+    /* O_NONBLOCK: opening a FIFO does not wait for a writer; fstat() then refuses it. */
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) {
         error_set(IDMR_EXIT_INPUT, "--simulation: cannot read '%s': %s", path, strerror(errno));
         return NULL;
     }
-    size_t capacity = 1 << 20, length = 0, got;
-    unsigned char *bytes = xmalloc(capacity);
-    while ((got = fread(bytes + length, 1, capacity - length, f)) > 0) {
-        length += got;
-        if (length == capacity)
-            bytes = xrealloc(bytes, capacity *= 2);
-    }
-    int failed = ferror(f);
-    fclose(f);
-    if (failed) {
-        free(bytes);
-        error_set(IDMR_EXIT_INPUT, "--simulation: cannot read '%s'", path);
+    struct stat info;
+    if (fstat(fd, &info) != 0) {
+        error_set(IDMR_EXIT_INPUT, "--simulation: cannot read '%s': %s", path, strerror(errno));
+        close(fd);
         return NULL;
     }
-    *size = length;
+    if (!S_ISREG(info.st_mode)) {
+        error_set(IDMR_EXIT_INPUT,
+                  "--simulation: '%s' is %s; give the simulation.bin that `idmr importance` "
+                  "writes",
+                  path, file_kind(info.st_mode));
+        close(fd);
+        return NULL;
+    }
+    fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) & ~O_NONBLOCK);
+    unsigned char head[sizeof MAGIC + sizeof(simulation_header)];
+    size_t have = (uint64_t)info.st_size < sizeof head ? (size_t)info.st_size : sizeof head;
+    int status = read_exactly(fd, head, have) ? read_failure(path) : 0;
+    if (!status && (have < sizeof MAGIC || memcmp(head, MAGIC, sizeof MAGIC)))
+        status = refuse_other_file(path, have < sizeof MAGIC ? NULL : head);
+    if (!status && have < sizeof head)
+        status = error_set(IDMR_EXIT_INPUT,
+                           "--simulation: '%s' is %zu bytes, shorter than the header of a "
+                           "simulation file (truncated)",
+                           path, have);
+    simulation_header h;
+    uint64_t promised = 0;
+    if (!status) {
+        memcpy(&h, head + sizeof MAGIC, sizeof h);
+        promised = promised_size(&h);
+        if (promised != (uint64_t)info.st_size)
+            status = error_set(IDMR_EXIT_INPUT,
+                               "--simulation: '%s' is %llu bytes, not the %llu its header "
+                               "describes (truncated or damaged)",
+                               path, (unsigned long long)info.st_size,
+                               (unsigned long long)promised);
+    }
+    unsigned char *bytes = NULL;
+    if (!status) {
+        bytes = xmalloc((size_t)promised);
+        memcpy(bytes, head, sizeof head);
+        if (read_exactly(fd, bytes + sizeof head, (size_t)promised - sizeof head))
+            status = read_failure(path);
+    }
+    if (!status) {
+        uint64_t stored, computed = fnv1a(FNV_OFFSET, bytes, (size_t)promised - sizeof stored);
+        memcpy(&stored, bytes + promised - sizeof stored, sizeof stored);
+        if (stored != computed)
+            status = error_set(IDMR_EXIT_INPUT,
+                               "--simulation: '%s' is damaged: its checksum does not match its "
+                               "contents; run `idmr importance SCENE -o DIR` again and pass "
+                               "DIR/simulation.bin",
+                               path);
+    }
+    close(fd);
+    if (status) {
+        free(bytes);
+        return NULL;
+    }
+    *size = (size_t)promised;
     return bytes;
 }
 
-/* The header checked against the file's length, the scene and the weights. */
-static int check_header(const char *path, const simulation_header *h, size_t size,
-                        const scene *s, const importance_options *o)
+/* The header checked against the scene and the weights, and for values no pass writes. */
+static int check_header(const char *path, const simulation_header *h, const scene *s,
+                        const importance_options *o)
 {
+    if (h->iterations == 0)
+        return error_set(IDMR_EXIT_INPUT, "--simulation: '%s' holds no iteration (damaged)",
+                         path);
+    if (h->photons == 0)
+        return error_set(IDMR_EXIT_INPUT,
+                         "--simulation: '%s' has a photon count of 0 per iteration (damaged)",
+                         path);
+    if (h->width == 0 || h->height == 0)
+        return error_set(IDMR_EXIT_INPUT,
+                         "--simulation: '%s' has a hit-point image of %ux%u pixels (damaged)",
+                         path, h->width, h->height);
+    if (h->kinds & ~(uint32_t)(KIND_CAMERA | KIND_SHADOW))
+        return error_set(IDMR_EXIT_INPUT,
+                         "--simulation: '%s' has unknown kinds of importance (bits 0x%x; "
+                         "damaged)",
+                         path, h->kinds);
+    if (!(h->seen_light >= 0) || !isfinite(h->seen_light))
+        return error_set(IDMR_EXIT_INPUT,
+                         "--simulation: '%s' has a seen-light sum of %g (damaged)", path,
+                         h->seen_light);
     uint64_t fingerprint;
     if (importance_file_fingerprint(s, &fingerprint))
         return -1;
-    size_t expected = sizeof MAGIC + sizeof *h;
-    if (h->triangles > SIZE_MAX / 32 || (uint64_t)h->width * h->height > SIZE_MAX / 8 ||
-        (expected += series_bytes(h) + sums_bytes(h) + pixels_bytes(h)) != size)
-        return error_set(IDMR_EXIT_INPUT,
-                         "--simulation: '%s' is %zu bytes, not the %zu its header describes "
-                         "(truncated or damaged)",
-                         path, size, expected);
     if (h->triangles != (uint64_t)s->triangle_count || h->fingerprint != fingerprint)
         return error_set(IDMR_EXIT_INPUT,
                          "--simulation: '%s' was made from another scene than '%s' (or from "
                          "this one before it changed): run `idmr importance` on it again",
                          path, s->file);
-    if (h->iterations == 0)
-        return error_set(IDMR_EXIT_INPUT, "--simulation: '%s' holds no iteration", path);
-    if (!(h->seen_light >= 0) || !isfinite(h->seen_light))
-        return error_set(IDMR_EXIT_INPUT,
-                         "--simulation: '%s' has a seen-light sum of %g (damaged)", path,
-                         h->seen_light);
     if (o->gamma > 0 && !(h->kinds & KIND_CAMERA))
         return error_set(IDMR_EXIT_INPUT,
                          "--simulation: '%s' was made with --gamma 0 and holds no camera "
@@ -166,6 +309,43 @@ static int check_header(const char *path, const simulation_header *h, size_t siz
                          "--simulation: '%s' was made with --shadow-weight 0 and holds no shadow "
                          "importance to weight by %g",
                          path, o->shadow_weight);
+    return 0;
+}
+
+/* Every value of the arrays as a pass writes them: radii positive, changes and sums finite and
+ * not negative; the first that is not is named, with the file. */
+static int check_values(const char *path, const importance_result *r, const scene *s)
+{
+    for (unsigned int n = 0; n < r->sppm.iterations; n++) {
+        if (!(r->sppm.radius[n] > 0) || !isfinite(r->sppm.radius[n]))
+            return error_set(IDMR_EXIT_INPUT,
+                             "--simulation: '%s': the gather radius of iteration %u is %g "
+                             "(damaged)",
+                             path, n + 1, r->sppm.radius[n]);
+        if (!(r->convergence[n] >= 0) || !isfinite(r->convergence[n]))
+            return error_set(IDMR_EXIT_INPUT,
+                             "--simulation: '%s': the convergence change of iteration %u is %g "
+                             "(damaged)",
+                             path, n + 1, r->convergence[n]);
+    }
+    const struct {
+        const char *name;
+        const double *sums;
+    } kinds[] = {{"camera", r->camera}, {"light", r->light}, {"shadow", r->shadow}};
+    for (size_t k = 0; k < sizeof kinds / sizeof *kinds; k++)
+        for (size_t t = 0; t < r->triangle_count; t++) {
+            double sum = kinds[k].sums[t];
+            if (sum >= 0 && isfinite(sum))
+                continue;
+            size_t m = 0, first = 0;
+            while (m + 1 < s->mesh_count && t >= first + s->meshes[m].triangle_count)
+                first += s->meshes[m++].triangle_count;
+            return error_set(IDMR_EXIT_INPUT,
+                             "--simulation: '%s': the %s importance sum of triangle %zu (mesh "
+                             "'%s', its triangle %zu) is %g; it must be finite and >= 0 "
+                             "(damaged, or written by a failed pass)",
+                             path, kinds[k].name, t, s->meshes[m].name, t - first, sum);
+        }
     return 0;
 }
 
@@ -183,32 +363,12 @@ int importance_file_read(const char *path, const scene *s, const importance_opti
 {
     memset(r, 0, sizeof *r);
     size_t size = 0;
-    unsigned char *bytes = read_all(path, &size);
+    unsigned char *bytes = read_checked(path, &size);
     if (!bytes)
         return -1;
     simulation_header h;
-    int status = 0;
-    if (size >= sizeof MAGIC && !memcmp(bytes, MAGIC_VERSION_1, sizeof MAGIC))
-        status = error_set(IDMR_EXIT_INPUT,
-                           "--simulation: '%s' was written by an older idmr, whose light "
-                           "importance left out the light seen through glass and mirrors; run "
-                           "`idmr importance` again",
-                           path);
-    else if (size >= sizeof MAGIC && !memcmp(bytes, MAGIC_VERSION_2, sizeof MAGIC))
-        status = error_set(IDMR_EXIT_INPUT,
-                           "--simulation: '%s' was written by an older idmr, whose light "
-                           "importance weighted the light seen through glass and mirrors %g "
-                           "times less; run `idmr importance` again",
-                           path, IMPORTANCE_SEEN_LIGHT_WEIGHT);
-    else if (size < sizeof MAGIC + sizeof h || memcmp(bytes, MAGIC, sizeof MAGIC))
-        status = error_set(IDMR_EXIT_INPUT,
-                           "--simulation: '%s' is not a simulation file of idmr (the "
-                           "simulation.bin that `idmr importance` writes)",
-                           path);
-    if (!status) {
-        memcpy(&h, bytes + sizeof MAGIC, sizeof h);
-        status = check_header(path, &h, size, s, o);
-    }
+    memcpy(&h, bytes + sizeof MAGIC, sizeof h);
+    int status = check_header(path, &h, s, o);
     if (!status) {
         const unsigned char *at = bytes + sizeof MAGIC + sizeof h;
         size_t per_series = sizeof(double) * h.iterations, per_kind = sizeof(double) * h.triangles;
@@ -227,6 +387,7 @@ int importance_file_read(const char *path, const scene *s, const importance_opti
         r->sppm.photon_records = h.photon_records;
         r->gathered = h.gathered;
         r->seen_light = h.seen_light;
+        status = check_values(path, r, s);
     }
     free(bytes);
     return status;

@@ -11,6 +11,7 @@
 #include "core/json.h"
 #include "io/image.h"
 #include "io/mesh_io.h"
+#include "io/ply_check.h"
 
 void importance_file_name(const char *mesh_name, char *out, size_t size)
 {
@@ -183,7 +184,8 @@ static int write_mesh_files(const char *dir, const scene *s, double *const *valu
         snprintf(path, sizeof path, "%s/importance/%s.ply", dir, name);
         mesh_data data = {mesh->vertex_count, mesh->triangle_count, mesh->positions,
                           mesh->indices, NULL, NULL, 0};
-        status = mesh_io_write_ply(path, &data, property, "importance", colours);
+        status = mesh_io_write_ply(path, &data, property, "importance", colours) ||
+                 ply_check_written(path);
         free(property);
         free(colours);
     }

@@ -49,7 +49,7 @@ enum {
 #define CHUNK 1024 /* candidates judged at a time when taking collapses */
 #define JUDGE_BLOCK 8  /* candidates a thread judges at a time */
 #define APPLY_BLOCK 16 /* collapses a thread takes at a time */
-#define SPIN_LIMIT 20000 /* pauses a thread spins before it sleeps or yields */
+#define SPIN_LIMIT 4000 /* pauses (about 0.1 ms) a thread spins before it sleeps or yields */
 
 typedef struct worker_pool worker_pool;
 
@@ -77,8 +77,8 @@ typedef struct fan {
     uint32_t count;
 } fan;
 
-/* Where current_fan and current_ring write, one slot per vertex of a collapse (v0, v1, vl, vr). */
-enum { SLOT_V0, SLOT_V1, SLOT_VL, SLOT_VR, SLOTS };
+/* Where current_fan and current_ring write: one slot for each end of a collapse. */
+enum { SLOT_V0, SLOT_V1, SLOTS };
 
 /* What a thread needs while it judges collapses. */
 typedef struct scratch {
@@ -139,6 +139,7 @@ typedef struct engine {
      * more than its triangles, as many as a vertex of one fan has), ring_size[v] long */
     ring_store rings;
     uint32_t *ring_size;
+    int rings_current; /* the adjacency and rings are the mesh's as it is (after engine_init) */
     double *quadric;
     double *self_error; /* per vertex: its quadric at its own position (the quadric methods) */
     double *importance;
@@ -249,7 +250,11 @@ static double quadric_error(const double *q, const float *point)
 
 /* ---- adjacency and rings ---- */
 
-/* The live triangles at each vertex, in triangle order. */
+/* The live triangles at each vertex, in triangle order. On the way, the corners of every
+ * triangle a collapse of the last pass touched are marked stale: a vertex's score depends on
+ * its triangles, its neighbours' triangles, quadrics and importance, so the touched vertices
+ * and their neighbours are scored again and the rest keep their scores (the scoring step clears
+ * the marks: settle_vertex). */
 static void build_adjacency(engine *e)
 {
     uint32_t *start = e->adjacency_start;
@@ -258,8 +263,12 @@ static void build_adjacency(engine *e)
         const uint32_t *c = corners(e, t);
         if (c[0] == COLLAPSE_NONE)
             continue;
-        for (int k = 0; k < 3; k++)
+        int touched = (e->flags[c[0]] | e->flags[c[1]] | e->flags[c[2]]) & FLAG_TOUCHED;
+        for (int k = 0; k < 3; k++) {
             start[c[k] + 1]++;
+            if (touched)
+                e->flags[c[k]] |= FLAG_STALE;
+        }
     }
     for (uint32_t v = 0; v < e->n; v++)
         start[v + 1] += start[v];
@@ -857,6 +866,43 @@ static ring ring_for(const engine *e, uint32_t v, int current, scratch *s, int s
     return current_ring(e, v, s, slot, &f);
 }
 
+/* Whether v has exactly three neighbours, `holding` among them unless COLLAPSE_NONE (the mesh as
+ * the pass found it, or with `current` as it is now). The valence-3 rule asks this of vl and vr
+ * for every judged collapse; for a touched vertex the neighbours are counted from its live
+ * triangles, stopping at a fourth, without gathering its ring. */
+static int valence_three(const engine *e, uint32_t v, int current, uint32_t holding)
+{
+    if (!current || !(e->flags[v] & FLAG_TOUCHED)) {
+        ring r = ring_of(e, v);
+        return r.size == 3 && (holding == COLLAPSE_NONE || ring_count(&r, holding));
+    }
+    uint32_t seen[3], count = 0, sources[2] = {v, e->donor[v]};
+    for (int k = 0; k < 2; k++) {
+        if (sources[k] == COLLAPSE_NONE)
+            continue;
+        fan from = pass_fan(e, sources[k]);
+        for (uint32_t i = 0; i < from.count; i++) {
+            const uint32_t *c = corners(e, from.triangle[i]);
+            if (c[0] == COLLAPSE_NONE || corner_at(e, from.triangle[i], v) == 3)
+                continue;
+            for (int m = 0; m < 3; m++) {
+                uint32_t j = 0;
+                while (j < count && seen[j] != c[m])
+                    j++;
+                if (c[m] == v || j < count)
+                    continue;
+                if (count == 3)
+                    return 0;
+                seen[count++] = c[m];
+            }
+        }
+    }
+    if (count != 3)
+        return 0;
+    return holding == COLLAPSE_NONE || seen[0] == holding || seen[1] == holding ||
+           seen[2] == holding;
+}
+
 /* Whether v0 -> v1 is legal; f0 and r0 are v0's fan and ring, v0 free and with more than two
  * neighbours. `current`: judge the mesh as it is now, in a pass where collapses were taken
  * (the other rings are gathered again), not as the pass found it. *rule names the first rule
@@ -868,7 +914,7 @@ static int collapse_legal(const engine *e, uint32_t v0, uint32_t v1, fan f0, con
     if (slot == r0->size)
         return *rule = "not an edge", 0;
     uint32_t held = r0->count[slot];
-    if (e->flags[v1] & FLAG_LOCKED)
+    if (e->m->locked && e->m->locked[v1]) /* the caller's (flags[v1] may be being rewritten) */
         return *rule = "locked", 0;
     ring ring1 = ring_for(e, v1, current, s, SLOT_V1), *r1 = &ring1;
     int boundary1;
@@ -892,12 +938,9 @@ static int collapse_legal(const engine *e, uint32_t v0, uint32_t v1, fan f0, con
         if (w != v1 && w != vl && w != vr && ring_count(r1, w))
             return *rule = "link condition", 0;
     }
-    if (both_sides) {
-        ring ring_l = ring_for(e, vl, current, s, SLOT_VL);
-        if (ring_l.size == 3 && ring_count(&ring_l, vr) &&
-            ring_for(e, vr, current, s, SLOT_VR).size == 3)
-            return *rule = "two joined valence-3 vertices", 0;
-    }
+    if (both_sides && valence_three(e, vl, current, vr) &&
+        valence_three(e, vr, current, COLLAPSE_NONE))
+        return *rule = "two joined valence-3 vertices", 0;
     if (!normals_kept(e, r0, v0, v1))
         return *rule = "normal limit", 0;
     if (e->o->method == DECIMATE_COMBINED && boundary0 && !isinf(e->boundary_tolerance) &&
@@ -953,21 +996,12 @@ static int compare_targets(const void *a, const void *b)
     return x->vertex < y->vertex ? -1 : x->vertex > y->vertex;
 }
 
-/* Scores v: its best legal collapse into best[v] and best_target[v] (COLLAPSE_NONE: none). */
-static void score_vertex(engine *e, uint32_t v, scratch *s)
+/* v's collapse targets (its ring's vertices; f0 and r0 its fan and ring) with their keys, into
+ * s->targets; their count. */
+static size_t target_keys(const engine *e, uint32_t v, fan f0, const ring *r0, scratch *s)
 {
-    e->best_target[v] = COLLAPSE_NONE;
-    if (e->flags[v] & (FLAG_LOCKED | FLAG_REMOVED))
-        return;
-    if (e->adjacency_start[v] == e->adjacency_start[v + 1])
-        return;
-    ring ring0 = ring_of(e, v), *r0 = &ring0;
-    fan f0 = pass_fan(e, v);
-    int boundary0;
-    if (!ring_simple(r0, &boundary0) || r0->size <= 2)
-        return;
     if (s->targets_capacity < r0->size) {
-        s->targets_capacity = 2 * r0->size;
+        s->targets_capacity = 2 * (size_t)r0->size;
         s->targets = xrealloc(s->targets, sizeof(target_key) * s->targets_capacity);
     }
     int by_importance = e->o->method == DECIMATE_IMPORTANCE;
@@ -977,7 +1011,55 @@ static void score_vertex(engine *e, uint32_t v, scratch *s)
         s->targets[i].distance = distance_of(e, u);
         s->targets[i].key = by_importance ? e->importance[u] : collapse_cost(e, f0, v, u, s);
     }
-    size_t count = r0->size;
+    return r0->size;
+}
+
+/* v's candidate for collapsing into target t (r0 its ring): ranked by the cost (QUADRIC,
+ * COMBINED) or by the importance of v and its ring (IMPORTANCE, the paper's ring sum). */
+static void set_best(engine *e, uint32_t v, const ring *r0, const target_key *t)
+{
+    int by_importance = e->o->method == DECIMATE_IMPORTANCE;
+    double priority = t->key;
+    if (by_importance) {
+        priority = e->importance[v];
+        for (uint32_t k = 0; k < r0->size; k++)
+            priority += e->importance[r0->vertex[k]];
+        CHECK_FINITE(priority, "ring importance");
+    }
+    e->best_target[v] = t->vertex;
+    e->best[v] = (candidate){(float)fmin(priority, (double)FLT_MAX / 2), distance_of(e, v),
+                             by_importance ? e->importance[t->vertex] : 0.0, t->distance, v};
+}
+
+/* Whether v may be removed at all: free, one fan, more than two neighbours (r0 its ring). */
+static int removable(const engine *e, uint32_t v, const ring *r0, int *boundary0)
+{
+    return !(e->flags[v] & (FLAG_LOCKED | FLAG_REMOVED)) && r0->size > 2 &&
+           ring_simple(r0, boundary0);
+}
+
+/* Scores v: its best legal collapse into best[v] and best_target[v] (COLLAPSE_NONE: none). The
+ * cheapest target (by the method's order) is tried first, as it is legal for most vertices;
+ * otherwise the targets are sorted and tried in order. */
+static void score_vertex(engine *e, uint32_t v, scratch *s)
+{
+    e->best_target[v] = COLLAPSE_NONE;
+    ring r0 = ring_of(e, v);
+    fan f0 = pass_fan(e, v);
+    int boundary0;
+    if (!removable(e, v, &r0, &boundary0))
+        return;
+    size_t count = target_keys(e, v, f0, &r0, s);
+    size_t cheapest = 0;
+    for (size_t i = 1; i < count; i++)
+        if (compare_targets(&s->targets[i], &s->targets[cheapest]) < 0)
+            cheapest = i;
+    const char *rule;
+    uint32_t preferred = s->targets[cheapest].vertex;
+    if (collapse_legal(e, v, preferred, f0, &r0, boundary0, 0, s, &rule)) {
+        set_best(e, v, &r0, &s->targets[cheapest]);
+        return;
+    }
     for (size_t i = 1; i < count; i++) { /* an insertion sort: a ring is short */
         target_key key = s->targets[i];
         size_t j = i;
@@ -987,24 +1069,24 @@ static void score_vertex(engine *e, uint32_t v, scratch *s)
         }
         s->targets[j] = key;
     }
-    for (size_t i = 0; i < count; i++) {
-        const char *rule;
-        uint32_t u = s->targets[i].vertex;
-        if (!collapse_legal(e, v, u, f0, r0, boundary0, 0, s, &rule))
-            continue;
-        double priority = s->targets[i].key;
-        if (by_importance) {
-            priority = e->importance[v];
-            for (uint32_t k = 0; k < r0->size; k++)
-                priority += e->importance[r0->vertex[k]];
-            CHECK_FINITE(priority, "ring importance");
+    for (size_t i = 1; i < count; i++) /* targets[0] is the preferred one */
+        if (collapse_legal(e, v, s->targets[i].vertex, f0, &r0, boundary0, 0, s, &rule)) {
+            set_best(e, v, &r0, &s->targets[i]);
+            return;
         }
-        e->best_target[v] = u;
-        e->best[v] = (candidate){(float)fmin(priority, (double)FLT_MAX / 2), distance_of(e, v),
-                                 by_importance ? e->importance[u] : 0.0,
-                                 s->targets[i].distance, v};
-        return;
-    }
+}
+
+/* The scoring step's work on v at the start of a pass: scored again where the last pass made it
+ * stale (its score dropped where it was removed), and the last pass's marks cleared. */
+static void settle_vertex(engine *e, uint32_t v, scratch *s)
+{
+    uint8_t flags = e->flags[v];
+    if (flags & FLAG_REMOVED)
+        e->best_target[v] = COLLAPSE_NONE;
+    else if (flags & FLAG_STALE)
+        score_vertex(e, v, s);
+    e->flags[v] = flags & (uint8_t) ~(FLAG_STALE | FLAG_TOUCHED | FLAG_TAKEN);
+    e->donor[v] = COLLAPSE_NONE;
 }
 
 /* ---- the per-vertex steps, in parallel ---- */
@@ -1025,6 +1107,18 @@ typedef struct worker_start {
     unsigned int index;
 } worker_start;
 
+/* What one step is: set before its generation is published, read by the threads that claim its
+ * items. Two, by the generation's parity: a thread that wakes late reads the parameters of a
+ * step already over, but can no longer claim any of its items. */
+typedef struct step_parameters {
+    atomic_uint step, items, block;
+} step_parameters;
+
+/* A step runs as its items are claimed, `block` at a time, from `claim` (the generation in the
+ * upper 32 bits, the next item in the lower): a thread claims only within the generation whose
+ * parameters it read. The caller waits until every item is done (`done`), not for every worker:
+ * one that is not running (the machine is busy) or wakes after the items are gone costs
+ * nothing. */
 struct worker_pool {
     engine *e;
     pthread_t thread[MAX_THREADS];
@@ -1034,48 +1128,61 @@ struct worker_pool {
     pthread_mutex_t lock; /* with `wake`: for the workers that sleep between steps */
     pthread_cond_t wake;
     unsigned int sleepers;
-    atomic_uint generation, finished;
+    atomic_uint generation;
     atomic_int quit;
-    vertex_step step;
-    uint32_t items, block; /* STEP_JUDGE and STEP_APPLY: items of the chunk, taken `block` at a
-                              time */
-    atomic_uint_fast32_t next;
+    step_parameters parameters[2];
+    _Atomic uint64_t claim;
+    atomic_uint done;
 };
 
 static void judge_item(engine *e, uint32_t item, scratch *s);
 static void apply_item(engine *e, uint32_t item, scratch *s);
 
-/* Takes blocks of items (vertices, or a chunk's candidates) until none is left. */
-static void run_step(worker_pool *pool, scratch *s)
+static void run_item(engine *e, vertex_step step, uint32_t i, scratch *s)
 {
-    engine *e = pool->e;
-    int per_vertex = pool->step != STEP_JUDGE && pool->step != STEP_APPLY;
-    uint32_t items = per_vertex ? e->n : pool->items, block = per_vertex ? SCORE_BLOCK : pool->block;
+    switch (step) {
+    case STEP_RINGS:
+        build_ring(e, i);
+        break;
+    case STEP_QUADRICS:
+        build_quadric(e, i);
+        break;
+    case STEP_SCORES:
+        settle_vertex(e, i, s);
+        break;
+    case STEP_JUDGE:
+        judge_item(e, i, s);
+        break;
+    case STEP_APPLY:
+        apply_item(e, i, s);
+        break;
+    }
+}
+
+/* Claims blocks of the items of step `generation` (vertices, or a chunk's candidates) and runs
+ * them, until none is left or the step is over. */
+static void run_step(worker_pool *pool, scratch *s, unsigned int generation)
+{
+    const step_parameters *parameters = &pool->parameters[generation & 1];
     for (;;) {
-        uint32_t begin = (uint32_t)atomic_fetch_add(&pool->next, block);
+        uint64_t claim = atomic_load_explicit(&pool->claim, memory_order_acquire);
+        if ((uint32_t)(claim >> 32) != generation)
+            return;
+        uint32_t begin = (uint32_t)claim;
+        uint32_t items = atomic_load_explicit(&parameters->items, memory_order_relaxed);
+        uint32_t block = atomic_load_explicit(&parameters->block, memory_order_relaxed);
         if (begin >= items)
             return;
-        uint32_t end = begin + block < items ? begin + block : items;
-        for (uint32_t i = begin; i < end; i++) {
-            switch (pool->step) {
-            case STEP_RINGS:
-                build_ring(e, i);
-                break;
-            case STEP_QUADRICS:
-                build_quadric(e, i);
-                break;
-            case STEP_SCORES:
-                if (e->flags[i] & FLAG_STALE)
-                    score_vertex(e, i, s);
-                break;
-            case STEP_JUDGE:
-                judge_item(e, i, s);
-                break;
-            case STEP_APPLY:
-                apply_item(e, i, s);
-                break;
-            }
-        }
+        uint32_t end = items - begin > block ? begin + block : items;
+        if (!atomic_compare_exchange_weak_explicit(&pool->claim, &claim,
+                                                   (uint64_t)generation << 32 | end,
+                                                   memory_order_acquire, memory_order_relaxed))
+            continue;
+        /* claimed: the step cannot end, nor its parameters change, before these are done */
+        vertex_step step = atomic_load_explicit(&parameters->step, memory_order_relaxed);
+        for (uint32_t i = begin; i < end; i++)
+            run_item(pool->e, step, i, s);
+        atomic_fetch_add_explicit(&pool->done, end - begin, memory_order_release);
     }
 }
 
@@ -1114,8 +1221,7 @@ static void *worker_main(void *arg)
         if (atomic_load(&pool->quit))
             return NULL;
         seen = generation;
-        run_step(pool, s);
-        atomic_fetch_add_explicit(&pool->finished, 1, memory_order_release);
+        run_step(pool, s, generation);
     }
 }
 
@@ -1126,8 +1232,14 @@ static void pool_start(worker_pool *pool, engine *e, unsigned int threads)
     pthread_mutex_init(&pool->lock, NULL);
     pthread_cond_init(&pool->wake, NULL);
     atomic_init(&pool->generation, 0);
-    atomic_init(&pool->finished, 0);
     atomic_init(&pool->quit, 0);
+    atomic_init(&pool->claim, 0);
+    atomic_init(&pool->done, 0);
+    for (int k = 0; k < 2; k++) {
+        atomic_init(&pool->parameters[k].step, 0);
+        atomic_init(&pool->parameters[k].items, 0);
+        atomic_init(&pool->parameters[k].block, 1);
+    }
     if (threads > MAX_THREADS)
         threads = MAX_THREADS;
     /* No more threads than blocks of vertices to share. */
@@ -1141,27 +1253,30 @@ static void pool_start(worker_pool *pool, engine *e, unsigned int threads)
     }
 }
 
-/* Runs one step over its items on all the pool's threads and the caller's. */
+/* Runs one step over its items on the pool's threads and the caller's; returns when all are
+ * done. */
 static void run_on_pool(engine *e, vertex_step step, uint32_t items, uint32_t block)
 {
     worker_pool *pool = e->pool;
-    pool->step = step;
-    pool->items = items;
-    pool->block = block;
-    atomic_store(&pool->next, 0);
-    atomic_store(&pool->finished, 0);
-    atomic_fetch_add_explicit(&pool->generation, 1, memory_order_release);
+    unsigned int generation = atomic_load_explicit(&pool->generation, memory_order_relaxed) + 1;
+    step_parameters *parameters = &pool->parameters[generation & 1];
+    atomic_store_explicit(&parameters->step, step, memory_order_relaxed);
+    atomic_store_explicit(&parameters->items, items, memory_order_relaxed);
+    atomic_store_explicit(&parameters->block, block, memory_order_relaxed);
+    atomic_store_explicit(&pool->done, 0, memory_order_relaxed);
+    atomic_store_explicit(&pool->claim, (uint64_t)generation << 32, memory_order_release);
+    atomic_store_explicit(&pool->generation, generation, memory_order_release);
     pthread_mutex_lock(&pool->lock);
     if (pool->sleepers)
         pthread_cond_broadcast(&pool->wake);
     pthread_mutex_unlock(&pool->lock);
-    run_step(pool, &pool->scratch[0]);
+    run_step(pool, &pool->scratch[0], generation);
     for (unsigned int spins = 0;
-         atomic_load_explicit(&pool->finished, memory_order_acquire) < pool->count; spins++)
+         atomic_load_explicit(&pool->done, memory_order_acquire) < items; spins++)
         if (spins < SPIN_LIMIT)
             spin_pause();
         else
-            sched_yield(); /* a worker is off its core: let it run */
+            sched_yield(); /* a worker holding a block is off its core: let it run */
 }
 
 static void pool_stop(worker_pool *pool)
@@ -1316,7 +1431,9 @@ static uint64_t collapse_removes(const engine *e, fan f0, uint32_t v0, uint32_t 
 /* Sets bits of a vertex's flags; atomic, as collapses taken side by side may touch one vertex. */
 static void flag(engine *e, uint32_t v, uint8_t bits)
 {
-    __atomic_fetch_or(&e->flags[v], bits, __ATOMIC_RELAXED);
+    /* most corners are flagged twice or more: the locked read-modify-write only where needed */
+    if ((__atomic_load_n(&e->flags[v], __ATOMIC_RELAXED) & bits) != bits)
+        __atomic_fetch_or(&e->flags[v], bits, __ATOMIC_RELAXED);
 }
 
 /* Takes v0 -> v1 (neither an end of a collapse taken in this pass; f0 holds v0's live
@@ -1360,26 +1477,6 @@ static void apply_collapse(engine *e, fan f0, uint32_t v0, uint32_t v1, uint32_t
     flag(e, v1, FLAG_TAKEN);
     e->donor[v1] = v0;
     history[v0] = v1;
-}
-
-/* A vertex's score depends on its triangles, its neighbours' triangles, quadrics and importance:
- * after a pass, the touched vertices and their neighbours are scored again, the rest keep their
- * scores. */
-static void mark_stale(engine *e)
-{
-    for (uint32_t v = 0; v < e->n; v++)
-        e->flags[v] &= (uint8_t)~FLAG_STALE;
-    for (uint32_t t = 0; t < e->t; t++) {
-        const uint32_t *c = corners(e, t);
-        if (c[0] == COLLAPSE_NONE)
-            continue;
-        if ((e->flags[c[0]] | e->flags[c[1]] | e->flags[c[2]]) & FLAG_TOUCHED)
-            for (int k = 0; k < 3; k++)
-                e->flags[c[k]] |= FLAG_STALE;
-    }
-    for (uint32_t v = 0; v < e->n; v++)
-        if (e->flags[v] & FLAG_REMOVED)
-            e->best_target[v] = COLLAPSE_NONE;
 }
 
 /* Whether a collapse taken earlier in this pass changed the triangles that v0 -> v1 was judged
@@ -1524,11 +1621,16 @@ static uint32_t take_in_chunks(engine *e, const candidate *list, size_t count, f
     return taken;
 }
 
-/* One pass; returns the collapses it took. */
+/* One pass; returns the collapses it took. Every vertex whose neighbourhood changed is scored
+ * (its best legal collapse), the candidates ranked and taken greedily, the pass stopping at
+ * PASS_COST_FACTOR x the cost of the candidate a quarter down the ranking. */
 static uint32_t run_pass(engine *e, candidate *list, candidate *spare, scratch *s)
 {
-    build_adjacency(e);
-    for_each_vertex(e, STEP_RINGS);
+    if (!e->rings_current) { /* the first pass has those engine_init built */
+        build_adjacency(e);
+        for_each_vertex(e, STEP_RINGS);
+    }
+    e->rings_current = 0;
     for_each_vertex(e, STEP_SCORES);
     size_t count = 0;
     for (uint32_t v = 0; v < e->n; v++)
@@ -1536,16 +1638,9 @@ static uint32_t run_pass(engine *e, candidate *list, candidate *spare, scratch *
             list[count++] = e->best[v];
     if (!count)
         return 0;
-    int full_ties = e->o->method == DECIMATE_IMPORTANCE || e->m->distance;
-    rank_candidates(list, spare, count, full_ties);
+    rank_candidates(list, spare, count, e->o->method == DECIMATE_IMPORTANCE || e->m->distance);
     float cost_limit = list[count / 4].cost * PASS_COST_FACTOR;
-    for (uint32_t v = 0; v < e->n; v++) {
-        e->flags[v] &= (uint8_t) ~(FLAG_TOUCHED | FLAG_TAKEN);
-        e->donor[v] = COLLAPSE_NONE;
-    }
-    uint32_t taken = take_in_chunks(e, list, count, cost_limit, s);
-    mark_stale(e);
-    return taken;
+    return take_in_chunks(e, list, count, cost_limit, s);
 }
 
 /* ---- setup ---- */
@@ -1673,6 +1768,7 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
         if (e->adjacency_start[v] < e->adjacency_start[v + 1])
             e->alive += current_wedges(e, v, &s);
     scratch_free(&s);
+    e->rings_current = 1;
     return 0;
 }
 

@@ -15,6 +15,7 @@
 #include "io/mesh_io.h"
 #include "io/gltf.h"
 #include "io/mitsuba_write.h"
+#include "io/ply_check.h"
 #include "io/scene_load.h"
 #include "passes/importance_file.h"
 #include "passes/importance_outputs.h"
@@ -359,7 +360,8 @@ static int write_reduced_scene(reduce_state *st)
         char path[PATH_MAX];
         name_ply(st, m);
         snprintf(path, sizeof path, "%s/%s", st->staging, st->ply[m]);
-        status = mesh_io_write_ply(path, &st->output[m].mesh, NULL, NULL, NULL);
+        status = mesh_io_write_ply(path, &st->output[m].mesh, NULL, NULL, NULL) ||
+                 ply_check_written(path);
         replacements[st->meshes_written++] = (mitsuba_replacement){
             s->meshes[m].xml_file, s->meshes[m].xml_line, st->ply[m], s->meshes[m].flat_normals};
     }

@@ -33,6 +33,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <unistd.h>
 
 #include "core/error.h"
@@ -350,22 +351,73 @@ static int relax_locks(reduce_state *st, uint64_t excess, decimate_method method
     return any;
 }
 
-/* One warning when the scene keeps more than requested. */
+/* Whether mesh m is named by --keep. */
+static int named_by_keep(const reduce_options *o, const scene_mesh *mesh)
+{
+    for (size_t k = 0; k < o->keep_count; k++)
+        if (!strcmp(o->keep[k], mesh->name))
+            return 1;
+    return 0;
+}
+
+/* One warning when the scene keeps more than requested, with where the vertices that were not
+ * given up are: meshes kept whole (named by --keep, emitting light, without area, of at most
+ * --min-vertices vertices), and meshes that ran out of legal collapses above their target. */
 static void warn_missed(const reduce_state *st)
 {
     uint64_t requested = st->plan.total_requested;
     if (st->vertices_after <= requested)
         return;
+    const reduce_options *o = st->options;
+    enum { BY_KEEP, BY_LIGHT, BY_NO_AREA, BY_SIZE, REASONS };
+    static const char *const reason_text[REASONS] = {
+        "meshes kept whole by --keep", "meshes that emit light", "meshes without area",
+        "meshes at or below --min-vertices"};
+    uint64_t kept[REASONS] = {0};
     size_t stuck = 0;
-    for (size_t m = 0; m < st->count; m++)
-        stuck += (st->plan.decimate[m] && st->budget[m].floor > 0) ||
-                 (st->not_reduced && st->not_reduced[m]);
-    warn("the reduced scene keeps %llu vertices, %llu more than the %llu requested: %zu meshes "
-         "cannot lose more without tearing open their outlines, seams or pieces (report.json: "
-         "per mesh vertices_floor, not_reduced)",
+    char names[256] = "";
+    size_t used = 0;
+    for (size_t m = 0; m < st->count; m++) {
+        const scene_mesh *mesh = &st->scene->meshes[m];
+        if (st->plan.decimate[m] || (st->not_reduced && st->not_reduced[m])) {
+            stuck += st->budget[m].floor > 0 || (st->not_reduced && st->not_reduced[m]);
+            continue;
+        }
+        if (reduce_decimatable(st, m))
+            continue; /* planned whole by the budget */
+        int reason = mesh->light >= 0          ? BY_LIGHT
+                     : named_by_keep(o, mesh)  ? BY_KEEP
+                     : reduce_mesh_pinned(o, mesh) ? BY_NO_AREA
+                                                   : BY_SIZE;
+        kept[reason] += mesh->vertex_count;
+        if (reason == BY_KEEP && used < sizeof names)
+            used += (size_t)snprintf(names + used, sizeof names - used, "%s'%s'",
+                                     used ? ", " : "", mesh->name);
+    }
+    char where[1024] = "";
+    size_t at = 0;
+    for (int r = 0; r < REASONS; r++) {
+        if (!kept[r] || at >= sizeof where)
+            continue;
+        at += (size_t)snprintf(where + at, sizeof where - at, "%s%llu%s in %s", at ? ", " : "",
+                               (unsigned long long)kept[r], at ? "" : " of them",
+                               reason_text[r]);
+        if (r == BY_KEEP && at < sizeof where)
+            at += (size_t)snprintf(where + at, sizeof where - at, " (%s)", names);
+        if (r == BY_SIZE && at < sizeof where)
+            at += (size_t)snprintf(where + at, sizeof where - at, " (%llu)",
+                                   (unsigned long long)o->min_vertices);
+    }
+    char stuck_text[256] = "";
+    if (stuck)
+        snprintf(stuck_text, sizeof stuck_text,
+                 "%s%zu mesh%s cannot lose more without tearing open outlines, seams or pieces "
+                 "(report.json: per mesh vertices_floor, not_reduced)",
+                 at ? "; and " : "", stuck, stuck == 1 ? "" : "es");
+    warn("the reduced scene keeps %llu vertices, %llu more than the %llu requested: %s%s",
          (unsigned long long)st->vertices_after,
          (unsigned long long)(st->vertices_after - requested), (unsigned long long)requested,
-         stuck);
+         where, stuck_text);
 }
 
 /* The share of mesh m's triangle corners whose shading normal does not point to the front

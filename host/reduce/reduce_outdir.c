@@ -2,7 +2,6 @@
  * missing, refused when it holds something and --force was not given, and never a directory
  * that holds a file the scene reads (the scene's own directory, however it is spelled, or one
  * above it: inputs are never written). */
-#include <dirent.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -11,22 +10,6 @@
 #include "core/error.h"
 #include "core/files.h"
 #include "reduce/reduce_stages.h"
-
-/* Whether dir exists and holds an entry; a directory that cannot be opened counts as empty
- * (files_make_directory() then says what is wrong with it). */
-static int directory_has_entries(const char *dir)
-{
-    DIR *handle = opendir(dir);
-    if (!handle)
-        return 0;
-    struct dirent *entry;
-    int entries = 0;
-    while ((entry = readdir(handle)))
-        if (strcmp(entry->d_name, ".") && strcmp(entry->d_name, ".."))
-            entries = 1;
-    closedir(handle);
-    return entries;
-}
 
 int reduce_outdir_prepare(reduce_state *st)
 {
@@ -37,7 +20,7 @@ int reduce_outdir_prepare(reduce_state *st)
     if (stat(outdir, &info) == 0 && !S_ISDIR(info.st_mode))
         return error_set(IDMR_EXIT_INPUT, "output directory '%s' exists and is not a directory",
                          outdir);
-    if (!st->options->force && directory_has_entries(outdir))
+    if (!st->options->force && files_directory_has_entries(outdir))
         return error_set(IDMR_EXIT_INPUT,
                          "output directory '%s' exists and is not empty (use --force to write "
                          "into it)",

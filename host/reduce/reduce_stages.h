@@ -7,7 +7,8 @@
  *   options      --target in (0, 1], every --keep name a mesh of the scene (reduce.c)
  *   outdir       OUTDIR checked (empty unless forced, holding no input) and its staging
  *                directory made beside it, where every later stage writes; published as OUTDIR
- *                when all succeeded, removed otherwise or on an interrupt (reduce_outdir.c)
+ *                when all succeeded (refused if another run filled OUTDIR meanwhile), removed
+ *                otherwise, on an exit or on a signal (reduce_outdir.c, core/files.h)
  *   memory plan  with --memory-budget: the target (and, without --initial, the initial D0) that
  *                the budget allows, from the device memory of the render and importance passes
  *                (passes/sppm.h: sppm_memory_of) as a line in the triangles that may be
