@@ -148,6 +148,21 @@ static void test_obj_malformed_statements(void **state)
     read_fails("empty.obj", "# nothing\nv 0 0 0\n", NULL, "has no faces");
 }
 
+/* A UTF-8 byte-order mark before the first statement (as editors on Windows write it) is not
+ * part of the statement: it once made "v" an unknown keyword and the faces' indices errors. */
+static void test_byte_order_mark(void **state)
+{
+    mesh_data m;
+    read_ok("bom.obj", "\xEF\xBB\xBFv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", &m);
+    assert_int_equal(m.vertex_count, 3);
+    assert_int_equal(m.triangle_count, 1);
+    mesh_data_free(&m);
+    read_ok("bom.off", "\xEF\xBB\xBFOFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", &m);
+    assert_int_equal(m.triangle_count, 1);
+    mesh_data_free(&m);
+    read_fails("bom-later.obj", "v 0 0 0\n\xEF\xBB\xBFv 1 0 0\n", "line 2", "");
+}
+
 /* ---- OFF ---- */
 
 /* Counts on the header's line or the next, comments, a quad, COFF's colours ignored. */
@@ -196,6 +211,7 @@ int main(void)
         cmocka_unit_test(test_obj_nan_vertex_is_an_error),
         cmocka_unit_test(test_obj_index_errors),
         cmocka_unit_test(test_obj_malformed_statements),
+        cmocka_unit_test(test_byte_order_mark),
         cmocka_unit_test(test_off_reads),
         cmocka_unit_test(test_off_errors),
     };

@@ -203,6 +203,13 @@ static int obj_statement(obj_reader *r, const char *keyword, size_t length)
             float_push(&r->normals, (float)values[k]);
     } else if (length == 1 && keyword[0] == 'f') {
         return obj_face(r);
+    } else if (!isalpha((unsigned char)keyword[0])) {
+        /* other statements (g, o, s, usemtl, ...) are skipped, but every one is a word: this is
+         * no statement (a stray byte-order mark, binary data) */
+        return error_set(IDMR_EXIT_INPUT,
+                         "cannot read mesh '%s': line %ld: not an OBJ statement (it starts with "
+                         "byte 0x%02X)",
+                         r->cursor.path, r->cursor.line, (unsigned char)keyword[0]);
     }
     return 0;
 }
@@ -269,6 +276,13 @@ static int obj_build(obj_reader *r, mesh_data *out)
 }
 
 /* Opens `path` for a reader, with the error set naming it when it cannot. */
+/* Steps over a UTF-8 byte-order mark at the start of line 1 (editors on Windows write one). */
+static void skip_byte_order_mark(text_cursor *c)
+{
+    if (c->line == 1 && memcmp(c->at, "\xEF\xBB\xBF", 3) == 0)
+        c->at += 3;
+}
+
 static FILE *open_text(const char *path)
 {
     FILE *f = fopen(path, "rb");
@@ -292,6 +306,7 @@ int mesh_text_read_obj(const char *path, mesh_data *out)
     while (status == 0 && getline(&line, &size, f) >= 0) {
         r.cursor.line++;
         r.cursor.at = line;
+        skip_byte_order_mark(&r.cursor);
         skip_blanks(&r.cursor);
         size_t length = strcspn(r.cursor.at, " \t\r\n");
         const char *keyword = r.cursor.at;
@@ -323,6 +338,7 @@ static int off_next_line(FILE *f, char **line, size_t *size, text_cursor *c)
     while (getline(line, size, f) >= 0) {
         c->line++;
         c->at = *line;
+        skip_byte_order_mark(c);
         skip_blanks(c);
         if (*c->at && *c->at != '\n' && *c->at != '#')
             return 1;
