@@ -612,6 +612,29 @@ static void test_memory_budget_decimation_refused(void **state)
     expect_refused(&o, "--memory-budget");
 }
 
+/* On a device that shares the host's memory, with the budget of test_memory_budget (the render
+ * fits whole, the importance pass only after an initial reduction) and two passes to 0.9: pass
+ * 2 would simulate the box at 0.9, beyond what the budget allows the importance pass, so the
+ * run is refused before pass 1, naming --passes (at e00444f pass 2 ran on it all the same). */
+static void test_memory_budget_later_pass_refused(void **state)
+{
+    if (!device_test_device()->info.host_unified)
+        skip();
+    scene *s = test_load_scene(CORNELL);
+    reduce_options o;
+    small_options(&o);
+    o.target = 0.9;
+    o.passes = 2;
+    uint64_t render_bytes, importance_bytes;
+    cornell_memory(s, &o, &render_bytes, &importance_bytes);
+    double device_share =
+        0.8 * (double)(render_bytes < importance_bytes ? render_bytes : importance_bytes);
+    o.memory_budget =
+        (uint64_t)((device_share + (double)resident_bytes()) / REDUCE_MEMORY_MARGIN);
+    scene_free(s);
+    expect_refused(&o, "--passes 2");
+}
+
 /* A budget below what rendering needs with every decimatable mesh gone (the film's and photons'
  * buffers alone): an input error naming --memory-budget, and no output. */
 static void test_memory_budget_too_small(void **state)
@@ -681,6 +704,7 @@ int main(void)
         cmocka_unit_test(test_memory_budget_too_small),
         cmocka_unit_test(test_memory_budget_nothing_to_reduce),
         cmocka_unit_test(test_memory_budget_decimation_refused),
+        cmocka_unit_test(test_memory_budget_later_pass_refused),
     };
     return DEVICE_TEST_RUN("reduce", tests, NULL, NULL) != 0;
 }

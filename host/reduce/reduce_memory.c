@@ -171,12 +171,13 @@ static void add_host_memory(memory_line *importance)
  * mesh at a time at the least: reduce_memory_meshes_in_flight). */
 static int refuse_in_flight(const reduce_state *st, uint64_t budget)
 {
-    size_t largest = 0;
+    size_t largest = st->count;
     for (size_t m = 0; m < st->count; m++)
         if (reduce_decimatable(st, m) &&
-            st->scene->meshes[m].vertex_count > st->scene->meshes[largest].vertex_count)
+            (largest == st->count ||
+             st->scene->meshes[m].vertex_count > st->scene->meshes[largest].vertex_count))
             largest = m;
-    if (!st->count || !reduce_decimatable(st, largest))
+    if (largest == st->count)
         return 0;
     double held = (double)resident_bytes();
     double mesh = IN_FLIGHT_BYTES_PER_VERTEX * (double)st->scene->meshes[largest].vertex_count;
@@ -185,8 +186,8 @@ static int refuse_in_flight(const reduce_state *st, uint64_t budget)
     return error_set(IDMR_EXIT_INPUT,
                      "--memory-budget %.1f MiB: device '%s' shares the host's memory; the "
                      "process holds %.1f MiB (the scene as loaded, the OpenCL runtime), and "
-                     "decimating mesh '%s' (%u vertices) takes about %.1f MiB more: raise the "
-                     "budget to at least %.1f MiB",
+                     "reading mesh '%s' (%u vertices) again to decimate or rewrite it takes "
+                     "about %.1f MiB more: raise the budget to at least %.1f MiB",
                      MIB(budget), st->device->info.name, MIB(held),
                      st->scene->meshes[largest].name, st->scene->meshes[largest].vertex_count,
                      MIB(mesh), MIB(held + mesh));
@@ -238,9 +239,12 @@ int reduce_memory_plan(reduce_state *st)
         if (shared)
             add_host_memory(&importance);
         double d0 = fitting_fraction(&importance, per_triangle, budget);
+        double histories = shared ? HISTORY_BYTES_PER_VERTEX * decimatable_vertices(st) : 0;
+        int histories_counted = 0;
         if (!(o->initial < 1) && d0 < 1) {
             /* Reduced first: its collapse histories are held while the pass runs. */
-            importance.fixed += shared ? HISTORY_BYTES_PER_VERTEX * decimatable_vertices(st) : 0;
+            importance.fixed += histories;
+            histories_counted = 1;
             d0 = fitting_fraction(&importance, per_triangle, budget);
             if (d0 < 0)
                 return error_set(IDMR_EXIT_INPUT,
@@ -256,7 +260,7 @@ int reduce_memory_plan(reduce_state *st)
          * (with the collapse histories of that decimation held for the remapping). */
         if (o->passes > 1) {
             double later = bytes_at(&importance, st->target, per_triangle) +
-                           (shared ? HISTORY_BYTES_PER_VERTEX * decimatable_vertices(st) : 0);
+                           (histories_counted ? 0 : histories);
             if (later > REDUCE_MEMORY_MARGIN * (double)budget)
                 return error_set(IDMR_EXIT_INPUT,
                                  "--memory-budget %.1f MiB: with --passes %u, pass 2 simulates "
