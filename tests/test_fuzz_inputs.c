@@ -7,7 +7,7 @@
  *                                   starting "accept-" accepted; any other (a crash-* or
  *                                   timeout-* file as libFuzzer names it) must only return
  *
- * TARGET is scene, obj, off, ply or stl. A directory that is missing or empty fails its test. Under
+ * TARGET is scene, simulation, obj, off, ply or stl. A directory that is missing or empty fails its test. Under
  * `make test config=sanitize` the replay runs with ASan and UBSan, as the fuzzer does. */
 #include <dirent.h>
 #include <setjmp.h>
@@ -31,8 +31,13 @@ static int make_temp_dir(void **state)
     return temp_dir_make(temp_dir, "fuzz-inputs");
 }
 
+/* The scene the simulation target reads for, loaded at its first input. */
+static scene *simulation_scene;
+
 static int remove_temp_dir(void **state)
 {
+    scene_free(simulation_scene);
+    simulation_scene = NULL;
     warn_silence(0);
     return temp_dir_remove(temp_dir);
 }
@@ -42,6 +47,13 @@ static int replay(const char *target, const uint8_t *data, size_t size)
 {
     if (strcmp(target, "scene") == 0)
         return fuzz_scene_input(data, size, temp_dir);
+    if (strcmp(target, "simulation") == 0) {
+        if (!simulation_scene)
+            simulation_scene = fuzz_simulation_scene(IDMR_ROOT, temp_dir);
+        if (!simulation_scene)
+            fail_msg("cannot load the simulation target's scene: %s", error_message());
+        return fuzz_simulation_input(data, size, temp_dir, simulation_scene);
+    }
     char extension[8];
     snprintf(extension, sizeof extension, ".%s", target);
     return fuzz_mesh_input(data, size, temp_dir, extension);
@@ -94,8 +106,8 @@ static void test_target_inputs(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        TARGET_TEST("scene"), TARGET_TEST("obj"), TARGET_TEST("off"),
-        TARGET_TEST("ply"),   TARGET_TEST("stl"),
+        TARGET_TEST("scene"), TARGET_TEST("simulation"), TARGET_TEST("obj"),
+        TARGET_TEST("off"),   TARGET_TEST("ply"),        TARGET_TEST("stl"),
     };
     return cmocka_run_group_tests(tests, make_temp_dir, remove_temp_dir);
 }

@@ -499,6 +499,9 @@ static void test_memory_budget(void **state)
     double device_share =
         0.8 * (double)(render_bytes < importance_bytes ? render_bytes : importance_bytes);
     int shared = device_test_device()->info.host_unified;
+    /* There the render fits whole: asked to keep everything, nothing would be left to do. */
+    if (shared)
+        o.target = 0.9;
     o.memory_budget = (uint64_t)device_share;
     if (shared) {
         expect_refused(&o, "shares the host's memory");
@@ -562,6 +565,74 @@ static void test_memory_budget(void **state)
     scene_free(streamed);
     reduction_free(&r);
     scene_free(s);
+}
+
+/* A budget the scene renders within as it is, with two passes asked for: the answer is
+ * "nothing to reduce" (target 1), found from the plan alone, without an initial reduction or an
+ * importance pass (at e00444f both passes ran, the second on the whole scene), and the scene
+ * is written as it is. */
+static void test_memory_budget_nothing_to_reduce(void **state)
+{
+    reduce_options o;
+    small_options(&o);
+    o.target = 1;
+    o.passes = 2;
+    o.memory_budget = 4ull << 30;
+    scene *s;
+    reduction r;
+    s = test_load_scene(CORNELL);
+    reduction_run(&r, s, &o);
+    assert_true(number(r.report, "target") == 1);
+    assert_int_equal(check_report_against_output(r.report, s, r.out), s->vertex_count);
+    const cJSON *initial = cJSON_GetObjectItemCaseSensitive(r.report, "initial");
+    assert_true(!initial || cJSON_IsNull(initial));
+    assert_true(number(cJSON_GetObjectItemCaseSensitive(r.report, "seconds"), "importance") <
+                0.05);
+    const cJSON *pass;
+    cJSON_ArrayForEach(pass, cJSON_GetObjectItemCaseSensitive(r.report, "passes"))
+    {
+        assert_true(number(pass, "iterations") == 0);
+    }
+    assert_true(number(r.report, "peak_rss_bytes") <= (double)o.memory_budget);
+    reduction_free(&r);
+    scene_free(s);
+}
+
+/* On a device that shares the host's memory: a budget the process already holds nearly all of,
+ * so the knot cannot be decimated beside it, is refused up front, naming the budget and what
+ * decimating it needs. */
+static void test_memory_budget_decimation_refused(void **state)
+{
+    if (!device_test_device()->info.host_unified)
+        skip();
+    reduce_options o;
+    small_options(&o);
+    o.method = REDUCE_QUADRIC;
+    o.memory_budget = (uint64_t)resident_bytes() + 4096;
+    expect_refused(&o, "--memory-budget");
+}
+
+/* On a device that shares the host's memory, with the budget of test_memory_budget (the render
+ * fits whole, the importance pass only after an initial reduction) and two passes to 0.9: pass
+ * 2 would simulate the box at 0.9, beyond what the budget allows the importance pass, so the
+ * run is refused before pass 1, naming --passes (at e00444f pass 2 ran on it all the same). */
+static void test_memory_budget_later_pass_refused(void **state)
+{
+    if (!device_test_device()->info.host_unified)
+        skip();
+    scene *s = test_load_scene(CORNELL);
+    reduce_options o;
+    small_options(&o);
+    o.target = 0.9;
+    o.passes = 2;
+    uint64_t render_bytes, importance_bytes;
+    cornell_memory(s, &o, &render_bytes, &importance_bytes);
+    double device_share =
+        0.8 * (double)(render_bytes < importance_bytes ? render_bytes : importance_bytes);
+    o.memory_budget =
+        (uint64_t)((device_share + (double)resident_bytes()) / REDUCE_MEMORY_MARGIN);
+    scene_free(s);
+    expect_refused(&o, "--passes 2");
 }
 
 /* A budget below what rendering needs with every decimatable mesh gone (the film's and photons'
@@ -631,6 +702,9 @@ int main(void)
         cmocka_unit_test(test_two_passes),
         cmocka_unit_test(test_memory_budget),
         cmocka_unit_test(test_memory_budget_too_small),
+        cmocka_unit_test(test_memory_budget_nothing_to_reduce),
+        cmocka_unit_test(test_memory_budget_decimation_refused),
+        cmocka_unit_test(test_memory_budget_later_pass_refused),
     };
     return DEVICE_TEST_RUN("reduce", tests, NULL, NULL) != 0;
 }

@@ -234,7 +234,12 @@ static unsigned char *read_checked(const char *path, size_t *size)
     if (!status) {
         memcpy(&h, head + sizeof MAGIC, sizeof h);
         promised = promised_size(&h);
-        if (promised != (uint64_t)info.st_size)
+        if (promised == 0)
+            status = error_set(IDMR_EXIT_INPUT,
+                               "--simulation: '%s': its header's counts (%llu triangles, a "
+                               "%ux%u image) describe a file larger than any (damaged)",
+                               path, (unsigned long long)h.triangles, h.width, h.height);
+        else if (promised != (uint64_t)info.st_size)
             status = error_set(IDMR_EXIT_INPUT,
                                "--simulation: '%s' is %llu bytes, not the %llu its header "
                                "describes (truncated or damaged)",

@@ -453,13 +453,68 @@ static int run_pass(reduce_state *st, unsigned int pass)
            record_pass(st, importance_before, reduction_before);
 }
 
+/* The process's peak resident memory since the last reset_peak_resident() (VmHWM), in bytes;
+ * 0 where the system does not say. */
+static double peak_resident_bytes(void)
+{
+    FILE *f = fopen("/proc/self/status", "r");
+    char line[256];
+    double kib = 0;
+    while (f && fgets(line, sizeof line, f))
+        if (sscanf(line, "VmHWM: %lf kB", &kib) == 1)
+            break;
+    if (f)
+        fclose(f);
+    return kib * 1024.0;
+}
+
+/* Starts the peak over (Linux: "5" into clear_refs), so a run measures its own peak, not an
+ * earlier one of the same process (a test). */
+static void reset_peak_resident(void)
+{
+    FILE *f = fopen("/proc/self/clear_refs", "w");
+    if (f) {
+        fputs("5", f);
+        fclose(f);
+    }
+}
+
+/* Where the device shares the host's memory the budget bounds the whole process: a run that
+ * went above it (the plan's estimates missed) is an error, not a result. */
+static int check_peak_within_budget(const reduce_state *st)
+{
+    uint64_t budget = st->options->memory_budget;
+    double peak = peak_resident_bytes();
+    if (!budget || !st->device->info.host_unified || peak <= (double)budget)
+        return 0;
+    return error_set(IDMR_EXIT_FAILURE,
+                     "--memory-budget %.1f MiB: the process peaked at %.1f MiB (device '%s' "
+                     "shares the host's memory, so the budget bounds the whole process); the "
+                     "reduced scene is not written: raise the budget or lower --target",
+                     (double)budget / 1048576.0, peak / 1048576.0, st->device->info.name);
+}
+
 int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
 {
     reduce_state st = {.device = d, .scene = s, .simulated = s, .outdir = outdir, .options = o,
                        .count = s->mesh_count, .target = o->target, .initial = o->initial};
     st.passes = xcalloc(REDUCE_MAX_PASSES + 1, sizeof *st.passes);
-    int status = check_options(&st) || reduce_memory_plan(&st) || reduce_outdir_prepare(&st) ||
-                 reduce_initial(&st);
+    if (o->memory_budget)
+        reset_peak_resident();
+    int status = check_options(&st) || reduce_memory_plan(&st);
+    /* The budget leaves nothing to remove (the scene renders within it as it is): the scene is
+     * written as it is, without an initial reduction or an importance pass to find that out. */
+    reduce_options as_is;
+    if (!status && o->memory_budget && !(st.target < 1) &&
+        reduce_method_uses_importance(o->method)) {
+        as_is = *o;
+        as_is.method = REDUCE_QUADRIC;
+        as_is.passes = 1;
+        as_is.initial = 1.0;
+        st.options = o = &as_is;
+        st.initial = 1.0;
+    }
+    status = status || reduce_outdir_prepare(&st) || reduce_initial(&st);
     for (unsigned int pass = 1; !status && pass <= o->passes; pass++)
         status = run_pass(&st, pass);
     /* Under a memory budget, the reduced scene decimated again at a lower target while its
@@ -473,7 +528,8 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
         if (!status && st.pass_count) /* the last pass's reduction is this one now */
             st.passes[st.pass_count - 1].vertices_after = st.vertices_after;
     }
-    status = status || write_reduced_scene(&st) || write_report(&st);
+    status = status || write_reduced_scene(&st) || write_report(&st) ||
+             check_peak_within_budget(&st);
     status = reduce_outdir_finish(&st, !status);
     if (!status)
         print_summary(&st);

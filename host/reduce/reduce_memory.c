@@ -166,6 +166,33 @@ static void add_host_memory(memory_line *importance)
     importance->per_triangle += HOST_BYTES_PER_TRIANGLE;
 }
 
+/* On a device that shares the host's memory: the largest mesh that may be decimated, read again
+ * and decimated beside what the process holds now, must fit the budget (the decimation takes one
+ * mesh at a time at the least: reduce_memory_meshes_in_flight). */
+static int refuse_in_flight(const reduce_state *st, uint64_t budget)
+{
+    size_t largest = st->count;
+    for (size_t m = 0; m < st->count; m++)
+        if (reduce_decimatable(st, m) &&
+            (largest == st->count ||
+             st->scene->meshes[m].vertex_count > st->scene->meshes[largest].vertex_count))
+            largest = m;
+    if (largest == st->count)
+        return 0;
+    double held = (double)resident_bytes();
+    double mesh = IN_FLIGHT_BYTES_PER_VERTEX * (double)st->scene->meshes[largest].vertex_count;
+    if (held + mesh <= (double)budget)
+        return 0;
+    return error_set(IDMR_EXIT_INPUT,
+                     "--memory-budget %.1f MiB: device '%s' shares the host's memory; the "
+                     "process holds %.1f MiB (the scene as loaded, the OpenCL runtime), and "
+                     "reading mesh '%s' (%u vertices) again to decimate or rewrite it takes "
+                     "about %.1f MiB more: raise the budget to at least %.1f MiB",
+                     MIB(budget), st->device->info.name, MIB(held),
+                     st->scene->meshes[largest].name, st->scene->meshes[largest].vertex_count,
+                     MIB(mesh), MIB(held + mesh));
+}
+
 int reduce_memory_plan(reduce_state *st)
 {
     const reduce_options *o = st->options;
@@ -195,15 +222,29 @@ int reduce_memory_plan(reduce_state *st)
     double d = fitting_fraction(&render, per_triangle, budget);
     if (d < st->target)
         st->target = d;
+    if (st->device->info.host_unified && refuse_in_flight(st, budget))
+        return -1;
+    /* Nothing to remove: reduce_run writes the scene as it is, with no pass to cost. */
+    if (!(st->target < 1)) {
+        if (o->importance.sppm.progress)
+            fprintf(stderr,
+                    "idmr: memory budget %.1f MiB: rendering the scene as it is needs about "
+                    "%.1f MiB, within the budget: nothing to reduce\n",
+                    MIB(budget), MIB(bytes_at(&render, 1.0, per_triangle)));
+        return 0;
+    }
     char simulated[160] = "";
     if (simulates) {
         int shared = st->device->info.host_unified;
         if (shared)
             add_host_memory(&importance);
         double d0 = fitting_fraction(&importance, per_triangle, budget);
+        double histories = shared ? HISTORY_BYTES_PER_VERTEX * decimatable_vertices(st) : 0;
+        int histories_counted = 0;
         if (!(o->initial < 1) && d0 < 1) {
             /* Reduced first: its collapse histories are held while the pass runs. */
-            importance.fixed += shared ? HISTORY_BYTES_PER_VERTEX * decimatable_vertices(st) : 0;
+            importance.fixed += histories;
+            histories_counted = 1;
             d0 = fitting_fraction(&importance, per_triangle, budget);
             if (d0 < 0)
                 return error_set(IDMR_EXIT_INPUT,
@@ -214,6 +255,22 @@ int reduce_memory_plan(reduce_state *st)
                                  MIB(budget), st->device->info.name,
                                  MIB(bytes_at(&importance, 0.0, per_triangle)));
             st->initial = d0;
+        }
+        /* Each pass after the first simulates the last one's result, the scene at the target
+         * (with the collapse histories of that decimation held for the remapping). */
+        if (o->passes > 1) {
+            double later = bytes_at(&importance, st->target, per_triangle) +
+                           (histories_counted ? 0 : histories);
+            if (later > REDUCE_MEMORY_MARGIN * (double)budget)
+                return error_set(IDMR_EXIT_INPUT,
+                                 "--memory-budget %.1f MiB: with --passes %u, pass 2 simulates "
+                                 "the scene reduced to the target %.4g, and its importance pass "
+                                 "needs about %.1f MiB%s: give --passes 1, a smaller --target "
+                                 "or a larger budget",
+                                 MIB(budget), o->passes, st->target, MIB(later),
+                                 shared ? " with what the host holds meanwhile (the device "
+                                          "shares its memory)"
+                                        : "");
         }
         snprintf(simulated, sizeof simulated, ", its importance pass %.1f MiB%s",
                  MIB(bytes_at(&importance, 1.0, per_triangle)),

@@ -7,6 +7,14 @@
  *                      m.ply, m.off (for shapes); the scene is loaded with mitsuba_load()
  *   fuzz_mesh_input    the bytes are one mesh file of the given extension, read with
  *                      mesh_io_read_oriented() (as a shape with vertex normals is read)
+ *   fuzz_simulation_input
+ *                      the bytes are a simulation file (`idmr importance` DIR/simulation.bin,
+ *                      passes/importance_file.h), read with importance_file_read() for the
+ *                      shipped Cornell box without its knot (fuzz_simulation_scene); where
+ *                      the bytes start with the magic and hold a header, their scene
+ *                      fingerprint and closing checksum are first set to what the reader
+ *                      expects, so the fuzzer reaches the checks behind them (a damaged
+ *                      checksum is a compare that needs no fuzzing)
  *
  * Either returns whether the reader accepted the input; a rejected input must leave a message
  * (the error set), never a crash, a hang or a leak. Files go to a directory the caller made. */
@@ -22,6 +30,7 @@
 #include "core/scene.h"
 #include "io/mesh_io.h"
 #include "io/mitsuba.h"
+#include "passes/importance_file.h"
 
 #define FUZZ_FILE_SEPARATOR "--idmr-fuzz-next-file--\n"
 
@@ -87,6 +96,71 @@ static inline int fuzz_mesh_input(const uint8_t *data, size_t size, const char *
         return 0;
     mesh_data_free(&mesh);
     return 1;
+}
+
+/* The scene the simulation target reads for: IDMR_ROOT/data/cornell/scene.xml with the knot's
+ * shape left out (its walls, block and light: a few dozen triangles, so a simulation file of
+ * it is small), written to dir/cornell-walls.xml and loaded; NULL with the error set. */
+static inline scene *fuzz_simulation_scene(const char *root, const char *dir)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/data/cornell/scene.xml", root);
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    static char xml[1 << 16];
+    size_t size = fread(xml, 1, sizeof xml - 1, f);
+    fclose(f);
+    xml[size] = 0;
+    char *knot = strstr(xml, "<shape type=\"ply\" id=\"knot\">");
+    char *end = knot ? strstr(knot, "</shape>") : NULL;
+    if (!end)
+        return NULL;
+    end += strlen("</shape>");
+    memmove(knot, end, strlen(end) + 1);
+    if (fuzz_write(dir, "cornell-walls.xml", (const uint8_t *)xml, strlen(xml)))
+        return NULL;
+    snprintf(path, sizeof path, "%s/cornell-walls.xml", dir);
+    return mitsuba_load(path);
+}
+
+#define FUZZ_SIMULATION_HEADER 80 /* magic (8) and the fixed header (72) */
+
+static inline uint64_t fuzz_fnv1a(const uint8_t *bytes, size_t size)
+{
+    uint64_t hash = 0xcbf29ce484222325ull;
+    for (size_t i = 0; i < size; i++)
+        hash = (hash ^ bytes[i]) * 0x100000001b3ull;
+    return hash;
+}
+
+static inline int fuzz_simulation_input(const uint8_t *data, size_t size, const char *dir,
+                                        const scene *s)
+{
+    uint8_t *bytes = malloc(size ? size : 1);
+    memcpy(bytes, data, size);
+    uint64_t fingerprint;
+    if (importance_file_fingerprint(s, &fingerprint))
+        abort();
+    if (size >= FUZZ_SIMULATION_HEADER + sizeof(uint64_t) &&
+        memcmp(bytes, "IDMRSIM4", 8) == 0) {
+        memcpy(bytes + 8, &fingerprint, sizeof fingerprint);
+        uint64_t checksum = fuzz_fnv1a(bytes, size - sizeof checksum);
+        memcpy(bytes + size - sizeof checksum, &checksum, sizeof checksum);
+    }
+    int written = fuzz_write(dir, "simulation.bin", bytes, size);
+    free(bytes);
+    if (written)
+        abort();
+    char path[4096];
+    snprintf(path, sizeof path, "%s/simulation.bin", dir);
+    error_clear();
+    importance_options o;
+    importance_options_default(&o);
+    importance_result r;
+    int status = importance_file_read(path, s, &o, &r);
+    importance_result_free(&r);
+    return status == 0;
 }
 
 #endif
