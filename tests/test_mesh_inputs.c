@@ -340,6 +340,54 @@ static void test_ply_face_properties(void **state)
     mesh_data_free(&m);
 }
 
+/* A face list named otherwise (vertex_ids), with ushort counts, ascii and binary: the face
+ * element's one list of integers holds the corners. Two such lists, neither named as usual: an
+ * error that says so. */
+static void test_ply_face_list_named_otherwise(void **state)
+{
+    mesh_data m;
+    static const uint32_t expected[] = {0, 1, 2, 0, 2, 3};
+    read_ok("ids.ply",
+            "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+            "property float z\nelement face 2\nproperty list ushort int vertex_ids\nend_header\n"
+            "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n",
+            &m);
+    assert_indices(&m, expected, 2);
+    mesh_data_free(&m);
+
+    unsigned char binary[512];
+    const char *header = "ply\nformat binary_little_endian 1.0\nelement vertex 4\n"
+                         "property float x\nproperty float y\nproperty float z\nelement face 2\n"
+                         "property uchar flags\nproperty list ushort uint indices\nend_header\n";
+    size_t n = strlen(header);
+    memcpy(binary, header, n);
+    static const float corners[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+    memcpy(binary + n, corners, sizeof corners);
+    n += sizeof corners;
+    for (int f = 0; f < 2; f++) {
+        uint8_t flags = 7;
+        uint16_t count = 3;
+        uint32_t face[3] = {0, (uint32_t)(1 + f), (uint32_t)(2 + f)};
+        memcpy(binary + n, &flags, 1);
+        memcpy(binary + n + 1, &count, 2);
+        memcpy(binary + n + 3, face, sizeof face);
+        n += 3 + sizeof face;
+    }
+    write_bytes("indices.ply", binary, n);
+    read_ok_path(path_in(temp_dir, "indices.ply"), &m);
+    assert_indices(&m, expected, 2);
+    mesh_data_free(&m);
+
+    FILE *f = fopen(path_in(temp_dir, "two-lists.ply"), "w");
+    assert_non_null(f);
+    fputs("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+          "property float z\nelement face 1\nproperty list uchar int a\n"
+          "property list uchar int b\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 3 0 1 2\n",
+          f);
+    assert_int_equal(fclose(f), 0);
+    read_fails_path("two-lists.ply", "several lists", NULL);
+}
+
 /* ---- bin/idmr ---- */
 
 /* DIR/scene.xml: a camera, a light, a floor and the shape of `type` reading `file`. */
@@ -546,6 +594,7 @@ int main(void)
         cmocka_unit_test(test_stl_damaged),
         cmocka_unit_test(test_ply_double_sided),
         cmocka_unit_test(test_ply_face_properties),
+        cmocka_unit_test(test_ply_face_list_named_otherwise),
         cmocka_unit_test(test_importance_with_repeated_vertex),
         cmocka_unit_test(test_gltf_strip),
         cmocka_unit_test(test_reduce_stl),

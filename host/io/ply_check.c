@@ -102,6 +102,36 @@ static int header_fail(const ply_reader *r, long number, const char *what)
 /* ---------------------------------------------------------------------------------------- */
 /* The header                                                                               */
 
+/* A face element whose corner list is named neither vertex_indices nor vertex_index (writers
+ * name it vertex_ids, indices, ...): its one list of integers is the corner list. Several such
+ * lists and none of the usual names: an error naming them, as no rule can tell which it is. */
+static int face_list_by_type(ply_reader *r, long number)
+{
+    for (int i = 0; i < r->element_count; i++) {
+        ply_element *e = &r->elements[i];
+        if (strcmp(e->name, "face") != 0)
+            continue;
+        ply_property *found = NULL;
+        size_t lists = 0;
+        for (int k = 0; k < e->property_count; k++) {
+            ply_property *p = &e->properties[k];
+            if (p->is_face_indices)
+                return 0;
+            if (p->count_type != PLY_TYPE_NONE && p->type < PLY_FLOAT32) {
+                found = p;
+                lists++;
+            }
+        }
+        if (lists == 1)
+            found->is_face_indices = 1;
+        else if (lists > 1)
+            return header_fail(r, number, "the face element has several lists of integers and "
+                                          "none named vertex_indices or vertex_index: which holds "
+                                          "the corners?");
+    }
+    return 0;
+}
+
 /* One header line (no newline), number `number`: what it declares into r, or an error. Sets
  * *done at "end_header". */
 static int header_line(ply_reader *r, char *line, long number, int *seen_format, int *done)
@@ -117,8 +147,9 @@ static int header_line(ply_reader *r, char *line, long number, int *seen_format,
         return 0;
     if (strcmp(words[0], "end_header") == 0) {
         *done = 1;
-        return *seen_format ? 0
-                            : header_fail(r, number, "no \"format\" line before \"end_header\"");
+        if (!*seen_format)
+            return header_fail(r, number, "no \"format\" line before \"end_header\"");
+        return face_list_by_type(r, number);
     }
     if (strcmp(words[0], "format") == 0) {
         if (count != 3 || strcmp(words[2], "1.0") != 0)
