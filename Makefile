@@ -158,7 +158,7 @@ bench: bin/idmr kernels $(BENCH_PROGRAMS)
 	@scripts/bench-reduction-quality
 
 # A 15-million-vertex scene reduced under a device-memory budget it does not fit
-# (scripts/bench-outofcore): about two hours on 2 cores, so not part of `make bench`.
+# (scripts/bench-outofcore): about five minutes on 2 cores, so not part of `make bench`.
 bench-outofcore: bin/idmr kernels
 	@scripts/bench-outofcore
 
