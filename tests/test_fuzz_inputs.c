@@ -7,7 +7,7 @@
  *                                   starting "accept-" accepted; any other (a crash-* or
  *                                   timeout-* file as libFuzzer names it) must only return
  *
- * TARGET is scene, obj, off, ply or stl. A directory that is missing or empty fails its test. Under
+ * TARGET is scene, gltf, obj, off, ply or stl. A directory that is missing or empty fails its test. Under
  * `make test config=sanitize` the replay runs with ASan and UBSan, as the fuzzer does. */
 #include <dirent.h>
 #include <setjmp.h>
@@ -19,6 +19,7 @@
 
 #include "mitsuba_common.h"
 
+#include "core/progress.h"
 #include "fuzz/fuzz_inputs.h"
 
 #define FUZZ_ROOT IDMR_ROOT "/tests/fuzz"
@@ -28,6 +29,7 @@ static char temp_dir[64];
 static int make_temp_dir(void **state)
 {
     warn_silence(1);
+    progress_set_quiet(1);
     return temp_dir_make(temp_dir, "fuzz-inputs");
 }
 
@@ -42,6 +44,8 @@ static int replay(const char *target, const uint8_t *data, size_t size)
 {
     if (strcmp(target, "scene") == 0)
         return fuzz_scene_input(data, size, temp_dir);
+    if (strcmp(target, "gltf") == 0)
+        return fuzz_gltf_input(data, size, temp_dir);
     char extension[8];
     snprintf(extension, sizeof extension, ".%s", target);
     return fuzz_mesh_input(data, size, temp_dir, extension);
@@ -94,8 +98,8 @@ static void test_target_inputs(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        TARGET_TEST("scene"), TARGET_TEST("obj"), TARGET_TEST("off"),
-        TARGET_TEST("ply"),   TARGET_TEST("stl"),
+        TARGET_TEST("scene"), TARGET_TEST("gltf"), TARGET_TEST("obj"),
+        TARGET_TEST("off"),   TARGET_TEST("ply"),  TARGET_TEST("stl"),
     };
     return cmocka_run_group_tests(tests, make_temp_dir, remove_temp_dir);
 }

@@ -7,6 +7,10 @@
  *                      m.ply, m.off (for shapes); the scene is loaded with mitsuba_load()
  *   fuzz_mesh_input    the bytes are one mesh file of the given extension, read with
  *                      mesh_io_read_oriented() (as a shape with vertex normals is read)
+ *   fuzz_gltf_input    the bytes are one glTF file: scene.glb when they begin with "glTF",
+ *                      else scene.gltf (its buffers as data: URIs or the GLB's BIN chunk), loaded
+ *                      with gltf_load(): the document reader and checks, then Assimp on what
+ *                      they let through
  *
  * Either returns whether the reader accepted the input; a rejected input must leave a message
  * (the error set), never a crash, a hang or a leak. Files go to a directory the caller made. */
@@ -20,6 +24,7 @@
 
 #include "core/error.h"
 #include "core/scene.h"
+#include "io/gltf.h"
 #include "io/mesh_io.h"
 #include "io/mitsuba.h"
 
@@ -86,6 +91,21 @@ static inline int fuzz_mesh_input(const uint8_t *data, size_t size, const char *
     if (mesh_io_read_oriented(path, &mesh, 1, &flipped))
         return 0;
     mesh_data_free(&mesh);
+    return 1;
+}
+
+static inline int fuzz_gltf_input(const uint8_t *data, size_t size, const char *dir)
+{
+    const char *name = size >= 4 && memcmp(data, "glTF", 4) == 0 ? "scene.glb" : "scene.gltf";
+    char path[4096];
+    if (fuzz_write(dir, name, data, size))
+        abort();
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    error_clear();
+    scene *s = gltf_load(path);
+    if (!s)
+        return 0;
+    scene_free(s);
     return 1;
 }
 
