@@ -7,8 +7,9 @@
  *                                   starting "accept-" accepted; any other (a crash-* or
  *                                   timeout-* file as libFuzzer names it) must only return
  *
- * TARGET is scene, simulation, obj, off, ply or stl. A directory that is missing or empty fails its test. Under
- * `make test config=sanitize` the replay runs with ASan and UBSan, as the fuzzer does. */
+ * TARGET is scene, gltf, simulation, obj, off, ply or stl. A directory that is missing or empty
+ * fails its test. Under `make test config=sanitize` the replay runs with ASan and UBSan, as the
+ * fuzzer does. */
 #include <dirent.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -19,6 +20,7 @@
 
 #include "mitsuba_common.h"
 
+#include "core/progress.h"
 #include "fuzz/fuzz_inputs.h"
 
 #define FUZZ_ROOT IDMR_ROOT "/tests/fuzz"
@@ -28,6 +30,7 @@ static char temp_dir[64];
 static int make_temp_dir(void **state)
 {
     warn_silence(1);
+    progress_set_quiet(1);
     return temp_dir_make(temp_dir, "fuzz-inputs");
 }
 
@@ -54,6 +57,8 @@ static int replay(const char *target, const uint8_t *data, size_t size)
             fail_msg("cannot load the simulation target's scene: %s", error_message());
         return fuzz_simulation_input(data, size, temp_dir, simulation_scene);
     }
+    if (strcmp(target, "gltf") == 0)
+        return fuzz_gltf_input(data, size, temp_dir);
     char extension[8];
     snprintf(extension, sizeof extension, ".%s", target);
     return fuzz_mesh_input(data, size, temp_dir, extension);
@@ -106,8 +111,9 @@ static void test_target_inputs(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        TARGET_TEST("scene"), TARGET_TEST("simulation"), TARGET_TEST("obj"),
-        TARGET_TEST("off"),   TARGET_TEST("ply"),        TARGET_TEST("stl"),
+        TARGET_TEST("scene"), TARGET_TEST("gltf"), TARGET_TEST("simulation"),
+        TARGET_TEST("obj"),   TARGET_TEST("off"),  TARGET_TEST("ply"),
+        TARGET_TEST("stl"),
     };
     return cmocka_run_group_tests(tests, make_temp_dir, remove_temp_dir);
 }

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "core/error.h"
+#include "core/progress.h"
 
 int fail(void)
 {
@@ -122,6 +123,7 @@ enum option_parse parse_sppm_option(int c, sppm_options *o, int *device_index)
         return OPTION_TAKEN;
     case OPT_QUIET:
         o->progress = 0;
+        progress_set_quiet(1); /* also for loading the scene */
         return OPTION_TAKEN;
     case OPT_LOCAL_SIZE:
         if (parse_unsigned("--local-size", optarg, 0, 4096, &whole))

@@ -32,6 +32,30 @@ void progress_begin(progress *p, const char *label, unsigned int total, int enab
     p->next_line = 0;
     p->done = 0;
     p->start = monotonic_seconds();
+    p->delay = 0;
+    p->shown = 0;
+}
+
+void progress_delay(progress *p, double seconds)
+{
+    p->delay = seconds;
+}
+
+void progress_set_total(progress *p, unsigned int total)
+{
+    p->total = total ? total : 1;
+}
+
+static int quiet;
+
+void progress_set_quiet(int value)
+{
+    quiet = value;
+}
+
+int progress_quiet(void)
+{
+    return quiet;
 }
 
 void progress_advance(progress *p, unsigned int amount, const char *detail)
@@ -45,6 +69,9 @@ void progress_update(progress *p, unsigned int done, const char *detail)
     if (!p->enabled)
         return;
     double elapsed = monotonic_seconds() - p->start;
+    if (elapsed < p->delay)
+        return;
+    p->shown = 1;
     double fraction = (double)done / p->total;
     double remaining = done ? elapsed * (p->total - done) / done : 0;
     if (p->terminal) {
@@ -65,6 +92,6 @@ void progress_update(progress *p, unsigned int done, const char *detail)
 
 void progress_end(progress *p)
 {
-    if (p->enabled && p->terminal)
+    if (p->enabled && p->terminal && (p->shown || p->delay <= 0))
         fputc('\n', stderr);
 }

@@ -48,6 +48,7 @@ void scene_free(scene *s)
     }
     free(s->meshes);
     free(s->mesh_names);
+    free(s->mesh_name_next);
     free(s->materials);
     free(s->material_info);
     free(s->lights);
@@ -82,31 +83,43 @@ static int mesh_name_taken(const scene *s, const char *name)
     return s->mesh_name_capacity && s->mesh_names[name_slot(s, name)] != 0;
 }
 
-/* Indexes mesh `index` by its name, growing the index to keep it at most half full. */
+/* Indexes mesh `index` by its name, growing the index to keep it at most half full (each
+ * name keeps the suffix its repeats try next). */
 static void index_mesh_name(scene *s, size_t index)
 {
     if (2 * (s->mesh_count + 1) > s->mesh_name_capacity) {
-        free(s->mesh_names);
-        s->mesh_name_capacity = s->mesh_name_capacity ? 2 * s->mesh_name_capacity : 64;
+        size_t *old = s->mesh_names, old_capacity = s->mesh_name_capacity;
+        unsigned *old_next = s->mesh_name_next;
+        s->mesh_name_capacity = old_capacity ? 2 * old_capacity : 64;
         s->mesh_names = xcalloc(s->mesh_name_capacity, sizeof *s->mesh_names);
-        for (size_t i = 0; i < s->mesh_count; i++)
-            if (i != index)
-                s->mesh_names[name_slot(s, s->meshes[i].name)] = i + 1;
+        s->mesh_name_next = xcalloc(s->mesh_name_capacity, sizeof *s->mesh_name_next);
+        for (size_t j = 0; j < old_capacity; j++)
+            if (old[j]) {
+                size_t slot = name_slot(s, s->meshes[old[j] - 1].name);
+                s->mesh_names[slot] = old[j];
+                s->mesh_name_next[slot] = old_next[j];
+            }
+        free(old_next);
+        free(old);
     }
     s->mesh_names[name_slot(s, s->meshes[index].name)] = index + 1;
 }
 
-/* "name", or "name.2", "name.3", ... when taken. */
-static char *unique_mesh_name(const scene *s, const char *name)
+/* "name", or "name.2", "name.3", ... when taken: the first that is free. Names are only ever
+ * added, so the search for a repeated name goes on from where the last one for it stopped
+ * (10,000 nodes of one name: linear, not quadratic). */
+static char *unique_mesh_name(scene *s, const char *name)
 {
     if (!mesh_name_taken(s, name))
         return xstrdup(name);
-    size_t size = strlen(name) + 24;
+    size_t slot = name_slot(s, name), size = strlen(name) + 24;
     char *candidate = xmalloc(size);
-    for (unsigned suffix = 2;; suffix++) {
+    for (unsigned suffix = s->mesh_name_next[slot] > 2 ? s->mesh_name_next[slot] : 2;; suffix++) {
         snprintf(candidate, size, "%s.%u", name, suffix);
-        if (!mesh_name_taken(s, candidate))
+        if (!mesh_name_taken(s, candidate)) {
+            s->mesh_name_next[slot] = suffix + 1;
             return candidate;
+        }
     }
 }
 

@@ -100,6 +100,8 @@ typedef struct scene {
     scene_mesh *meshes;
     size_t mesh_count;
     size_t *mesh_names;         /* hash index of the mesh names: mesh index + 1, 0 empty */
+    unsigned *mesh_name_next;   /* per slot of mesh_names: the suffix a repeat of its name
+                                   tries first (every one below it is taken) */
     size_t mesh_name_capacity;  /* a power of two, at least twice mesh_count */
 
     idmr_material *materials;

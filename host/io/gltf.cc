@@ -1,6 +1,7 @@
 // gltf.cc — glTF 2.0 scenes read through Assimp (the mapping is in gltf.h; the reduced scene is
 // written by gltf_write.c, from the file's own JSON).
 #include <assimp/Importer.hpp>
+#include <assimp/ProgressHandler.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
@@ -15,18 +16,23 @@
 
 extern "C" {
 #include "core/error.h"
+#include "core/progress.h"
 #include "io/gltf.h"
+#include "io/gltf_validate.h"
 #include "io/image.h"
 #include "io/mitsuba_paths.h"
 #include "io/shapes.h"
+#include "io/xform.h"
 }
 
 namespace {
 
 // A primitive per aiMesh, triangulated; the instances' numbering (collect_instances) is the one
 // gltf_write.c's walk() makes again from the file's JSON when it writes the reduced meshes.
-const unsigned IMPORT_FLAGS =
-    aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure;
+// Not aiProcess_ValidateDataStructure: it matches every light's and camera's name against every
+// node (10,000 lights: seconds per thousand); the file is checked before (gltf_validate.h) and
+// what is taken from Assimp's scene is checked where it is read (add_instance).
+const unsigned IMPORT_FLAGS = aiProcess_Triangulate | aiProcess_SortByPType;
 
 const unsigned FILM_WIDTH = 1024;        // the film's width; the height follows the aspect
 const double DEFAULT_YFOV = M_PI / 4;    // no camera: the framing camera's vertical fov
@@ -52,22 +58,11 @@ void collect_instances(const aiScene *scene, aiNode *node, const aiMatrix4x4 &pa
 {
     aiMatrix4x4 world = parent * node->mTransformation;
     for (unsigned k = 0; k < node->mNumMeshes; k++)
-        if (is_triangle_mesh(scene->mMeshes[node->mMeshes[k]]))
+        if (node->mMeshes[k] < scene->mNumMeshes &&
+            is_triangle_mesh(scene->mMeshes[node->mMeshes[k]]))
             out.push_back(Instance{node, k, world});
     for (unsigned c = 0; c < node->mNumChildren; c++)
         collect_instances(scene, node->mChildren[c], world, out);
-}
-
-// The transform of the node named `name` (a camera's or light's), world space; identity when
-// no node has that name. glTF places cameras and lights at their node's origin looking down
-// its -z, with +y up; that is what is read (Assimp 5.2 also copies the node's translation
-// into the camera's and light's own position, which would count it twice).
-aiMatrix4x4 node_world(const aiScene *scene, const aiString &name)
-{
-    aiMatrix4x4 world;
-    for (const aiNode *node = scene->mRootNode->FindNode(name); node; node = node->mParent)
-        world = node->mTransformation * world;
-    return world;
 }
 
 double determinant3(const aiMatrix4x4 &m)
@@ -111,6 +106,13 @@ const aiScene *import(Assimp::Importer &importer, const char *path)
 
 // ---- reading ----
 
+// A node the default scene reaches, with its world transform (from the file's JSON).
+struct Placed {
+    const cJSON *node;
+    int index;
+    xform world;
+};
+
 struct Loader {
     const char *path;
     std::string dir;
@@ -118,7 +120,85 @@ struct Loader {
     scene *s;
     std::vector<int> material_of; // per aiMaterial: the scene's material, or -1 before first use
     bool warned_embedded = false;
+    gltf_document *doc;            // the file's JSON and buffers, checked (gltf_validate.h)
+    const gltf_checked *checked;
+    std::vector<Placed> placed;    // depth first from the default scene's roots
+    std::vector<const cJSON *> primitive_of; // per instance: its glTF primitive
 };
+
+const cJSON *member(const cJSON *object, const char *name)
+{
+    return cJSON_IsObject(object) ? cJSON_GetObjectItemCaseSensitive(object, name) : nullptr;
+}
+
+// object[name] as a number, `fallback` when it is none.
+double number(const cJSON *object, const char *name, double fallback)
+{
+    const cJSON *item = member(object, name);
+    return cJSON_IsNumber(item) ? item->valuedouble : fallback;
+}
+
+// The items of the array `array` (none when it is not one).
+std::vector<const cJSON *> items(const cJSON *array)
+{
+    std::vector<const cJSON *> out;
+    const cJSON *item;
+    if (cJSON_IsArray(array))
+        cJSON_ArrayForEach(item, array) out.push_back(item);
+    return out;
+}
+
+// Every node of the default scene ("scene", else the first) with its world transform, a node
+// before its children, as Assimp imports them. The hierarchy is checked (no cycle, one parent),
+// so the walk ends; it keeps its own stack (a deep chain of nodes needs no deep recursion).
+std::vector<Placed> place_nodes(const cJSON *root)
+{
+    std::vector<const cJSON *> nodes = items(member(root, "nodes"));
+    std::vector<const cJSON *> scenes = items(member(root, "scenes"));
+    size_t chosen = (size_t)number(root, "scene", 0);
+    std::vector<Placed> out;
+    if (chosen >= scenes.size())
+        return out;
+    std::vector<Placed> stack;
+    std::vector<const cJSON *> roots = items(member(scenes[chosen], "nodes"));
+    for (size_t r = roots.size(); r-- > 0;) {
+        int index = (int)roots[r]->valuedouble;
+        stack.push_back(Placed{nodes[index], index, gltf_node_transform(nodes[index])});
+    }
+    while (!stack.empty()) {
+        Placed p = stack.back();
+        stack.pop_back();
+        out.push_back(p);
+        std::vector<const cJSON *> children = items(member(p.node, "children"));
+        for (size_t k = children.size(); k-- > 0;) {
+            int index = (int)children[k]->valuedouble;
+            xform local = gltf_node_transform(nodes[index]);
+            stack.push_back(Placed{nodes[index], index, xform_multiply(&p.world, &local)});
+        }
+    }
+    return out;
+}
+
+// Per instance, the glTF primitive it was made from: the triangle primitives (triangles, strip,
+// fan) of each node's mesh, the nodes depth first (`placed`), as collect_instances and
+// gltf_write.c's walk() number them. (Assimp's own mesh order is another: it reads the meshes
+// as nodes reach them.)
+std::vector<const cJSON *> instance_primitives(const cJSON *root,
+                                               const std::vector<Placed> &placed)
+{
+    std::vector<const cJSON *> meshes = items(member(root, "meshes")), out;
+    for (const Placed &p : placed) {
+        const cJSON *mesh = member(p.node, "mesh");
+        if (!cJSON_IsNumber(mesh))
+            continue;
+        for (const cJSON *primitive : items(member(meshes[(size_t)mesh->valuedouble], "primitives"))) {
+            double mode = number(primitive, "mode", 4);
+            if (mode == 4 || mode == 5 || mode == 6)
+                out.push_back(primitive);
+        }
+    }
+    return out;
+}
 
 float material_float(const aiMaterial *m, const char *key, unsigned type, unsigned index,
                      float fallback)
@@ -234,30 +314,78 @@ bool emission(const aiMaterial *m, float radiance[3])
     return radiance[0] > 0 || radiance[1] > 0 || radiance[2] > 0;
 }
 
+// Whether Assimp 5.2 reads accessor `a` wrong: it copies the bytes of integers (normalized
+// UNSIGNED_BYTE and UNSIGNED_SHORT texture coordinates) into floats. (The base of a sparse
+// accessor it reads as if packed, past its end where it is not: gltf_validate refuses those.)
+bool assimp_misreads(const gltf_accessor *a)
+{
+    return a->component_type != GLTF_FLOAT;
+}
+
+// Attribute `name` of the primitive instance `number` was made from, read here into `out`
+// (vertex_count × its components) where Assimp misreads it. 1 when it was, 0 when Assimp's
+// values stand, -1 with the error set.
+int own_values(Loader &ld, int number, const char *name, uint32_t vertex_count,
+               std::vector<float> &out)
+{
+    const cJSON *primitive = ld.primitive_of[(size_t)number];
+    const cJSON *reference = member(member(primitive, "attributes"), name);
+    if (!primitive || !cJSON_IsNumber(reference))
+        return 0;
+    int index = (int)reference->valuedouble;
+    const gltf_accessor *a = &ld.checked->accessors[index];
+    if (!assimp_misreads(a))
+        return 0;
+    if (member(member(primitive, "extensions"), "KHR_draco_mesh_compression") ||
+        a->count != vertex_count)
+        return fail(ld.path, "accessor " + std::to_string(index) + ": " + name +
+                                 " of integers in a Draco-compressed primitive is not read "
+                                 "(Assimp 5.2 garbles it)");
+    out.resize((size_t)a->count * a->components);
+    return gltf_accessor_read_floats(ld.doc, a, out.data()) ? -1 : 1;
+}
+
 int add_instance(Loader &ld, const Instance &instance, int number)
 {
     const aiMesh *mesh = ld.ai->mMeshes[instance.node->mMeshes[instance.slot]];
+    if (!mesh->mVertices || mesh->mMaterialIndex >= ld.ai->mNumMaterials)
+        return fail(ld.path, std::string("Assimp made mesh '") + mesh->mName.C_Str() +
+                                 "' without positions or with no material");
+    for (unsigned f = 0; f < mesh->mNumFaces; f++)
+        for (unsigned k = 0; k < mesh->mFaces[f].mNumIndices; k++)
+            if (mesh->mFaces[f].mIndices[k] >= mesh->mNumVertices)
+                return fail(ld.path, std::string("Assimp made mesh '") + mesh->mName.C_Str() +
+                                         "' with a face index past its vertices");
     const aiMatrix4x4 &world = instance.world;
     aiMatrix3x3 normals = normal_matrix(world);
     bool mirrored = determinant3(world) < 0;
     uint32_t vertex_count = mesh->mNumVertices;
+    std::vector<float> own_positions, own_uv, own_normals; // where Assimp misreads them
+    int own_p = own_values(ld, number, "POSITION", vertex_count, own_positions);
+    int own_t = own_p < 0 ? -1 : own_values(ld, number, "TEXCOORD_0", vertex_count, own_uv);
+    int own_n = own_t < 0 ? -1 : own_values(ld, number, "NORMAL", vertex_count, own_normals);
+    if (own_n < 0)
+        return -1;
     float *positions = (float *)xmalloc(sizeof(float) * 3 * (vertex_count + 1));
     float *texcoords = nullptr, *normal_values = nullptr;
     for (uint32_t v = 0; v < vertex_count; v++) {
-        aiVector3D p = world * mesh->mVertices[v];
+        const float *q = own_p ? &own_positions[3 * (size_t)v] : nullptr;
+        aiVector3D p = world * (q ? aiVector3D(q[0], q[1], q[2]) : mesh->mVertices[v]);
         positions[3 * v] = p.x, positions[3 * v + 1] = p.y, positions[3 * v + 2] = p.z;
     }
-    if (mesh->HasTextureCoords(0)) {
+    if (mesh->HasTextureCoords(0)) { /* v as Mitsuba reads it: the file's, 1 - Assimp's */
         texcoords = (float *)xmalloc(sizeof(float) * 2 * (vertex_count + 1));
         for (uint32_t v = 0; v < vertex_count; v++) {
-            texcoords[2 * v] = mesh->mTextureCoords[0][v].x;
-            texcoords[2 * v + 1] = 1.0f - mesh->mTextureCoords[0][v].y;
+            texcoords[2 * v] = own_t ? own_uv[2 * (size_t)v] : mesh->mTextureCoords[0][v].x;
+            texcoords[2 * v + 1] =
+                own_t ? own_uv[2 * (size_t)v + 1] : 1.0f - mesh->mTextureCoords[0][v].y;
         }
     }
     if (mesh->HasNormals()) {
         normal_values = (float *)xmalloc(sizeof(float) * 3 * (vertex_count + 1));
         for (uint32_t v = 0; v < vertex_count; v++) {
-            aiVector3D n = unit(normals * mesh->mNormals[v]);
+            const float *q = own_n ? &own_normals[3 * (size_t)v] : nullptr;
+            aiVector3D n = unit(normals * (q ? aiVector3D(q[0], q[1], q[2]) : mesh->mNormals[v]));
             normal_values[3 * v] = n.x, normal_values[3 * v + 1] = n.y,
                               normal_values[3 * v + 2] = n.z;
         }
@@ -298,45 +426,72 @@ int add_instance(Loader &ld, const Instance &instance, int number)
     return 0;
 }
 
+// What a node's placement makes of its origin and of its -z axis.
+void place(const xform &world, float position[3], float direction[3])
+{
+    const double origin[3] = {0, 0, 0}, down[3] = {0, 0, -1};
+    double p[3], d[3];
+    xform_apply_point(&world, origin, p);
+    xform_apply_vector(&world, down, d);
+    if (!(xform_normalize(d) > 0) || !std::isfinite(d[0] + d[1] + d[2]))
+        d[0] = d[1] = d[2] = 0;
+    for (int k = 0; k < 3; k++)
+        position[k] = (float)p[k], direction[k] = (float)d[k];
+}
+
+// "kind 'name'" of a camera or light (else of its node; else its number).
+std::string label(const char *kind, const cJSON *item, const cJSON *node, int index)
+{
+    const cJSON *name = member(item, "name");
+    if (!cJSON_IsString(name) || !name->valuestring[0])
+        name = member(node, "name");
+    if (cJSON_IsString(name) && name->valuestring[0])
+        return std::string(kind) + " '" + name->valuestring + "'";
+    return std::string(kind) + " " + std::to_string(index);
+}
+
+// KHR_lights_punctual, one light for each node that names one (gltf_validate.c checked them),
+// read from the file's JSON: colour × intensity, a spot's cone angles, placed by its node.
 int add_lights(Loader &ld)
 {
-    for (unsigned i = 0; i < ld.ai->mNumLights; i++) {
-        const aiLight *l = ld.ai->mLights[i];
-        aiMatrix4x4 world = node_world(ld.ai, l->mName);
+    std::vector<const cJSON *> lights =
+        items(member(member(member(ld.doc->json, "extensions"), "KHR_lights_punctual"), "lights"));
+    for (const Placed &p : ld.placed) {
+        const cJSON *reference =
+            member(member(member(p.node, "extensions"), "KHR_lights_punctual"), "light");
+        if (!cJSON_IsNumber(reference))
+            continue;
+        int index = (int)reference->valuedouble;
+        const cJSON *l = lights[(size_t)index];
+        const cJSON *type = member(l, "type"), *colour = member(l, "color");
+        double intensity = number(l, "intensity", 1);
         idmr_light light;
         memset(&light, 0, sizeof light);
-        aiVector3D position = world * aiVector3D(0, 0, 0);
-        aiVector3D direction = unit(aiMatrix3x3(world) * aiVector3D(0, 0, -1));
-        light.emission[0] = std::max(0.0f, l->mColorDiffuse.r);
-        light.emission[1] = std::max(0.0f, l->mColorDiffuse.g);
-        light.emission[2] = std::max(0.0f, l->mColorDiffuse.b);
-        light.position[0] = position.x, light.position[1] = position.y,
-        light.position[2] = position.z;
-        light.direction[0] = direction.x, light.direction[1] = direction.y,
-        light.direction[2] = direction.z;
-        switch (l->mType) {
-        case aiLightSource_POINT:
+        for (int k = 0; k < 3; k++) {
+            const cJSON *c = cJSON_GetArrayItem(colour, k);
+            light.emission[k] =
+                (float)std::max(0.0, (cJSON_IsNumber(c) ? c->valuedouble : 1.0) * intensity);
+        }
+        place(p.world, light.position, light.direction);
+        if (strcmp(type->valuestring, "point") == 0) {
             light.kind = IDMR_LIGHT_POINT;
-            break;
-        case aiLightSource_SPOT: {
+        } else if (strcmp(type->valuestring, "spot") == 0) {
             light.kind = IDMR_LIGHT_SPOT;
-            float outer = std::min((float)M_PI / 2, std::max(0.0f, l->mAngleOuterCone));
-            float inner = std::min(outer, std::max(0.0f, l->mAngleInnerCone));
-            light.cos_cutoff = std::cos(outer);
-            light.cos_falloff_start = std::cos(inner);
-            break;
-        }
-        case aiLightSource_DIRECTIONAL:
+            const cJSON *spot = member(l, "spot");
+            double outer = number(spot, "outerConeAngle", M_PI / 4);
+            double inner = number(spot, "innerConeAngle", 0);
+            light.cos_cutoff = (float)std::cos(outer);
+            light.cos_falloff_start = (float)std::cos(inner);
+        } else {
             light.kind = IDMR_LIGHT_DIRECTIONAL;
-            break;
-        default:
-            warn("%s: light '%s' is of a kind glTF does not define: ignored", ld.path,
-                 l->mName.C_Str());
-            continue;
         }
-        if (direction.SquareLength() == 0 && light.kind != IDMR_LIGHT_POINT)
-            return fail(ld.path, std::string("light '") + l->mName.C_Str() +
-                                     "': its node's transform is degenerate");
+        float length = light.direction[0] * light.direction[0] +
+                       light.direction[1] * light.direction[1] +
+                       light.direction[2] * light.direction[2];
+        if (length == 0 && light.kind != IDMR_LIGHT_POINT)
+            return fail(ld.path, label("light", l, p.node, index) + " (/nodes/" +
+                                     std::to_string(p.index) +
+                                     "): its node's transform is degenerate");
         scene_add_light(ld.s, &light);
     }
     return 0;
@@ -369,31 +524,36 @@ void set_film(scene *s, double yfov, double aspect)
     s->has_camera = 1;
 }
 
-// The first perspective camera; none: the scene framed from +z (needs the bounding box).
+// The first perspective camera a node of the default scene holds (depth first; read from the
+// file's JSON, checked by gltf_validate.c); none: the scene framed from +z (needs the bounding
+// box: frame_scene).
 int add_camera(Loader &ld)
 {
-    for (unsigned i = 0; i < ld.ai->mNumCameras; i++) {
-        const aiCamera *c = ld.ai->mCameras[i];
-        if (c->mHorizontalFOV <= 0 || c->mOrthographicWidth > 0) {
-            warn("%s: camera '%s' is orthographic: not simulated", ld.path, c->mName.C_Str());
+    std::vector<const cJSON *> cameras = items(member(ld.doc->json, "cameras"));
+    for (const Placed &p : ld.placed) {
+        const cJSON *reference = member(p.node, "camera");
+        if (!cJSON_IsNumber(reference))
+            continue;
+        int index = (int)reference->valuedouble;
+        const cJSON *c = cameras[(size_t)index];
+        std::string name = label("camera", c, p.node, index);
+        if (strcmp(member(c, "type")->valuestring, "perspective") != 0) {
+            warn("%s: %s is orthographic: not simulated", ld.path, name.c_str());
             continue;
         }
-        aiMatrix4x4 world = node_world(ld.ai, c->mName);
-        aiMatrix3x3 linear(world);
-        double aspect = c->mAspect > 0 ? c->mAspect : DEFAULT_ASPECT;
-        // Assimp 5.2 stores glTF's yfov × aspect ratio as mHorizontalFOV (the full angle):
-        // yfov is that divided by the aspect again.
-        double yfov = c->mAspect > 0 ? c->mHorizontalFOV / c->mAspect : c->mHorizontalFOV;
-        if (!(yfov > 0 && yfov < M_PI))
-            return fail(ld.path, std::string("camera '") + c->mName.C_Str() +
-                                     "': its field of view is not between 0 and 180 degrees");
-        if (!set_frame(&ld.s->camera, world * aiVector3D(0, 0, 0), linear * aiVector3D(0, 0, -1),
-                       linear * aiVector3D(0, 1, 0)))
-            return fail(ld.path, std::string("camera '") + c->mName.C_Str() +
-                                     "': its node's transform is degenerate");
+        const cJSON *perspective = member(c, "perspective");
+        double yfov = number(perspective, "yfov", DEFAULT_YFOV);
+        double aspect = number(perspective, "aspectRatio", DEFAULT_ASPECT);
+        const xform &w = p.world;
+        aiVector3D origin((float)w.m[3], (float)w.m[7], (float)w.m[11]);
+        aiVector3D forward(-(float)w.m[2], -(float)w.m[6], -(float)w.m[10]);
+        aiVector3D up((float)w.m[1], (float)w.m[5], (float)w.m[9]);
+        if (!set_frame(&ld.s->camera, origin, forward, up))
+            return fail(ld.path, name + " (/nodes/" + std::to_string(p.index) +
+                                     "): its node's transform is degenerate");
         set_film(ld.s, yfov, aspect);
         for (int k = 0; k < 16; k++)
-            ld.s->camera_info.to_world[k] = world[k / 4][k % 4];
+            ld.s->camera_info.to_world[k] = (float)w.m[k];
         return 0;
     }
     return 0;
@@ -452,38 +612,119 @@ extern "C" int gltf_is_scene_file(const char *path)
     return dot && (strcasecmp(dot, ".gltf") == 0 || strcasecmp(dot, ".glb") == 0);
 }
 
+namespace {
+
+// The checked document, freed on every way out of gltf_load.
+struct Checked {
+    gltf_document doc;
+    gltf_checked checked;
+    progress bar; // the whole load: accessors, primitives, Assimp's import, instances
+    Checked() : doc(), checked(), bar() {}
+    ~Checked()
+    {
+        progress_end(&bar);
+        gltf_checked_free(&checked);
+        gltf_document_free(&doc);
+    }
+};
+
+// How much of the load is done when Assimp calls (it does at its start and end, and between
+// its post-processing steps): the import counts as one unit of work.
+class ImportProgress : public Assimp::ProgressHandler {
+public:
+    explicit ImportProgress(progress *bar) : bar_(bar), start_(bar->done) {}
+    bool Update(float share) override
+    {
+        progress_update(bar_, start_ + (share >= 1.0f ? 1u : 0u), nullptr);
+        return true; // go on
+    }
+
+private:
+    progress *bar_;
+    unsigned start_;
+};
+
+// The scene of Assimp's import (the document checked): instances, lights, camera. NULL with the
+// error set.
+scene *build(const char *path, const aiScene *ai, Checked &file)
+{
+    char *dir = mitsuba_path_directory(path);
+    Loader ld{path,
+              dir,
+              ai,
+              scene_create(path),
+              std::vector<int>(ai->mNumMaterials, -1),
+              false,
+              &file.doc,
+              &file.checked,
+              place_nodes(file.doc.json),
+              {}};
+    free(dir);
+    ld.primitive_of = instance_primitives(file.doc.json, ld.placed);
+    std::vector<Instance> instances;
+    collect_instances(ai, ai->mRootNode, aiMatrix4x4(), instances);
+    int status = instances.empty() ? fail(path, "holds no triangle mesh") : 0;
+    if (!status && instances.size() != ld.primitive_of.size())
+        status = fail(path, "Assimp found " + std::to_string(instances.size()) +
+                                " triangle mesh instances, the file has " +
+                                std::to_string(ld.primitive_of.size()));
+    progress_set_total(&file.bar, file.bar.done + (unsigned)instances.size());
+    for (size_t i = 0; i < instances.size() && !status; i++) {
+        status = add_instance(ld, instances[i], (int)i);
+        progress_advance(&file.bar, 1, nullptr);
+    }
+    if (!status)
+        status = add_lights(ld);
+    if (!status)
+        status = add_camera(ld);
+    if (!status)
+        status = add_default_light(ld);
+    if (!status)
+        warn_unsimulated(ld);
+    if (!status && scene_finalize(ld.s))
+        status = error_prefix("%s", path);
+    if (!status && !ld.s->has_camera)
+        frame_scene(ld);
+    if (status) {
+        scene_free(ld.s);
+        return nullptr;
+    }
+    return ld.s;
+}
+
+} // namespace
+
 extern "C" scene *gltf_load(const char *path)
 {
+    Checked file;
+    progress_begin(&file.bar, "loading glTF", 1, !progress_quiet()); // the total once read
+    progress_delay(&file.bar, 1.0);
+    if (gltf_document_read(path, &file.doc))
+        return nullptr;
+    // one unit per accessor and primitive checked, one for Assimp, one per instance (at first
+    // a primitive per node that names a mesh, then as Assimp found them); shown once loading
+    // has taken a second
+    unsigned work = (unsigned)cJSON_GetArraySize(member(file.doc.json, "accessors")) + 1;
+    std::vector<const cJSON *> meshes = items(member(file.doc.json, "meshes"));
+    for (const cJSON *mesh : meshes)
+        work += (unsigned)cJSON_GetArraySize(member(mesh, "primitives"));
+    for (const cJSON *node : items(member(file.doc.json, "nodes"))) {
+        double mesh = number(node, "mesh", -1);
+        if (mesh >= 0 && mesh < (double)meshes.size())
+            work += (unsigned)cJSON_GetArraySize(member(meshes[(size_t)mesh], "primitives"));
+    }
+    progress_set_total(&file.bar, work);
+    if (gltf_validate(&file.doc, &file.bar, &file.checked))
+        return nullptr;
+    gltf_document_release_buffers(&file.doc); // Assimp reads its own; read again if needed
     try {
         Assimp::Importer importer;
+        importer.SetProgressHandler(new ImportProgress(&file.bar)); // the importer owns it
         const aiScene *ai = import(importer, path);
         if (!ai)
             return nullptr;
-        char *dir = mitsuba_path_directory(path);
-        Loader ld{path, dir, ai, scene_create(path), std::vector<int>(ai->mNumMaterials, -1)};
-        free(dir);
-        std::vector<Instance> instances;
-        collect_instances(ai, ai->mRootNode, aiMatrix4x4(), instances);
-        int status = instances.empty() ? fail(path, "holds no triangle mesh") : 0;
-        for (size_t i = 0; i < instances.size() && !status; i++)
-            status = add_instance(ld, instances[i], (int)i);
-        if (!status)
-            status = add_lights(ld);
-        if (!status)
-            status = add_camera(ld);
-        if (!status)
-            status = add_default_light(ld);
-        if (!status)
-            warn_unsimulated(ld);
-        if (!status && scene_finalize(ld.s))
-            status = error_prefix("%s", path);
-        if (!status && !ld.s->has_camera)
-            frame_scene(ld);
-        if (status) {
-            scene_free(ld.s);
-            return nullptr;
-        }
-        return ld.s;
+        progress_advance(&file.bar, 1, nullptr);
+        return build(path, ai, file);
     } catch (const std::exception &e) {
         error_set(IDMR_EXIT_INPUT, "%s: Assimp failed: %s", path, e.what());
         return nullptr;

@@ -1,8 +1,14 @@
 /* gltf.h — glTF 2.0 scenes (.gltf, .glb) in and out, through Assimp: the second scene format
  * beside Mitsuba XML (io/mitsuba.h, the primary one).
  *
- * Reading (gltf_load): Assimp imports the file (triangulated, primitives sorted by type);
- * every node that holds a triangle mesh gives one scene mesh per mesh it holds (an instance),
+ * Reading (gltf_load): the file is read as its own document and checked as the glTF
+ * specification says (io/gltf_validate.h: what Assimp 5.2 would drop, misread or crash on is
+ * refused, naming the file and the JSON pointer, line and column, or GLB byte at fault); then
+ * Assimp imports it (triangulated, primitives sorted by type); lights and the camera are read
+ * from the document at the nodes of the default scene, and texture coordinates of normalized
+ * integers (which Assimp 5.2 garbles) from its accessors. Loading shows progress once it has
+ * taken a second, unless the command line said --quiet (core/progress.h).
+ * Every node that holds a triangle mesh gives one scene mesh per mesh it holds (an instance),
  * in world space (the node's transforms applied, the winding turned where they mirror), named
  * "<node>/<mesh>" and numbered in the order of a depth-first walk from the root: its xml_file is
  * the glTF file and its xml_line that number, which the writer finds it by. What is mapped:
@@ -22,12 +28,12 @@
  *   emissiveFactor (× strength)       an area light of that radiance on the mesh
  *   baseColorTexture                  a texture (sRGB, linearised); embedded images are not
  *                                     read (warned: the base colour factor is used)
- *   KHR_lights_punctual point, spot,  point, spot (inner/outer cone), directional; intensity
- *   directional                       (cd, lx) taken as W/sr, W/m² one for one, as glTF viewers
- *                                     render it
+ *   KHR_lights_punctual point, spot,  point, spot (inner/outer cone), directional, one for each
+ *   directional                       node that names it; colour × intensity (cd, lx) taken as
+ *                                     W/sr, W/m² one for one, as glTF viewers render it
  *   no light, no emissive material    a uniform white environment, radiance 1 (warned)
- *   camera (perspective, the first)   the pinhole camera: yfov, aspect ratio (film 1024 wide;
- *                                     --resolution scales it); none: the whole scene framed
+ *   camera (perspective, the first    the pinhole camera: yfov, aspect ratio (film 1024 wide;
+ *   a node holds, depth first)        --resolution scales it); none: the whole scene framed
  *                                     from +z with a 45° yfov (warned)
  * Orthographic cameras, skins, morph targets and animations are not simulated (warned).
  *
@@ -62,7 +68,7 @@ extern "C" {
 int gltf_is_scene_file(const char *path);
 
 /* Loads `path` and returns the finalized scene, or NULL with the error set (IDMR_EXIT_INPUT)
- * naming the file and Assimp's reason. */
+ * naming the file, where it is wrong and why (or Assimp's reason). */
 scene *gltf_load(const char *path);
 
 typedef struct gltf_replacement {

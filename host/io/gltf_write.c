@@ -154,53 +154,6 @@ static void set_number(cJSON *object, const char *name, double value)
         cJSON_AddNumberToObject(object, name, value);
 }
 
-/* Reads object[name] as exactly `count` numbers; 0 when it is no such array. */
-static int numbers_of(const cJSON *object, const char *name, double *values, int count)
-{
-    const cJSON *array = cJSON_GetObjectItemCaseSensitive(object, name), *item;
-    if (!cJSON_IsArray(array) || cJSON_GetArraySize(array) != count)
-        return 0;
-    int i = 0;
-    cJSON_ArrayForEach(item, array)
-    {
-        if (!cJSON_IsNumber(item))
-            return 0;
-        values[i++] = item->valuedouble;
-    }
-    return 1;
-}
-
-/* A node's local transform: its matrix (column-major), else translation × rotation × scale
- * (glTF's order, which Assimp reads the same). */
-static xform node_transform(const cJSON *node)
-{
-    double v[16];
-    if (numbers_of(node, "matrix", v, 16)) {
-        double rows[16];
-        for (int row = 0; row < 4; row++)
-            for (int col = 0; col < 4; col++)
-                rows[4 * row + col] = v[4 * col + row];
-        return xform_from_rows(rows);
-    }
-    xform t = xform_identity();
-    if (numbers_of(node, "translation", v, 3))
-        t = xform_translate(v[0], v[1], v[2]);
-    if (numbers_of(node, "rotation", v, 4)) { /* x, y, z, w */
-        double x = v[0], y = v[1], z = v[2], w = v[3];
-        const double r[9] = {
-            1 - 2 * (y * y + z * z), 2 * (x * y - z * w),     2 * (x * z + y * w),
-            2 * (x * y + z * w),     1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
-            2 * (x * z - y * w),     2 * (y * z + x * w),     1 - 2 * (x * x + y * y)};
-        xform rotation = xform_from_3x3(r);
-        t = xform_multiply(&t, &rotation);
-    }
-    if (numbers_of(node, "scale", v, 3)) {
-        xform scale = xform_scale(v[0], v[1], v[2]);
-        t = xform_multiply(&t, &scale);
-    }
-    return t;
-}
-
 static int is_triangle_mode(const cJSON *primitive)
 {
     const cJSON *mode = cJSON_GetObjectItemCaseSensitive(primitive, "mode");
@@ -215,7 +168,7 @@ static int walk(writer *w, int node, const xform *parent, int depth, size_t *cap
         return error_set(IDMR_EXIT_INPUT, "%s: nodes[%d]: the node hierarchy has a cycle",
                          w->scene_file, node);
     const cJSON *n = w->nodes[node];
-    xform local = node_transform(n), world = xform_multiply(parent, &local);
+    xform local = gltf_node_transform(n), world = xform_multiply(parent, &local);
     w->visits[node]++;
     int mesh = index_of(n, "mesh", w->mesh_count);
     const cJSON *primitives =
@@ -1004,15 +957,8 @@ int gltf_write_reduced(const char *scene_file, const char *outdir,
     w.scene_file = scene_file;
     w.outdir = outdir;
     w.bundle = bundle;
-    if (gltf_document_read(scene_file, &w.doc))
+    if (gltf_document_read(scene_file, &w.doc)) /* refuses a .glb that is none, and back */
         return -1;
-    int binary = w.doc.binary;
-    if (binary != (strcmp(gltf_output_name(scene_file), "scene.glb") == 0)) {
-        gltf_document_free(&w.doc);
-        return error_set(IDMR_EXIT_INPUT, "%s: %s", scene_file,
-                         binary ? "a GLB file named as JSON text (.gltf)"
-                                : "JSON text named as a GLB file (.glb)");
-    }
     char *input_dir = mitsuba_path_directory(scene_file);
     w.input_dir = mitsuba_path_real(*input_dir ? input_dir : ".");
     if (!w.input_dir)

@@ -15,6 +15,10 @@
  *                      fingerprint and closing checksum are first set to what the reader
  *                      expects, so the fuzzer reaches the checks behind them (a damaged
  *                      checksum is a compare that needs no fuzzing)
+ *   fuzz_gltf_input    the bytes are one glTF file: scene.glb when they begin with "glTF",
+ *                      else scene.gltf (its buffers as data: URIs or the GLB's BIN chunk), loaded
+ *                      with gltf_load(): the document reader and checks, then Assimp on what
+ *                      they let through
  *
  * Either returns whether the reader accepted the input; a rejected input must leave a message
  * (the error set), never a crash, a hang or a leak. Files go to a directory the caller made. */
@@ -28,6 +32,7 @@
 
 #include "core/error.h"
 #include "core/scene.h"
+#include "io/gltf.h"
 #include "io/mesh_io.h"
 #include "io/mitsuba.h"
 #include "passes/importance_file.h"
@@ -161,6 +166,21 @@ static inline int fuzz_simulation_input(const uint8_t *data, size_t size, const 
     int status = importance_file_read(path, s, &o, &r);
     importance_result_free(&r);
     return status == 0;
+}
+
+static inline int fuzz_gltf_input(const uint8_t *data, size_t size, const char *dir)
+{
+    const char *name = size >= 4 && memcmp(data, "glTF", 4) == 0 ? "scene.glb" : "scene.gltf";
+    char path[4096];
+    if (fuzz_write(dir, name, data, size))
+        abort();
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    error_clear();
+    scene *s = gltf_load(path);
+    if (!s)
+        return 0;
+    scene_free(s);
+    return 1;
 }
 
 #endif
