@@ -17,6 +17,7 @@
 
 extern "C" {
 #include "reduce/decimate.h"
+#include "reduce/weld.h"
 }
 
 namespace idmr_decimate {
@@ -51,6 +52,11 @@ void copy_attribute_values(int uv_floats, int normal_floats, const float *values
 // into the error path.
 int decimate_guarded(const decimate_input *in, decimate_method method, decimate_output *out,
                      int (*decimate)(const decimate_input *, decimate_method, decimate_output *));
+
+// The OpenMesh rebuild's input: the flat weld's kept triangles, turned as it turned them, in its
+// order (its twins and the triangles that weld into zero area left out), over the input's
+// vertices.
+std::vector<uint32_t> repaired_indices(const decimate_input *in, const weld_result &flat);
 
 // Per mesh vertex (n of them), the least vertex_distance of the input vertices welded into it;
 // empty when the input has no distances.

@@ -220,14 +220,7 @@ void build_repaired(const decimate_input *in, Mesh &mesh, decimate_output *out,
 {
     weld_result flat;
     weld_flat(in, &flat);
-    std::vector<uint32_t> indices(3 * (size_t)flat.triangle_count);
-    for (uint32_t k = 0; k < flat.triangle_count; k++) {
-        const uint32_t *ix = &in->indices[3 * (size_t)flat.kept_from[k]];
-        bool turned = flat.turned && flat.turned[k];
-        indices[3 * (size_t)k] = ix[0];
-        indices[3 * (size_t)k + 1] = ix[turned ? 2 : 1];
-        indices[3 * (size_t)k + 2] = ix[turned ? 1 : 2];
-    }
+    std::vector<uint32_t> indices = repaired_indices(in, flat);
     decimate_input repaired = *in;
     repaired.indices = indices.data();
     repaired.triangle_count = flat.triangle_count;

@@ -318,4 +318,19 @@ std::vector<uint32_t> welded_distances(const decimate_input *in, const decimate_
     return distance;
 }
 
+// The rebuild's input: the flat weld's kept triangles, turned as it turned them, in its order
+// (its twins and the triangles that weld into zero area left out), over the input's vertices.
+std::vector<uint32_t> repaired_indices(const decimate_input *in, const weld_result &flat)
+{
+    std::vector<uint32_t> indices(3 * (size_t)flat.triangle_count);
+    for (uint32_t k = 0; k < flat.triangle_count; k++) {
+        const uint32_t *ix = &in->indices[3 * (size_t)flat.kept_from[k]];
+        bool turned = flat.turned && flat.turned[k];
+        indices[3 * (size_t)k] = ix[0];
+        indices[3 * (size_t)k + 1] = ix[turned ? 2 : 1];
+        indices[3 * (size_t)k + 2] = ix[turned ? 1 : 2];
+    }
+    return indices;
+}
+
 } // namespace idmr_decimate
