@@ -47,14 +47,12 @@
 #include "core/error.h"
 #include "core/files.h"
 #include "core/json.h"
+#include "io/gltf_accessor.h"
 #include "io/gltf_document.h"
 #include "io/mitsuba_paths.h"
 #include "io/xform.h"
 
 enum {
-    COMPONENT_UNSIGNED_SHORT = 5123,
-    COMPONENT_UNSIGNED_INT = 5125,
-    COMPONENT_FLOAT = 5126,
     TARGET_ARRAY_BUFFER = 34962,
     TARGET_ELEMENT_ARRAY_BUFFER = 34963,
     MODE_TRIANGLES = 4,
@@ -469,7 +467,7 @@ static int replace_primitive(writer *w, cJSON *primitive, const instance *in,
     cJSON *attributes = cJSON_CreateObject();
     cJSON *accessor;
     int position = add_accessor(w, values, sizeof(float) * 3 * n, TARGET_ARRAY_BUFFER,
-                                COMPONENT_FLOAT, (int)n, "VEC3", &accessor);
+                                GLTF_FLOAT, (int)n, "VEC3", &accessor);
     cJSON_AddItemToObject(accessor, "min", cJSON_CreateDoubleArray(low, 3));
     cJSON_AddItemToObject(accessor, "max", cJSON_CreateDoubleArray(high, 3));
     cJSON_AddNumberToObject(attributes, "POSITION", position);
@@ -488,13 +486,13 @@ static int replace_primitive(writer *w, cJSON *primitive, const instance *in,
         }
         cJSON_AddNumberToObject(attributes, "NORMAL",
                                 add_accessor(w, values, sizeof(float) * 3 * n, TARGET_ARRAY_BUFFER,
-                                             COMPONENT_FLOAT, (int)n, "VEC3", NULL));
+                                             GLTF_FLOAT, (int)n, "VEC3", NULL));
     }
     free(values);
     if (reduced->texcoords)
         cJSON_AddNumberToObject(attributes, "TEXCOORD_0",
                                 add_accessor(w, reduced->texcoords, sizeof(float) * 2 * n,
-                                             TARGET_ARRAY_BUFFER, COMPONENT_FLOAT, (int)n, "VEC2",
+                                             TARGET_ARRAY_BUFFER, GLTF_FLOAT, (int)n, "VEC2",
                                              NULL));
     /* indices: unsigned short while every index is below 65,535 (glTF reserves the largest
      * value of the type) */
@@ -510,7 +508,7 @@ static int replace_primitive(writer *w, cJSON *primitive, const instance *in,
             memcpy(indices + 2 * (size_t)k, &(uint16_t){(uint16_t)index}, 2);
     }
     int index_accessor = add_accessor(w, indices, index_size * 3 * t, TARGET_ELEMENT_ARRAY_BUFFER,
-                                      wide ? COMPONENT_UNSIGNED_INT : COMPONENT_UNSIGNED_SHORT,
+                                      wide ? GLTF_UNSIGNED_INT : GLTF_UNSIGNED_SHORT,
                                       (int)(3 * t), "SCALAR", NULL);
     free(indices);
     /* what the primitive had that no longer matches its vertices */
@@ -527,7 +525,7 @@ static int replace_primitive(writer *w, cJSON *primitive, const instance *in,
         cJSON *zeros;
         float *nothing = xcalloc(3 * (size_t)n, sizeof(float));
         int zero = add_accessor(w, nothing, sizeof(float) * 3 * n, TARGET_ARRAY_BUFFER,
-                                COMPONENT_FLOAT, (int)n, "VEC3", &zeros);
+                                GLTF_FLOAT, (int)n, "VEC3", &zeros);
         free(nothing);
         const double origin[3] = {0, 0, 0};
         cJSON_AddItemToObject(zeros, "min", cJSON_CreateDoubleArray(origin, 3));
