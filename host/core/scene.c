@@ -105,6 +105,15 @@ static void index_mesh_name(scene *s, size_t index)
     s->mesh_names[name_slot(s, s->meshes[index].name)] = index + 1;
 }
 
+/* `array` of `count` items of `size` bytes with room for one more: it doubles when full, its
+ * capacity the next power of two (not one item at a time: 20,000 meshes copied 20,000 times). */
+static void *grown(void *array, size_t count, size_t size)
+{
+    if (count & (count - 1)) /* not a power of two: room left */
+        return array;
+    return xrealloc(array, (count ? 2 * count : 1) * size);
+}
+
 /* "name", or "name.2", "name.3", ... when taken: the first that is free. Names are only ever
  * added, so the search for a repeated name goes on from where the last one for it stopped
  * (10,000 nodes of one name: linear, not quadratic). */
@@ -144,7 +153,7 @@ scene_mesh *scene_add_mesh(scene *s, const char *name, const char *shape_type, c
                            uint32_t triangle_count, uint32_t *indices, float *texcoords)
 {
     char *unique = unique_mesh_name(s, name && *name ? name : (shape_type ? shape_type : "mesh"));
-    s->meshes = xrealloc(s->meshes, (s->mesh_count + 1) * sizeof *s->meshes);
+    s->meshes = grown(s->meshes, s->mesh_count, sizeof *s->meshes);
     scene_mesh *m = &s->meshes[s->mesh_count++];
     memset(m, 0, sizeof *m);
     m->name = unique;
@@ -174,7 +183,7 @@ uint32_t scene_add_material(scene *s, const char *name, const char *bsdf_type,
 
 int scene_add_light(scene *s, const idmr_light *light)
 {
-    s->lights = xrealloc(s->lights, (s->light_count + 1) * sizeof *s->lights);
+    s->lights = grown(s->lights, s->light_count, sizeof *s->lights);
     s->lights[s->light_count] = *light;
     return (int)s->light_count++;
 }

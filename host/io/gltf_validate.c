@@ -382,8 +382,7 @@ static const char *unreadable(const char *name, const char **warning)
 {
     static const char *const prefixes[] = {"KHR_materials_"};
     static const char *const readable[] = {"KHR_draco_mesh_compression", "KHR_lights_punctual",
-                                           "KHR_texture_transform", "KHR_xmp_json_ld",
-                                           "KHR_animation_pointer"};
+                                           "KHR_texture_transform", "KHR_xmp_json_ld"};
     static const char *const texture_formats[] = {"KHR_texture_basisu", "EXT_texture_webp",
                                                   "EXT_texture_avif"};
     static const char *const techniques[] = {"KHR_techniques_webgl", "KHR_technique_webgl"};
@@ -410,6 +409,8 @@ static const char *unreadable(const char *name, const char **warning)
     if (strcmp(name, "KHR_mesh_quantization") == 0)
         return "quantized vertex data (integer positions and normals), which Assimp 5.2 reads "
                "as floats";
+    if (strcmp(name, "KHR_animation_pointer") == 0)
+        return "animation pointers, which Assimp 5.2 reads as translations of a node";
     if (strcmp(name, "EXT_mesh_gpu_instancing") == 0)
         return "GPU instancing, which Assimp 5.2 ignores: the instances would be missing";
     return "an extension idmr does not implement";
@@ -1364,9 +1365,21 @@ static int check_animation(const checker *c, int n)
                          : strcmp(path, "rotation") == 0                              ? 4
                          : strcmp(path, "weights") == 0                               ? 1
                                                                                       : 0;
+        if (!components) { /* Assimp 5.2 reads any other path as a translation */
+            status = bad(c, at(part, "%s/target/path", where),
+                         "'%.40s' is none of translation, rotation, scale, weights (animation "
+                         "pointers are not read)",
+                         path);
+            break;
+        }
+        if (node < 0) {
+            status = bad(c, at(part, "%s/target/node", where),
+                         "missing: a %s channel animates a node", path);
+            break;
+        }
         const gltf_accessor *out = outputs[sampler];
-        if (!components || !out)
-            continue; /* another path (an extension's): Assimp reads none */
+        if (!out)
+            continue;
         /* as many outputs as keys (three per key for CUBICSPLINE); weights: that times the
          * number of morph targets */
         uint32_t needed = (uint32_t)output_per_key[sampler];

@@ -9,9 +9,9 @@
  *                 samplers, skins, cameras, lights, animation samplers)
  *   extensions    extensionsRequired names only extensions idmr reads (KHR_draco_mesh_
  *                 compression, which Assimp decodes; lights, materials, texture transforms,
- *                 XMP, animation pointers; texture formats with a warning: such textures are not
- *                 read); meshopt compression, mesh quantization, GPU instancing and any other
- *                 are refused
+ *                 XMP; texture formats and WebGL techniques with a warning: such textures are
+ *                 not read, such shaders not run); meshopt compression, mesh quantization, GPU
+ *                 instancing, animation pointers and any other are refused
  *   buffers       byteLength, the bytes behind it (file, BIN chunk, well-formed base64)
  *   bufferViews   within their buffer; byteStride 4 to 252, a multiple of 4
  *   accessors     componentType, type, count, normalized; byteOffset aligned to the component;
@@ -30,8 +30,9 @@
  *   lights        KHR_lights_punctual: type point, spot or directional; a spot's cone angles
  *                 0 <= inner < outer <= π/2; intensity >= 0, range > 0, colour of three numbers
  *   skins, animations  joints, inverse bind matrices (MAT4 FLOAT, one per joint; required,
- *                 since Assimp 5.2 crashes without), channel targets and samplers (input SCALAR
- *                 FLOAT, output as many per key as its interpolation and path ask)
+ *                 since Assimp 5.2 crashes without), channel targets (a node, and a path of
+ *                 the four glTF defines) and samplers (input SCALAR FLOAT, output as many per
+ *                 key as its interpolation and path ask)
  *
  * A Draco-compressed primitive's data is decoded by Assimp: its accessors are checked, its
  * index values are not. Every error names the file, the JSON pointer of what is wrong
