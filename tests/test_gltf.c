@@ -43,6 +43,7 @@
 #include <cmocka.h>
 
 #include "command_common.h"
+#include "gltf_common.h"
 
 #include <cjson/cJSON.h>
 #include <math.h>
@@ -502,12 +503,6 @@ static void write_bytes(const char *path, const void *bytes, size_t size)
     assert_int_equal(fclose(f), 0);
 }
 
-static void put_u32(unsigned char *p, uint32_t v)
-{
-    p[0] = (unsigned char)v, p[1] = (unsigned char)(v >> 8), p[2] = (unsigned char)(v >> 16),
-    p[3] = (unsigned char)(v >> 24);
-}
-
 /* Writes `doc` with `bin` as dir/name: a .gltf with its buffer in dir/grid.bin, or a .glb (a
  * 12-byte header, the JSON chunk padded with spaces, the BIN chunk). Returns the path
  * (static). */
@@ -530,16 +525,8 @@ static const char *write_document(cJSON *doc, const test_bin *bin, const char *d
         write_bytes(bin_path, bin->data, bin->size);
         write_bytes(path, text, strlen(text));
     } else {
-        size_t json = (strlen(text) + 3) & ~(size_t)3, data = (bin->size + 3) & ~(size_t)3;
-        size_t total = 12 + 8 + json + 8 + data;
-        unsigned char *glb_bytes = calloc(total, 1);
-        memcpy(glb_bytes, "glTF", 4);
-        put_u32(glb_bytes + 4, 2), put_u32(glb_bytes + 8, (uint32_t)total);
-        put_u32(glb_bytes + 12, (uint32_t)json), memcpy(glb_bytes + 16, "JSON", 4);
-        memset(glb_bytes + 20, ' ', json);
-        memcpy(glb_bytes + 20, text, strlen(text));
-        put_u32(glb_bytes + 20 + json, (uint32_t)data), memcpy(glb_bytes + 24 + json, "BIN", 4);
-        memcpy(glb_bytes + 28 + json, bin->data, bin->size);
+        size_t total;
+        unsigned char *glb_bytes = glb_pack(text, bin->data, bin->size, &total);
         write_bytes(path, glb_bytes, total);
         free(glb_bytes);
     }

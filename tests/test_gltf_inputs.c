@@ -40,6 +40,7 @@
 #include <cmocka.h>
 
 #include "command_common.h"
+#include "gltf_common.h"
 
 #include <cjson/cJSON.h>
 #include <math.h>
@@ -162,12 +163,6 @@ static void write_file(const char *path, const void *data, size_t size)
     assert_int_equal(fclose(f), 0);
 }
 
-static void put_u32(unsigned char *p, uint32_t v)
-{
-    p[0] = (unsigned char)v, p[1] = (unsigned char)(v >> 8), p[2] = (unsigned char)(v >> 16),
-    p[3] = (unsigned char)(v >> 24);
-}
-
 /* dir/name: a .gltf with the bytes as the data: URI of buffer 0 (unless it has a uri), or a .glb
  * with them as its BIN chunk. Returns the path (static). */
 static const char *write_scene(cJSON *doc, const bytes *b, const char *name)
@@ -188,16 +183,8 @@ static const char *write_scene(cJSON *doc, const bytes *b, const char *name)
     if (!glb) {
         write_file(path, text, strlen(text));
     } else {
-        size_t json = (strlen(text) + 3) & ~(size_t)3, bin = (b->size + 3) & ~(size_t)3;
-        size_t total = 12 + 8 + json + 8 + bin;
-        unsigned char *glb_bytes = calloc(total, 1);
-        memcpy(glb_bytes, "glTF", 4);
-        put_u32(glb_bytes + 4, 2), put_u32(glb_bytes + 8, (uint32_t)total);
-        put_u32(glb_bytes + 12, (uint32_t)json), memcpy(glb_bytes + 16, "JSON", 4);
-        memset(glb_bytes + 20, ' ', json);
-        memcpy(glb_bytes + 20, text, strlen(text));
-        put_u32(glb_bytes + 20 + json, (uint32_t)bin), memcpy(glb_bytes + 24 + json, "BIN", 4);
-        memcpy(glb_bytes + 28 + json, b->data, b->size);
+        size_t total;
+        unsigned char *glb_bytes = glb_pack(text, b->data, b->size, &total);
         write_file(path, glb_bytes, total);
         free(glb_bytes);
     }
