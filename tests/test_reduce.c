@@ -477,6 +477,24 @@ static void cornell_memory(const scene *s, const reduce_options *o, uint64_t *re
     bvh_free(&b);
 }
 
+/* What the process grows by, at most, between the test's reading of what it holds and the
+ * plan's. */
+#define TEST_PROCESS_GROWTH_BYTES (4.0 * 1024 * 1024)
+
+/* On a device that shares the host's memory, the budget that gives the importance pass
+ * device_share beside what the process holds (`held`, over the plan's margin), or, where that is
+ * more, what the plan asks to read the knot again beside it (at 2d25ed6 the first alone fell
+ * short of the second by 0.1 to 1.7 MiB, depending on the machine: the knot's in-flight bytes
+ * exceed its share of the importance pass). */
+static uint64_t shared_memory_budget(const scene *s, double device_share, double held)
+{
+    double importance = (device_share + held) / REDUCE_MEMORY_MARGIN;
+    double in_flight =
+        held + REDUCE_IN_FLIGHT_BYTES_PER_VERTEX * test_find_mesh(s, "knot")->vertex_count +
+        TEST_PROCESS_GROWTH_BYTES;
+    return (uint64_t)(importance > in_flight ? importance : in_flight);
+}
+
 /* A memory budget of 80 % of what the whole Cornell box needs to render and to simulate: the
  * target and an initial reduction are chosen for it, no importance pass allocates more than the
  * budget or uploads the whole scene (its device bytes stay below the whole scene's, and it
@@ -486,8 +504,9 @@ static void cornell_memory(const scene *s, const reduce_options *o, uint64_t *re
  * On a device that shares the host's memory (a CPU: PoCL) the budget bounds the whole process
  * while the importance pass runs (reduce_memory.c). There those 80 % alone are refused, with a
  * message that says why, and the budget is that plus what this process holds now (over the
- * plan's margin): the render then fits it whole, and the importance pass still gets no more than
- * the 80 %, the rest being what the host holds. */
+ * plan's margin), or what reading the knot again takes beside what the process holds where that
+ * is more: the render then fits it whole, the importance pass gets what is left beside the host's
+ * share, and still not the whole scene. */
 static void test_memory_budget(void **state)
 {
     scene *s = test_load_scene(CORNELL);
@@ -505,8 +524,10 @@ static void test_memory_budget(void **state)
     o.memory_budget = (uint64_t)device_share;
     if (shared) {
         expect_refused(&o, "shares the host's memory");
-        o.memory_budget =
-            (uint64_t)((device_share + (double)resident_bytes()) / REDUCE_MEMORY_MARGIN);
+        double held = (double)resident_bytes();
+        o.memory_budget = shared_memory_budget(s, device_share, held);
+        /* What the plan may give the importance pass. */
+        device_share = REDUCE_MEMORY_MARGIN * (double)o.memory_budget - held;
     }
     reduction r;
     reduction_run(&r, s, &o);
@@ -542,8 +563,11 @@ static void test_memory_budget(void **state)
     /* Streaming, as the command loads under a budget: the knot is released as soon as it is
      * read and read again where it is needed; the result is the same, byte for byte (at the
      * initial reduction chosen above: on a shared device the choice follows what the process
-     * holds, which this test's own allocations move). */
+     * holds, which this test's own allocations move, and so the budget gets room for the
+     * first run's output, which this process still holds). */
     o.initial = number(initial, "target");
+    if (shared)
+        o.memory_budget += 64u << 20;
     scene *streamed = scene_load_streaming(CORNELL, REDUCE_INITIAL_FLOOR);
     assert_non_null(streamed);
     assert_true(test_find_mesh(streamed, "knot")->released);
@@ -629,8 +653,7 @@ static void test_memory_budget_later_pass_refused(void **state)
     cornell_memory(s, &o, &render_bytes, &importance_bytes);
     double device_share =
         0.8 * (double)(render_bytes < importance_bytes ? render_bytes : importance_bytes);
-    o.memory_budget =
-        (uint64_t)((device_share + (double)resident_bytes()) / REDUCE_MEMORY_MARGIN);
+    o.memory_budget = shared_memory_budget(s, device_share, (double)resident_bytes());
     scene_free(s);
     expect_refused(&o, "--passes 2");
 }

@@ -48,13 +48,6 @@
 #include "passes/render.h"
 #include "reduce/reduce_stages.h"
 
-/* The host memory one mesh takes while it is decimated, per input vertex: read again, welded,
- * the collapse engine's arrays, the output. Measured on the full dragon (437,645 vertices) with
- * the engine (decimate_mesh, two threads): 347 bytes with the combined method, 571 with its
- * computed normals carried (their attribute quadrics), 387 with quadric and normals; with
- * OpenMesh's decimater before it, 500 and 640. */
-#define IN_FLIGHT_BYTES_PER_VERTEX 700.0
-
 /* The decimations the fit may run again. */
 #define FIT_ROUNDS 3
 /* What the host holds beside a device that shares its memory (above): per original vertex the
@@ -180,7 +173,7 @@ static int refuse_in_flight(const reduce_state *st, uint64_t budget)
     if (largest == st->count)
         return 0;
     double held = (double)resident_bytes();
-    double mesh = IN_FLIGHT_BYTES_PER_VERTEX * (double)st->scene->meshes[largest].vertex_count;
+    double mesh = REDUCE_IN_FLIGHT_BYTES_PER_VERTEX * (double)st->scene->meshes[largest].vertex_count;
     if (held + mesh <= (double)budget)
         return 0;
     return error_set(IDMR_EXIT_INPUT,
@@ -320,8 +313,8 @@ size_t reduce_memory_meshes_in_flight(const reduce_state *st, const uint32_t *ve
     double held = (double)resident_bytes();
     size_t fitting = 1;
     while (fitting < count) {
-        held += IN_FLIGHT_BYTES_PER_VERTEX * (double)vertices[fitting - 1];
-        if (held + IN_FLIGHT_BYTES_PER_VERTEX * (double)vertices[fitting] > (double)budget)
+        held += REDUCE_IN_FLIGHT_BYTES_PER_VERTEX * (double)vertices[fitting - 1];
+        if (held + REDUCE_IN_FLIGHT_BYTES_PER_VERTEX * (double)vertices[fitting] > (double)budget)
             break;
         fitting++;
     }
