@@ -1698,6 +1698,17 @@ static int attribute_ids_shared(const collapse_mesh *m)
     return shared;
 }
 
+/* An array that a parallel step sums into, zeroed here on one thread: left to the step's first
+ * touches (calloc's fresh pages, read before they are written), the quadric step took 0.12 s on
+ * the dragon with two threads and 0.04 s once the pages were in. The rings, written before they
+ * are read, showed no such difference. */
+static void *zeroed_array(size_t count, size_t size)
+{
+    void *array = xmalloc(count * size);
+    memset(array, 0, count * size);
+    return array;
+}
+
 static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
 {
     memset(e, 0, sizeof *e);
@@ -1741,8 +1752,8 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     if (m->importance)
         memcpy(e->importance, m->importance, sizeof(double) * e->n);
     if (o->method != DECIMATE_IMPORTANCE) {
-        e->quadric = xcalloc(10 * n, sizeof(double));
-        e->self_error = xcalloc(n, sizeof(double));
+        e->quadric = zeroed_array(10 * n, sizeof(double));
+        e->self_error = zeroed_array(n, sizeof(double));
     }
     for (uint32_t v = 0; v < e->n; v++) {
         e->donor[v] = COLLAPSE_NONE;
