@@ -16,9 +16,11 @@
  * touched vertex are its pass-start ones plus its donor's (current_fan); a vertex receives at
  * most once in a pass, as an end of a taken collapse is not taken again.
  *
- * Threads: one pool per run (worker_pool) takes the per-vertex steps (rings, quadrics, scores)
- * and the chunks' judging and taking (take_in_chunks); each writes only its own vertex's or
- * collapse's records, so the result is the same on any number of threads. */
+ * Threads: one pool per run (worker_pool) takes the steps (vertex_step): the adjacency's
+ * counting sort and the ranking's listing by ranges of vertices, the per-vertex rings, quadrics
+ * and scores, and the chunks' judging and taking (take_in_chunks); each writes only its own
+ * range's, vertex's or collapse's records, so the result is the same on any number of
+ * threads. */
 #include "reduce/collapse.h"
 
 #include <float.h>
@@ -52,6 +54,22 @@ enum {
 #define SPIN_LIMIT 4000 /* pauses (about 0.1 ms) a thread spins before it sleeps or yields */
 
 typedef struct worker_pool worker_pool;
+
+/* The steps the pool's threads take, each over its items (vertices, ranges of vertices, or a
+ * chunk's candidates). Each item's step writes only that item's records, so the items may go to
+ * any thread and the result does not depend on which. */
+typedef enum vertex_step {
+    STEP_COUNT_CORNERS, /* per range of vertices (build_adjacency) */
+    STEP_FILE_CORNERS,
+    STEP_RINGS, /* per vertex */
+    STEP_QUADRICS,
+    STEP_SCORES,
+    STEP_COUNT_CANDIDATES, /* per range of vertices (rank_candidates) */
+    STEP_WRITE_KEYS,
+    STEP_GATHER_CANDIDATES, /* per range of the ranking */
+    STEP_JUDGE, /* per candidate of a chunk (take_in_chunks) */
+    STEP_APPLY
+} vertex_step;
 
 /* A vertex's one-ring: each neighbour, how many live triangles hold the edge to it (at most 255
  * counted), and the third corners of those triangles: left[i] of the triangle (v, vertex[i],
@@ -106,6 +124,11 @@ typedef struct candidate {
     uint32_t vertex;
 } candidate;
 
+/* A candidate's place in the ranking (rank_candidates): its cost's bits and its vertex. */
+typedef struct rank_key {
+    uint32_t cost_bits, vertex;
+} rank_key;
+
 /* A candidate judged on the mesh as it is, ahead of taking it (judge): its verdict, the
  * vertices its verdict read (v0, v1, vl, vr) and those taking it writes (v0 and its ring; more
  * than WRITES_MAX: the ring is gathered again when needed), and the vertices it removes. */
@@ -142,6 +165,7 @@ typedef struct engine {
     int rings_current; /* the adjacency and rings are the mesh's as it is (after engine_init) */
     double *quadric;
     double *self_error; /* per vertex: its quadric at its own position (the quadric methods) */
+    int quadrics_built; /* the quadric step has run (engine_init, after the first rings) */
     double *importance;
     uint32_t *donor;
     /* the scoring's results, per vertex */
@@ -155,6 +179,13 @@ typedef struct engine {
     double importance_floor; /* COMBINED (importance_floor()) */
     uint64_t alive;
     worker_pool *pool;
+    unsigned int threads; /* the pool's, the caller's included */
+    /* the ranking (rank_candidates): per range of vertices the offset of its candidates; the
+     * keys sorted (and their spare); the ranked candidates, `ranked` of them */
+    uint32_t range_offset[MAX_THREADS + 1];
+    rank_key *keys, *spare_keys;
+    candidate *list;
+    size_t ranked;
     /* taking collapses in chunks (take_in_chunks) */
     const candidate *chunk;         /* the ranked candidates of the pass */
     uint32_t *chunk_items;          /* the chunk: positions in it, deferred ones first */
@@ -250,38 +281,92 @@ static double quadric_error(const double *q, const float *point)
 
 /* ---- adjacency and rings ---- */
 
-/* The live triangles at each vertex, in triangle order. On the way, the corners of every
- * triangle a collapse of the last pass touched are marked stale: a vertex's score depends on
- * its triangles, its neighbours' triangles, quadrics and importance, so the touched vertices
- * and their neighbours are scored again and the rest keep their scores (the scoring step clears
- * the marks: settle_vertex). */
+/* Sets bits of a vertex's flags; atomic, as the threads of a step may set bits of one vertex
+ * (collapses taken side by side touch a shared neighbour; stale marks of other ranges). */
+static void flag(engine *e, uint32_t v, uint8_t bits)
+{
+    /* most are set twice or more: the locked read-modify-write only where needed */
+    if ((__atomic_load_n(&e->flags[v], __ATOMIC_RELAXED) & bits) != bits)
+        __atomic_fetch_or(&e->flags[v], bits, __ATOMIC_RELAXED);
+}
+
+static void run_on_pool(engine *e, vertex_step step, uint32_t items, uint32_t block);
+
+/* The live triangles at each vertex, in triangle order (adjacency[adjacency_start[v] ..]). On
+ * the way, the corners of every triangle a collapse of the last pass touched are marked stale: a
+ * vertex's score depends on its triangles, its neighbours' triangles, quadrics and importance, so
+ * the touched vertices and their neighbours are scored again and the rest keep their scores (the
+ * scoring step clears the marks: settle_vertex). A counting sort, the vertices cut into one range
+ * per thread: each thread sweeps all triangles and counts, then files, the corners in its own
+ * range (count_corners, file_corners), so each vertex's list is in triangle order on any number
+ * of threads; between the two sweeps the counts become offsets. */
 static void build_adjacency(engine *e)
 {
     uint32_t *start = e->adjacency_start;
-    memset(start, 0, sizeof(uint32_t) * ((size_t)e->n + 1));
+    uint32_t ranges = e->threads;
+    start[0] = 0;
+    run_on_pool(e, STEP_COUNT_CORNERS, ranges, 1);
+    for (uint32_t v = 0; v < e->n; v++)
+        start[v + 1] += start[v];
+    run_on_pool(e, STEP_FILE_CORNERS, ranges, 1);
+    for (uint32_t v = e->n; v > 0; v--) /* each start now holds the next vertex's */
+        start[v] = start[v - 1];
+    start[0] = 0;
+}
+
+/* The vertices of range `range` of as many as the pool has threads: [*first, *end). */
+static void vertex_range(const engine *e, uint32_t range, uint32_t *first, uint32_t *end)
+{
+    uint64_t ranges = e->threads;
+    *first = (uint32_t)((uint64_t)e->n * range / ranges);
+    *end = (uint32_t)((uint64_t)e->n * (range + 1) / ranges);
+}
+
+/* A vertex's flags, read while other threads may set bits of them (flag). */
+static uint8_t flags_of(const engine *e, uint32_t v)
+{
+    return __atomic_load_n(&e->flags[v], __ATOMIC_RELAXED);
+}
+
+/* Counts the live triangles at each vertex of the range into adjacency_start[v + 1], marking
+ * the stale ones. */
+static void count_corners(engine *e, uint32_t range)
+{
+    uint32_t first, end, *start = e->adjacency_start;
+    vertex_range(e, range, &first, &end);
+    memset(&start[(size_t)first + 1], 0, sizeof(uint32_t) * (end - first));
     for (uint32_t t = 0; t < e->t; t++) {
         const uint32_t *c = corners(e, t);
         if (c[0] == COLLAPSE_NONE)
             continue;
-        int touched = (e->flags[c[0]] | e->flags[c[1]] | e->flags[c[2]]) & FLAG_TOUCHED;
+        int touched = -1; /* read only where a corner is in the range */
         for (int k = 0; k < 3; k++) {
+            if (c[k] - first >= end - first)
+                continue;
             start[c[k] + 1]++;
+            if (touched < 0)
+                touched = (flags_of(e, c[0]) | flags_of(e, c[1]) | flags_of(e, c[2])) &
+                          FLAG_TOUCHED;
             if (touched)
-                e->flags[c[k]] |= FLAG_STALE;
+                flag(e, c[k], FLAG_STALE);
         }
     }
-    for (uint32_t v = 0; v < e->n; v++)
-        start[v + 1] += start[v];
+}
+
+/* Files each live triangle under the corners it has in the range, adjacency_start[v] counting
+ * up as v's are filed. */
+static void file_corners(engine *e, uint32_t range)
+{
+    uint32_t first, end, *start = e->adjacency_start;
+    vertex_range(e, range, &first, &end);
     for (uint32_t t = 0; t < e->t; t++) {
         const uint32_t *c = corners(e, t);
         if (c[0] == COLLAPSE_NONE)
             continue;
         for (int k = 0; k < 3; k++)
-            e->adjacency[start[c[k]]++] = t;
+            if (c[k] - first < end - first)
+                e->adjacency[start[c[k]]++] = t;
     }
-    for (uint32_t v = e->n; v > 0; v--)
-        start[v] = start[v - 1];
-    start[0] = 0;
 }
 
 /* v's triangles in this pass's adjacency: all live and current while v is untouched. */
@@ -376,7 +461,7 @@ static ring view_of(ring_store r, uint32_t size)
 /* Builds v's one-ring from its pass-start triangles into the pass's ring arrays. */
 static void build_ring(engine *e, uint32_t v)
 {
-    if (e->quadric) /* the quadrics are as the last pass left them: v's own error with them */
+    if (e->quadrics_built) /* as the last pass left them: v's own error with them */
         e->self_error[v] = quadric_error(&e->quadric[10 * (size_t)v], position(e, v));
     uint32_t degree = e->adjacency_start[v + 1] - e->adjacency_start[v];
     e->ring_size[v] = fill_ring(e, v, pass_fan(e, v),
@@ -705,7 +790,7 @@ static double importance_floor(const engine *e)
 static void build_quadric(engine *e, uint32_t v)
 {
     int combined = e->o->method == DECIMATE_COMBINED;
-    double *quadric = &e->quadric[10 * (size_t)v];
+    double quadric[10] = {0}; /* summed here, stored once: e->quadric is not zeroed */
     fan f = pass_fan(e, v);
     ring r = ring_of(e, v);
     for (uint32_t i = 0; i < f.count; i++) {
@@ -752,6 +837,7 @@ static void build_quadric(engine *e, uint32_t v)
                 q[m] += face[m];
         }
     }
+    memcpy(&e->quadric[10 * (size_t)v], quadric, sizeof quadric);
     e->self_error[v] = quadric_error(quadric, position(e, v));
 }
 
@@ -1091,17 +1177,8 @@ static void settle_vertex(engine *e, uint32_t v, scratch *s)
 
 /* ---- the per-vertex steps, in parallel ---- */
 
-/* The engine's threads: started once per run, each with its own scratch, handed one step at a
- * time. Each vertex's step writes only that vertex's records, so the blocks of vertices may go
- * to any thread and the result does not depend on which. */
-typedef enum vertex_step {
-    STEP_RINGS,
-    STEP_QUADRICS,
-    STEP_SCORES,
-    STEP_JUDGE,
-    STEP_APPLY
-} vertex_step;
-
+/* The engine's threads: started once per run, each with its own scratch, handed one step
+ * (vertex_step) at a time. */
 typedef struct worker_start {
     worker_pool *pool;
     unsigned int index;
@@ -1135,12 +1212,21 @@ struct worker_pool {
     atomic_uint done;
 };
 
+static void count_candidates(engine *e, uint32_t range);
+static void write_keys(engine *e, uint32_t range);
+static void gather_candidates(engine *e, uint32_t range);
 static void judge_item(engine *e, uint32_t item, scratch *s);
 static void apply_item(engine *e, uint32_t item, scratch *s);
 
 static void run_item(engine *e, vertex_step step, uint32_t i, scratch *s)
 {
     switch (step) {
+    case STEP_COUNT_CORNERS:
+        count_corners(e, i);
+        break;
+    case STEP_FILE_CORNERS:
+        file_corners(e, i);
+        break;
     case STEP_RINGS:
         build_ring(e, i);
         break;
@@ -1149,6 +1235,15 @@ static void run_item(engine *e, vertex_step step, uint32_t i, scratch *s)
         break;
     case STEP_SCORES:
         settle_vertex(e, i, s);
+        break;
+    case STEP_COUNT_CANDIDATES:
+        count_candidates(e, i);
+        break;
+    case STEP_WRITE_KEYS:
+        write_keys(e, i);
+        break;
+    case STEP_GATHER_CANDIDATES:
+        gather_candidates(e, i);
         break;
     case STEP_JUDGE:
         judge_item(e, i, s);
@@ -1314,36 +1409,79 @@ static int compare_candidates(const void *a, const void *b)
     return x->vertex < y->vertex ? -1 : x->vertex > y->vertex;
 }
 
-/* Sorts the candidates: a radix sort on the cost's bits (costs are not negative, so their bits
- * order as the costs do), stable, so equal costs stay in vertex order; then runs of equal cost
- * sorted by the full order where the ties have keys beyond the vertex. */
-static void rank_candidates(candidate *list, candidate *spare, size_t count, int full_ties)
+/* Lists the candidates of the vertices of one range (vertex_range) as ranking keys, in vertex
+ * order, at the range's offset: counted first (count_candidates), the offsets summed, then
+ * written (write_keys). */
+static void count_candidates(engine *e, uint32_t range)
 {
-    size_t histogram[2][65536];
+    uint32_t first, end, count = 0;
+    vertex_range(e, range, &first, &end);
+    for (uint32_t v = first; v < end; v++)
+        count += e->best_target[v] != COLLAPSE_NONE;
+    e->range_offset[range + 1] = count;
+}
+
+static void write_keys(engine *e, uint32_t range)
+{
+    uint32_t first, end;
+    vertex_range(e, range, &first, &end);
+    rank_key *key = &e->keys[e->range_offset[range]];
+    for (uint32_t v = first; v < end; v++)
+        if (e->best_target[v] != COLLAPSE_NONE) {
+            uint32_t bits;
+            memcpy(&bits, &e->best[v].cost, sizeof bits);
+            *key++ = (rank_key){bits, v};
+        }
+}
+
+/* The ranked candidates' records, from the sorted keys: list[i] of a range of the list. */
+static void gather_candidates(engine *e, uint32_t range)
+{
+    size_t first = e->ranked * range / e->threads, end = e->ranked * (range + 1) / e->threads;
+    for (size_t i = first; i < end; i++)
+        e->list[i] = e->best[e->keys[i].vertex];
+}
+
+/* Ranks the candidates into e->list (e->ranked of them): their keys (the cost's bits and the
+ * vertex) listed in vertex order, a radix sort on the cost's bits (costs are not negative, so
+ * their bits order as the costs do), stable, so equal costs stay in vertex order; the records
+ * gathered in that order; then runs of equal cost sorted by the full order where the ties have
+ * keys beyond the vertex. */
+static void rank_candidates(engine *e, int full_ties)
+{
+    uint32_t ranges = e->threads;
+    e->range_offset[0] = 0;
+    run_on_pool(e, STEP_COUNT_CANDIDATES, ranges, 1);
+    for (uint32_t r = 0; r < ranges; r++)
+        e->range_offset[r + 1] += e->range_offset[r];
+    size_t count = e->range_offset[ranges];
+    e->ranked = count;
+    if (!count)
+        return;
+    run_on_pool(e, STEP_WRITE_KEYS, ranges, 1);
+    uint32_t histogram[2][65536];
     memset(histogram, 0, sizeof histogram);
     for (size_t i = 0; i < count; i++) {
-        uint32_t bits;
-        memcpy(&bits, &list[i].cost, sizeof bits);
-        histogram[0][bits & 0xffff]++;
-        histogram[1][bits >> 16]++;
+        histogram[0][e->keys[i].cost_bits & 0xffff]++;
+        histogram[1][e->keys[i].cost_bits >> 16]++;
     }
     for (int digit = 0; digit < 2; digit++) {
-        size_t sum = 0;
+        uint32_t sum = 0;
         for (size_t b = 0; b < 65536; b++) {
-            size_t c = histogram[digit][b];
+            uint32_t c = histogram[digit][b];
             histogram[digit][b] = sum;
             sum += c;
         }
-        candidate *from = digit ? spare : list, *to = digit ? list : spare;
+        rank_key *from = digit ? e->spare_keys : e->keys, *to = digit ? e->keys : e->spare_keys;
         for (size_t i = 0; i < count; i++) {
-            uint32_t bits;
-            memcpy(&bits, &from[i].cost, sizeof bits);
-            uint32_t bucket = digit ? bits >> 16 : bits & 0xffff;
+            uint32_t bucket = digit ? from[i].cost_bits >> 16 : from[i].cost_bits & 0xffff;
             to[histogram[digit][bucket]++] = from[i];
         }
     }
+    run_on_pool(e, STEP_GATHER_CANDIDATES, ranges, 1);
     if (!full_ties)
         return;
+    candidate *list = e->list;
     for (size_t i = 0; i < count;) {
         size_t j = i + 1;
         while (j < count && list[j].cost == list[i].cost)
@@ -1426,14 +1564,6 @@ static uint64_t collapse_removes(const engine *e, fan f0, uint32_t v0, uint32_t 
         removed += before > after ? before - after : 0;
     }
     return removed;
-}
-
-/* Sets bits of a vertex's flags; atomic, as collapses taken side by side may touch one vertex. */
-static void flag(engine *e, uint32_t v, uint8_t bits)
-{
-    /* most corners are flagged twice or more: the locked read-modify-write only where needed */
-    if ((__atomic_load_n(&e->flags[v], __ATOMIC_RELAXED) & bits) != bits)
-        __atomic_fetch_or(&e->flags[v], bits, __ATOMIC_RELAXED);
 }
 
 /* Takes v0 -> v1 (neither an end of a collapse taken in this pass; f0 holds v0's live
@@ -1624,7 +1754,7 @@ static uint32_t take_in_chunks(engine *e, const candidate *list, size_t count, f
 /* One pass; returns the collapses it took. Every vertex whose neighbourhood changed is scored
  * (its best legal collapse), the candidates ranked and taken greedily, the pass stopping at
  * PASS_COST_FACTOR x the cost of the candidate a quarter down the ranking. */
-static uint32_t run_pass(engine *e, candidate *list, candidate *spare, scratch *s)
+static uint32_t run_pass(engine *e, scratch *s)
 {
     if (!e->rings_current) { /* the first pass has those engine_init built */
         build_adjacency(e);
@@ -1632,15 +1762,11 @@ static uint32_t run_pass(engine *e, candidate *list, candidate *spare, scratch *
     }
     e->rings_current = 0;
     for_each_vertex(e, STEP_SCORES);
-    size_t count = 0;
-    for (uint32_t v = 0; v < e->n; v++)
-        if (e->best_target[v] != COLLAPSE_NONE)
-            list[count++] = e->best[v];
-    if (!count)
+    rank_candidates(e, e->o->method == DECIMATE_IMPORTANCE || e->m->distance);
+    if (!e->ranked)
         return 0;
-    rank_candidates(list, spare, count, e->o->method == DECIMATE_IMPORTANCE || e->m->distance);
-    float cost_limit = list[count / 4].cost * PASS_COST_FACTOR;
-    return take_in_chunks(e, list, count, cost_limit, s);
+    float cost_limit = e->list[e->ranked / 4].cost * PASS_COST_FACTOR;
+    return take_in_chunks(e, e->list, e->ranked, cost_limit, s);
 }
 
 /* ---- setup ---- */
@@ -1666,6 +1792,9 @@ static void engine_free(engine *e)
     free(e->best_target);
     free(e->best);
     free(e->attribute_terms);
+    free(e->list);
+    free(e->keys);
+    free(e->spare_keys);
     free(e->judgements);
     free(e->chunk_items);
     free(e->accepted);
@@ -1696,17 +1825,6 @@ static int attribute_ids_shared(const collapse_mesh *m)
     }
     free(owner);
     return shared;
-}
-
-/* An array that a parallel step sums into, zeroed here on one thread: left to the step's first
- * touches (calloc's fresh pages, read before they are written), the quadric step took 0.12 s on
- * the dragon with two threads and 0.04 s once the pages were in. The rings, written before they
- * are read, showed no such difference. */
-static void *zeroed_array(size_t count, size_t size)
-{
-    void *array = xmalloc(count * size);
-    memset(array, 0, count * size);
-    return array;
 }
 
 static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
@@ -1752,8 +1870,11 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     if (m->importance)
         memcpy(e->importance, m->importance, sizeof(double) * e->n);
     if (o->method != DECIMATE_IMPORTANCE) {
-        e->quadric = zeroed_array(10 * n, sizeof(double));
-        e->self_error = zeroed_array(n, sizeof(double));
+        /* Written, not summed into, by the quadric step (build_quadric): summed into
+         * calloc's fresh pages, read before they were written, that step took 0.12 s on the
+         * dragon with two threads, 0.04 s once the pages were in. */
+        e->quadric = xmalloc(sizeof(double) * 10 * n);
+        e->self_error = xmalloc(sizeof(double) * n);
     }
     for (uint32_t v = 0; v < e->n; v++) {
         e->donor[v] = COLLAPSE_NONE;
@@ -1764,6 +1885,7 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     }
     e->pool = xmalloc(sizeof *e->pool);
     pool_start(e->pool, e, o->threads ? o->threads : 1);
+    e->threads = e->pool->count + 1;
     build_adjacency(e);
     for_each_vertex(e, STEP_RINGS);
     if (e->quadric) {
@@ -1772,6 +1894,7 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
             e->importance_floor = importance_floor(e);
         }
         for_each_vertex(e, STEP_QUADRICS);
+        e->quadrics_built = 1;
     }
     scratch s;
     memset(&s, 0, sizeof s);
@@ -1786,10 +1909,10 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
 size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_method method)
 {
     /* flags, adjacency_start, ring_size, donor, best_target, stamp, best, importance, the
-     * ranking's list and spare, the quadric and its own error; a ring slot (vertex, left,
-     * right, held) */
+     * ranking's keys (and their spare) and list, the quadric and its own error; a ring slot
+     * (vertex, left, right, held) */
     size_t per_vertex = 1 + 4 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
-                        2 * sizeof(candidate) +
+                        2 * sizeof(rank_key) + sizeof(candidate) +
                         (method != DECIMATE_IMPORTANCE ? 11 * sizeof(double) : 0);
     size_t ring_slot = 3 * sizeof(uint32_t) + 1;
     /* per corner: the adjacency and a ring slot */
@@ -1808,8 +1931,9 @@ int collapse_run(collapse_mesh *m, const collapse_options *o, collapse_result *r
     result->vertices_before = e.alive;
     result->collapses = 0;
     result->passes = 0;
-    candidate *list = xmalloc(sizeof(candidate) * ((size_t)e.n + 1));
-    candidate *spare = xmalloc(sizeof(candidate) * ((size_t)e.n + 1));
+    e.list = xmalloc(sizeof(candidate) * ((size_t)e.n + 1));
+    e.keys = xmalloc(sizeof(rank_key) * ((size_t)e.n + 1));
+    e.spare_keys = xmalloc(sizeof(rank_key) * ((size_t)e.n + 1));
     e.history = result->collapsed_into;
     e.judgements = xmalloc(sizeof(judgement) * CHUNK);
     e.chunk_items = xmalloc(sizeof(uint32_t) * CHUNK);
@@ -1819,7 +1943,7 @@ int collapse_run(collapse_mesh *m, const collapse_options *o, collapse_result *r
     scratch s;
     memset(&s, 0, sizeof s);
     while (e.alive > o->target_vertices) {
-        uint32_t taken = run_pass(&e, list, spare, &s);
+        uint32_t taken = run_pass(&e, &s);
         if (!taken)
             break;
         result->collapses += taken;
@@ -1827,8 +1951,6 @@ int collapse_run(collapse_mesh *m, const collapse_options *o, collapse_result *r
     }
     result->vertices_after = e.alive;
     scratch_free(&s);
-    free(list);
-    free(spare);
     engine_free(&e);
     return 0;
 }
