@@ -5,6 +5,7 @@
  * two triangles, and the check again. */
 #include "reduce/weld.h"
 
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -12,6 +13,7 @@
 
 #define EMPTY 0xffffffffu
 #define MAX_ATTRIBUTE_FLOATS 5
+#define WELD_THREADS 64 /* the most the manifold check starts */
 
 static uint32_t mix(uint32_t h, uint32_t word)
 {
@@ -219,16 +221,23 @@ static void vertex_corners_free(vertex_corners *vc)
     free(vc->corner_of);
 }
 
-/* The manifold check and the wedge count, on a vertex -> triangle adjacency. */
-static void check_manifold(weld_result *out)
+/* The manifold check and the wedge count of the vertices [first, end), on a vertex -> triangle
+ * adjacency; one range per thread (check_manifold). */
+typedef struct manifold_range {
+    const weld_result *out;
+    const vertex_corners *vc;
+    uint32_t first, end;
+    uint32_t non_manifold, counted;
+} manifold_range;
+
+static void *check_range(void *arg)
 {
-    uint32_t n = out->vertex_count;
-    out->non_manifold_vertices = out->vertices_counted = 0;
-    vertex_corners vc;
-    vertex_corners_build(out, &vc);
-    uint32_t *start = vc.start, *corner_of = vc.corner_of, largest = vc.largest;
+    manifold_range *r = arg;
+    const weld_result *out = r->out;
+    const uint32_t *start = r->vc->start, *corner_of = r->vc->corner_of;
+    uint32_t largest = r->vc->largest;
     uint32_t *next = xmalloc(sizeof(uint32_t) * (2 * (size_t)largest + 1)), *previous = next + largest;
-    for (uint32_t v = 0; v < n; v++) {
+    for (uint32_t v = r->first; v < r->end; v++) {
         uint32_t count = start[v + 1] - start[v];
         if (!count)
             continue;
@@ -244,11 +253,45 @@ static void check_manifold(weld_result *out)
                 wedges += !seen;
             }
         }
-        out->vertices_counted += out->corner_ids ? wedges : 1;
+        r->counted += out->corner_ids ? wedges : 1;
         if (!one_fan(next, previous, count))
-            out->non_manifold_vertices++;
+            r->non_manifold++;
     }
     free(next);
+    return NULL;
+}
+
+/* The manifold check and the wedge count, the vertices cut into one range per thread (at most
+ * WELD_THREADS; where a thread cannot be started, the caller checks its range). */
+static void check_manifold(weld_result *out, unsigned int threads)
+{
+    vertex_corners vc;
+    vertex_corners_build(out, &vc);
+    if (threads < 1)
+        threads = 1;
+    if (threads > WELD_THREADS)
+        threads = WELD_THREADS;
+    manifold_range range[WELD_THREADS];
+    pthread_t thread[WELD_THREADS];
+    int started[WELD_THREADS] = {0};
+    for (unsigned int i = 0; i < threads; i++) {
+        range[i] = (manifold_range){out, &vc, (uint32_t)((uint64_t)out->vertex_count * i / threads),
+                                    (uint32_t)((uint64_t)out->vertex_count * (i + 1) / threads),
+                                    0, 0};
+        if (i > 0)
+            started[i] = pthread_create(&thread[i], NULL, check_range, &range[i]) == 0;
+    }
+    check_range(&range[0]);
+    out->non_manifold_vertices = range[0].non_manifold;
+    out->vertices_counted = range[0].counted;
+    for (unsigned int i = 1; i < threads; i++) {
+        if (started[i])
+            pthread_join(thread[i], NULL);
+        else
+            check_range(&range[i]);
+        out->non_manifold_vertices += range[i].non_manifold;
+        out->vertices_counted += range[i].counted;
+    }
     vertex_corners_free(&vc);
 }
 
@@ -412,11 +455,11 @@ int weld_flat(const decimate_input *in, weld_result *out)
     uint32_t *id_of = number_attributes(in, out);
     keep_triangles(in, id_of, out);
     free(id_of);
-    check_manifold(out);
+    check_manifold(out, in->threads);
     if (out->non_manifold_vertices) {
         set_aside_twins(out);
         orient(out);
-        check_manifold(out);
+        check_manifold(out, in->threads);
     }
     return 0;
 }
