@@ -2,12 +2,12 @@
  * application over flat arrays.
  *
  * State, per vertex: flags (locked by the caller, removed, touched or an end of a collapse taken
- * in this pass, to be scored again), the plane quadric (10 doubles: the upper triangle of A,
- * then b, then c, for p'Ap + 2b'p + c) and its error at the vertex itself, the importance, the
- * best collapse the scoring found (target, cost, tie keys) and the donor (the vertex that went
- * into it in this pass). Per triangle: its three vertices and corner ids (the caller's arrays,
- * rewritten). Per attribute id (COMBINED with attributes): its attribute quadric (see
- * "Attribute quadrics" below). At the start of each pass the adjacency (adjacency[
+ * in this pass), whether it is to be scored again, the plane quadric (10 doubles: the upper
+ * triangle of A, then b, then c, for p'Ap + 2b'p + c) and its error at the vertex itself, the
+ * importance, the best collapse the scoring found (target, cost, tie keys) and the donor (the
+ * vertex that went into it in this pass). Per triangle: its three vertices and corner ids (the
+ * caller's arrays, rewritten). Per attribute id (COMBINED with attributes): its attribute
+ * quadric (see "Attribute quadrics" below). At the start of each pass the adjacency (adjacency[
  * adjacency_start[v] ..]: the live triangles at v) and the rings (ring_of) are built again.
  *
  * Why a vertex's pass-start triangles stay exact until it is touched: a triangle changes only
@@ -37,8 +37,7 @@ enum {
     FLAG_LOCKED = 1,  /* the caller's lock: never removed */
     FLAG_REMOVED = 2, /* collapsed into another vertex */
     FLAG_TOUCHED = 4, /* a collapse taken in this pass changed its triangles */
-    FLAG_STALE = 8,   /* its score must be computed again (it or a neighbour was touched) */
-    FLAG_TAKEN = 16,  /* an end of a collapse taken in this pass */
+    FLAG_TAKEN = 8,   /* an end of a collapse taken in this pass */
 };
 
 #define BOUNDARY_WEIGHT 10.0 /* COMBINED: an open edge's plane, per length² (decimate_modules) */
@@ -157,6 +156,9 @@ typedef struct engine {
     const collapse_options *o;
     uint32_t n, t;
     uint8_t *flags;
+    uint8_t *stale; /* per vertex: its score must be computed again (it or a neighbour was
+                       touched; build_adjacency marks, settle_vertex clears), apart from the
+                       flags, which the adjacency's threads read while they mark */
     uint32_t *adjacency_start, *adjacency;
     /* the rings of this pass: v's from slot adjacency_start[v] + v on (room for one neighbour
      * more than its triangles, as many as a vertex of one fan has), ring_size[v] long */
@@ -281,11 +283,10 @@ static double quadric_error(const double *q, const float *point)
 
 /* ---- adjacency and rings ---- */
 
-/* Sets bits of a vertex's flags; atomic, as the threads of a step may set bits of one vertex
- * (collapses taken side by side touch a shared neighbour; stale marks of other ranges). */
+/* Sets bits of a vertex's flags; atomic, as collapses taken side by side may touch one vertex. */
 static void flag(engine *e, uint32_t v, uint8_t bits)
 {
-    /* most are set twice or more: the locked read-modify-write only where needed */
+    /* most corners are flagged twice or more: the locked read-modify-write only where needed */
     if ((__atomic_load_n(&e->flags[v], __ATOMIC_RELAXED) & bits) != bits)
         __atomic_fetch_or(&e->flags[v], bits, __ATOMIC_RELAXED);
 }
@@ -322,12 +323,6 @@ static void vertex_range(const engine *e, uint32_t range, uint32_t *first, uint3
     *end = (uint32_t)((uint64_t)e->n * (range + 1) / ranges);
 }
 
-/* A vertex's flags, read while other threads may set bits of them (flag). */
-static uint8_t flags_of(const engine *e, uint32_t v)
-{
-    return __atomic_load_n(&e->flags[v], __ATOMIC_RELAXED);
-}
-
 /* Counts the live triangles at each vertex of the range into adjacency_start[v + 1], marking
  * the stale ones. */
 static void count_corners(engine *e, uint32_t range)
@@ -345,10 +340,9 @@ static void count_corners(engine *e, uint32_t range)
                 continue;
             start[c[k] + 1]++;
             if (touched < 0)
-                touched = (flags_of(e, c[0]) | flags_of(e, c[1]) | flags_of(e, c[2])) &
-                          FLAG_TOUCHED;
+                touched = (e->flags[c[0]] | e->flags[c[1]] | e->flags[c[2]]) & FLAG_TOUCHED;
             if (touched)
-                flag(e, c[k], FLAG_STALE);
+                e->stale[c[k]] = 1;
         }
     }
 }
@@ -1169,9 +1163,10 @@ static void settle_vertex(engine *e, uint32_t v, scratch *s)
     uint8_t flags = e->flags[v];
     if (flags & FLAG_REMOVED)
         e->best_target[v] = COLLAPSE_NONE;
-    else if (flags & FLAG_STALE)
+    else if (e->stale[v])
         score_vertex(e, v, s);
-    e->flags[v] = flags & (uint8_t) ~(FLAG_STALE | FLAG_TOUCHED | FLAG_TAKEN);
+    e->stale[v] = 0;
+    e->flags[v] = flags & (uint8_t) ~(FLAG_TOUCHED | FLAG_TAKEN);
     e->donor[v] = COLLAPSE_NONE;
 }
 
@@ -1778,6 +1773,7 @@ static void engine_free(engine *e)
         free(e->pool);
     }
     free(e->flags);
+    free(e->stale);
     free(e->adjacency_start);
     free(e->adjacency);
     free(e->rings.vertex);
@@ -1855,6 +1851,7 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
         o->boundary_tolerance > 0 ? o->boundary_tolerance : DECIMATE_BOUNDARY_TOLERANCE;
     size_t n = (size_t)e->n + 1;
     e->flags = xcalloc(n, 1);
+    e->stale = xmalloc(n);
     e->adjacency_start = xmalloc(sizeof(uint32_t) * (n + 1));
     e->adjacency = xmalloc(sizeof(uint32_t) * (3 * (size_t)e->t + 1));
     size_t ring_slots = 3 * (size_t)e->t + n;
@@ -1879,7 +1876,7 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     for (uint32_t v = 0; v < e->n; v++) {
         e->donor[v] = COLLAPSE_NONE;
         e->best_target[v] = COLLAPSE_NONE;
-        e->flags[v] = FLAG_STALE;
+        e->stale[v] = 1;
         if (m->locked && m->locked[v])
             e->flags[v] |= FLAG_LOCKED;
     }
@@ -1908,10 +1905,10 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
 
 size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_method method)
 {
-    /* flags, adjacency_start, ring_size, donor, best_target, stamp, best, importance, the
+    /* flags, stale, adjacency_start, ring_size, donor, best_target, stamp, best, importance, the
      * ranking's keys (and their spare) and list, the quadric and its own error; a ring slot
      * (vertex, left, right, held) */
-    size_t per_vertex = 1 + 4 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
+    size_t per_vertex = 1 + 1 + 4 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
                         2 * sizeof(rank_key) + sizeof(candidate) +
                         (method != DECIMATE_IMPORTANCE ? 11 * sizeof(double) : 0);
     size_t ring_slot = 3 * sizeof(uint32_t) + 1;

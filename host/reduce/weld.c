@@ -236,7 +236,8 @@ static void *check_range(void *arg)
     const weld_result *out = r->out;
     const uint32_t *start = r->vc->start, *corner_of = r->vc->corner_of;
     uint32_t largest = r->vc->largest;
-    uint32_t *next = xmalloc(sizeof(uint32_t) * (2 * (size_t)largest + 1)), *previous = next + largest;
+    uint32_t *next = xmalloc(sizeof(uint32_t) * (2 * (size_t)largest + 1));
+    uint32_t *previous = next + largest;
     for (uint32_t v = r->first; v < r->end; v++) {
         uint32_t count = start[v + 1] - start[v];
         if (!count)
