@@ -1606,14 +1606,12 @@ static void apply_collapse(engine *e, fan f0, uint32_t v0, uint32_t v1, uint32_t
 
 /* Whether a collapse taken earlier in this pass changed the triangles that v0 -> v1 was judged
  * on: those of v0, v1, vl and vr. */
-static int neighbourhood_touched(const engine *e, uint32_t v0, uint32_t v1)
+static int neighbourhood_touched(const engine *e, const judgement *j)
 {
-    if ((e->flags[v0] | e->flags[v1]) & FLAG_TOUCHED)
+    if ((e->flags[j->v0] | e->flags[j->v1]) & FLAG_TOUCHED)
         return 1;
-    ring r0 = ring_of(e, v0); /* exact: v0 is untouched */
-    uint32_t slot = ring_find(&r0, v1), vl = r0.left[slot], vr = r0.right[slot];
-    return (vl != COLLAPSE_NONE && (e->flags[vl] & FLAG_TOUCHED)) ||
-           (vr != COLLAPSE_NONE && (e->flags[vr] & FLAG_TOUCHED));
+    return (j->vl != COLLAPSE_NONE && (e->flags[j->vl] & FLAG_TOUCHED)) ||
+           (j->vr != COLLAPSE_NONE && (e->flags[j->vr] & FLAG_TOUCHED));
 }
 
 /* Judges v0 -> v1 on the mesh as it is, as the pass's greedy order would when it comes to it:
@@ -1635,7 +1633,7 @@ static void judge(const engine *e, uint32_t v0, uint32_t v1, scratch *s, judgeme
     if (slot == r0.size)
         return; /* no longer neighbours */
     j->vl = r0.left[slot], j->vr = r0.right[slot];
-    if (neighbourhood_touched(e, v0, v1)) {
+    if (neighbourhood_touched(e, j)) {
         const char *rule;
         int boundary0;
         if (!ring_simple(&r0, &boundary0) || r0.size <= 2 ||
