@@ -953,8 +953,10 @@ static ring ring_for(const engine *e, uint32_t v, int current, scratch *s, int s
 static int valence_three(const engine *e, uint32_t v, int current, uint32_t holding)
 {
     if (!current || !(e->flags[v] & FLAG_TOUCHED)) {
+        if (e->ring_size[v] != 3) /* most are not: their ring is not looked at */
+            return 0;
         ring r = ring_of(e, v);
-        return r.size == 3 && (holding == COLLAPSE_NONE || ring_count(&r, holding));
+        return holding == COLLAPSE_NONE || ring_count(&r, holding);
     }
     uint32_t seen[3], count = 0, sources[2] = {v, e->donor[v]};
     for (int k = 0; k < 2; k++) {
