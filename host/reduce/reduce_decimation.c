@@ -516,13 +516,15 @@ void reduce_decimation_forget(reduce_state *st)
     for (size_t m = 0; st->output && m < st->count; m++)
         decimate_output_free(&st->output[m]);
     free(st->output);
-    free(st->input);
-    free(st->budget);
     st->output = NULL;
-    st->input = NULL;
-    st->budget = NULL;
-    budget_plan_free(&st->plan);
     st->compensation_rounds = st->locks_relaxed = st->seams_freed = 0;
+}
+
+decimate_output *reduce_decimation_take_output(reduce_state *st)
+{
+    decimate_output *output = st->output;
+    st->output = NULL;
+    return output;
 }
 
 int reduce_decimation(reduce_state *st)
