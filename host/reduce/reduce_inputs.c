@@ -5,10 +5,10 @@
 
 #include "reduce/reduce_stages.h"
 
-static int is_kept(const reduce_options *o, const char *name)
+int reduce_mesh_named_by_keep(const reduce_options *o, const scene_mesh *mesh)
 {
     for (size_t i = 0; i < o->keep_count; i++)
-        if (strcmp(o->keep[i], name) == 0)
+        if (strcmp(o->keep[i], mesh->name) == 0)
             return 1;
     return 0;
 }
@@ -25,7 +25,7 @@ static int has_no_area(const scene_mesh *mesh)
 
 int reduce_mesh_pinned(const reduce_options *o, const scene_mesh *mesh)
 {
-    return mesh->light >= 0 || is_kept(o, mesh->name) ||
+    return mesh->light >= 0 || reduce_mesh_named_by_keep(o, mesh) ||
            (mesh->released ? mesh->no_area : has_no_area(mesh));
 }
 

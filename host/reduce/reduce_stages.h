@@ -156,6 +156,9 @@ typedef struct reduce_state {
 
 /* ---- what every stage asks of a mesh (reduce_inputs.c) ---- */
 
+/* Whether --keep names the mesh. */
+int reduce_mesh_named_by_keep(const reduce_options *o, const scene_mesh *mesh);
+
 /* Emitters, meshes named with --keep and meshes without area (every triangle degenerate: all
  * its points coincide or lie on a line) are never decimated. */
 int reduce_mesh_pinned(const reduce_options *o, const scene_mesh *mesh);
