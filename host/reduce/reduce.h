@@ -32,13 +32,14 @@
  * whole scene. Meshes the initial reduction leaves whole are read again and kept; without an
  * initial reduction the importance pass needs the whole scene, and all are read again.
  *
- * Files: reduce.c (the pipeline and its option, importance, budget and writing stages),
+ * Files: reduce.c (the pipeline: the stages in order and every loop back), one file per stage:
+ * reduce_options.c, reduce_outdir.c, reduce_memory.c (the memory budget's whole policy: the
+ * target and initial reduction it asks for, and the check that the reduced scene fits it),
  * reduce_passes.c (the initial reduction, the scene each pass simulates, the remapping),
- * reduce_memory.c (the target and initial reduction a memory budget asks for, and the check that
- * the reduced scene fits it),
- * factor_stop.c (when the importance pass has learnt enough), reduce_outdir.c,
- * reduce_decimation.c (with the compensation rounds), reduce_report.c; the
- * stages share the reduce_state of reduce_stages.h. */
+ * reduce_importance.c (the importance pass, with factor_stop.c saying when it has learnt
+ * enough), reduce_budget.c (the plan of Eq. 3), reduce_decimation.c (with the compensation
+ * rounds), reduce_write.c and reduce_report.c; and reduce_inputs.c (what the stages ask of each
+ * mesh). The stages share the reduce_state of reduce_stages.h. */
 #ifndef IDMR_REDUCE_H
 #define IDMR_REDUCE_H
 

@@ -33,7 +33,6 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
 #include <unistd.h>
 
 #include "core/error.h"
@@ -351,15 +350,6 @@ static int relax_locks(reduce_state *st, uint64_t excess, decimate_method method
     return any;
 }
 
-/* Whether mesh m is named by --keep. */
-static int named_by_keep(const reduce_options *o, const scene_mesh *mesh)
-{
-    for (size_t k = 0; k < o->keep_count; k++)
-        if (!strcmp(o->keep[k], mesh->name))
-            return 1;
-    return 0;
-}
-
 /* One warning when the scene keeps more than requested, with where the vertices that were not
  * given up are: meshes kept whole (named by --keep, emitting light, without area, of at most
  * --min-vertices vertices), and meshes that ran out of legal collapses above their target. */
@@ -385,10 +375,10 @@ static void warn_missed(const reduce_state *st)
         }
         if (reduce_decimatable(st, m))
             continue; /* planned whole by the budget */
-        int reason = mesh->light >= 0          ? BY_LIGHT
-                     : named_by_keep(o, mesh)  ? BY_KEEP
-                     : reduce_mesh_pinned(o, mesh) ? BY_NO_AREA
-                                                   : BY_SIZE;
+        int reason = mesh->light >= 0                       ? BY_LIGHT
+                     : reduce_mesh_named_by_keep(o, mesh) ? BY_KEEP
+                     : reduce_mesh_pinned(o, mesh)        ? BY_NO_AREA
+                                                          : BY_SIZE;
         kept[reason] += mesh->vertex_count;
         if (reason == BY_KEEP && used < sizeof names)
             used += (size_t)snprintf(names + used, sizeof names - used, "%s'%s'",
@@ -516,13 +506,15 @@ void reduce_decimation_forget(reduce_state *st)
     for (size_t m = 0; st->output && m < st->count; m++)
         decimate_output_free(&st->output[m]);
     free(st->output);
-    free(st->input);
-    free(st->budget);
     st->output = NULL;
-    st->input = NULL;
-    st->budget = NULL;
-    budget_plan_free(&st->plan);
     st->compensation_rounds = st->locks_relaxed = st->seams_freed = 0;
+}
+
+decimate_output *reduce_decimation_take_output(reduce_state *st)
+{
+    decimate_output *output = st->output;
+    st->output = NULL;
+    return output;
 }
 
 int reduce_decimation(reduce_state *st)

@@ -1,6 +1,9 @@
-/* reduce_memory.c — `idmr reduce --memory-budget BYTES` (reduce.h, reduce_stages.h): the target
- * and initial reduction a device-memory budget allows, and the check that the reduced scene
- * fits it.
+/* reduce_memory.c — the budget policy of `idmr reduce --memory-budget BYTES` (reduce.h,
+ * reduce_stages.h), the one place whose decisions read the budget: the target and initial
+ * reduction it allows (the memory plan), whether there is anything to remove, the importance
+ * pass's device limit, how many meshes are decimated at once, the check that the reduced scene
+ * fits it (the memory fit, which asks reduce_run() to decimate again) and that the run's peak
+ * stayed within it.
  *
  * Device memory is what the passes allocate, computed by the function that sizes their
  * allocations (passes/sppm.h, sppm_memory_of, through render_memory and importance_memory):
@@ -19,8 +22,8 @@
  * (reduce.h) of the budget becomes the target where it is below --target; and when the
  * importance pass over the whole scene would not fit (and no --initial was given), the largest
  * D0 whose importance pass fits is the initial reduction.
- * The importance pass itself is run with the budget as its device limit, so it fails with a
- * message rather than allocate more.
+ * The importance pass itself is run with the budget as its device limit
+ * (reduce_memory_device_limit), so it fails with a message rather than allocate more.
  *
  * A device that shares the host's memory (device_info.host_unified: a CPU, as PoCL's) has its
  * buffers in the process's resident memory, beside what the host holds while the pass runs, so
@@ -30,8 +33,10 @@
  * be decimated), and per simulated triangle HOST_BYTES_PER_TRIANGLE: the scene it simulates, the
  * sums read back and, until uploaded, its BVH. The initial reduction so chosen keeps the whole
  * process within the budget while the pass runs; the decimation takes only as many meshes at a
- * time as keep it there too (reduce_memory_meshes_in_flight), and the fit's BVH build is made with the
- * remapped importance on disk (below). bench-outofcore reports the peak.
+ * time as keep it there too (reduce_memory_meshes_in_flight), and the fit's BVH build is made
+ * with the remapped importance on disk (below). The plan starts the process's peak over, and a
+ * run that peaks above the budget all the same is an error, its scene not written
+ * (reduce_memory_check_peak). bench-outofcore reports the peak.
  *
  * The fit. After the last decimation the reduced scene's BVH is built and its render memory
  * computed exactly; above the budget, the target is lowered in proportion to the excess over
@@ -186,12 +191,39 @@ static int refuse_in_flight(const reduce_state *st, uint64_t budget)
                      MIB(mesh), MIB(held + mesh));
 }
 
+/* The process's peak resident memory since the last reset_peak_resident() (VmHWM), in bytes;
+ * 0 where the system does not say. */
+static double peak_resident_bytes(void)
+{
+    FILE *f = fopen("/proc/self/status", "r");
+    char line[256];
+    double kib = 0;
+    while (f && fgets(line, sizeof line, f))
+        if (sscanf(line, "VmHWM: %lf kB", &kib) == 1)
+            break;
+    if (f)
+        fclose(f);
+    return kib * 1024.0;
+}
+
+/* Starts the peak over (Linux: "5" into clear_refs), so a run measures its own peak, not an
+ * earlier one of the same process (a test). */
+static void reset_peak_resident(void)
+{
+    FILE *f = fopen("/proc/self/clear_refs", "w");
+    if (f) {
+        fputs("5", f);
+        fclose(f);
+    }
+}
+
 int reduce_memory_plan(reduce_state *st)
 {
     const reduce_options *o = st->options;
     uint64_t budget = o->memory_budget;
     if (!budget)
         return 0;
+    reset_peak_resident(); /* the run's own peak, for reduce_memory_check_peak() */
     /* Without an importance pass (quadric) only the render is costed: nothing else runs. */
     int simulates = reduce_method_uses_importance(o->method);
     memory_line render, importance;
@@ -302,8 +334,6 @@ static int measure_reduced(reduce_state *st)
     return status;
 }
 
-/* Frees the plan and the decimation, to run them again for a lower target. */
-
 size_t reduce_memory_meshes_in_flight(const reduce_state *st, const uint32_t *vertices,
                                       size_t count)
 {
@@ -350,4 +380,31 @@ int reduce_memory_fit(reduce_state *st, int *again)
                 MIB(total), MIB(budget), st->target);
     *again = 1;
     return reduce_remapped_restore(st);
+}
+
+uint64_t reduce_memory_device_limit(const reduce_state *st)
+{
+    return st->options->memory_budget;
+}
+
+int reduce_memory_nothing_to_remove(const reduce_state *st)
+{
+    return st->options->memory_budget && !(st->target < 1);
+}
+
+/* Where the device shares the host's memory the budget bounds the whole process: a run that
+ * went above it (the plan's estimates missed) is an error, not a result. */
+int reduce_memory_check_peak(const reduce_state *st)
+{
+    uint64_t budget = st->options->memory_budget;
+    if (!budget || !st->device->info.host_unified)
+        return 0;
+    double peak = peak_resident_bytes();
+    if (peak <= (double)budget)
+        return 0;
+    return error_set(IDMR_EXIT_FAILURE,
+                     "--memory-budget %.1f MiB: the process peaked at %.1f MiB (device '%s' "
+                     "shares the host's memory, so the budget bounds the whole process); the "
+                     "reduced scene is not written: raise the budget or lower --target",
+                     MIB(budget), MIB(peak), st->device->info.name);
 }

@@ -1,5 +1,5 @@
-/* reduce_options.c — the options of `idmr reduce`: defaults, the method's name, and which
- * meshes the options keep as they are (see reduce.h, reduce_stages.h). */
+/* reduce_options.c — the options of `idmr reduce`: defaults, the method's name, and the options
+ * stage, which checks them against each other and the scene (see reduce.h, reduce_stages.h). */
 #include <string.h>
 
 #include "core/error.h"
@@ -66,26 +66,36 @@ decimate_method reduce_method_collapses(reduce_method method)
     return DECIMATE_QUADRIC;
 }
 
-static int is_kept(const reduce_options *o, const char *name)
+/* --target and --initial in (0, 1], --passes in 1 .. REDUCE_MAX_PASSES and only with a method
+ * that has an importance pass (and not with --simulation, a pass of the whole scene); every
+ * --keep name is a mesh of the scene. */
+int reduce_options_check(const reduce_state *st)
 {
-    for (size_t i = 0; i < o->keep_count; i++)
-        if (strcmp(o->keep[i], name) == 0)
-            return 1;
+    const reduce_options *o = st->options;
+    const scene *s = st->scene;
+    if (!(o->target > 0 && o->target <= 1))
+        return error_set(IDMR_EXIT_INPUT, "--target must be in (0, 1], not %g", o->target);
+    if (!(o->initial > 0 && o->initial <= 1))
+        return error_set(IDMR_EXIT_INPUT, "--initial must be in (0, 1], not %g", o->initial);
+    if (o->passes < 1 || o->passes > REDUCE_MAX_PASSES)
+        return error_set(IDMR_EXIT_INPUT, "--passes must be 1 to %u, not %u", REDUCE_MAX_PASSES,
+                         o->passes);
+    int staged = o->initial < 1 || o->passes > 1;
+    if (staged && !reduce_method_uses_importance(o->method))
+        return error_set(IDMR_EXIT_INPUT, "--initial and --passes are for the methods with an "
+                                          "importance pass, not '%s'",
+                         reduce_method_name(o->method));
+    if ((staged || o->memory_budget) && o->simulation)
+        return error_set(IDMR_EXIT_INPUT, "--simulation is a pass over the whole scene: it "
+                                          "cannot be combined with --initial, --passes or "
+                                          "--memory-budget");
+    for (size_t k = 0; k < o->keep_count; k++) {
+        size_t m = 0;
+        while (m < s->mesh_count && strcmp(s->meshes[m].name, o->keep[k]))
+            m++;
+        if (m == s->mesh_count)
+            return error_set(IDMR_EXIT_INPUT, "--keep %s: the scene has no mesh of that name "
+                                              "(see `idmr info`)", o->keep[k]);
+    }
     return 0;
-}
-
-/* Whether every triangle of the mesh is degenerate (zero area): welded, it has no surface to
- * decimate, and its collapses would leave a mesh without faces that no reader loads. */
-static int has_no_area(const scene_mesh *mesh)
-{
-    for (uint32_t t = 0; t < mesh->triangle_count; t++)
-        if (scene_mesh_triangle_area(mesh, t) > 0.0)
-            return 0;
-    return 1;
-}
-
-int reduce_mesh_pinned(const reduce_options *o, const scene_mesh *mesh)
-{
-    return mesh->light >= 0 || is_kept(o, mesh->name) ||
-           (mesh->released ? mesh->no_area : has_no_area(mesh));
 }

@@ -1,7 +1,8 @@
 /* reduce_passes.c — the stages of `idmr reduce` that let the importance pass run on a reduced
  * scene (paper 3.5; reduce.h, reduce_stages.h): the initial reduction (--initial D0), the scene
  * each pass simulates (a view of the scene with the reduced meshes), the importance copied back
- * to the original vertices (remap.h), and the change from one pass to the next (--passes). */
+ * to the original vertices (remap.h; moved to disk and back while the memory fit builds its BVH),
+ * and the change from one pass to the next (--passes). */
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -10,7 +11,6 @@
 
 #include "core/error.h"
 #include "core/progress.h"
-#include "passes/importance_outputs.h"
 #include "reduce/remap.h"
 #include "reduce/reduce_stages.h"
 
@@ -43,7 +43,8 @@ scene *reduce_view_of(reduce_state *st, const decimate_output *meshes)
     return view;
 }
 
-int reduce_restore_all(reduce_state *st)
+/* Every released mesh (core/scene.h: streaming) read again. 0, or -1 with the error set. */
+static int restore_all(reduce_state *st)
 {
     for (size_t m = 0; m < st->count; m++)
         if (scene_mesh_restore(st->scene, m))
@@ -71,7 +72,7 @@ int reduce_initial(reduce_state *st)
 {
     const reduce_options *o = st->options;
     if (!(st->initial < 1)) /* the passes simulate the scene itself: all of it in memory */
-        return reduce_restore_all(st);
+        return restore_all(st);
     double start = monotonic_seconds();
     decimate_input *inputs = xcalloc(st->count + 1, sizeof *inputs);
     uint64_t *targets = xcalloc(st->count + 1, sizeof *targets);
@@ -208,20 +209,13 @@ static void history_free(reduce_state *st)
     st->history = NULL;
 }
 
-int reduce_next_pass(reduce_state *st)
+int reduce_next_pass(reduce_state *st, decimate_output *output)
 {
-    /* What the last pass computed on its simulated scene goes first, while that scene exists. */
-    importance_vertex_values_free(st->vertex_importance, st->simulated);
-    st->vertex_importance = NULL;
     remapped_free(st);
-    importance_result_free(&st->importance);
     history_free(st);
     /* The last pass's output is the next pass's history: decimated from the originals. Meshes
      * it did not decimate have no output, and are simulated as they are. */
-    st->history = st->output;
-    st->output = NULL;
-    reduce_decimation_forget(st);
-    st->stopped_at = 0;
+    st->history = output;
     return build_view(st);
 }
 
@@ -229,6 +223,4 @@ void reduce_passes_free(reduce_state *st)
 {
     remapped_free(st);
     history_free(st);
-    free(st->passes);
-    st->passes = NULL;
 }

@@ -1,9 +1,16 @@
-/* reduce_report.c — report.json of `idmr reduce` (see reduce.h for the keys): the importance
- * report's object (method importance) or a bare one with the scene, meshes and seconds, to which
- * the reduction adds its options, vertex totals, stage seconds and per-mesh figures. */
+/* reduce_report.c — the report stage of `idmr reduce` (see reduce_stages.h): report.json (see
+ * reduce.h for the keys), with the importance outputs beside it for the methods with importance
+ * (passes/importance_outputs.h), and the closing line. report.json is the importance report's
+ * object (method importance) or a bare one with the scene, meshes and seconds, to which the
+ * reduction adds its options, vertex totals, stage seconds and per-mesh figures. */
+#include <limits.h>
 #include <math.h>
+#include <stdio.h>
 #include <sys/resource.h>
 
+#include "core/json.h"
+#include "io/gltf.h"
+#include "io/scene_load.h"
 #include "reduce/reduce_stages.h"
 
 #include "passes/importance_outputs.h"
@@ -228,7 +235,9 @@ static void add_stop_rule(cJSON *root, const reduce_state *st)
     }
 }
 
-cJSON *reduce_report_json(const reduce_state *st)
+/* report.json's content: the importance report's keys (method importance) or the scene name,
+ * then the reduction's options, totals, seconds and per-mesh figures. The caller deletes it. */
+static cJSON *report_json(const reduce_state *st)
 {
     const reduce_options *o = st->options;
     cJSON *root = reduce_method_uses_importance(o->method)
@@ -249,4 +258,37 @@ cJSON *reduce_report_json(const reduce_state *st)
     for (size_t m = 0; m < st->scene->mesh_count; m++)
         add_mesh(meshes, st, m);
     return root;
+}
+
+int reduce_report_write(const reduce_state *st)
+{
+    const reduce_options *o = st->options;
+    cJSON *report = report_json(st);
+    int status;
+    if (reduce_method_uses_importance(o->method)) {
+        status = importance_write_outputs(st->staging, report, st->simulated, &o->importance,
+                                          &st->importance, st->vertex_importance);
+    } else {
+        char path[PATH_MAX];
+        snprintf(path, sizeof path, "%s/report.json", st->staging);
+        status = json_write(report, path);
+    }
+    cJSON_Delete(report);
+    return status;
+}
+
+/* The reduced scene's file name in OUTDIR. */
+static const char *reduced_scene_name(const scene *s)
+{
+    return scene_is_gltf(s) ? gltf_output_name(s->file) : "scene.xml";
+}
+
+void reduce_report_summary(const reduce_state *st)
+{
+    fprintf(stderr,
+            "idmr: %llu -> %llu vertices (target %.4g: %llu), %zu of %zu meshes rewritten; "
+            "reduced scene in %s/%s\n",
+            (unsigned long long)st->plan.total_before, (unsigned long long)st->vertices_after,
+            st->target, (unsigned long long)st->plan.total_requested, st->meshes_written,
+            st->count, st->outdir, reduced_scene_name(st->scene));
 }

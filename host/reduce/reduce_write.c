@@ -1,0 +1,100 @@
+/* reduce_write.c — the write stage of `idmr reduce` (see reduce.h, reduce_stages.h): the
+ * reduced scene in the staging directory. A Mitsuba scene: meshes/NAME.ply for every mesh the
+ * plan decimated (each read back and checked: io/ply_check.h) and scene.xml, the input's XML
+ * with those shapes pointing to them (io/mitsuba_write.h); a glTF scene: scene.gltf (.glb) with
+ * the decimated meshes in it (io/gltf.h). */
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/error.h"
+#include "core/files.h"
+#include "core/progress.h"
+#include "io/gltf.h"
+#include "io/mesh_io.h"
+#include "io/mitsuba_write.h"
+#include "io/ply_check.h"
+#include "io/scene_load.h"
+#include "passes/importance_outputs.h"
+#include "reduce/reduce_stages.h"
+
+/* Whether an earlier mesh's PLY has the name mesh m's would get. */
+static int ply_name_taken(const reduce_state *st, size_t m)
+{
+    for (size_t k = 0; k < m; k++)
+        if (st->ply[k] && strcmp(st->ply[k], st->ply[m]) == 0)
+            return 1;
+    return 0;
+}
+
+/* st->ply[m] = "meshes/NAME.ply"; two mesh names can make the same file name ("a/b", "a_b"):
+ * the later ones are numbered ("meshes/NAME.2.ply"). */
+static void name_ply(reduce_state *st, size_t m)
+{
+    char name[256];
+    importance_file_name(st->scene->meshes[m].name, name, sizeof name);
+    size_t length = strlen(name) + 32;
+    st->ply[m] = xmalloc(length);
+    snprintf(st->ply[m], length, "meshes/%s.ply", name);
+    for (unsigned int suffix = 2; ply_name_taken(st, m); suffix++)
+        snprintf(st->ply[m], length, "meshes/%s.%u.ply", name, suffix);
+}
+
+/* A glTF scene: OUTDIR/scene.gltf or scene.glb with the decimated meshes in it (io/gltf.h). */
+static int write_reduced_gltf(reduce_state *st)
+{
+    const scene *s = st->scene;
+    gltf_replacement *replacements = xcalloc(st->count + 1, sizeof *replacements);
+    for (size_t m = 0; m < st->count; m++)
+        if (st->plan.decimate[m])
+            replacements[st->meshes_written++] =
+                (gltf_replacement){s->meshes[m].xml_line, &st->output[m].mesh};
+    int status = gltf_write_reduced(s->file, st->staging, replacements, st->meshes_written,
+                                    st->options->bundle);
+    free(replacements);
+    return status;
+}
+
+/* OUTDIR/meshes/NAME.ply for every decimated mesh, then OUTDIR/scene.xml pointing to them; or,
+ * for a glTF scene, OUTDIR/scene.gltf (.glb). */
+int reduce_write(reduce_state *st)
+{
+    const scene *s = st->scene;
+    double start = monotonic_seconds();
+    if (scene_is_gltf(s)) {
+        int status = write_reduced_gltf(st);
+        st->seconds_write = monotonic_seconds() - start;
+        return status;
+    }
+    char meshes[PATH_MAX];
+    snprintf(meshes, sizeof meshes, "%s/meshes", st->staging);
+    int status = files_make_directory(meshes);
+    st->ply = xcalloc(st->count + 1, sizeof *st->ply);
+    mitsuba_replacement *replacements = xcalloc(st->count + 1, sizeof *replacements);
+    for (size_t m = 0; m < st->count && !status; m++) {
+        if (!st->plan.decimate[m])
+            continue;
+        char path[PATH_MAX];
+        name_ply(st, m);
+        snprintf(path, sizeof path, "%s/%s", st->staging, st->ply[m]);
+        status = mesh_io_write_ply(path, &st->output[m].mesh, NULL, NULL, NULL) ||
+                 ply_check_written(path);
+        replacements[st->meshes_written++] = (mitsuba_replacement){
+            s->meshes[m].xml_file, s->meshes[m].xml_line, st->ply[m], s->meshes[m].flat_normals};
+    }
+    if (!status)
+        status = mitsuba_write_reduced(s->file, st->staging, replacements, st->meshes_written,
+                                       st->options->bundle);
+    free(replacements);
+    st->seconds_write = monotonic_seconds() - start;
+    return status;
+}
+
+void reduce_write_free(reduce_state *st)
+{
+    for (size_t m = 0; st->ply && m < st->count; m++)
+        free(st->ply[m]);
+    free(st->ply);
+    st->ply = NULL;
+}
