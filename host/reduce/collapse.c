@@ -16,11 +16,10 @@
  * touched vertex are its pass-start ones plus its donor's (current_fan); a vertex receives at
  * most once in a pass, as an end of a taken collapse is not taken again.
  *
- * Threads: one pool per run (worker_pool) takes the steps (vertex_step): the adjacency's
- * counting sort and the ranking's listing by ranges of vertices, the per-vertex rings, quadrics
- * and scores, and the chunks' judging and taking (take_in_chunks); each writes only its own
- * range's, vertex's or collapse's records, so the result is the same on any number of
- * threads. */
+ * Threads: one pool per run (worker_pool) takes the steps (vertex_step): the per-vertex rings,
+ * quadrics and scores, the ranking's listing and gathering by ranges, and the chunks' judging
+ * and taking (take_in_chunks); each writes only its own vertex's, range's or collapse's records,
+ * so the result is the same on any number of threads. */
 #include "reduce/collapse.h"
 
 #include <float.h>
@@ -58,8 +57,6 @@ typedef struct worker_pool worker_pool;
  * chunk's candidates). Each item's step writes only that item's records, so the items may go to
  * any thread and the result does not depend on which. */
 typedef enum vertex_step {
-    STEP_COUNT_CORNERS, /* per range of vertices (build_adjacency) */
-    STEP_FILE_CORNERS,
     STEP_RINGS, /* per vertex */
     STEP_QUADRICS,
     STEP_SCORES,
@@ -157,9 +154,9 @@ typedef struct engine {
     uint32_t n, t;
     uint8_t *flags;
     uint8_t *stale; /* per vertex: its score must be computed again (it or a neighbour was
-                       touched; build_adjacency marks, settle_vertex clears), apart from the
-                       flags, which the adjacency's threads read while they mark */
+                       touched; build_adjacency marks, settle_vertex clears) */
     uint32_t *adjacency_start, *adjacency;
+    uint32_t *live, live_count; /* the triangles live at the last adjacency, in order */
     /* the rings of this pass: v's from slot adjacency_start[v] + v on (room for one neighbour
      * more than its triangles, as many as a vertex of one fan has), ring_size[v] long */
     ring_store rings;
@@ -283,33 +280,38 @@ static double quadric_error(const double *q, const float *point)
 
 /* ---- adjacency and rings ---- */
 
-/* Sets bits of a vertex's flags; atomic, as collapses taken side by side may touch one vertex. */
-static void flag(engine *e, uint32_t v, uint8_t bits)
-{
-    /* most corners are flagged twice or more: the locked read-modify-write only where needed */
-    if ((__atomic_load_n(&e->flags[v], __ATOMIC_RELAXED) & bits) != bits)
-        __atomic_fetch_or(&e->flags[v], bits, __ATOMIC_RELAXED);
-}
-
-static void run_on_pool(engine *e, vertex_step step, uint32_t items, uint32_t block);
-
-/* The live triangles at each vertex, in triangle order (adjacency[adjacency_start[v] ..]). On
- * the way, the corners of every triangle a collapse of the last pass touched are marked stale: a
- * vertex's score depends on its triangles, its neighbours' triangles, quadrics and importance, so
- * the touched vertices and their neighbours are scored again and the rest keep their scores (the
- * scoring step clears the marks: settle_vertex). A counting sort, the vertices cut into one range
- * per thread: each thread sweeps all triangles and counts, then files, the corners in its own
- * range (count_corners, file_corners), so each vertex's list is in triangle order on any number
- * of threads; between the two sweeps the counts become offsets. */
+/* The live triangles at each vertex, in triangle order (adjacency[adjacency_start[v] ..]): a
+ * counting sort over the list of live triangles, which it keeps (the triangles that died in the
+ * last pass dropped from it, in place: a pass sweeps the triangles that remain, not all). On the
+ * way, the corners of every triangle a collapse of the last pass touched are marked stale: a
+ * vertex's score depends on its triangles, its neighbours' triangles, quadrics and importance,
+ * so the touched vertices and their neighbours are scored again and the rest keep their scores
+ * (the scoring step clears the marks: settle_vertex). */
 static void build_adjacency(engine *e)
 {
-    uint32_t *start = e->adjacency_start;
-    uint32_t ranges = e->threads;
-    start[0] = 0;
-    run_on_pool(e, STEP_COUNT_CORNERS, ranges, 1);
+    uint32_t *start = e->adjacency_start, live = 0;
+    memset(start, 0, sizeof(uint32_t) * ((size_t)e->n + 1));
+    for (uint32_t i = 0; i < e->live_count; i++) {
+        uint32_t t = e->live[i];
+        const uint32_t *c = corners(e, t);
+        if (c[0] == COLLAPSE_NONE)
+            continue;
+        e->live[live++] = t;
+        int touched = (e->flags[c[0]] | e->flags[c[1]] | e->flags[c[2]]) & FLAG_TOUCHED;
+        for (int k = 0; k < 3; k++) {
+            start[c[k] + 1]++;
+            if (touched)
+                e->stale[c[k]] = 1;
+        }
+    }
+    e->live_count = live;
     for (uint32_t v = 0; v < e->n; v++)
         start[v + 1] += start[v];
-    run_on_pool(e, STEP_FILE_CORNERS, ranges, 1);
+    for (uint32_t i = 0; i < live; i++) {
+        const uint32_t *c = corners(e, e->live[i]);
+        for (int k = 0; k < 3; k++)
+            e->adjacency[start[c[k]]++] = e->live[i];
+    }
     for (uint32_t v = e->n; v > 0; v--) /* each start now holds the next vertex's */
         start[v] = start[v - 1];
     start[0] = 0;
@@ -321,46 +323,6 @@ static void vertex_range(const engine *e, uint32_t range, uint32_t *first, uint3
     uint64_t ranges = e->threads;
     *first = (uint32_t)((uint64_t)e->n * range / ranges);
     *end = (uint32_t)((uint64_t)e->n * (range + 1) / ranges);
-}
-
-/* Counts the live triangles at each vertex of the range into adjacency_start[v + 1], marking
- * the stale ones. */
-static void count_corners(engine *e, uint32_t range)
-{
-    uint32_t first, end, *start = e->adjacency_start;
-    vertex_range(e, range, &first, &end);
-    memset(&start[(size_t)first + 1], 0, sizeof(uint32_t) * (end - first));
-    for (uint32_t t = 0; t < e->t; t++) {
-        const uint32_t *c = corners(e, t);
-        if (c[0] == COLLAPSE_NONE)
-            continue;
-        int touched = -1; /* read only where a corner is in the range */
-        for (int k = 0; k < 3; k++) {
-            if (c[k] - first >= end - first)
-                continue;
-            start[c[k] + 1]++;
-            if (touched < 0)
-                touched = (e->flags[c[0]] | e->flags[c[1]] | e->flags[c[2]]) & FLAG_TOUCHED;
-            if (touched)
-                e->stale[c[k]] = 1;
-        }
-    }
-}
-
-/* Files each live triangle under the corners it has in the range, adjacency_start[v] counting
- * up as v's are filed. */
-static void file_corners(engine *e, uint32_t range)
-{
-    uint32_t first, end, *start = e->adjacency_start;
-    vertex_range(e, range, &first, &end);
-    for (uint32_t t = 0; t < e->t; t++) {
-        const uint32_t *c = corners(e, t);
-        if (c[0] == COLLAPSE_NONE)
-            continue;
-        for (int k = 0; k < 3; k++)
-            if (c[k] - first < end - first)
-                e->adjacency[start[c[k]]++] = t;
-    }
 }
 
 /* v's triangles in this pass's adjacency: all live and current while v is untouched. */
@@ -1218,12 +1180,6 @@ static void apply_item(engine *e, uint32_t item, scratch *s);
 static void run_item(engine *e, vertex_step step, uint32_t i, scratch *s)
 {
     switch (step) {
-    case STEP_COUNT_CORNERS:
-        count_corners(e, i);
-        break;
-    case STEP_FILE_CORNERS:
-        file_corners(e, i);
-        break;
     case STEP_RINGS:
         build_ring(e, i);
         break;
@@ -1563,6 +1519,14 @@ static uint64_t collapse_removes(const engine *e, fan f0, uint32_t v0, uint32_t 
     return removed;
 }
 
+/* Sets bits of a vertex's flags; atomic, as collapses taken side by side may touch one vertex. */
+static void flag(engine *e, uint32_t v, uint8_t bits)
+{
+    /* most corners are flagged twice or more: the locked read-modify-write only where needed */
+    if ((__atomic_load_n(&e->flags[v], __ATOMIC_RELAXED) & bits) != bits)
+        __atomic_fetch_or(&e->flags[v], bits, __ATOMIC_RELAXED);
+}
+
 /* Takes v0 -> v1 (neither an end of a collapse taken in this pass; f0 holds v0's live
  * triangles): moves v0's triangles onto v1, removes the two of the edge, merges the quadrics (or
  * the importance), records the history and touches v0's ring. */
@@ -1776,6 +1740,7 @@ static void engine_free(engine *e)
     free(e->stale);
     free(e->adjacency_start);
     free(e->adjacency);
+    free(e->live);
     free(e->rings.vertex);
     free(e->rings.left);
     free(e->rings.right);
@@ -1854,6 +1819,10 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     e->stale = xmalloc(n);
     e->adjacency_start = xmalloc(sizeof(uint32_t) * (n + 1));
     e->adjacency = xmalloc(sizeof(uint32_t) * (3 * (size_t)e->t + 1));
+    e->live = xmalloc(sizeof(uint32_t) * ((size_t)e->t + 1));
+    for (uint32_t t = 0; t < e->t; t++)
+        e->live[t] = t;
+    e->live_count = e->t;
     size_t ring_slots = 3 * (size_t)e->t + n;
     e->rings.vertex = xmalloc(sizeof(uint32_t) * ring_slots);
     e->rings.left = xmalloc(sizeof(uint32_t) * ring_slots);
@@ -1907,7 +1876,7 @@ size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_
 {
     /* flags, stale, adjacency_start, ring_size, donor, best_target, stamp, best, importance, the
      * ranking's keys (and their spare) and list, the quadric and its own error; a ring slot
-     * (vertex, left, right, held) */
+     * (vertex, left, right, held); per triangle its place in the live list */
     size_t per_vertex = 1 + 1 + 4 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
                         2 * sizeof(rank_key) + sizeof(candidate) +
                         (method != DECIMATE_IMPORTANCE ? 11 * sizeof(double) : 0);
@@ -1915,7 +1884,7 @@ size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_
     /* per corner: the adjacency and a ring slot */
     size_t per_corner = sizeof(uint32_t) + ring_slot;
     return (per_vertex + ring_slot) * ((size_t)vertex_count + 1) +
-           per_corner * 3 * (size_t)triangle_count;
+           (3 * per_corner + sizeof(uint32_t)) * (size_t)triangle_count;
 }
 
 int collapse_run(collapse_mesh *m, const collapse_options *o, collapse_result *result)

@@ -49,8 +49,8 @@
  *
  * Memory: collapse_memory() says it (per vertex: flags and stale marks, the quadric and its own
  * error, the importance, the scores, the ranking's keys and list, the donor and stamps; per
- * triangle corner: the adjacency and a ring slot), 297 bytes per vertex of the dragon with the
- * quadric methods, 209 with IMPORTANCE; COMBINED adds its attribute quadrics per attribute set.
+ * triangle corner: the adjacency and a ring slot; per triangle: its place in the live list),
+ * 305 bytes per vertex of the dragon with the quadric methods, 217 with IMPORTANCE; COMBINED adds its attribute quadrics per attribute set.
  * The caller's arrays are used in place: the triangles and corner ids are rewritten, nothing
  * else. */
 #ifndef IDMR_COLLAPSE_H
