@@ -477,6 +477,22 @@ static void cornell_memory(const scene *s, const reduce_options *o, uint64_t *re
     bvh_free(&b);
 }
 
+/* Under AddressSanitizer the process holds memory that a --memory-budget's plan does not model
+ * (freed blocks kept in quarantine, red zones around every block: a run of test_memory_budget
+ * peaked 6 MiB above its budget with a 16 MiB quarantine, 3 MiB above it with ASan's default),
+ * so the tests that hold a run's resident memory to a budget on a device that shares the host's
+ * memory are skipped there, saying why. */
+static void skip_where_resident_memory_is_not_modelled(void)
+{
+#if defined(__SANITIZE_ADDRESS__)
+    if (device_test_device()->info.host_unified) {
+        print_message("  skipped: under AddressSanitizer the process's resident memory is not "
+                      "what the budget's plan models\n");
+        skip();
+    }
+#endif
+}
+
 /* What the process grows by, at most, between the test's reading of what it holds and the
  * plan's. */
 #define TEST_PROCESS_GROWTH_BYTES (4.0 * 1024 * 1024)
@@ -509,6 +525,7 @@ static uint64_t shared_memory_budget(const scene *s, double device_share, double
  * share, and still not the whole scene. */
 static void test_memory_budget(void **state)
 {
+    skip_where_resident_memory_is_not_modelled();
     scene *s = test_load_scene(CORNELL);
     reduce_options o;
     small_options(&o);
@@ -644,6 +661,7 @@ static void test_memory_budget_later_pass_refused(void **state)
 {
     if (!device_test_device()->info.host_unified)
         skip();
+    skip_where_resident_memory_is_not_modelled();
     scene *s = test_load_scene(CORNELL);
     reduce_options o;
     small_options(&o);
