@@ -57,8 +57,8 @@ typedef struct worker_pool worker_pool;
  * chunk's candidates). Each item's step writes only that item's records, so the items may go to
  * any thread and the result does not depend on which. */
 typedef enum vertex_step {
-    STEP_RINGS, /* per vertex */
-    STEP_QUADRICS,
+    STEP_FIRST_RINGS, /* per vertex: its ring, then its quadric (engine_init) */
+    STEP_RINGS,       /* per vertex */
     STEP_SCORES,
     STEP_COUNT_CANDIDATES, /* per range of vertices (rank_candidates) */
     STEP_WRITE_KEYS,
@@ -164,7 +164,7 @@ typedef struct engine {
     int rings_current; /* the adjacency and rings are the mesh's as it is (after engine_init) */
     double *quadric;
     double *self_error; /* per vertex: its quadric at its own position (the quadric methods) */
-    int quadrics_built; /* the quadric step has run (engine_init, after the first rings) */
+    int quadrics_built; /* the quadrics are built (engine_init: the first rings step) */
     double *importance;
     uint32_t *donor;
     /* the scoring's results, per vertex */
@@ -1183,8 +1183,10 @@ static void run_item(engine *e, vertex_step step, uint32_t i, scratch *s)
     case STEP_RINGS:
         build_ring(e, i);
         break;
-    case STEP_QUADRICS:
-        build_quadric(e, i);
+    case STEP_FIRST_RINGS:
+        build_ring(e, i);
+        if (e->quadric)
+            build_quadric(e, i); /* from v's own ring, built just now */
         break;
     case STEP_SCORES:
         settle_vertex(e, i, s);
@@ -1836,7 +1838,7 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     if (m->importance)
         memcpy(e->importance, m->importance, sizeof(double) * e->n);
     if (o->method != DECIMATE_IMPORTANCE) {
-        /* Written, not summed into, by the quadric step (build_quadric): summed into
+        /* Written, not summed into, by the first rings step (build_quadric): summed into
          * calloc's fresh pages, read before they were written, that step took 0.12 s on the
          * dragon with two threads, 0.04 s once the pages were in. */
         e->quadric = xmalloc(sizeof(double) * 10 * n);
@@ -1853,15 +1855,12 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     pool_start(e->pool, e, o->threads ? o->threads : 1);
     e->threads = e->pool->count + 1;
     build_adjacency(e);
-    for_each_vertex(e, STEP_RINGS);
-    if (e->quadric) {
-        if (o->method == DECIMATE_COMBINED) {
-            start_attribute_quadrics(e);
-            e->importance_floor = importance_floor(e);
-        }
-        for_each_vertex(e, STEP_QUADRICS);
-        e->quadrics_built = 1;
+    if (e->quadric && o->method == DECIMATE_COMBINED) {
+        start_attribute_quadrics(e);
+        e->importance_floor = importance_floor(e);
     }
+    for_each_vertex(e, STEP_FIRST_RINGS); /* and the quadrics */
+    e->quadrics_built = e->quadric != NULL;
     scratch s;
     memset(&s, 0, sizeof s);
     for (uint32_t v = 0; v < e->n; v++)
