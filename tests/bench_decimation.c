@@ -9,7 +9,8 @@
  * combined, importance: a synthetic importance field (high on one side of the dragon); openmesh:
  * stock DecimaterT + ModQuadricT as Debian ships it (one run, 20-40 s); meshopt: meshoptimizer's
  * meshopt_simplify to 10 % of the triangles, one thread. Each engine figure is decimate_mesh()
- * whole (the welded rebuild, the engine, the output), the best of ROUNDS. And the parallel
+ * whole (the welded rebuild, the engine, the output), the best of ROUNDS rounds that run every
+ * figure once, meshoptimizer's too. And the parallel
  * decimation of the living room's meshes (meshes on threads):
  *
  *   decimation-parallel: scene=living-room meshes=<n> one=<s> two=<s> speedup=<one/two>
@@ -22,28 +23,28 @@
 #include "io/mitsuba.h"
 #include "trace_common.h"
 
-#define ROUNDS 3
+/* Rounds of the dragon's measurements: each round runs every method on one and two threads and
+ * meshoptimizer once, and each figure is the best of its rounds, so that a spell of noise on
+ * the machine costs one round of every figure rather than every round of one. */
+#define ROUNDS 5
 
 static double best_of(double a, double b) { return a < b ? a : b; }
 
-/* The best of ROUNDS runs of decimate_mesh; the output's vertex count into *vertices. */
+/* One run of decimate_mesh, its seconds; the output's vertex count into *vertices. */
 static double time_engine(decimate_input in, decimate_method method, unsigned int threads,
                           uint32_t *vertices)
 {
-    double best = 1e30;
     in.threads = threads;
-    for (int round = 0; round < ROUNDS; round++) {
-        decimate_output out;
-        double t0 = trace_seconds();
-        if (decimate_mesh(&in, method, &out)) {
-            fprintf(stderr, "bench_decimation: %s\n", error_message());
-            exit(1);
-        }
-        best = best_of(best, trace_seconds() - t0);
-        *vertices = out.mesh.vertex_count;
-        decimate_output_free(&out);
+    decimate_output out;
+    double t0 = trace_seconds();
+    if (decimate_mesh(&in, method, &out)) {
+        fprintf(stderr, "bench_decimation: %s\n", error_message());
+        exit(1);
     }
-    return best;
+    double seconds = trace_seconds() - t0;
+    *vertices = out.mesh.vertex_count;
+    decimate_output_free(&out);
+    return seconds;
 }
 
 static void bench_dragon(void)
@@ -71,18 +72,19 @@ static void bench_dragon(void)
         exit(1);
     }
     in.target_vertices = start / 10;
-    uint32_t combined_vertices[2], importance_vertices[2], quadric_vertices[2];
-    double combined[2], by_importance[2], quadric[2];
-    for (int t = 0; t < 2; t++) {
-        combined[t] = time_engine(in, DECIMATE_COMBINED, t + 1, &combined_vertices[t]);
-        by_importance[t] = time_engine(in, DECIMATE_IMPORTANCE, t + 1, &importance_vertices[t]);
-        quadric[t] = time_engine(in, DECIMATE_QUADRIC, t + 1, &quadric_vertices[t]);
-    }
-
+    /* per method (combined, importance, quadric) and thread count (1, 2) */
+    static const decimate_method methods[3] = {DECIMATE_COMBINED, DECIMATE_IMPORTANCE,
+                                               DECIMATE_QUADRIC};
+    double seconds[3][2] = {{1e30, 1e30}, {1e30, 1e30}, {1e30, 1e30}};
+    uint32_t vertices[3][2];
     double meshopt = 1e30;
     size_t meshopt_triangles = 0;
     unsigned int *destination = malloc(3 * sizeof(unsigned int) * mesh.triangle_count);
     for (int round = 0; round < ROUNDS; round++) {
+        for (int t = 0; t < 2; t++)
+            for (int k = 0; k < 3; k++)
+                seconds[k][t] =
+                    best_of(seconds[k][t], time_engine(in, methods[k], t + 1, &vertices[k][t]));
         double t0 = trace_seconds();
         meshopt_triangles =
             meshopt_simplify(destination, mesh.indices, 3 * (size_t)mesh.triangle_count,
@@ -102,13 +104,13 @@ static void bench_dragon(void)
                "quadric/meshopt=%.2f vertices=%u target_vertices=%llu combined_vertices=%u "
                "importance_vertices=%u quadric_vertices=%u openmesh_vertices=%ld "
                "meshopt_triangles=%zu\n",
-               t + 1, combined[t], by_importance[t], quadric[t], stock, meshopt,
-               combined[t] / meshopt, quadric[t] / meshopt, mesh.vertex_count,
-               (unsigned long long)in.target_vertices, combined_vertices[t],
-               importance_vertices[t], quadric_vertices[t], stock_vertices, meshopt_triangles);
+               t + 1, seconds[0][t], seconds[1][t], seconds[2][t], stock, meshopt,
+               seconds[0][t] / meshopt, seconds[2][t] / meshopt, mesh.vertex_count,
+               (unsigned long long)in.target_vertices, vertices[0][t], vertices[1][t],
+               vertices[2][t], stock_vertices, meshopt_triangles);
     printf("decimation-parallel: mesh=dragon threads=2 method=combined one=%.3f two=%.3f "
            "speedup=%.2f\n",
-           combined[0], combined[1], combined[0] / combined[1]);
+           seconds[0][0], seconds[0][1], seconds[0][0] / seconds[0][1]);
     fflush(stdout);
     free(destination);
     free(importance);

@@ -874,9 +874,19 @@ static void test_reduce_refuses_simulation_values(void **state)
     }
 }
 
+/* How a run's memory is bounded: its address space, or under AddressSanitizer (the sanitize
+ * config's bin/idmr), whose shadow memory takes terabytes of address space, its resident set,
+ * by the sanitizer's own limit. */
+#if defined(__SANITIZE_ADDRESS__)
+#define MEMORY_BOUND                                                                           \
+    "export ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}hard_rss_limit_mb=4000\"; "
+#else
+#define MEMORY_BOUND "ulimit -v 4000000; "
+#endif
+
 /* --simulation on what is not a regular file: /dev/zero (read without end until memory ran
  * out), a FIFO (blocked forever), a directory. Refused at once, named, and nothing of the run
- * is left. The address space and the time are bounded, so that a failure here cannot take the
+ * is left. The memory and the time are bounded, so that a failure here cannot take the
  * machine's memory. */
 static void test_reduce_refuses_special_simulation_files(void **state)
 {
@@ -895,8 +905,8 @@ static void test_reduce_refuses_special_simulation_files(void **state)
     for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
         char file[128];
         snprintf(file, sizeof file, cases[i].file, dir);
-        run_result r = run("ulimit -v 4000000; timeout 60 bin/idmr reduce data/cornell/scene.xml "
-                           "--target 0.1 -o %s/out --simulation %s --quiet",
+        run_result r = run(MEMORY_BOUND "timeout 60 bin/idmr reduce data/cornell/scene.xml "
+                                        "--target 0.1 -o %s/out --simulation %s --quiet",
                            dir, file);
         if (r.status != 2 || !strstr(r.err, cases[i].expect) || !strstr(r.err, file))
             fail_msg("'%s': exit %d, '%s' (expected 2, the file and '%s')", r.command, r.status,
