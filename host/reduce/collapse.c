@@ -317,14 +317,6 @@ static void build_adjacency(engine *e)
     start[0] = 0;
 }
 
-/* The vertices of range `range` of as many as the pool has threads: [*first, *end). */
-static void vertex_range(const engine *e, uint32_t range, uint32_t *first, uint32_t *end)
-{
-    uint64_t ranges = e->threads;
-    *first = (uint32_t)((uint64_t)e->n * range / ranges);
-    *end = (uint32_t)((uint64_t)e->n * (range + 1) / ranges);
-}
-
 /* v's triangles in this pass's adjacency: all live and current while v is untouched. */
 static fan pass_fan(const engine *e, uint32_t v)
 {
@@ -1362,6 +1354,14 @@ static int compare_candidates(const void *a, const void *b)
     if (x->target_distance != y->target_distance)
         return x->target_distance < y->target_distance ? -1 : 1;
     return x->vertex < y->vertex ? -1 : x->vertex > y->vertex;
+}
+
+/* The vertices of range `range` of as many as the pool has threads: [*first, *end). */
+static void vertex_range(const engine *e, uint32_t range, uint32_t *first, uint32_t *end)
+{
+    uint64_t ranges = e->threads;
+    *first = (uint32_t)((uint64_t)e->n * range / ranges);
+    *end = (uint32_t)((uint64_t)e->n * (range + 1) / ranges);
 }
 
 /* Lists the candidates of the vertices of one range (vertex_range) as ranking keys, in vertex
