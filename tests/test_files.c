@@ -4,7 +4,6 @@
  * abort and on every exit() (the out-of-memory path among them); a second run staged into the
  * same missing directory is refused rather than merged; every write checked (a file size
  * limit makes writes fail part-way, as a full disk does). */
-#include <pthread.h>
 #include <setjmp.h>
 #include <signal.h>
 #include <stdarg.h>
@@ -171,44 +170,59 @@ static void test_copy_refuses_its_source(void **state)
 }
 
 
+/* The argument that makes this program the child of stage_then_end (main). */
+#define STAGE_CHILD "--stage-then-end"
+
 #if defined(__SANITIZE_ADDRESS__)
-/* LeakSanitizer's own hook, off in the children these tests fork: they end through exit() on
- * purpose, and the leak check there waited for threads of the parent that a forked child does
- * not have (it hung). */
-static int forked_child;
-static void mark_forked_child(void) { forked_child = 1; }
+/* LeakSanitizer's own hook: off in the child of stage_then_end, which ends through exit() on
+ * purpose with its staging state held. */
+static int stage_child;
 int __lsan_is_turned_off(void);
-int __lsan_is_turned_off(void) { return forked_child; }
+int __lsan_is_turned_off(void) { return stage_child; }
 #endif
+
+/* The child of stage_then_end: stages `final`, then ends as `how` says. */
+static int stage_then_end_child(const char *final, int how)
+{
+#if defined(__SANITIZE_ADDRESS__)
+    stage_child = 1;
+#endif
+    char staging[256];
+    signal(SIGABRT, SIG_DFL);
+    if (files_stage_begin(final, staging, sizeof staging) ||
+        files_make_directory(path_in(staging, "meshes")) ||
+        files_write_atomic(path_in(staging, "meshes/half.ply"), "h", 1))
+        _exit(3);
+    if (how == 1) {
+#if defined(__SANITIZE_ADDRESS__)
+        exit(IDMR_EXIT_FAILURE); /* ASan ends a failed allocation itself, without exit() */
+#else
+        volatile size_t huge = SIZE_MAX / 4;
+        free(xmalloc(huge));
+        _exit(4); /* not reached: xmalloc exits */
+#endif
+    }
+    if (how == 2)
+        abort();
+    exit(IDMR_EXIT_FAILURE);
+}
 
 /* A staged child that ends through exit() — xmalloc's out-of-memory path, or any other exit
  * that is not a signal — or through abort(): the staging directory is removed all the same.
- * `how`: 0 exit(), 1 xmalloc of more than the address space, 2 abort(). */
+ * `how`: 0 exit(), 1 xmalloc of more than the address space, 2 abort(). The child is this
+ * program run again (stage_then_end_child), not a forked copy: a copy of a process with threads
+ * cannot end through exit(), whose library finalizers wait for threads the copy does not have
+ * (the sanitize build's, log4cplus's through OpenImageIO, hung there). */
 static void stage_then_end(const char *name, int how)
 {
-    char final[128];
+    char final[128], how_text[8];
     snprintf(final, sizeof final, "%s/%s", temp_dir, name);
+    snprintf(how_text, sizeof how_text, "%d", how);
     pid_t child = fork();
     assert_true(child >= 0);
     if (child == 0) {
-        char staging[256];
-        signal(SIGABRT, SIG_DFL);
-        if (files_stage_begin(final, staging, sizeof staging) ||
-            files_make_directory(path_in(staging, "meshes")) ||
-            files_write_atomic(path_in(staging, "meshes/half.ply"), "h", 1))
-            _exit(3);
-        if (how == 1) {
-#if defined(__SANITIZE_ADDRESS__)
-            exit(IDMR_EXIT_FAILURE); /* ASan ends a failed allocation itself, without exit() */
-#else
-            volatile size_t huge = SIZE_MAX / 4;
-            free(xmalloc(huge));
-            _exit(4); /* not reached: xmalloc exits */
-#endif
-        }
-        if (how == 2)
-            abort();
-        exit(IDMR_EXIT_FAILURE);
+        execl("/proc/self/exe", "test_files", STAGE_CHILD, final, how_text, (char *)NULL);
+        _exit(127);
     }
     int status;
     assert_int_equal(waitpid(child, &status, 0), child);
@@ -312,11 +326,10 @@ static void test_write_cut_short_fails(void **state)
     assert_true(exists(path));
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
-#if defined(__SANITIZE_ADDRESS__)
-    pthread_atfork(NULL, NULL, mark_forked_child);
-#endif
+    if (argc == 4 && strcmp(argv[1], STAGE_CHILD) == 0)
+        return stage_then_end_child(argv[2], atoi(argv[3]));
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_stage_publishes_as_a_unit),
         cmocka_unit_test(test_stage_merges_into_a_full_directory),
