@@ -2,10 +2,10 @@
  * application over flat arrays.
  *
  * State, per vertex: flags (locked by the caller, removed, touched or an end of a collapse taken
- * in this pass), whether it is to be scored again, the plane quadric (10 doubles: the upper
- * triangle of A, then b, then c, for p'Ap + 2b'p + c) and its error at the vertex itself, the
- * importance, the best collapse the scoring found (target, cost, tie keys) and the donor (the
- * vertex that went into it in this pass). Per triangle: its three vertices and corner ids (the
+ * in this pass, to be scored again), the plane quadric (10 doubles: the upper triangle of A,
+ * then b, then c, for p'Ap + 2b'p + c) and its error at the vertex itself, the importance, the
+ * best collapse the scoring found (target, cost, tie keys) and the donor (the vertex that went
+ * into it in this pass). Per triangle: its three vertices and corner ids (the
  * caller's arrays, rewritten). Per attribute id (COMBINED with attributes): its attribute
  * quadric (see "Attribute quadrics" below). At the start of each pass the adjacency (adjacency[
  * adjacency_start[v] ..]: the live triangles at v) and the rings (ring_of) are built again.
@@ -36,7 +36,8 @@ enum {
     FLAG_LOCKED = 1,  /* the caller's lock: never removed */
     FLAG_REMOVED = 2, /* collapsed into another vertex */
     FLAG_TOUCHED = 4, /* a collapse taken in this pass changed its triangles */
-    FLAG_TAKEN = 8,   /* an end of a collapse taken in this pass */
+    FLAG_STALE = 8,   /* its score must be computed again (it or a neighbour was touched) */
+    FLAG_TAKEN = 16,  /* an end of a collapse taken in this pass */
 };
 
 #define BOUNDARY_WEIGHT 10.0 /* COMBINED: an open edge's plane, per length² (decimate_modules) */
@@ -153,8 +154,6 @@ typedef struct engine {
     const collapse_options *o;
     uint32_t n, t;
     uint8_t *flags;
-    uint8_t *stale; /* per vertex: its score must be computed again (it or a neighbour was
-                       touched; build_adjacency marks, settle_vertex clears) */
     uint32_t *adjacency_start, *adjacency;
     uint32_t *live, live_count; /* the triangles live at the last adjacency, in order */
     /* the rings of this pass: v's from slot adjacency_start[v] + v on (room for one neighbour
@@ -301,7 +300,7 @@ static void build_adjacency(engine *e)
         for (int k = 0; k < 3; k++) {
             start[c[k] + 1]++;
             if (touched)
-                e->stale[c[k]] = 1;
+                e->flags[c[k]] |= FLAG_STALE;
         }
     }
     e->live_count = live;
@@ -1119,10 +1118,9 @@ static void settle_vertex(engine *e, uint32_t v, scratch *s)
     uint8_t flags = e->flags[v];
     if (flags & FLAG_REMOVED)
         e->best_target[v] = COLLAPSE_NONE;
-    else if (e->stale[v])
+    else if (flags & FLAG_STALE)
         score_vertex(e, v, s);
-    e->stale[v] = 0;
-    e->flags[v] = flags & (uint8_t) ~(FLAG_TOUCHED | FLAG_TAKEN);
+    e->flags[v] = flags & (uint8_t) ~(FLAG_STALE | FLAG_TOUCHED | FLAG_TAKEN);
     e->donor[v] = COLLAPSE_NONE;
 }
 
@@ -1739,7 +1737,6 @@ static void engine_free(engine *e)
         free(e->pool);
     }
     free(e->flags);
-    free(e->stale);
     free(e->adjacency_start);
     free(e->adjacency);
     free(e->live);
@@ -1818,7 +1815,6 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
         o->boundary_tolerance > 0 ? o->boundary_tolerance : DECIMATE_BOUNDARY_TOLERANCE;
     size_t n = (size_t)e->n + 1;
     e->flags = xcalloc(n, 1);
-    e->stale = xmalloc(n);
     e->adjacency_start = xmalloc(sizeof(uint32_t) * (n + 1));
     e->adjacency = xmalloc(sizeof(uint32_t) * (3 * (size_t)e->t + 1));
     e->live = xmalloc(sizeof(uint32_t) * ((size_t)e->t + 1));
@@ -1847,7 +1843,7 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     for (uint32_t v = 0; v < e->n; v++) {
         e->donor[v] = COLLAPSE_NONE;
         e->best_target[v] = COLLAPSE_NONE;
-        e->stale[v] = 1;
+        e->flags[v] = FLAG_STALE;
         if (m->locked && m->locked[v])
             e->flags[v] |= FLAG_LOCKED;
     }
@@ -1873,10 +1869,10 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
 
 size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_method method)
 {
-    /* flags, stale, adjacency_start, ring_size, donor, best_target, stamp, best, importance, the
+    /* flags, adjacency_start, ring_size, donor, best_target, stamp, best, importance, the
      * ranking's keys (and their spare) and list, the quadric and its own error; a ring slot
      * (vertex, left, right, held); per triangle its place in the live list */
-    size_t per_vertex = 1 + 1 + 4 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
+    size_t per_vertex = 1 + 4 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
                         2 * sizeof(rank_key) + sizeof(candidate) +
                         (method != DECIMATE_IMPORTANCE ? 11 * sizeof(double) : 0);
     size_t ring_slot = 3 * sizeof(uint32_t) + 1;
