@@ -93,10 +93,15 @@ int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
     for (unsigned int pass = 1; !status && pass <= o->passes; pass++)
         status = run_pass(&st, pass);
     /* Under a memory budget, the reduced scene decimated again at a lower target while its
-     * render does not fit (the fit says so). */
+     * render does not fit (the fit says so); the remapped importance, which only that
+     * decimation needs, out of memory while the fit measures, where the fit says so. */
     for (int again = 1; !status && again;) {
-        status = reduce_memory_fit(&st, &again);
+        status = (reduce_memory_fit_spills(&st) && reduce_remapped_spill(&st)) ||
+                 reduce_memory_fit(&st, &again);
         if (status || !again)
+            break;
+        status = reduce_remapped_restore(&st);
+        if (status)
             break;
         forget_reduction(&st);
         status = reduce_plan_budget(&st) || reduce_decimation(&st);

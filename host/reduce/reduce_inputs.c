@@ -1,6 +1,8 @@
 /* reduce_inputs.c — per mesh of the scene, what every stage of `idmr reduce` asks of it (see
  * reduce_stages.h): whether it is pinned (never decimated) or may be decimated at all, which
- * attributes it carries through the decimation, and the decimate_input it is decimated from. */
+ * attributes it carries through the decimation, and the decimate_input it is decimated from;
+ * and the view of the scene with some of its meshes decimated (the scene a later pass
+ * simulates, the reduced scene the memory fit measures). */
 #include <string.h>
 
 #include "reduce/reduce_stages.h"
@@ -75,4 +77,33 @@ decimate_input reduce_decimation_input(const reduce_state *st, size_t m)
     in.uv_weight = st->options->uv_weight;
     in.normal_weight = st->options->normal_weight;
     return in;
+}
+
+/* Whether `o` holds a decimated mesh (its history may be freed already). */
+static int holds_decimation(const decimate_output *o)
+{
+    return o->mesh.positions != NULL;
+}
+
+scene *reduce_view_of(reduce_state *st, const decimate_output *meshes)
+{
+    /* A released mesh without a decimation here is shown as it is: read again (and kept). */
+    for (size_t m = 0; m < st->count; m++)
+        if (!holds_decimation(&meshes[m]) && scene_mesh_restore(st->scene, m))
+            return NULL;
+    scene *view = scene_view(st->scene);
+    for (size_t m = 0; m < st->count; m++) {
+        const decimate_output *h = &meshes[m];
+        if (!holds_decimation(h))
+            continue;
+        /* The view's mesh is the decimation, in memory (shared: the output owns it). */
+        scene_mesh_set_geometry(&view->meshes[m], h->mesh.vertex_count, h->mesh.positions,
+                                h->mesh.triangle_count, h->mesh.indices, h->mesh.texcoords,
+                                h->mesh.normals);
+    }
+    if (scene_finalize(view)) {
+        scene_view_free(view);
+        return NULL;
+    }
+    return view;
 }

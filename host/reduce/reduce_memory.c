@@ -42,7 +42,8 @@
  * computed exactly; above the budget, the target is lowered in proportion to the excess over
  * the fixed part and the plan and decimation run again (at most FIT_ROUNDS times). On a device
  * that shares the host's memory, the remapped importance, which only such a decimation needs,
- * waits in the staging directory while the BVH is built (reduce_remapped_spill). */
+ * waits in the staging directory while the BVH is built (reduce_memory_fit_spills says so;
+ * reduce_run() moves it out and back). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -357,10 +358,7 @@ int reduce_memory_fit(reduce_state *st, int *again)
     *again = 0;
     if (!budget)
         return 0;
-    /* On a device that shares the host's memory the BVH build (about 160 bytes per triangle
-     * while it runs) would sit beside the remapped importance, which only a further decimation
-     * needs: it waits on disk meanwhile. */
-    if ((st->device->info.host_unified && reduce_remapped_spill(st)) || measure_reduced(st))
+    if (measure_reduced(st))
         return -1;
     double total = (double)sppm_memory_total(&st->render_memory);
     if (total <= (double)budget)
@@ -379,7 +377,12 @@ int reduce_memory_fit(reduce_state *st, int *again)
                 "decimating again to %.4g\n",
                 MIB(total), MIB(budget), st->target);
     *again = 1;
-    return reduce_remapped_restore(st);
+    return 0;
+}
+
+int reduce_memory_fit_spills(const reduce_state *st)
+{
+    return st->options->memory_budget && st->device->info.host_unified;
 }
 
 uint64_t reduce_memory_device_limit(const reduce_state *st)

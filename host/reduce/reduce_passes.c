@@ -14,35 +14,6 @@
 #include "reduce/remap.h"
 #include "reduce/reduce_stages.h"
 
-/* Whether `o` holds a decimated mesh (its history may be freed already). */
-static int holds_decimation(const decimate_output *o)
-{
-    return o->mesh.positions != NULL;
-}
-
-scene *reduce_view_of(reduce_state *st, const decimate_output *meshes)
-{
-    /* A released mesh without a decimation here is shown as it is: read again (and kept). */
-    for (size_t m = 0; m < st->count; m++)
-        if (!holds_decimation(&meshes[m]) && scene_mesh_restore(st->scene, m))
-            return NULL;
-    scene *view = scene_view(st->scene);
-    for (size_t m = 0; m < st->count; m++) {
-        const decimate_output *h = &meshes[m];
-        if (!holds_decimation(h))
-            continue;
-        /* The view's mesh is the decimation, in memory (shared: the output owns it). */
-        scene_mesh_set_geometry(&view->meshes[m], h->mesh.vertex_count, h->mesh.positions,
-                                h->mesh.triangle_count, h->mesh.indices, h->mesh.texcoords,
-                                h->mesh.normals);
-    }
-    if (scene_finalize(view)) {
-        scene_view_free(view);
-        return NULL;
-    }
-    return view;
-}
-
 /* Every released mesh (core/scene.h: streaming) read again. 0, or -1 with the error set. */
 static int restore_all(reduce_state *st)
 {

@@ -36,7 +36,8 @@
  *   memory fit   with --memory-budget: the reduced scene's exact render memory (its BVH built);
  *                above the budget, the target is lowered: render_memory, fit_rounds, target; on
  *                a device sharing the host's memory the remapped importance waits on disk
- *                meanwhile (reduce_memory.c, with reduce_passes.c's reduce_remapped_spill);
+ *                meanwhile (reduce_memory.c; reduce_run() spills and restores it with
+ *                reduce_passes.c's reduce_remapped_spill and reduce_remapped_restore);
  *                reduce_run() then forgets the budget and decimation and runs them again, and
  *                the fit after them; last, the run's peak memory checked against the budget
  *   write        meshes/NAME.ply and scene.xml: ply, meshes_written (reduce_write.c)
@@ -175,6 +176,11 @@ void reduce_mesh_attributes(const reduce_state *st, size_t m, int *texcoords, in
  * streaming) gives no geometry: reduce_decimate_meshes() reads it again first. */
 decimate_input reduce_decimation_input(const reduce_state *st, size_t m);
 
+/* A finalised view of the scene (core/scene.h, scene_view) in which every mesh that `meshes`
+ * holds a decimation of (collapsed_into set) is that decimation, and every other mesh is the
+ * scene's (read again, and kept, where it was released); NULL with the error set. */
+scene *reduce_view_of(reduce_state *st, const decimate_output *meshes);
+
 /* ---- options (reduce_options.c) ---- */
 
 /* The options stage: the options against each other and the scene. 0, or -1 with the error set
@@ -206,9 +212,13 @@ uint64_t reduce_memory_device_limit(const reduce_state *st);
  * the budget, and at least one. */
 size_t reduce_memory_meshes_in_flight(const reduce_state *st, const uint32_t *vertices,
                                       size_t count);
+/* Whether the fit's BVH build is to be made with the remapped importance out of memory
+ * (reduce_remapped_spill): under a budget on a device that shares the host's memory, where the
+ * build (about 160 bytes per triangle while it runs) would sit beside it, and only a further
+ * decimation needs it. */
+int reduce_memory_fit_spills(const reduce_state *st);
 /* The fit: the reduced scene's exact render memory; above the budget, a lower st->target and
- * *again set (the remapped importance read back: reduce_run() decimates again); after
- * FIT_ROUNDS such rounds, an error. */
+ * *again set (reduce_run() decimates again); after FIT_ROUNDS such rounds, an error. */
 int reduce_memory_fit(reduce_state *st, int *again);
 /* On a device that shares the host's memory: an error when the process's resident memory
  * peaked above the budget during the run (from reduce_memory_plan() on). 0, or -1 with the
@@ -224,11 +234,6 @@ int reduce_initial(reduce_state *st);
  * becomes the history, and its view the scene the next importance pass simulates; the last
  * remapped importance, history and view are freed. 0, or -1 with the error set. */
 int reduce_next_pass(reduce_state *st, decimate_output *output);
-
-/* A finalised view of the scene (core/scene.h, scene_view) in which every mesh that `meshes`
- * holds a decimation of (collapsed_into set) is that decimation, and every other mesh is the
- * scene's (read again, and kept, where it was released); NULL with the error set. */
-scene *reduce_view_of(reduce_state *st, const decimate_output *meshes);
 
 /* After the importance pass: with a history, the importance per vertex of the simulated scene
  * copied back to the originals into st->remapped and st->distance. */
