@@ -13,7 +13,8 @@
 
 #define EMPTY 0xffffffffu
 #define MAX_ATTRIBUTE_FLOATS 5
-#define WELD_THREADS 64 /* the most the manifold check starts */
+#define WELD_THREADS 64   /* the most the manifold check starts */
+#define WELD_BLOCK 16384  /* vertices a thread of the manifold check takes at the least */
 
 static uint32_t mix(uint32_t h, uint32_t word)
 {
@@ -263,7 +264,8 @@ static void *check_range(void *arg)
 }
 
 /* The manifold check and the wedge count, the vertices cut into one range per thread (at most
- * WELD_THREADS; where a thread cannot be started, the caller checks its range). */
+ * WELD_THREADS, and no more than blocks of WELD_BLOCK vertices; where a thread cannot be
+ * started, the caller checks its range). */
 static void check_manifold(weld_result *out, unsigned int threads)
 {
     vertex_corners vc;
@@ -272,6 +274,8 @@ static void check_manifold(weld_result *out, unsigned int threads)
         threads = 1;
     if (threads > WELD_THREADS)
         threads = WELD_THREADS;
+    while (threads > 1 && (size_t)(threads - 1) * WELD_BLOCK >= out->vertex_count)
+        threads--; /* a small mesh is checked sooner than a thread starts */
     manifold_range range[WELD_THREADS];
     pthread_t thread[WELD_THREADS];
     int started[WELD_THREADS] = {0};
