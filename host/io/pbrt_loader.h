@@ -135,7 +135,7 @@ void pbrt_warnings_reset(void);
 
 /* A material as read, added to the scene when a shape first uses it. */
 typedef struct pbrt_material {
-    char *name; /* MakeNamedMaterial's name, or "material@file:line" */
+    char *name; /* MakeNamedMaterial's name, or "<type>@<file's base name>:<line>" */
     char *type; /* the pbrt material type */
     idmr_material material;
     char *texture_file; /* resolved image for the reflectance, or NULL */

@@ -525,7 +525,8 @@ int pbrt_read_material(pbrt_loader *ld, const char *file, int line, const char *
     if (name)
         snprintf(label, sizeof label, "%s", name);
     else
-        snprintf(label, sizeof label, "%s@%s:%d", material_type, file, line);
+        snprintf(label, sizeof label, "%s@%s:%d", material_type,
+                 strrchr(file, '/') ? strrchr(file, '/') + 1 : file, line);
     entry.name = xstrdup(label);
     entry.type = xstrdup(material_type);
     entry.scene_index = -1;
