@@ -64,6 +64,10 @@ static int write_reduced_gltf(reduce_state *st)
 static int write_reduced_pbrt(reduce_state *st, const char *meshes)
 {
     const scene *s = st->scene;
+    if (st->options->bundle)
+        warn("--bundle is not applied to a pbrt scene: its paths are written relative to %s "
+             "(or absolute)",
+             st->outdir);
     int status = files_make_directory(meshes);
     st->ply = xcalloc(st->count + 1, sizeof *st->ply);
     pbrt_replacement *replacements = xcalloc(st->count + 1, sizeof *replacements);
