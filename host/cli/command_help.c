@@ -34,7 +34,8 @@ static const struct {
     {"reduce", 1,
      "  reduce SCENE --target D -o OUTDIR   (or --memory-budget BYTES for --target)\n"
      "                            the reduced scene: OUTDIR/scene.xml and meshes/*.ply with\n"
-     "                            about D of all vertices; takes the options of importance\n"
+     "                            about D of all vertices (scene.pbrt for a pbrt-v4 scene,\n"
+     "                            scene.gltf/.glb for glTF); takes the options of importance\n"
      "      --method M            combined (default: importance budgets each mesh and\n"
      "                            weights its quadric error; open boundaries locked),\n"
      "                            importance (the paper's: importance orders collapses),\n"
