@@ -21,7 +21,8 @@
  *               hyperboloid are warned about and left out.
  *   lights      AreaLightSource "diffuse", LightSource point, spot, distant, infinite
  *               (constant L, or an image: pbrt's equal-area octahedral map is resampled to
- *               idmr's equirectangular environment).
+ *               idmr's equirectangular environment); goniometric and projection lights are
+ *               warned about and left out.
  * Relative paths resolve from the directory of the scene file, as pbrt-v4 resolves them (also
  * in included files). Errors name the file and line ("file:line: Statement: what") and the load
  * fails; a warning names the first file and line it applies to.

@@ -12,7 +12,7 @@
  *             octahedral square map, resampled (nearest texel) to an equirectangular map of
  *             2N × N for an N × N square in Mitsuba's frame, with the CTM's rotation as the
  *             environment's to_world
- *   goniometric, projection    refused with a message.
+ *   goniometric, projection    warned about and left out.
  * `power` and `illuminance` (photometric normalisation) are warned about and not applied.
  * Colours: rgb as written; blackbody, named and sampled spectra are normalised to luminance 1,
  * as pbrt-v4 normalises a light's spectrum before its scale. */
@@ -330,8 +330,10 @@ int pbrt_read_light(pbrt_loader *ld, const char *file, int line, const char *typ
         for (int k = 0; k < 3; k++)
             light.direction[k] = (float)direction[k];
     } else if (strcmp(type, "goniometric") == 0 || strcmp(type, "projection") == 0) {
-        return pbrt_fail(file, line, "LightSource \"%s\" is not simulated by idmr (use point or "
-                                     "spot)", type);
+        for (size_t i = 0; i < params->count; i++)
+            params->items[i].used = 1;
+        pbrt_warn(file, line, "LightSource \"%s\" is not simulated by idmr: left out", type);
+        return 0;
     } else {
         return pbrt_fail(file, line, "LightSource: unknown type '%s'", type);
     }

@@ -114,7 +114,7 @@ int pbrt_param_bool(const char *file, pbrt_params *params, const char *name, int
                     int *out);
 int pbrt_param_string(const char *file, pbrt_params *params, const char *name,
                       const char *fallback, const char **out);
-/* A point/vector of 3 (point3, point, vector3, vector, normal, normal3); *found set. */
+/* A point/vector of 3 (point3, point, vector3, vector, normal, normal3). */
 int pbrt_param_point3(const char *file, pbrt_params *params, const char *name,
                       const double fallback[3], double out[3]);
 /* Warns (once per statement kind and parameter) about each parameter no reader used. */

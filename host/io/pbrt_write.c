@@ -10,7 +10,8 @@
  *            parameter, "texture alpha", ...). The geometric ones dropped: P, indices, uv, st,
  *            N, S, faceIndices, filename, radius, zmin, zmax, phimax, height, innerradius,
  *            levels.
- *   path     the value of a "filename" (or "mapname", "emissionfilename") parameter of any
+ *   path     the value of a "filename" (or "mapname", "emissionfilename", "normalmap") string
+ *            parameter of any
  *            statement but Film (whose filename is the renderer's output), and a spectrum
  *            parameter's string that names an existing file: a relative path is resolved as the
  *            reader resolves it (from the scene's directory) and written relative to outdir, or
@@ -228,7 +229,7 @@ static int is_path_param(const raw_param *p, const char *statement, const pbrt_w
     int path = 0;
     if (strcmp(p->type, "string") == 0 &&
         (strcmp(p->name, "filename") == 0 || strcmp(p->name, "mapname") == 0 ||
-         strcmp(p->name, "emissionfilename") == 0))
+         strcmp(p->name, "emissionfilename") == 0 || strcmp(p->name, "normalmap") == 0))
         path = strcmp(statement, "Film") != 0;
     else if (strcmp(p->type, "spectrum") == 0) {
         char *candidate = mitsuba_path_join(w->scene_dir, value);
