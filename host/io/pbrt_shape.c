@@ -23,6 +23,7 @@
 #include "io/pbrt_loader.h"
 
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -195,6 +196,10 @@ static int vertex_arrays(const char *file, int line, pbrt_params *params, size_t
     if (N && N->number_count / 3 != vertices)
         return pbrt_fail(file, N->line, "Shape: %zu normals for %zu points", N->number_count / 3,
                          vertices);
+    for (size_t i = 0; i < P->number_count; i++)
+        if (fabs(P->numbers[i]) > FLT_MAX)
+            return pbrt_fail(file, P->line, "Shape: \"point3 P\" value %g is beyond float range",
+                             P->numbers[i]);
     size_t count = indices ? indices->number_count : corners;
     if (count == 0)
         return pbrt_fail(file, line, "Shape: no indices");
