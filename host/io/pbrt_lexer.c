@@ -18,6 +18,8 @@ void pbrt_lexer_init(pbrt_lexer *lx, const char *file, const char *text, size_t 
     lx->text = text;
     lx->size = size;
     lx->line = 1;
+    if (size >= 3 && memcmp(text, "\xEF\xBB\xBF", 3) == 0) /* a UTF-8 byte order mark */
+        lx->pos = 3;
 }
 
 static int is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }

@@ -65,11 +65,14 @@ static const named_ior glasses[] = {
     {"glass-F11", 1.6209},
 };
 
+/* The texture `name`: float and spectrum textures have names of their own in pbrt, so a
+ * spectrum texture is looked for first (colours are what the materials read), then a float one. */
 static const pbrt_texture *find_texture(const pbrt_loader *ld, const char *name)
 {
-    for (size_t i = ld->texture_count; i-- > 0;)
-        if (strcmp(ld->textures[i].name, name) == 0)
-            return &ld->textures[i];
+    for (int want_float = 0; want_float < 2; want_float++)
+        for (size_t i = ld->texture_count; i-- > 0;)
+            if (ld->textures[i].is_float == want_float && strcmp(ld->textures[i].name, name) == 0)
+                return &ld->textures[i];
     return NULL;
 }
 
