@@ -347,7 +347,8 @@ static void test_kinds_mitsuba_round_trip(void **state)
     static const char *expected[] = {
         "<bsdf type=\"twosided\" id=\"painted\">", "<texture type=\"bitmap\" name=\"reflectance\">",
         "<bsdf type=\"roughplastic\" id=\"rough_plastic\">",
-        "<bsdf type=\"plastic\" id=\"smooth_plastic\">", "<bsdf type=\"roughconductor\" id=\"gold\">",
+        "<bsdf type=\"plastic\" id=\"smooth_plastic\">",
+        "<bsdf type=\"roughconductor\" id=\"gold\">",
         "<bsdf type=\"conductor\" id=\"mirror\">", "<bsdf type=\"dielectric\" id=\"glass\">",
         "<bsdf type=\"thindielectric\" id=\"pane\">", "<emitter type=\"spot\">",
         "<emitter type=\"envmap\">", "kinds-out/environment.exr", "<emitter type=\"area\">",

@@ -143,9 +143,9 @@ static int name_taken(char **names, size_t count, const char *name)
 }
 
 /* names[index] = `name` made safe (`fallback` when nothing is left of it; one that starts with
- * '_', which Mitsuba keeps for itself, gets `fallback` before it), unique among names[0 .. count) (the
- * NULL ones not yet named) and others[0 .. other_count) by a suffix .2, .3, ... (Mitsuba's ids of shapes and bsdfs share
- * one namespace). */
+ * '_', which Mitsuba keeps for itself, gets `fallback` before it) and unique, by a suffix .2,
+ * .3, ..., among names[0 .. count) (the NULL ones not named yet) and others[0 .. other_count)
+ * (Mitsuba's ids of shapes and bsdfs share one namespace). */
 static void give_name(char **names, size_t count, size_t index, const char *name,
                       const char *fallback, char **others, size_t other_count)
 {
