@@ -373,6 +373,45 @@ static void test_gltf_mitsuba_round_trip(void **state)
     free(text);
 }
 
+/* Names that a file system or Mitsuba would not take apart: "a/b" and "a_b" make the same file
+ * name, "A_B" the same on a case-blind file system, "_x" an id Mitsuba keeps for itself, and a
+ * material named as a mesh would share its id. One triangle each, built in code. */
+static void test_names_made_apart(void **state)
+{
+    (void)state;
+    static const char *names[] = {"wall", "a/b", "a_b", "A_B", "_x"};
+    static const char *expected[] = {"wall", "a_b", "a_b.2", "A_B.3", "mesh_x"};
+    scene *s = scene_create("built-in-code.xml");
+    idmr_material m = {{0.5f, 0.5f, 0.5f}, IDMR_MATERIAL_DIFFUSE, {0, 0, 0}, 0, 1, 1, -1, 0};
+    uint32_t material = scene_add_material(s, "wall", "diffuse", &m);
+    for (size_t i = 0; i < sizeof names / sizeof *names; i++) {
+        float *p = calloc(9, sizeof *p);
+        uint32_t *t = malloc(3 * sizeof *t);
+        p[3] = 1, p[7] = 1, p[2] = p[5] = p[8] = (float)i;
+        t[0] = 0, t[1] = 1, t[2] = 2;
+        scene_mesh *mesh = scene_add_mesh(s, names[i], "ply", NULL, 0, 3, p, 1, t, NULL);
+        mesh->material = material;
+    }
+    if (scene_finalize(s))
+        fail_msg("%s", error_message());
+    char out[160], path[192];
+    snprintf(out, sizeof out, "%s/names.xml", work);
+    export_ok(s, out, 0);
+    scene_free(s);
+    scene *b = load(out);
+    assert_int_equal(b->mesh_count, sizeof names / sizeof *names);
+    for (size_t i = 0; i < b->mesh_count; i++) {
+        assert_string_equal(b->meshes[i].name, expected[i]);
+        snprintf(path, sizeof path, "%s/names/%s.ply", work, expected[i]);
+        struct stat st;
+        if (stat(path, &st) != 0)
+            fail_msg("no %s", path);
+    }
+    assert_int_equal(b->material_count, 1);
+    assert_string_equal(b->material_info[0].name, "wall.2");
+    scene_free(b);
+}
+
 /* ---- pbrt-v4 text ---- */
 
 /* The numbers of the statement that starts with `keyword` (up to 32), after its "[". */
@@ -632,6 +671,7 @@ int main(void)
         CONVERT_TEST(test_cornell_mitsuba_round_trip),
         CONVERT_TEST(test_kinds_mitsuba_round_trip),
         CONVERT_TEST(test_gltf_mitsuba_round_trip),
+        CONVERT_TEST(test_names_made_apart),
         CONVERT_TEST(test_kinds_pbrt_text),
         CONVERT_TEST(test_pbrt_environment_mean),
         CONVERT_TEST(test_cornell_converted_renders_in_mitsuba3),

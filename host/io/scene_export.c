@@ -134,30 +134,68 @@ static void safe_name(const char *name, char *out, size_t size)
     out[n] = '\0';
 }
 
-static int name_taken(char **names, size_t count, const char *name)
+/* The names given so far, compared without case (a case-blind file system holds one file for
+ * "Wall.ply" and "wall.ply"): open addressing over pointers to the names, which their arrays
+ * own. */
+typedef struct name_set {
+    const char **slots;
+    size_t capacity, count; /* capacity a power of two, at least twice count */
+} name_set;
+
+static uint64_t name_hash(const char *name)
 {
-    for (size_t i = 0; i < count; i++)
-        if (names[i] && strcasecmp(names[i], name) == 0) /* case: a case-blind file system */
+    uint64_t h = 1469598103934665603ull; /* FNV-1a over the lower-case bytes */
+    for (const char *c = name; *c; c++) {
+        char lower = *c >= 'A' && *c <= 'Z' ? (char)(*c - 'A' + 'a') : *c;
+        h = (h ^ (unsigned char)lower) * 1099511628211ull;
+    }
+    return h;
+}
+
+static int name_set_has(const name_set *set, const char *name)
+{
+    if (!set->capacity)
+        return 0;
+    for (size_t i = name_hash(name) & (set->capacity - 1); set->slots[i];
+         i = (i + 1) & (set->capacity - 1))
+        if (strcasecmp(set->slots[i], name) == 0)
             return 1;
     return 0;
 }
 
-/* names[index] = `name` made safe (`fallback` when nothing is left of it; one that starts with
- * '_', which Mitsuba keeps for itself, gets `fallback` before it) and unique, by a suffix .2,
- * .3, ..., among names[0 .. count) (the NULL ones not named yet) and others[0 .. other_count)
- * (Mitsuba's ids of shapes and bsdfs share one namespace). */
-static void give_name(char **names, size_t count, size_t index, const char *name,
-                      const char *fallback, char **others, size_t other_count)
+static void name_set_add(name_set *set, const char *name)
+{
+    if (2 * (set->count + 1) > set->capacity) {
+        name_set grown = {xcalloc(set->capacity ? 2 * set->capacity : 64, sizeof(char *)),
+                          set->capacity ? 2 * set->capacity : 64, 0};
+        for (size_t i = 0; i < set->capacity; i++)
+            if (set->slots[i])
+                name_set_add(&grown, set->slots[i]);
+        free(set->slots);
+        *set = grown;
+    }
+    size_t i = name_hash(name) & (set->capacity - 1);
+    while (set->slots[i])
+        i = (i + 1) & (set->capacity - 1);
+    set->slots[i] = name;
+    set->count++;
+}
+
+/* `name` made safe (`fallback` when nothing is left of it; one that starts with '_', which
+ * Mitsuba keeps for itself, gets `fallback` before it) and unique in `taken` by a suffix .2,
+ * .3, ... (Mitsuba's ids of shapes and bsdfs share one namespace, so one set holds both);
+ * malloc'd, and added to `taken`. */
+static char *give_name(name_set *taken, const char *name, const char *fallback)
 {
     char safe[128], base[160], candidate[192];
     safe_name(name, safe, sizeof safe);
     snprintf(base, sizeof base, "%s%s", !safe[0] || safe[0] == '_' ? fallback : "", safe);
     snprintf(candidate, sizeof candidate, "%s", base);
-    for (unsigned suffix = 2; name_taken(names, count, candidate) ||
-                              name_taken(others, other_count, candidate);
-         suffix++)
+    for (unsigned suffix = 2; name_set_has(taken, candidate); suffix++)
         snprintf(candidate, sizeof candidate, "%s.%u", base, suffix);
-    names[index] = xstrdup(candidate);
+    char *given = xstrdup(candidate);
+    name_set_add(taken, given);
+    return given;
 }
 
 /* out_dir, folder_name and folder from job->out. */
@@ -221,12 +259,13 @@ static void plan_names(export_job *job)
     job->mesh_files = xcalloc(s->mesh_count + 1, sizeof *job->mesh_files);
     job->material_names = xcalloc(s->material_count + 1, sizeof *job->material_names);
     job->texture_files = xcalloc(s->texture_count + 1, sizeof *job->texture_files);
+    name_set taken = {NULL, 0, 0};
     for (size_t m = 0; m < s->mesh_count; m++) {
         if (s->meshes[m].triangle_count == 0) {
             warn("%s: mesh '%s' has no triangles: left out", job->out, s->meshes[m].name);
             continue;
         }
-        give_name(job->mesh_names, s->mesh_count, m, s->meshes[m].name, "mesh", NULL, 0);
+        job->mesh_names[m] = give_name(&taken, s->meshes[m].name, "mesh");
         size_t length = strlen(job->folder_name) + strlen(job->mesh_names[m]) + 8;
         job->mesh_files[m] = xmalloc(length);
         snprintf(job->mesh_files[m], length, "%s/%s.ply", job->folder_name, job->mesh_names[m]);
@@ -236,10 +275,10 @@ static void plan_names(export_job *job)
         uint32_t material = s->meshes[m].material;
         if (job->mesh_names[m] && material < s->material_count &&
             !job->material_names[material])
-            give_name(job->material_names, s->material_count, material,
-                      s->material_info[material].name,
-                      "material", job->mesh_names, s->mesh_count);
+            job->material_names[material] =
+                give_name(&taken, s->material_info[material].name, "material");
     }
+    free(taken.slots);
 }
 
 /* A file the scene reads, named relative to the output's directory (absolute where the two
