@@ -4,18 +4,20 @@
  *   camera_paths      one camera path per pixel (lib/paths.h): hit points, and what the pass
  *                     records (importance: camera importance, then the light seen through
  *                     specular surfaces; render: throughput and emission)
- *   photon_paths      one photon path per work-item into its slot of records (lib/paths.h)
+ *   photon_paths      one photon path per work-item into its slot of records (lib/paths.h),
+ *                     and the slots it stored appended to the stored-vertex list
  *   grid_count, scan_chunks, scan_chunk_sums, scan_apply, grid_scatter
  *                     the hash grid over the hit points by counting sort (lib/hit_point_grid.h)
  * importance pass (paper 3.2, 3.3, 4.1; host/passes/importance.c):
- *   gather_count      per photon vertex: the hit points that gather it
+ *   gather_count      per stored photon vertex (the stored-vertex list): the hit points that
+ *                     gather it
  *   path_importance   per path, from its last vertex back: running sum s of gather counts;
  *                     vertex j adds weight_j × s to its triangle's light importance
  *   shadow_rays       per hit point, one shadow ray: its occluder gets shadow importance
  *                     (lib/shadows.h; built with IDMR_SHADOW_IMPORTANCE=1)
  *   pixel_centre_hits the triangle seen through each pixel centre (the importance image)
  * render pass (host/passes/render.c):
- *   render_gather     per stored photon: every hit point that gathers it gets
+ *   render_gather     per stored photon (the stored-vertex list): every hit point that gathers it gets
  *                     throughput × BRDF × flux, added in fixed point to its pixel
  *
  * Argument order: params first, then (for path kernels) the camera and SCENE_BUFFERS
@@ -46,15 +48,26 @@ kernel void camera_paths(idmr_sppm_params params, idmr_camera camera, SCENE_BUFF
     camera_path(&scene, &params, camera, pixel, hit_points, records SEEN_LIGHT_ARGUMENT);
 }
 
+/* The stored-vertex list (stored_count, stored_slots): the slots that hold a record, so that
+ * the gathers take one work-item per stored photon (about 1.7 per path) and not one per slot
+ * (IDMR_PATH_VERTICES per path). A path appends its slots where one atomic add puts them, so the
+ * list's order changes from run to run; what the gathers add per slot does not depend on it,
+ * and their sums are integers, so results stay the same bit for bit. */
 kernel void photon_paths(idmr_sppm_params params, SCENE_BUFFERS, global uint *path_length,
-                         global photon_record *records)
+                         global photon_record *records, volatile global uint *stored_count,
+                         global uint *stored_slots)
 {
     uint path = get_global_id(0);
     if (path >= params.path_count)
         return;
     scene_view scene = SCENE_VIEW();
-    path_length[path] =
-        photon_path(&scene, &params, path, records + (size_t)path * IDMR_PATH_VERTICES);
+    uint length = photon_path(&scene, &params, path, records + (size_t)path * IDMR_PATH_VERTICES);
+    path_length[path] = length;
+    if (length == 0)
+        return;
+    uint first = atomic_add(stored_count, length);
+    for (uint j = 0; j < length; j++)
+        stored_slots[first + j] = path * IDMR_PATH_VERTICES + j;
 }
 
 kernel void grid_count(idmr_sppm_params params, global const idmr_hit_point *hit_points,
@@ -102,33 +115,31 @@ kernel void scan_apply(global const uint *cell_counts, uint cell_count,
 }
 
 kernel void grid_scatter(idmr_sppm_params params, global const idmr_hit_point *hit_points,
-                         volatile global uint *cell_cursor, global uint *grid_points)
+                         volatile global uint *cell_cursor, global idmr_hit_point *grid_hits)
 {
     uint i = get_global_id(0);
     if (i < params.width * params.height && hit_points[i].offset > 0.0f)
-        grid_points[atomic_inc(cell_cursor + grid_bucket(hit_points + i, &params))] = i;
+        grid_hits[atomic_inc(cell_cursor + grid_bucket(hit_points + i, &params))] = hit_points[i];
 }
 
 #if PASS_IMPORTANCE
 
+/* gathered[slot] for the stored slots only (path_importance reads no other). */
 kernel void gather_count(idmr_sppm_params params, global const idmr_photon_vertex *vertices,
-                         global const uint *path_length, global const idmr_hit_point *hit_points,
-                         global const uint *cell_start, global const uint *grid_points,
+                         global const uint *stored_count, global const uint *stored_slots,
+                         global const uint *cell_start, global const idmr_hit_point *grid_hits,
                          global uint *gathered)
 {
-    uint v = get_global_id(0);
-    if (v >= params.path_count * IDMR_PATH_VERTICES)
+    if (get_global_id(0) >= *stored_count)
         return;
-    uint count = 0;
-    if (v % IDMR_PATH_VERTICES < path_length[v / IDMR_PATH_VERTICES]) {
-        float3 p = vload3(0, vertices[v].position), side = vload3(0, vertices[v].normal);
-        float r2 = params.radius * params.radius;
-        uint buckets[8];
-        uint bucket_count = grid_buckets_near(p, &params, buckets);
-        for (uint b = 0; b < bucket_count; b++)
-            for (uint i = cell_start[buckets[b]]; i < cell_start[buckets[b] + 1]; i++)
-                count += hit_point_gathers(hit_points + grid_points[i], p, side, r2);
-    }
+    uint v = stored_slots[get_global_id(0)], count = 0;
+    float3 p = vload3(0, vertices[v].position), side = vload3(0, vertices[v].normal);
+    float r2 = params.radius * params.radius;
+    uint buckets[8];
+    uint bucket_count = grid_buckets_near(p, &params, buckets);
+    for (uint b = 0; b < bucket_count; b++)
+        for (uint i = cell_start[buckets[b]]; i < cell_start[buckets[b] + 1]; i++)
+            count += hit_point_gathers(grid_hits + i, p, side, r2);
     gathered[v] = count;
 }
 
@@ -196,17 +207,15 @@ inline ulong radiance_units(float c, float scale)
 }
 
 kernel void render_gather(idmr_sppm_params params, global const idmr_render_photon *photons,
-                          global const uint *path_length, global const idmr_hit_point *hit_points,
+                          global const uint *stored_count, global const uint *stored_slots,
                           global const idmr_render_hit *render_hits,
                           global const idmr_material *materials, global const uint *cell_start,
-                          global const uint *grid_points,
+                          global const idmr_hit_point *grid_hits,
                           volatile global fixed_word *pixel_radiance)
 {
-    uint slot = get_global_id(0);
-    if (slot >= params.path_count * IDMR_PATH_VERTICES ||
-        slot % IDMR_PATH_VERTICES >= path_length[slot / IDMR_PATH_VERTICES])
+    if (get_global_id(0) >= *stored_count)
         return;
-    global const idmr_render_photon *photon = photons + slot;
+    global const idmr_render_photon *photon = photons + stored_slots[get_global_id(0)];
     float3 p = vload3(0, photon->position), side = vload3(0, photon->normal);
     float3 incoming = vload3(0, photon->direction);
     float3 flux = (float3)(photon->flux_r, photon->flux_g, photon->flux_b);
@@ -215,11 +224,10 @@ kernel void render_gather(idmr_sppm_params params, global const idmr_render_phot
     uint bucket_count = grid_buckets_near(p, &params, buckets);
     for (uint b = 0; b < bucket_count; b++)
         for (uint i = cell_start[buckets[b]]; i < cell_start[buckets[b] + 1]; i++) {
-            uint index = grid_points[i];
-            global const idmr_hit_point *hp = hit_points + index;
+            global const idmr_hit_point *hp = grid_hits + i;
             if (!hit_point_gathers(hp, p, side, r2))
                 continue;
-            global const idmr_render_hit *rh = render_hits + index;
+            global const idmr_render_hit *rh = render_hits + hp->pixel;
             float3 ns = unpack_normal(rh->shading_normal);
             float3 c = vload3(0, rh->throughput) * flux *
                        brdf(materials + rh->material, incoming, vload3(0, rh->outgoing), ns) *

@@ -93,6 +93,13 @@ static const struct {
      "                            noise cancelled: A = original, B = reduced scene, 1 and 2\n"
      "                            two seeds; reduction_rmse ± standard error (N-pixel tiles,\n"
      "                            default 16)\n"},
+    {"convert", 0,
+     "  convert SCENE -o OUT      the scene as idmr reads it, written in the format OUT's\n"
+     "                            extension names: OUT.xml a Mitsuba 3 scene, OUT.pbrt a\n"
+     "                            pbrt-v4 scene; meshes as world-space PLYs (and the\n"
+     "                            environment map as an EXR) in the folder OUT's stem names\n"
+     "      --force               replace OUT and files in that folder\n"
+     "      --quiet               no progress on stderr while loading\n"},
     {"kernels", 0,
      "  kernels [--device N] [--quiet]\n"
      "                            build every kernel program variant on the device (a\n"

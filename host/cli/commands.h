@@ -25,6 +25,10 @@ int command_render(int argc, char **argv);
  * idmr compare --paired A1 A2 B1 B2 [--tile N] [--json]: the reduction error, noise cancelled. */
 int command_compare(int argc, char **argv);
 
+/* idmr convert SCENE -o OUT [--force] [--quiet]: the scene written as a Mitsuba 3 (.xml) or
+ * pbrt-v4 (.pbrt) scene. */
+int command_convert(int argc, char **argv);
+
 /* idmr kernels [--device N] [--quiet]: builds every kernel program variant (make kernels). */
 int command_kernels(int argc, char **argv);
 

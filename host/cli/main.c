@@ -6,6 +6,7 @@
  *   idmr [-v] reduce SCENE --target D -o OUTDIR [options]
  *   idmr [-v] render SCENE -o IMAGE [options]
  *   idmr compare A B [--diff DIFF.png] [--diff-max E] [--json]
+ *   idmr convert SCENE -o OUT.xml|OUT.pbrt [--force]
  *   idmr help [COMMAND], idmr COMMAND --help   (command_help.c)
  *
  * Each command lives in command_<name>.c (commands.h); what they share of their options, in
@@ -28,7 +29,7 @@ static const struct {
 } COMMANDS[] = {
     {"devices", command_devices}, {"info", command_info},     {"importance", command_importance},
     {"reduce", command_reduce},   {"render", command_render}, {"compare", command_compare},
-    {"kernels", command_kernels},
+    {"kernels", command_kernels}, {"convert", command_convert},
 };
 
 /* Whether a command's arguments (argv[0] its name) hold -h or --help, before any "--". */

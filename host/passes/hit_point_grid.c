@@ -20,7 +20,7 @@ static void grid_sizes(unsigned int hit_points, unsigned int *cells, unsigned in
     bytes[1] = (*cells + 1) * sizeof(cl_uint);
     bytes[2] = *cells * sizeof(cl_uint);
     bytes[3] = *chunks * sizeof(cl_uint);
-    bytes[4] = (hit_points ? hit_points : 1) * sizeof(cl_uint);
+    bytes[4] = (hit_points ? hit_points : 1) * sizeof(idmr_hit_point);
 }
 
 uint64_t hit_point_grid_bytes(unsigned int hit_points)
@@ -49,7 +49,7 @@ int hit_point_grid_create(device *d, cl_program program, unsigned int hit_points
         {&g->cell_start, bytes[1], "grid cell starts"},
         {&g->cell_cursor, bytes[2], "grid cursors"},
         {&g->chunk_sums, bytes[3], "grid prefix sums"},
-        {&g->grid_points, bytes[4], "grid hit point lists"},
+        {&g->grid_hits, bytes[4], "grid hit points"},
     };
     return device_buffers(d, buffers, sizeof buffers / sizeof *buffers, &g->bytes);
 }
@@ -60,7 +60,7 @@ void hit_point_grid_release(hit_point_grid *g)
                            g->scatter};
     device_release_kernels(kernels, sizeof kernels / sizeof *kernels);
     cl_mem buffers[] = {g->cell_counts, g->cell_start, g->cell_cursor, g->chunk_sums,
-                        g->grid_points};
+                        g->grid_hits};
     device_release_buffers(buffers, sizeof buffers / sizeof *buffers);
     memset(g, 0, sizeof *g);
 }
@@ -85,7 +85,7 @@ int hit_point_grid_build(device *d, hit_point_grid *g, const idmr_sppm_params *p
                    device_run(d, g->scan_apply, "scan_apply", g->chunks, 0) ||
                    DEVICE_SET_ARGS(g->scatter, "grid_scatter", DEVICE_ARG(*params),
                                    DEVICE_ARG(hit_points), DEVICE_ARG(g->cell_cursor),
-                                   DEVICE_ARG(g->grid_points)) ||
+                                   DEVICE_ARG(g->grid_hits)) ||
                    device_run(d, g->scatter, "grid_scatter", g->hit_points, local_size)
                ? -1
                : 0;

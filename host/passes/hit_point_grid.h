@@ -1,6 +1,6 @@
 /* hit_point_grid.h — the hash grid over an iteration's hit points (kernels/lib/hit_point_grid.h),
  * built on the device by counting sort: cell counts with atomics, a three-step prefix sum, a
- * scatter of hit point indices by cell. Part of the SPPM core (passes/sppm.h).
+ * scatter of copies of the hit points by cell (a gather reads a cell's hit points in a row). Part of the SPPM core (passes/sppm.h).
  *
  * The cells are 2r (and a little more) wide for the gather radius r, so a gather ball touches
  * at most 2 x 2 x 2 of them, and they are counted in 64 bits from the world origin: where the
@@ -21,7 +21,7 @@
 
 typedef struct hit_point_grid {
     cl_kernel count, scan_chunks, scan_chunk_sums, scan_apply, scatter;
-    cl_mem cell_counts, cell_start, cell_cursor, chunk_sums, grid_points;
+    cl_mem cell_counts, cell_start, cell_cursor, chunk_sums, grid_hits;
     unsigned int hit_points, cells, chunks;
     uint64_t bytes; /* device memory of the grid's buffers */
 } hit_point_grid;

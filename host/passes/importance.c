@@ -166,10 +166,12 @@ static int gather(sppm *core, void *state)
     size_t local = core->options->local_size;
     if ((p->shadows && cast_shadow_rays(core, p)) ||
         DEVICE_SET_ARGS(p->gather, "gather_count", DEVICE_ARG(core->params),
-                        DEVICE_ARG(core->photon_records), DEVICE_ARG(core->path_length),
-                        DEVICE_ARG(core->hit_points), DEVICE_ARG(core->grid.cell_start),
-                        DEVICE_ARG(core->grid.grid_points), DEVICE_ARG(p->gathered)) ||
-        device_run(core->dev, p->gather, "gather_count", core->slots, local))
+                        DEVICE_ARG(core->photon_records), DEVICE_ARG(core->stored_count),
+                        DEVICE_ARG(core->stored_slots), DEVICE_ARG(core->grid.cell_start),
+                        DEVICE_ARG(core->grid.grid_hits),
+                        DEVICE_ARG(p->gathered)) ||
+        (core->stored &&
+         device_run(core->dev, p->gather, "gather_count", core->stored, local)))
         return -1;
     if (!p->options->accumulate_importance)
         return 0;
@@ -211,15 +213,21 @@ static int add_accumulator(sppm *core, importance_pass *p, int k, double *sums, 
                         KIND_NAMES[k]);
 }
 
-/* Hit points found by the first iteration's photon vertices, for the report. */
+/* Hit points found by the first iteration's photon vertices, for the report: the gather counts
+ * of the stored slots (gather_count writes no other). */
 static int count_gathered(sppm *core, importance_pass *p)
 {
     uint32_t *gathered = xmalloc(core->slots * sizeof *gathered);
+    uint32_t *stored = xmalloc((core->stored + 1) * sizeof *stored);
     int status = device_read(core->dev, p->gathered, core->slots * sizeof *gathered, gathered,
-                             "gather counts");
-    for (size_t i = 0; i < core->slots && !status; i++)
-        p->result->gathered += gathered[i];
+                             "gather counts") ||
+                 (core->stored && device_read(core->dev, core->stored_slots,
+                                              core->stored * sizeof *stored, stored,
+                                              "stored photon slots"));
+    for (size_t i = 0; i < core->stored && !status; i++)
+        p->result->gathered += gathered[stored[i]];
     free(gathered);
+    free(stored);
     return status;
 }
 

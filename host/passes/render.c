@@ -110,13 +110,13 @@ static int gather(sppm *core, void *state)
 {
     render_pass *p = state;
         return DEVICE_SET_ARGS(p->gather, "render_gather", DEVICE_ARG(core->params),
-                           DEVICE_ARG(core->photon_records), DEVICE_ARG(core->path_length),
-                           DEVICE_ARG(core->hit_points), DEVICE_ARG(p->render_hits),
+                           DEVICE_ARG(core->photon_records), DEVICE_ARG(core->stored_count),
+                           DEVICE_ARG(core->stored_slots), DEVICE_ARG(p->render_hits),
                            DEVICE_ARG(core->uploaded.materials),
-                           DEVICE_ARG(core->grid.cell_start), DEVICE_ARG(core->grid.grid_points),
+                           DEVICE_ARG(core->grid.cell_start), DEVICE_ARG(core->grid.grid_hits),
                            DEVICE_ARG(p->pixel_radiance)) ||
-                   device_run(core->dev, p->gather, "render_gather", core->slots,
-                              core->options->local_size)
+                   (core->stored && device_run(core->dev, p->gather, "render_gather",
+                                               core->stored, core->options->local_size))
                ? -1
                : 0;
 }

@@ -80,6 +80,7 @@ void sppm_snapshot_free(sppm_snapshot *snapshot)
     free(snapshot->hit_points);
     free(snapshot->photon_records);
     free(snapshot->path_length);
+    free(snapshot->stored_slots);
     memset(snapshot, 0, sizeof *snapshot);
 }
 
@@ -138,14 +139,18 @@ static int build_program(sppm *core, const sppm_pass *pass)
     return 0;
 }
 
-/* The sizes of the core's own buffers (hit points, photon path lengths, photon slots), in
- * allocate()'s order: one place for the allocation and sppm_memory_of(). */
+/* The sizes of the core's own buffers (hit points, photon path lengths, photon slots, the
+ * stored-vertex list's length and slots), in allocate()'s order: one place for the allocation
+ * and sppm_memory_of(). */
+#define CORE_BUFFERS 5
 static void core_sizes(unsigned int pixels, unsigned int photons, size_t record_bytes,
-                       size_t bytes[3])
+                       size_t bytes[CORE_BUFFERS])
 {
     bytes[0] = (size_t)pixels * sizeof(idmr_hit_point);
     bytes[1] = (size_t)photons * sizeof(cl_uint);
     bytes[2] = (size_t)photons * IDMR_PATH_VERTICES * record_bytes;
+    bytes[3] = sizeof(cl_uint);
+    bytes[4] = (size_t)photons * IDMR_PATH_VERTICES * sizeof(cl_uint);
 }
 
 int sppm_memory_of(const device *d, const scene *s, uint64_t bvh_bytes, const sppm_options *o,
@@ -156,11 +161,13 @@ int sppm_memory_of(const device *d, const scene *s, uint64_t bvh_bytes, const sp
     if (check_inputs(d, s, o, pass, &film))
         return -1;
     unsigned int pixels = film.width * film.height;
-    size_t bytes[3];
+    size_t bytes[CORE_BUFFERS];
     core_sizes(pixels, film.photons, pass->photon_record_bytes, bytes);
     m->geometry = device_scene_geometry_bytes(s);
     m->bvh = bvh_bytes;
-    m->core = hit_point_grid_bytes(pixels) + bytes[0] + bytes[1] + bytes[2];
+    m->core = hit_point_grid_bytes(pixels);
+    for (int k = 0; k < CORE_BUFFERS; k++)
+        m->core += bytes[k];
     m->pass = pass->pass_bytes
                   ? pass->pass_bytes(s, pixels, (size_t)film.photons * IDMR_PATH_VERTICES)
                   : 0;
@@ -206,12 +213,14 @@ static int allocate(sppm *core, const sppm_pass *pass)
     core->slots = (size_t)summary->photons * IDMR_PATH_VERTICES;
     if (hit_point_grid_create(core->dev, core->program, core->pixels, &core->grid))
         return -1;
-    size_t bytes[3];
+    size_t bytes[CORE_BUFFERS];
     core_sizes(core->pixels, summary->photons, pass->photon_record_bytes, bytes);
-    const device_buffer_request buffers[] = {
+    const device_buffer_request buffers[CORE_BUFFERS] = {
         {&core->hit_points, bytes[0], "hit points"},
         {&core->path_length, bytes[1], "photon path lengths"},
         {&core->photon_records, bytes[2], "photon paths"},
+        {&core->stored_count, bytes[3], "stored photon count"},
+        {&core->stored_slots, bytes[4], "stored photon slots"},
     };
     summary->buffer_bytes = core->grid.bytes;
     if (device_buffers(core->dev, buffers, sizeof buffers / sizeof *buffers,
@@ -229,7 +238,9 @@ static int allocate(sppm *core, const sppm_pass *pass)
                                          1) ||
                    DEVICE_SET_ARGS_FROM(core->photon_paths, "photon_paths",
                                         1 + DEVICE_SCENE_BUFFERS, DEVICE_ARG(core->path_length),
-                                        DEVICE_ARG(core->photon_records))
+                                        DEVICE_ARG(core->photon_records),
+                                        DEVICE_ARG(core->stored_count),
+                                        DEVICE_ARG(core->stored_slots))
                ? -1
                : 0;
 }
@@ -238,7 +249,8 @@ static void release(sppm *core)
 {
     cl_kernel kernels[] = {core->camera_paths, core->photon_paths};
     device_release_kernels(kernels, sizeof kernels / sizeof *kernels);
-    cl_mem buffers[] = {core->hit_points, core->path_length, core->photon_records};
+    cl_mem buffers[] = {core->hit_points, core->path_length, core->photon_records,
+                        core->stored_count, core->stored_slots};
     device_release_buffers(buffers, sizeof buffers / sizeof *buffers);
     hit_point_grid_release(&core->grid);
     if (core->program)
@@ -268,24 +280,18 @@ static void params_begin(sppm *core)
  * records (they change little between iterations). */
 static int first_iteration(sppm *core, double *radius2)
 {
-    size_t paths = core->params.path_count;
     idmr_hit_point *hit_points = xmalloc(core->pixels * sizeof *hit_points);
-    uint32_t *lengths = xmalloc(paths * sizeof *lengths);
     int status = device_read(core->dev, core->hit_points, core->pixels * sizeof *hit_points,
-                             hit_points, "hit points") ||
-                 device_read(core->dev, core->path_length, paths * sizeof *lengths, lengths,
-                             "photon path lengths");
+                             hit_points, "hit points");
     for (size_t i = 0; i < core->pixels && !status; i++)
         core->summary->hit_points += hit_points[i].offset > 0.0f;
-    for (size_t i = 0; i < paths && !status; i++)
-        core->summary->photon_records += lengths[i];
+    core->summary->photon_records = core->stored;
     double pinned = core->options->radius;
     if (!status)
         *radius2 = pinned > 0 ? pinned * pinned
                               : sppm_initial_radius2(core->scene, core->params.width, hit_points,
                                                      core->pixels);
     free(hit_points);
-    free(lengths);
     return status ? -1 : 0;
 }
 
@@ -302,9 +308,14 @@ static int iterate(sppm *core, sppm_pass *pass, unsigned int n, double *radius2)
         device_run(core->dev, core->camera_paths, "camera_paths", core->pixels, local))
         return -1;
     double t1 = monotonic_seconds();
-    if (DEVICE_SET_ARG(core->photon_paths, "photon_paths", 0, core->params) ||
-        device_run(core->dev, core->photon_paths, "photon_paths", core->params.path_count, local))
+    cl_uint stored = 0;
+    if (device_clear(core->dev, core->stored_count, sizeof(cl_uint), "stored photon count") ||
+        DEVICE_SET_ARG(core->photon_paths, "photon_paths", 0, core->params) ||
+        device_run(core->dev, core->photon_paths, "photon_paths", core->params.path_count,
+                   local) ||
+        device_read(core->dev, core->stored_count, sizeof stored, &stored, "stored photon count"))
         return -1;
+    core->stored = stored;
     double t2 = monotonic_seconds();
     if (n == 0 && first_iteration(core, radius2))
         return -1;
@@ -332,12 +343,18 @@ static int take_snapshot(sppm *core, size_t record_bytes, sppm_snapshot *out)
     out->hit_points = xmalloc(core->pixels * sizeof *out->hit_points);
     out->photon_records = xmalloc(slots * record_bytes);
     out->path_length = xmalloc(paths * sizeof *out->path_length);
+    out->stored = core->stored;
+    out->stored_slots = xmalloc((core->stored + 1) * sizeof *out->stored_slots);
     return device_read(core->dev, core->hit_points, core->pixels * sizeof *out->hit_points,
                        out->hit_points, "hit points") ||
                    device_read(core->dev, core->photon_records, slots * record_bytes,
                                out->photon_records, "photon paths") ||
                    device_read(core->dev, core->path_length, paths * sizeof *out->path_length,
-                               out->path_length, "photon path lengths")
+                               out->path_length, "photon path lengths") ||
+                   (core->stored &&
+                    device_read(core->dev, core->stored_slots,
+                                core->stored * sizeof *out->stored_slots, out->stored_slots,
+                                "stored photon slots"))
                ? -1
                : 0;
 }

@@ -108,6 +108,8 @@ typedef struct sppm_snapshot {
     idmr_hit_point *hit_points; /* params.width * params.height */
     void *photon_records;       /* params.path_count * IDMR_PATH_VERTICES of the pass's records */
     uint32_t *path_length;      /* params.path_count */
+    uint32_t *stored_slots;     /* the stored-vertex list (sppm.stored_slots), `stored` long */
+    size_t stored;
 } sppm_snapshot;
 
 void sppm_snapshot_free(sppm_snapshot *snapshot);
@@ -121,6 +123,10 @@ typedef struct sppm {
     cl_program program;
     cl_kernel camera_paths, photon_paths;
     cl_mem hit_points, path_length, photon_records;
+    /* the stored-vertex list (kernels/sppm.cl, photon_paths): its length and the slots that
+     * hold a record; the gathers run over it */
+    cl_mem stored_count, stored_slots;
+    size_t stored;                  /* the list's length this iteration, read back */
     hit_point_grid grid;
     unsigned int pixels;
     size_t slots;                   /* photon record slots: paths × IDMR_PATH_VERTICES */

@@ -8,8 +8,12 @@
  *                      p * IDMR_PATH_VERTICES + j, j < path_length[p], so a path is consecutive
  *                      in memory; what a record holds is the pass's (idmr/importance_layout.h,
  *                      idmr/render_layout.h)
+ *   uint               stored_count, stored_slots[paths * IDMR_PATH_VERTICES]: the slots that
+ *                      hold a record this iteration, listed by photon_paths; the gathers run
+ *                      over them
  * The hash grid over hit points: cell_start[cells + 1] (prefix sums of the counts, computed in
- * chunks of IDMR_SCAN_CHUNK cells) and grid_points[pixels] (hit point indices sorted by cell).
+ * chunks of IDMR_SCAN_CHUNK cells) and grid_hits[pixels] (copies of the hit points sorted by
+ * cell).
  *
  * Both passes sum into 64-bit fixed-point words with integer atomics (kernels/lib/fixed_point.h),
  * cleared every iteration; the host stops with an error when a word reaches

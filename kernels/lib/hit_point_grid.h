@@ -7,7 +7,9 @@
  *   grid_count       hit points per bucket (cell_counts, cleared by the host)
  *   scan_chunks, scan_chunk_sums, scan_apply
  *                    cell_start = prefix sums of the counts, in three steps
- *   grid_scatter     grid_points: hit point indices sorted by bucket
+ *   grid_scatter     grid_hits: copies of the hit points sorted by bucket, so that a gather
+ *                    reads each bucket's hit points one after the other (their `pixel` says
+ *                    whose they are)
  * The cell size is at least twice the gather radius (the host sets it), so a ball of that
  * radius touches at most 2 x 2 x 2 cells; grid_buckets_near() lists their buckets once each
  * (two cells may hash to one bucket). Host side: host/passes/hit_point_grid.c. */
