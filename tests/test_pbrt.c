@@ -20,6 +20,7 @@
 #include "io/mesh_io.h"
 #include "io/pbrt.h"
 #include "io/pbrt_loader.h"
+#include "io/scene_export.h"
 #include "io/xform.h"
 #include "reduce/reduce.h"
 
@@ -837,6 +838,59 @@ static void test_coffee(void **state)
     scene_free(s);
 }
 
+/* The shipped Cornell box written as pbrt-v4 by `idmr convert` (io/export_pbrt.c, written by
+ * another hand from pbrt's documentation) and read back here: the same camera frame, film and
+ * field of view, meshes, materials and light, so the two agree on pbrt's camera space and
+ * conventions. */
+static void test_convert_round_trip(void **state)
+{
+    scene *mitsuba = test_load_scene(IDMR_ROOT "/data/cornell/scene.xml");
+    char out[TEST_PATH_MAX];
+    snprintf(out, sizeof out, "%s/convert/box.pbrt", temp_dir);
+    mkdir(path_in(temp_dir, "convert"), 0755);
+    warn_silence(1);
+    int status = scene_export(mitsuba, out, 0);
+    warn_silence(0);
+    if (status)
+        fail_msg("convert: %s", error_message());
+    scene *s = load_quiet(out);
+    if (!s)
+        fail_msg("reading the converted scene: %s", error_message());
+    const idmr_camera *a = &mitsuba->camera, *b = &s->camera;
+    assert_int_equal(a->width, b->width);
+    assert_int_equal(a->height, b->height);
+    assert_vec3(b->origin, a->origin[0], a->origin[1], a->origin[2], 1e-5);
+    assert_vec3(b->forward, a->forward[0], a->forward[1], a->forward[2], 1e-6);
+    assert_vec3(b->right, a->right[0], a->right[1], a->right[2], 1e-6);
+    assert_vec3(b->up, a->up[0], a->up[1], a->up[2], 1e-6);
+    assert_near(b->tan_half_x, a->tan_half_x, 1e-6);
+    assert_near(b->tan_half_y, a->tan_half_y, 1e-6);
+    assert_int_equal(s->mesh_count, mitsuba->mesh_count);
+    assert_int_equal(s->triangle_count, mitsuba->triangle_count);
+    assert_int_equal(s->light_count, mitsuba->light_count);
+    for (size_t m = 0; m < s->mesh_count; m++) {
+        const scene_mesh *ma = &mitsuba->meshes[m], *mb = &s->meshes[m];
+        assert_int_equal(ma->triangle_count, mb->triangle_count);
+        assert_int_equal(ma->light >= 0, mb->light >= 0);
+        const idmr_material *x = &mitsuba->materials[ma->material], *y = &s->materials[mb->material];
+        assert_int_equal(x->kind, y->kind);
+        assert_vec3(y->reflectance, x->reflectance[0], x->reflectance[1], x->reflectance[2], 1e-6);
+        for (uint32_t t = 0; t < ma->triangle_count; t++) { /* the same front side */
+            double na[3], nb[3];
+            triangle_normal(ma, t, na);
+            triangle_normal(mb, t, nb);
+            if (xform_dot(na, na) > 0 && xform_dot(na, nb) <= 0)
+                fail_msg("mesh %s, triangle %u faces the other way", ma->name, t);
+        }
+        if (ma->light >= 0)
+            assert_vec3(s->lights[mb->light].emission, mitsuba->lights[ma->light].emission[0],
+                        mitsuba->lights[ma->light].emission[1],
+                        mitsuba->lights[ma->light].emission[2], 1e-5);
+    }
+    scene_free(s);
+    scene_free(mitsuba);
+}
+
 /* ---------------------------------------------------------------------------------------- */
 /* Device: idmr reduce of the coffee maker                                                  */
 
@@ -920,6 +974,7 @@ int main(void)
         cmocka_unit_test(test_writer_round_trip),
         cmocka_unit_test(test_writer_unknown_offset),
         cmocka_unit_test(test_coffee),
+        cmocka_unit_test(test_convert_round_trip),
     };
     for (size_t i = 0; i < ARRAY_COUNT(single); i++)
         tests[count++] = single[i];
