@@ -524,8 +524,9 @@ static int parse_file(pbrt_loader *ld, const char *path, const char *includer, i
     }
     if (!status && !includer && ld->stack_count > stack_at_start)
         status = pbrt_fail(path, lx.line, "the file ends inside %s",
-                           ld->stack_kind[ld->stack_count - 1] == 'O' ? "ObjectBegin"
-                                                                      : "AttributeBegin");
+                           ld->stack_kind[ld->stack_count - 1] == 'O'   ? "ObjectBegin"
+                           : ld->stack_kind[ld->stack_count - 1] == 'T' ? "TransformBegin"
+                                                                        : "AttributeBegin");
     free(text);
     return status;
 }

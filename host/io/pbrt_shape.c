@@ -405,6 +405,9 @@ int pbrt_read_shape(pbrt_loader *ld, const char *file, int line, long offset, co
     int file_normals = mesh.normals != NULL && strcmp(type, "sphere") != 0;
     if (ld->current_object) {
         pbrt_object *o = ld->current_object;
+        if (ld->state.area_light.active)
+            pbrt_warn(file, line, "Shape inside an object under an AreaLightSource: instances do "
+                                  "not emit");
         o->shapes = xrealloc(o->shapes, (o->shape_count + 1) * sizeof *o->shapes);
         pbrt_object_shape *shape = &o->shapes[o->shape_count++];
         memset(shape, 0, sizeof *shape);
