@@ -105,7 +105,8 @@ struct importance_result {
     uint64_t gathered;       /* hit points found by photon vertices, first iteration */
     double seen_light;       /* the part of Σ_T light(T) that is light seen through specular
                                 surfaces, as gathers (above) */
-    double path_seconds;     /* the path walk, part of sppm.seconds.gather */
+    double path_seconds;     /* the path walk, part of sppm.seconds.gather (several devices:
+                                the most any device spent) */
     sppm_summary sppm;       /* iterations, radii, image size, photons, bytes, timings */
 };
 
@@ -133,6 +134,12 @@ int importance_memory(const device *d, const scene *s, uint64_t bvh_bytes,
  * error set. `r` is freed with importance_result_free() either way. */
 int importance_run(device *d, const scene *s, const bvh *b, const importance_options *o,
                    importance_result *r);
+
+/* importance_run() on the `count` devices of `devices` at once (passes/sppm.h): the photon
+ * paths split between them, camera-side sums from the first, the per-triangle integer sums
+ * added before their conversion, so that the result is a single device's bit for bit. */
+int importance_run_devices(device *devices, unsigned int count, const scene *s, const bvh *b,
+                           const importance_options *o, importance_result *r);
 void importance_result_free(importance_result *r);
 
 /* A(T) of scene triangle t (above): its importance amount per iteration. */
