@@ -234,6 +234,37 @@ static void test_split_paths_by_hand(void **state)
     assert_int_equal(counts[2], 2);
 }
 
+/* importance_add_words: the devices' words added as integers, then converted once. 2^53 + 1
+ * and 1 make 2^53 + 2, a double; converted one by one they would make 2^53 + 1 -> 2^53 (ties to
+ * even), and 2^53 + 1.0 -> 2^53 again. A sum at the saturation limit is an error naming it. */
+static void test_words_are_added_as_integers(void **state)
+{
+    (void)state;
+    const uint64_t big = (1ull << 53) + 1;
+    const uint64_t first[3] = {big, 3, 0}, second[3] = {1, 5, 0}, third[3] = {0, 0, 7};
+    const uint64_t *words[3] = {first, second, third};
+    double sums[3] = {0, 1, 0}, added = 0;
+    assert_int_equal(importance_add_words(sums, words, 3, 3, 1.0, "light", "less", &added), 0);
+    assert_true(sums[0] == 0x1p53 + 2);
+    assert_true(sums[1] == 9);
+    assert_true(sums[2] == 7);
+    assert_true(added == 0x1p53 + 2 + 8 + 7);
+    /* the scale of the accumulators: one product of the integer sum */
+    double scaled[1] = {0};
+    const uint64_t odd[1] = {(1ull << 60) + 3}, even[1] = {(1ull << 58) + 5};
+    const uint64_t *pair[2] = {odd, even};
+    assert_int_equal(importance_add_words(scaled, pair, 2, 1, 1.0 / 1048576.0, "light", "less",
+                                          NULL), 0);
+    assert_true(scaled[0] == (double)(odd[0] + even[0]) / 1048576.0);
+    /* 2^61 + 2^61 reaches the limit of 2^62 */
+    const uint64_t half[1] = {1ull << 61};
+    const uint64_t *halves[2] = {half, half};
+    error_clear();
+    assert_int_equal(importance_add_words(scaled, halves, 2, 1, 1.0, "light importance",
+                                          "fewer photons per iteration", NULL), -1);
+    assert_non_null(strstr(error_message(), "light importance of triangle 0"));
+}
+
 /* bin/idmr importance --device all (and 1,0) against --device 0: simulation.bin byte for byte;
  * report.json names both devices. The renderer refuses more than one device, a list with a
  * device twice is refused. */
@@ -280,6 +311,7 @@ int main(void)
     unsetenv("IDMR_DEVICE");
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_split_paths_by_hand),
+        cmocka_unit_test(test_words_are_added_as_integers),
         cmocka_unit_test(test_two_devices_give_the_one_device_sums),
         cmocka_unit_test(test_uneven_fixed_splits_give_the_same_sums),
         cmocka_unit_test(test_three_cores_and_a_tiny_first_share),

@@ -63,8 +63,7 @@ typedef struct importance_pass {
     double total_power; /* Σ of the lights' luminous power (scene_finalize) */
     importance_device device[SPPM_MAX_DEVICES]; /* by sppm.index */
     size_t words;     /* accumulator words: one per triangle (at least one) */
-    uint64_t *scratch; /* a read-back accumulator */
-    uint64_t *merged;  /* the devices' accumulators of one kind, added as integers */
+    uint64_t *read_back[SPPM_MAX_DEVICES]; /* each device's accumulator of one kind, read back */
     double *previous;  /* each triangle's weighted sum before this iteration */
     unsigned int calm; /* iterations in a row with Δ below the tolerance */
 } importance_pass;
@@ -134,11 +133,8 @@ static int prepare(sppm *core, void *state)
         {&d->accumulators[SHADOW], z.accumulator, KIND_NAMES[SHADOW]},
         {&d->accumulators[SEEN_LIGHT], z.accumulator, KIND_NAMES[SEEN_LIGHT]},
     };
-    if (!p->scratch) {
-        p->scratch = xmalloc(p->words * sizeof *p->scratch);
-        p->merged = xmalloc(p->words * sizeof *p->merged);
+    if (!p->previous)
         p->previous = xcalloc(p->words, sizeof *p->previous);
-    }
     if (device_create_kernel(core->program, "gather_count", &d->gather) ||
         device_create_kernel(core->program, "path_importance", &d->path) ||
         device_create_kernel(core->program, "pixel_centre_hits", &d->centre_hits) ||
@@ -202,59 +198,54 @@ static int gather(sppm *core, void *state)
     return 0;
 }
 
-static int saturated(int k, size_t t)
+int importance_add_words(double *sums, const uint64_t *const *words, unsigned int count,
+                         size_t n, double scale, const char *what, const char *remedy,
+                         double *added)
 {
-    return error_set(IDMR_EXIT_FAILURE,
-                     "%s of triangle %zu came within a factor 2 of the 64-bit fixed-point limit in "
-                     "one iteration; use %s",
-                     KIND_NAMES[k], t,
-                     k == LIGHT ? "fewer photons per iteration" : "a smaller --resolution");
-}
-
-/* Reads accumulator k of the first `count` devices and adds them up as integers into
- * p->merged (checking saturation after every addition, so that it cannot overflow), clearing
- * each. Integer sums are the same in any order, so the merged words are the ones a single
- * device would have summed, whatever the split. */
-static int merge_accumulator(sppm *cores, unsigned int count, importance_pass *p, int k)
-{
-    size_t n = (size_t)cores->scene->triangle_count;
-    for (unsigned int j = 0; j < count; j++) {
-        uint64_t *words = j == 0 ? p->merged : p->scratch;
-        cl_mem accumulator = p->device[j].accumulators[k];
-        if (n && device_read(cores[j].dev, accumulator, n * sizeof *words, words, KIND_NAMES[k]))
-            return count > 1 ? error_prefix("device %d (%s)", cores[j].dev->info.index,
-                                            cores[j].dev->info.name)
-                             : -1;
-        for (size_t t = 0; t < n; t++) {
-            if (words[t] >= IDMR_FIXED_SATURATION)
-                return saturated(k, t);
-            if (j > 0 && (p->merged[t] += words[t]) >= IDMR_FIXED_SATURATION)
-                return saturated(k, t);
-        }
-        if (device_clear(cores[j].dev, accumulator, p->words * sizeof(cl_ulong), KIND_NAMES[k]))
-            return -1;
-    }
-    return 0;
-}
-
-/* Adds accumulator k of the first `count` devices (merge_accumulator) × scale (per fixed-point
- * unit) to `sums`, and clears them; adds the total it added to *added where that is not NULL. */
-static int add_accumulator(sppm *cores, unsigned int count, importance_pass *p, int k,
-                           double *sums, double scale, double *added)
-{
-    if (merge_accumulator(cores, count, p, k))
-        return -1;
     double total = 0;
-    size_t n = (size_t)cores->scene->triangle_count;
     for (size_t t = 0; t < n; t++) {
-        double value = scale * (double)p->merged[t];
+        /* each word and each partial sum below the saturation limit (2^62): no overflow */
+        uint64_t sum = 0;
+        for (unsigned int j = 0; j < count; j++)
+            if (words[j][t] >= IDMR_FIXED_SATURATION ||
+                (sum += words[j][t]) >= IDMR_FIXED_SATURATION)
+                return error_set(IDMR_EXIT_FAILURE,
+                                 "%s of triangle %zu came within a factor 2 of the 64-bit "
+                                 "fixed-point limit in one iteration; use %s",
+                                 what, t, remedy);
+        double value = scale * (double)sum; /* the one conversion */
         sums[t] += value;
         total += value;
-        CHECK_FINITE(sums[t], KIND_NAMES[k]);
+        CHECK_FINITE(sums[t], what);
     }
     if (added)
         *added += total;
     return 0;
+}
+
+/* Reads accumulator k of the first `count` devices back and clears them, then adds them to
+ * `sums` (importance_add_words: as integers, × scale per fixed-point unit); adds the total it
+ * added to *added where that is not NULL. */
+static int add_accumulator(sppm *cores, unsigned int count, importance_pass *p, int k,
+                           double *sums, double scale, double *added)
+{
+    size_t n = (size_t)cores->scene->triangle_count;
+    for (unsigned int j = 0; j < count; j++) {
+        cl_mem accumulator = p->device[j].accumulators[k];
+        if (!p->read_back[j])
+            p->read_back[j] = xmalloc(p->words * sizeof *p->read_back[j]);
+        if ((n && device_read(cores[j].dev, accumulator, n * sizeof(cl_ulong), p->read_back[j],
+                              KIND_NAMES[k])) ||
+            device_clear(cores[j].dev, accumulator, p->words * sizeof(cl_ulong), KIND_NAMES[k]))
+            return count > 1 ? error_prefix("device %d (%s)", cores[j].dev->info.index,
+                                            cores[j].dev->info.name)
+                             : -1;
+    }
+    return importance_add_words(sums, (const uint64_t *const *)p->read_back, count, n, scale,
+                                KIND_NAMES[k],
+                                k == LIGHT ? "fewer photons per iteration"
+                                           : "a smaller --resolution",
+                                added);
 }
 
 /* Hit points found by the first iteration's photon vertices on one device, for the report:
@@ -420,8 +411,8 @@ static void release(void *state)
         device_release_buffers(&d->gathered, 1);
         device_release_buffers(d->accumulators, KINDS);
     }
-    free(p->scratch);
-    free(p->merged);
+    for (unsigned int j = 0; j < SPPM_MAX_DEVICES; j++)
+        free(p->read_back[j]);
     free(p->previous);
 }
 
