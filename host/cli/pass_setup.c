@@ -20,6 +20,8 @@ int pass_setup_open_devices(const device_choice *choice, device *devices, unsign
             warn("--device all: %zu devices found; the first %d are used", found,
                  SPPM_MAX_DEVICES);
         wanted = found < SPPM_MAX_DEVICES ? (unsigned int)found : SPPM_MAX_DEVICES;
+        if (wanted == 0)
+            return error_set(IDMR_EXIT_INPUT, "--device all: no OpenCL device was found");
         for (unsigned int k = 0; k < wanted; k++)
             list[k] = (int)k;
     } else if (choice->count > 1) {

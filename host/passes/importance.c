@@ -173,8 +173,8 @@ static int cast_shadow_rays(sppm *core, importance_device *p)
  * once: it touches only the device's own part of the state. */
 static int gather(sppm *core, void *state)
 {
-    const importance_pass *p = state;
-    importance_device *d = (importance_device *)p->device + core->index;
+    importance_pass *p = state;
+    importance_device *d = p->device + core->index;
     size_t local = core->options->local_size;
     if ((p->shadows && core->index == 0 && cast_shadow_rays(core, d)) ||
         DEVICE_SET_ARGS(d->gather, "gather_count", DEVICE_ARG(core->params),

@@ -123,8 +123,8 @@ typedef struct sppm_device_share {
 } sppm_device_share;
 
 /* What a run of the core did, for the passes' results and reports. With several devices the
- * bytes are the first device's (each device's are in device[]), and each stage's seconds the
- * most any device spent in it. */
+ * bytes are the first device's (each device's are in device[]), each stage's seconds the most
+ * any device spent in it, and the build seconds those of all devices' builds (made in turn). */
 typedef struct sppm_summary {
     unsigned int width, height; /* hit-point image */
     unsigned int photons;       /* photon paths per iteration */
