@@ -234,6 +234,21 @@ static void test_split_paths_by_hand(void **state)
     assert_int_equal(counts[2], 2);
 }
 
+/* A device budget that no device meets: the error names the first device checked. */
+static void test_memory_error_names_the_device(void **state)
+{
+    (void)state;
+    importance_options o = cornell.o;
+    o.sppm.device_budget = 4096;
+    importance_result r;
+    error_clear();
+    assert_int_equal(importance_run_devices(devices, 2, cornell.s, &cornell.b, &o, &r), -1);
+    assert_non_null(strstr(error_message(), "device 0 ("));
+    assert_non_null(strstr(error_message(), "memory budget"));
+    assert_int_equal(error_code(), IDMR_EXIT_INPUT);
+    importance_result_free(&r);
+}
+
 /* importance_add_words: the devices' words added as integers, then converted once. 2^53 + 1
  * and 1 make 2^53 + 2, a double; converted one by one they would make 2^53 + 1 -> 2^53 (ties to
  * even), and 2^53 + 1.0 -> 2^53 again. A sum at the saturation limit is an error naming it. */
@@ -266,7 +281,8 @@ static void test_words_are_added_as_integers(void **state)
 }
 
 /* bin/idmr importance --device all (and 1,0) against --device 0: simulation.bin byte for byte;
- * report.json names both devices. The renderer refuses more than one device, a list with a
+ * report.json names both devices; `reduce --device all` writes the same reduced scene and
+ * importance maps. The renderer and a memory budget refuse more than one device, a list with a
  * device twice is refused. */
 static void test_cli_device_all_writes_the_same_simulation(void **state)
 {
@@ -293,6 +309,18 @@ static void test_cli_device_all_writes_the_same_simulation(void **state)
     assert_succeeded(&r);
     assert_string_equal(r.out, "2\n");
     run_free(&r);
+    r = run("bin/idmr reduce %s --target 0.5 --device 0 -o %s/reduced-one && "
+            "bin/idmr reduce %s --target 0.5 --device all -o %s/reduced-all && "
+            "cmp %s/reduced-one/meshes/knot.ply %s/reduced-all/meshes/knot.ply && "
+            "cmp %s/reduced-one/scene.xml %s/reduced-all/scene.xml && "
+            "diff -r %s/reduced-one/importance %s/reduced-all/importance",
+            common, dir, common, dir, dir, dir, dir, dir, dir, dir);
+    assert_succeeded(&r);
+    run_free(&r);
+    r = run("bin/idmr reduce %s --memory-budget 100M --device all -o %s/budget", common, dir);
+    assert_int_equal(r.status, 2);
+    assert_non_null(strstr(r.err, "plans the scene for one device"));
+    run_free(&r);
     r = run("bin/idmr render data/cornell/scene.xml --device all --iterations 1 -o %s/x.exr", dir);
     assert_int_equal(r.status, 2);
     assert_non_null(strstr(r.err, "renderer runs on one device"));
@@ -316,6 +344,7 @@ int main(void)
         cmocka_unit_test(test_uneven_fixed_splits_give_the_same_sums),
         cmocka_unit_test(test_three_cores_and_a_tiny_first_share),
         cmocka_unit_test(test_glass_of_water_with_seen_light),
+        cmocka_unit_test(test_memory_error_names_the_device),
         cmocka_unit_test(test_cli_device_all_writes_the_same_simulation),
     };
     return cmocka_run_group_tests_name("multi-device importance", tests, open_devices,

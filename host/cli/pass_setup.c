@@ -25,14 +25,25 @@ int pass_setup_open_devices(const device_choice *choice, device *devices, unsign
         for (unsigned int k = 0; k < wanted; k++)
             list[k] = (int)k;
     } else if (choice->count > 1) {
+        device_info *infos;
+        size_t found;
+        if (device_list(&infos, &found))
+            return -1;
+        free(infos);
         wanted = choice->count;
-        for (unsigned int k = 0; k < wanted; k++)
+        for (unsigned int k = 0; k < wanted; k++) {
             list[k] = choice->list[k];
+            if ((size_t)list[k] >= found)
+                return error_set(IDMR_EXIT_INPUT,
+                                 "--device: device %d does not exist: there are %zu (see `idmr "
+                                 "devices`)",
+                                 list[k], found);
+        }
     }
     for (*count = 0; *count < wanted; (*count)++)
         if (device_open(devices + *count, list[*count])) {
             if (wanted > 1)
-                error_prefix("--device: device %d", list[*count]);
+                error_prefix("device %d", list[*count]);
             pass_setup_close_devices(devices, *count);
             *count = 0;
             return -1;
