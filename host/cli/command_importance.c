@@ -53,10 +53,25 @@ static int run_pass(device *d, unsigned int count, const scene *s, const bvh *b,
 static void print_summary(const importance_cli_job *job)
 {
     const importance_result *r = &job->result;
+    char devices[256] = "";
+    if (r->sppm.devices > 1) {
+        /* "on devices 0, 1 (paths 41%, 59%)": each device's share of all the paths */
+        size_t used = (size_t)snprintf(devices, sizeof devices, " on devices");
+        for (unsigned int k = 0; k < r->sppm.devices && used < sizeof devices; k++)
+            used += (size_t)snprintf(devices + used, sizeof devices - used, "%s %d",
+                                     k ? "," : "", r->sppm.device[k].index);
+        double all = (double)r->sppm.photons * r->sppm.iterations;
+        for (unsigned int k = 0; k < r->sppm.devices && used < sizeof devices && all > 0; k++)
+            used += (size_t)snprintf(devices + used, sizeof devices - used, "%s%.0f%%",
+                                     k ? ", " : " (paths ",
+                                     100.0 * (double)r->sppm.device[k].paths / all);
+        if (used < sizeof devices && all > 0)
+            snprintf(devices + used, sizeof devices - used, ")");
+    }
     fprintf(stderr,
-            "idmr: %u iterations of %u photon paths in %.1f s; outputs in %s/ (report.json, "
+            "idmr: %u iterations of %u photon paths in %.1f s%s; outputs in %s/ (report.json, "
             "importance.png, importance/*.ply, convergence.csv, simulation.bin)\n",
-            r->sppm.iterations, r->sppm.photons, r->sppm.seconds.total, job->output);
+            r->sppm.iterations, r->sppm.photons, r->sppm.seconds.total, devices, job->output);
 }
 
 int command_importance(int argc, char **argv)
