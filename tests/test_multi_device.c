@@ -300,8 +300,8 @@ static void test_cli_device_all_writes_the_same_simulation(void **state)
     r = run("bin/idmr importance %s --device 1,0 -o %s/list", common, dir);
     assert_succeeded(&r);
     run_free(&r);
-    r = run("cmp %s/one/simulation.bin %s/all/simulation.bin && "
-            "cmp %s/one/simulation.bin %s/list/simulation.bin",
+    r = run("(cmp %s/one/simulation.bin %s/all/simulation.bin && "
+            "cmp %s/one/simulation.bin %s/list/simulation.bin)",
             dir, dir, dir, dir);
     assert_succeeded(&r);
     run_free(&r);
@@ -309,11 +309,11 @@ static void test_cli_device_all_writes_the_same_simulation(void **state)
     assert_succeeded(&r);
     assert_string_equal(r.out, "2\n");
     run_free(&r);
-    r = run("bin/idmr reduce %s --target 0.5 --device 0 -o %s/reduced-one && "
+    r = run("(bin/idmr reduce %s --target 0.5 --device 0 -o %s/reduced-one && "
             "bin/idmr reduce %s --target 0.5 --device all -o %s/reduced-all && "
             "cmp %s/reduced-one/meshes/knot.ply %s/reduced-all/meshes/knot.ply && "
             "cmp %s/reduced-one/scene.xml %s/reduced-all/scene.xml && "
-            "diff -r %s/reduced-one/importance %s/reduced-all/importance",
+            "diff -r %s/reduced-one/importance %s/reduced-all/importance)",
             common, dir, common, dir, dir, dir, dir, dir, dir, dir);
     assert_succeeded(&r);
     run_free(&r);
