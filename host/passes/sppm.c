@@ -1,6 +1,8 @@
 /* sppm.c — the SPPM core under both passes (see sppm.h): upload, program, the core's buffers,
  * per-iteration parameters, the radius schedule, the iteration loop, progress, timings and
- * snapshots. A pass adds its work through the hooks of its sppm_pass. */
+ * snapshots; with several devices one core each, driven at once by one host thread each, and
+ * the split of the photon paths between them (sppm_split_paths, rebalance). A pass adds its
+ * work through the hooks of its sppm_pass. */
 #include "device/program.h"
 #include "passes/sppm.h"
 
