@@ -120,7 +120,9 @@ static const char SPPM_OPTIONS[] =
     "                            last included, as Mitsuba's max_depth counts (default 16,\n"
     "                            the paper's; render: 64, with Russian roulette from 16)\n"
     "      --seed S              random seed (default 1)\n"
-    "      --device N            OpenCL device (see `idmr devices`)\n"
+    "      --device N            OpenCL device (see `idmr devices`); importance and reduce\n"
+    "                            also take a list (0,2) or all: the importance pass on those\n"
+    "                            devices at once, the same result as on the first alone\n"
     "      --quiet               no progress on stderr\n"
     "      --generic             kernels with every feature, not only the scene's\n";
 
