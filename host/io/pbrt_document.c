@@ -29,8 +29,7 @@ char *pbrt_resolve_path(const pbrt_loader *ld, const char *written)
     return mitsuba_path_join(ld->scene_dir, written);
 }
 
-/* Reads a whole file into a malloc'd, NUL-terminated buffer. */
-static char *read_file(const char *path, size_t *size)
+char *pbrt_read_text(const char *path, size_t *size)
 {
     FILE *f = fopen(path, "rb");
     if (!f) {
@@ -508,7 +507,7 @@ static int statement(pbrt_loader *ld, pbrt_lexer *lx, const pbrt_token *t, int *
 static int parse_file(pbrt_loader *ld, const char *path, const char *includer, int include_line)
 {
     size_t size;
-    char *text = read_file(path, &size);
+    char *text = pbrt_read_text(path, &size);
     if (!text)
         return includer ? error_prefix("%s:%d: Include", includer, include_line) : -1;
     pbrt_lexer lx;

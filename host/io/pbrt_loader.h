@@ -28,6 +28,7 @@
 
 #include "core/scene.h"
 #include "io/pbrt.h"
+#include "io/spectrum.h"
 #include "io/xform.h"
 
 /* ---- tokens (pbrt_lexer.c) ---- */
@@ -115,6 +116,10 @@ int pbrt_param_bool(const char *file, pbrt_params *params, const char *name, int
 int pbrt_param_string(const char *file, pbrt_params *params, const char *name,
                       const char *fallback, const char **out);
 /* A point/vector of 3 (point3, point, vector3, vector, normal, normal3). */
+/* A "spectrum" parameter given as wavelength-value pairs (nm, increasing) as linear RGB for
+ * `use`; -1 with the error set (file and line) where the wavelengths do not increase. */
+int pbrt_sampled_spectrum(const char *file, const pbrt_param *p, const char *name,
+                          spectrum_use use, float out[3]);
 int pbrt_param_point3(const char *file, pbrt_params *params, const char *name,
                       const double fallback[3], double out[3]);
 /* Warns (once per statement kind and parameter) about each parameter no reader used. */
@@ -217,6 +222,10 @@ typedef struct pbrt_loader {
     int camera_line;
     long film_width, film_height;
 } pbrt_loader;
+
+/* A whole file in a malloc'd, NUL-terminated buffer (*size its bytes); NULL with the error set
+ * naming the file. For the reader and the writer (pbrt_write.c). */
+char *pbrt_read_text(const char *path, size_t *size);
 
 /* A resolved path for `written` (from the scene's directory unless absolute); malloc'd. */
 char *pbrt_resolve_path(const pbrt_loader *ld, const char *written);

@@ -169,18 +169,8 @@ int pbrt_material_color(pbrt_loader *ld, const char *file, pbrt_params *params,
         if (p->number_count == 1)
             out[0] = out[1] = out[2] = (float)p->numbers[0];
         else if (p->number_count >= 2) {
-            int count = (int)(p->number_count / 2);
-            double lambda[512], value[512];
-            if (count > 512)
-                count = 512;
-            for (int i = 0; i < count; i++) {
-                lambda[i] = p->numbers[2 * i];
-                value[i] = p->numbers[2 * i + 1];
-                if (i && lambda[i] <= lambda[i - 1])
-                    return pbrt_fail(file, p->line,
-                                     "\"spectrum %s\": wavelengths must increase", name);
-            }
-            spectrum_to_rgb(lambda, value, count, SPECTRUM_REFLECTANCE, out);
+            if (pbrt_sampled_spectrum(file, p, name, SPECTRUM_REFLECTANCE, out))
+                return -1;
         } else {
             pbrt_warn(file, p->line,
                       "\"spectrum %s\" [ \"%s\" ]: named or file spectra are not read here: "

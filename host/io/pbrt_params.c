@@ -338,3 +338,21 @@ void pbrt_params_warn_unused(const char *file, const char *statement, const pbrt
                       statement, p->type, p->name);
     }
 }
+
+int pbrt_sampled_spectrum(const char *file, const pbrt_param *p, const char *name,
+                          spectrum_use use, float out[3])
+{
+    enum { MOST = 512 };
+    int count = (int)(p->number_count / 2);
+    double lambda[MOST], value[MOST];
+    if (count > MOST)
+        count = MOST;
+    for (int i = 0; i < count; i++) {
+        lambda[i] = p->numbers[2 * i];
+        value[i] = p->numbers[2 * i + 1];
+        if (i && lambda[i] <= lambda[i - 1])
+            return pbrt_fail(file, p->line, "\"spectrum %s\": wavelengths must increase", name);
+    }
+    spectrum_to_rgb(lambda, value, count, use, out);
+    return 0;
+}

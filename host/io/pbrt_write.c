@@ -111,34 +111,6 @@ static char *path_from_outdir(const pbrt_writer *w, const char *resolved)
 
 /* ---- reading the files ---- */
 
-static char *read_whole(const char *path, size_t *size)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        error_set(IDMR_EXIT_INPUT, "cannot open '%s'", path);
-        return NULL;
-    }
-    size_t capacity = 1 << 16, used = 0;
-    char *text = xmalloc(capacity);
-    for (;;) {
-        used += fread(text + used, 1, capacity - used - 1, f);
-        if (used + 1 < capacity)
-            break;
-        capacity *= 2;
-        text = xrealloc(text, capacity);
-    }
-    int failed = ferror(f);
-    fclose(f);
-    if (failed) {
-        free(text);
-        error_set(IDMR_EXIT_INPUT, "cannot read '%s'", path);
-        return NULL;
-    }
-    text[used] = '\0';
-    *size = used;
-    return text;
-}
-
 /* A parameter as the writer sees it: its declaration token and its value tokens' span. */
 typedef struct raw_param {
     char *type, *name;
@@ -396,7 +368,7 @@ static int scan_file(pbrt_writer *w, const char *path, int depth, size_t *index)
     }
     write_file f;
     memset(&f, 0, sizeof f);
-    f.text = read_whole(path, &f.size);
+    f.text = pbrt_read_text(path, &f.size);
     if (!f.text) {
         free(real);
         return -1;
