@@ -455,7 +455,7 @@ static void test_lights(void **state)
     scene *s = load_text(
         "WorldBegin\n"
         "AttributeBegin\nTranslate 1 2 3\nLightSource \"point\" \"rgb I\" [ 1 2 3 ] \"float scale\" 2\nAttributeEnd\n"
-        "LightSource \"spot\" \"point3 from\" [ 0 5 0 ] \"point3 to\" [ 0 0 0 ] \"float coneangle\" 40 \"float conedelta\" 10\n"
+        "LightSource \"spot\" \"point3 from\" [ 0 5 0 ] \"point3 to\" [ 0 0 0 ] \"float coneangle\" 40 \"float conedeltaangle\" 10\n"
         "LightSource \"distant\" \"point3 from\" [ 0 0 0 ] \"point3 to\" [ 0 -2 0 ] \"rgb L\" [ 3 3 3 ]\n"
         "LightSource \"infinite\" \"rgb L\" [ 0.5 0.25 0.125 ]\n"
         "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [ 4 4 4 ] \"float scale\" 0.5\n" ONE_TRIANGLE

@@ -5,7 +5,7 @@
  *                              emits from: the loader winds the mesh to face it), so twosided
  *                              is warned; an image (filename) is not read (warned)
  *   point     I × scale at the CTM's image of `from`
- *   spot      I × scale at `from` towards `to`; coneangle is the cutoff, coneangle - conedelta
+ *   spot      I × scale at `from` towards `to`; coneangle is the cutoff, coneangle - conedeltaangle
  *             where the falloff starts
  *   distant   L × scale travelling from `from` to `to` (defaults (0,0,0) to (0,0,1))
  *   infinite  constant L × scale (a 1 × 1 environment), or `filename`: pbrt-v4's equal-area
@@ -299,7 +299,7 @@ int pbrt_read_light(pbrt_loader *ld, const char *file, int line, const char *typ
             pbrt_light_color(ld, file, params, "I", one, light.emission) ||
             light_scale(file, line, params, light.emission) ||
             pbrt_param_float(file, params, "coneangle", 30.0, &cone) ||
-            pbrt_param_float(file, params, "conedelta", 5.0, &delta))
+            pbrt_param_float(file, params, "conedeltaangle", 5.0, &delta))
             return -1;
         if (!(cone > 0.0 && cone <= 180.0))
             return pbrt_fail(file, line, "spot: coneangle must be in (0, 180] degrees");
