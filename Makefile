@@ -17,7 +17,7 @@ config ?= release
 BUILD := build/$(config)
 
 WARNINGS := -Wall -Wextra -Wshadow -Wno-unused-parameter
-PKG_MODULES := libxml-2.0 libcjson OpenCL openmesh OpenImageIO assimp
+PKG_MODULES := libxml-2.0 libcjson OpenCL openmesh OpenImageIO assimp zlib
 TEST_PKG_MODULES := cmocka
 EMBREE_HEADER := /usr/include/embree3/rtcore.h
 

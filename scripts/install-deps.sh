@@ -15,7 +15,7 @@ cd "$(dirname "$0")/.."
 
 PACKAGES="build-essential pkg-config pocl-opencl-icd ocl-icd-opencl-dev opencl-headers clinfo
 libembree-dev libopenmesh-dev libopenimageio-dev libxml2-dev libcjson-dev libcmocka-dev
-libmeshoptimizer-dev libassimp-dev assimp-testmodels
+libmeshoptimizer-dev libassimp-dev assimp-testmodels zlib1g-dev
 python3-matplotlib python3-numpy python3-venv"
 
 PYTHON_PACKAGES="mitsuba==3.9.1 drjit==1.5.0 flip-evaluator==1.7 numpy==2.4.6 trimesh==4.12.2

@@ -3,7 +3,8 @@
  *
  *   trianglemesh  P, indices (may be left out for one triangle), uv, N
  *   plymesh       filename: ASCII or binary PLY through idmr's reader (io/mesh_io.h; polygons
- *                 fan-triangulated); a gzipped .ply.gz is refused (zlib is not a dependency)
+ *                 fan-triangulated); a gzipped one (.ply.gz) is unpacked with zlib into a
+ *                 temporary file under $TMPDIR (else /tmp), read, and removed
  *   bilinearmesh  P, indices (4 per patch: p00 p10 p01 p11), uv, N: two triangles per patch
  *   loopsubdiv    its control mesh (not subdivided: warned)
  *   sphere        radius (zmin, zmax, phimax: the whole sphere, warned), tessellated
@@ -28,6 +29,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
+#include <zlib.h>
 #include <unistd.h>
 
 #include "core/error.h"
@@ -264,6 +267,45 @@ static int shape_bilinear(const char *file, int line, pbrt_params *params, mesh_
     return 0;
 }
 
+/* Reads the gzipped PLY at `path` into `mesh` through a temporary file (never beside the input:
+ * its folder may be read-only). 0, or -1 with the error set naming the file. */
+static int read_gzipped_ply(const char *path, mesh_data *mesh)
+{
+    const char *dir = getenv("TMPDIR");
+    char temporary[4096];
+    snprintf(temporary, sizeof temporary, "%s/idmr-plymesh-XXXXXX.ply", dir && *dir ? dir : "/tmp");
+    int fd = mkstemps(temporary, 4);
+    if (fd < 0)
+        return error_set(IDMR_EXIT_FAILURE, "cannot create a temporary file to unpack '%s': %s",
+                         path, strerror(errno));
+    gzFile in = gzopen(path, "rb");
+    int status = in ? 0 : error_set(IDMR_EXIT_INPUT, "cannot open '%s': %s", path, strerror(errno));
+    char buffer[1 << 16];
+    int got = 0;
+    while (!status && (got = gzread(in, buffer, sizeof buffer)) > 0)
+        for (int done = 0; done < got && !status;) {
+            ssize_t put = write(fd, buffer + done, (size_t)(got - done));
+            if (put < 0)
+                status = error_set(IDMR_EXIT_FAILURE, "cannot unpack '%s' into '%s': %s", path,
+                                   temporary, strerror(errno));
+            else
+                done += (int)put;
+        }
+    if (!status && got < 0) {
+        int code;
+        status = error_set(IDMR_EXIT_INPUT, "cannot unpack '%s': %s", path, gzerror(in, &code));
+    }
+    if (in)
+        gzclose(in);
+    if (close(fd) != 0 && !status)
+        status = error_set(IDMR_EXIT_FAILURE, "cannot unpack '%s' into '%s': %s", path,
+                           temporary, strerror(errno));
+    if (!status && mesh_io_read(temporary, mesh))
+        status = error_prefix("'%s' (unpacked)", path);
+    unlink(temporary);
+    return status;
+}
+
 static int shape_plymesh(pbrt_loader *ld, const char *file, int line, pbrt_params *params,
                          mesh_data *mesh, char **path)
 {
@@ -273,18 +315,14 @@ static int shape_plymesh(pbrt_loader *ld, const char *file, int line, pbrt_param
     if (!written)
         return pbrt_fail(file, line, "Shape \"plymesh\": \"string filename\" is missing");
     size_t n = strlen(written);
-    if (n >= 3 && strcmp(written + n - 3, ".gz") == 0)
-        return pbrt_fail(file, line,
-                         "Shape \"plymesh\": '%s' is gzipped: idmr reads plain PLY files "
-                         "(unpack it with gunzip and name the .ply)",
-                         written);
+    int gzipped = n >= 3 && strcmp(written + n - 3, ".gz") == 0;
     *path = pbrt_resolve_path(ld, written);
     if (access(*path, R_OK) != 0)
         return pbrt_fail(file, line, "Shape \"plymesh\": cannot read '%s' (%s): %s", written,
                          *path, strerror(errno));
     if (pbrt_param_find(params, "displacement") || pbrt_param_find(params, "edgelength"))
         pbrt_warn(file, line, "Shape \"plymesh\": displacement is not simulated by idmr");
-    if (mesh_io_read(*path, mesh))
+    if (gzipped ? read_gzipped_ply(*path, mesh) : mesh_io_read(*path, mesh))
         return error_prefix("%s:%d: Shape \"plymesh\"", file, line);
     return 0;
 }
