@@ -184,8 +184,8 @@ int command_reduce(int argc, char **argv)
                            "--max-error-relative");
     if (!code && (!arguments.output ||
                   (!request.have_target && !request.options.memory_budget && !searched)))
-        code = usage_error("reduce: -o OUTDIR and --target D, --max-error E or --memory-budget "
-                           "BYTES are required");
+        code = usage_error("reduce: -o OUTDIR and --target D or --memory-budget BYTES (or "
+                           "--max-error E) are required");
     if (!code && !request.have_target)
         request.options.target = 1.0; /* the budget alone sets it */
     if (!code && request.options.simulation &&
