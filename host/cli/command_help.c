@@ -72,7 +72,7 @@ static const struct {
      "                            (default 0.1)\n"
      "      --check-iterations N  SPPM iterations of each check render (default 16)\n"
      "      --check-resolution F  film scale of the check renders (default 0.25)\n"
-     "      --check-photons N     photon paths per check iteration (default 100000)\n"
+     "      --check-photons N     photon paths per check iteration (default 50000)\n"
      "      --min-vertices N      meshes this small are not decimated (default 16)\n"
      "      --max-normal-angle A  no collapse turns a face more than A degrees (default 60)\n"
      "      --uv-weight W         combined: a texture-coordinate change of 1 costs as much as\n"

@@ -85,14 +85,14 @@ typedef struct reduce_error_options {
                                 ratio of 1 + step (default 0.1) */
     unsigned int iterations; /* SPPM iterations of each check render (default 16) */
     double resolution;       /* scale of the scene's film for the check renders (default 0.25) */
-    unsigned int photons;    /* photon paths per iteration of a check render (default 100,000;
+    unsigned int photons;    /* photon paths per iteration of a check render (default 50,000;
                                 0: the device's default) */
 } reduce_error_options;
 
 #define REDUCE_ERROR_STEP 0.1
 #define REDUCE_ERROR_ITERATIONS 16u
 #define REDUCE_ERROR_RESOLUTION 0.25
-#define REDUCE_ERROR_PHOTONS 100000u
+#define REDUCE_ERROR_PHOTONS 50000u
 
 typedef struct reduce_options {
     importance_options importance;

@@ -17,7 +17,7 @@
  * a seed cannot change the renderer's bias; only the scene differs between A and B.
  *
  * Check renders: the hit-point film at --check-resolution (default 0.25) of the scene's,
- * --check-iterations (16) of --check-photons (100,000) photon paths: sized for a CPU; the error
+ * --check-iterations (16) of --check-photons (50,000) photon paths: sized for a CPU; the error
  * they measure is the change at that film size (the same at any size for what covers many
  * pixels; a change of a pixel or two is averaged into the larger pixels). */
 #include <math.h>
