@@ -68,10 +68,10 @@ static int run_pass(reduce_state *st, unsigned int pass)
     if (st->options->passes > 1 && st->options->importance.sppm.progress)
         fprintf(stderr, "idmr: pass %u of %u: importance on %llu vertices\n", pass,
                 st->options->passes, (unsigned long long)st->simulated->vertex_count);
-    /* With --max-error the target is searched for: the budget and decimation run at every D
-     * the search measures, and last at the D it found. */
     if (reduce_importance(st))
         return -1;
+    /* With --max-error the target is searched for: the budget and decimation run at every D
+     * the search measures, and last at the D it found. */
     int status = st->options->error.bound != REDUCE_ERROR_NONE
                      ? reduce_error_budget(st)
                      : reduce_plan_budget(st) || reduce_decimation(st);
