@@ -495,6 +495,15 @@ static void test_max_error_glass_caustic(void **state)
     const cJSON *chosen = object(budget, "chosen");
     assert_true(number(chosen, "error") + number(chosen, "standard_error") <= E);
     assert_true(number(chosen, "target") < 1);
+    /* the steps below the D found that only their noise failed are counted (a warning) */
+    unsigned int by_noise = 0;
+    const cJSON *item;
+    cJSON_ArrayForEach(item, object(budget, "curve"))
+    {
+        by_noise += !cJSON_IsTrue(object(item, "within")) && number(item, "error") <= E &&
+                    number(item, "target") < number(chosen, "target");
+    }
+    assert_int_equal((unsigned int)number(budget, "steps_failed_by_noise"), by_noise);
     image_paired_error check;
     independent_check(s, r.out, object(budget, "check_render"), &check);
     print_message("  chosen D %g: search %g ± %g, independent check %g ± %g, E %g\n",

@@ -154,6 +154,18 @@ static double search_floor(const reduce_state *st)
     return total > 0 ? fmin(1.0, fmax(least, 1.0) / total) : 1.0;
 }
 
+/* The steps below the D found whose error alone is within E but error + standard error is
+ * not: the noise of the check renders, not the change, failed them, and kept vertices. */
+static unsigned int noise_decided(const error_search_result *r, double max_error)
+{
+    unsigned int count = 0;
+    for (size_t k = 1; k < r->count; k++) {
+        const error_search_step *s = &r->steps[k];
+        count += !s->passes && s->error <= max_error && s->target < r->target;
+    }
+    return count;
+}
+
 /* The mean of the original's two renders over pixels and channels. */
 static double mean_radiance(const search_context *c, size_t values)
 {
@@ -196,6 +208,13 @@ int reduce_error_budget(reduce_state *st)
     }
     if (!status) {
         e->result.steps[0].vertices = st->plan.total_before;
+        e->noise_decided = noise_decided(&e->result, e->max_error);
+        if (e->noise_decided && e->max_error > 0) /* at E = 0 only no change passes */
+            warn("--max-error: %u of %zu steps below the D found failed by their standard "
+                 "error alone (error within E %.4g, error + standard error above it): the "
+                 "check renders' noise, not the change, kept vertices; more "
+                 "--check-iterations or --check-photons may allow fewer",
+                 e->noise_decided, e->result.count - 1, e->max_error);
         e->seconds_final_decimation = final_seconds;
         if (verbose) {
             const error_search_step *chosen = &e->result.steps[e->result.chosen];

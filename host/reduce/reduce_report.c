@@ -209,6 +209,7 @@ static void add_error_budget(cJSON *root, const reduce_state *st)
     cJSON_AddStringToObject(budget, "criterion", "error + standard_error <= max_error");
     cJSON_AddNumberToObject(budget, "step", o->step);
     cJSON_AddNumberToObject(budget, "floor", e->floor);
+    cJSON_AddNumberToObject(budget, "steps_failed_by_noise", e->noise_decided);
     cJSON *check = cJSON_AddObjectToObject(budget, "check_render");
     cJSON_AddNumberToObject(check, "iterations", o->iterations);
     cJSON_AddNumberToObject(check, "photons", o->photons);

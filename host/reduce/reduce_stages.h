@@ -93,6 +93,8 @@ typedef struct reduce_error_state {
     double radius;             /* the first gather radius every check render shares */
     unsigned int width, height; /* the check renders' film */
     error_search_result result; /* the curve walked and the D chosen */
+    unsigned int noise_decided; /* steps below the D found that failed by their standard error
+                                   alone (error <= E < error + standard error): a warning */
     double seconds_originals;  /* the original's two renders */
     double seconds_search;     /* the whole stage: originals, steps and the final decimation */
     double seconds_final_decimation; /* the decimation at the D chosen (budget included) */
