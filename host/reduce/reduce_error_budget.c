@@ -72,11 +72,16 @@ static int render_pair(reduce_state *st, const scene *s, float *images[2])
         render_options options = check_options(st, k);
         render_result r;
         status = render_run(st->device, s, &b, &options, &r);
+        reduce_error_state *e = &st->error_search;
+        if (!status && e->width && (r.sppm.width != e->width || r.sppm.height != e->height))
+            status = error_set(IDMR_EXIT_FAILURE, "--max-error: a check render of the reduced "
+                                                  "scene is %ux%u, the original's %ux%u",
+                               r.sppm.width, r.sppm.height, e->width, e->height);
         if (!status) {
-            if (!(st->error_search.radius > 0))
-                st->error_search.radius = r.sppm.radius[0];
-            st->error_search.width = r.sppm.width;
-            st->error_search.height = r.sppm.height;
+            if (!(e->radius > 0))
+                e->radius = r.sppm.radius[0];
+            e->width = r.sppm.width;
+            e->height = r.sppm.height;
             images[k] = r.image;
             r.image = NULL;
         }
