@@ -163,14 +163,14 @@ bench-outofcore: bin/idmr kernels
 	@scripts/bench-outofcore
 
 # libFuzzer targets (tests/fuzz/): the scene loader with its includes and meshes, the glTF
-# loader (document, checks, Assimp), the simulation-file reader (reduce --simulation), and each
-# mesh reader. `make fuzz` installs clang if missing, builds them in build/fuzz and runs each for
+# loader (document, checks, Assimp), the pbrt-v4 loader (with an include and a PLY), the
+# simulation-file reader (reduce --simulation), and each mesh reader. `make fuzz` installs clang if missing, builds them in build/fuzz and runs each for
 # FUZZ_SECONDS (scripts/run-fuzz.sh); test_fuzz_inputs replays their seeds and regressions.
 FUZZ_SECONDS ?= 60
 FUZZ_MESH_PROGRAMS := $(BUILD)/tests/fuzz_obj $(BUILD)/tests/fuzz_off $(BUILD)/tests/fuzz_ply \
                       $(BUILD)/tests/fuzz_stl
 FUZZ_PROGRAMS := $(BUILD)/tests/fuzz_scene $(BUILD)/tests/fuzz_gltf $(BUILD)/tests/fuzz_simulation \
-                 $(FUZZ_MESH_PROGRAMS)
+                 $(BUILD)/tests/fuzz_pbrt $(FUZZ_MESH_PROGRAMS)
 fuzz:
 	@scripts/install-deps.sh --fuzz
 	@$(MAKE) --no-print-directory config=fuzz fuzz-targets
@@ -178,7 +178,7 @@ fuzz:
 
 fuzz-targets: $(FUZZ_PROGRAMS)
 
-$(BUILD)/tests/fuzz_scene $(BUILD)/tests/fuzz_gltf: $(BUILD)/tests/fuzz_%: tests/fuzz/fuzz_%.c \
+$(BUILD)/tests/fuzz_scene $(BUILD)/tests/fuzz_gltf $(BUILD)/tests/fuzz_pbrt: $(BUILD)/tests/fuzz_%: tests/fuzz/fuzz_%.c \
                                                   tests/fuzz/fuzz_inputs.h $(BUILD)/libidmr.a $(FLAGS)
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) -Itests $(CFLAGS) -fsanitize=fuzzer $(LDFLAGS) -o $@ $< $(BUILD)/libidmr.a $(LDLIBS)

@@ -5,7 +5,9 @@
  *                     records (importance: camera importance, then the light seen through
  *                     specular surfaces; render: throughput and emission)
  *   photon_paths      one photon path per work-item into its slot of records (lib/paths.h),
- *                     and the slots it stored appended to the stored-vertex list
+ *                     and the slots it stored appended to the stored-vertex list; work-item
+ *                     i traces path params.path_first + i (several devices: each its range,
+ *                     host/passes/sppm.h) into slot i
  *   grid_count, scan_chunks, scan_chunk_sums, scan_apply, grid_scatter
  *                     the hash grid over the hit points by counting sort (lib/hit_point_grid.h)
  * importance pass (paper 3.2, 3.3, 4.1; host/passes/importance.c):
@@ -57,17 +59,18 @@ kernel void photon_paths(idmr_sppm_params params, SCENE_BUFFERS, global uint *pa
                          global photon_record *records, volatile global uint *stored_count,
                          global uint *stored_slots)
 {
-    uint path = get_global_id(0);
-    if (path >= params.path_count)
+    uint slot = get_global_id(0); /* this device's path slot: path path_first + slot */
+    if (slot >= params.device_paths)
         return;
     scene_view scene = SCENE_VIEW();
-    uint length = photon_path(&scene, &params, path, records + (size_t)path * IDMR_PATH_VERTICES);
-    path_length[path] = length;
+    uint length = photon_path(&scene, &params, params.path_first + slot,
+                              records + (size_t)slot * IDMR_PATH_VERTICES);
+    path_length[slot] = length;
     if (length == 0)
         return;
     uint first = atomic_add(stored_count, length);
     for (uint j = 0; j < length; j++)
-        stored_slots[first + j] = path * IDMR_PATH_VERTICES + j;
+        stored_slots[first + j] = slot * IDMR_PATH_VERTICES + j;
 }
 
 kernel void grid_count(idmr_sppm_params params, global const idmr_hit_point *hit_points,
@@ -147,8 +150,8 @@ kernel void path_importance(idmr_sppm_params params, global const idmr_photon_ve
                             global const uint *path_length, global const uint *gathered,
                             volatile global fixed_word *light_importance)
 {
-    uint path = get_global_id(0);
-    if (path >= params.path_count)
+    uint path = get_global_id(0); /* this device's path slot */
+    if (path >= params.device_paths)
         return;
     uint base = path * IDMR_PATH_VERTICES;
     ulong running = 0;

@@ -4,6 +4,13 @@
  *
  *   importance-iteration: seconds=<s> plain=<s> ratio=<importance/plain> photons=<n> ...
  *
+ *   scaling: devices=<n> seconds=<s> speedup=<one device's seconds / s>
+ *
+ * the pass on every OpenCL device at once (importance_run_devices: photon paths split, the
+ * same sums bit for bit) against the default device alone, per iteration; where PoCL is asked
+ * for no devices in particular, POCL_DEVICES="pthread pthread" gives it two CPU devices (on a
+ * machine of 2 cores they share those cores: no speed-up is to be expected there).
+ *
  * Each variant runs one iteration first (the runtime compiles kernels lazily on first use),
  * then ITERATIONS; the variants alternate ROUNDS times and the best per-iteration time of each
  * counts (shared machines are noisy; the least disturbed run is the truest). */
@@ -20,22 +27,65 @@
 #define ITERATIONS 3
 #define ROUNDS 2
 
-static double seconds_per_iteration(device *d, const scene *s, const bvh *b, int accumulate_importance,
-                                    unsigned int iterations, importance_result *r)
+static double seconds_on(device *d, unsigned int count, const scene *s, const bvh *b,
+                         int accumulate_importance, unsigned int iterations, importance_result *r)
 {
     importance_options o;
     importance_options_default(&o);
     o.sppm.iterations = iterations;
     o.accumulate_importance = accumulate_importance;
-    if (importance_run(d, s, b, &o, r)) {
+    if (importance_run_devices(d, count, s, b, &o, r)) {
         fprintf(stderr, "bench_importance: %s\n", error_message());
         exit(1);
     }
     return r->sppm.seconds.total / r->sppm.iterations;
 }
 
+static double seconds_per_iteration(device *d, const scene *s, const bvh *b,
+                                    int accumulate_importance, unsigned int iterations,
+                                    importance_result *r)
+{
+    return seconds_on(d, 1, s, b, accumulate_importance, iterations, r);
+}
+
+/* The scaling line: every device against the default one, best of ROUNDS each. */
+static void scaling(device *d, const scene *s, const bvh *b)
+{
+    device_info *infos;
+    size_t found;
+    if (device_list(&infos, &found)) {
+        fprintf(stderr, "bench_importance: %s\n", error_message());
+        exit(1);
+    }
+    free(infos);
+    unsigned int count = found < SPPM_MAX_DEVICES ? (unsigned int)found : SPPM_MAX_DEVICES;
+    device all[SPPM_MAX_DEVICES];
+    for (unsigned int k = 0; k < count; k++)
+        if (device_open(all + k, (int)k)) {
+            fprintf(stderr, "bench_importance: %s\n", error_message());
+            exit(1);
+        }
+    importance_result r;
+    double one = 1e30, several = 1e30;
+    seconds_on(all, count, s, b, 1, 1, &r);
+    importance_result_free(&r);
+    for (int round = 0; round < ROUNDS; round++) {
+        double seconds = seconds_on(d, 1, s, b, 1, ITERATIONS, &r);
+        one = seconds < one ? seconds : one;
+        importance_result_free(&r);
+        seconds = seconds_on(all, count, s, b, 1, ITERATIONS, &r);
+        several = seconds < several ? seconds : several;
+        importance_result_free(&r);
+    }
+    printf("scaling: devices=1 seconds=%.3f speedup=1.00 device=\"%s\"\n", one, d->info.name);
+    printf("scaling: devices=%u seconds=%.3f speedup=%.2f\n", count, several, one / several);
+    for (unsigned int k = 0; k < count; k++)
+        device_close(all + k);
+}
+
 int main(void)
 {
+    setenv("POCL_DEVICES", "pthread pthread", 0); /* before the first OpenCL call */
     const char *path = bench_write_dragon_box();
     scene *s = path ? mitsuba_load(path) : NULL;
     if (!s) {
@@ -77,6 +127,7 @@ int main(void)
            "path=%.3f (plain: camera=%.3f photon=%.3f)\n",
            stage[1][0], stage[1][1], stage[1][2], stage[1][3], stage[1][4], stage[0][0],
            stage[0][1]);
+    scaling(&d, s, &b);
     bvh_free(&b);
     device_close(&d);
     scene_free(s);

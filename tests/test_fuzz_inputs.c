@@ -7,7 +7,7 @@
  *                                   starting "accept-" accepted; any other (a crash-* or
  *                                   timeout-* file as libFuzzer names it) must only return
  *
- * TARGET is scene, gltf, simulation, obj, off, ply or stl. A directory that is missing or empty
+ * TARGET is scene, pbrt, gltf, simulation, obj, off, ply or stl. A directory that is missing or empty
  * fails its test. Under `make test config=sanitize` the replay runs with ASan and UBSan, as the
  * fuzzer does. */
 #include <dirent.h>
@@ -59,6 +59,8 @@ static int replay(const char *target, const uint8_t *data, size_t size)
     }
     if (strcmp(target, "gltf") == 0)
         return fuzz_gltf_input(data, size, temp_dir);
+    if (strcmp(target, "pbrt") == 0)
+        return fuzz_pbrt_input(data, size, temp_dir);
     char extension[8];
     snprintf(extension, sizeof extension, ".%s", target);
     return fuzz_mesh_input(data, size, temp_dir, extension);
@@ -113,7 +115,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         TARGET_TEST("scene"), TARGET_TEST("gltf"), TARGET_TEST("simulation"),
         TARGET_TEST("obj"),   TARGET_TEST("off"),  TARGET_TEST("ply"),
-        TARGET_TEST("stl"),
+        TARGET_TEST("stl"),   TARGET_TEST("pbrt"),
     };
     return cmocka_run_group_tests(tests, make_temp_dir, remove_temp_dir);
 }

@@ -34,7 +34,8 @@ static const struct {
     {"reduce", 1,
      "  reduce SCENE --target D -o OUTDIR   (or --memory-budget BYTES, or --max-error E)\n"
      "                            the reduced scene: OUTDIR/scene.xml and meshes/*.ply with\n"
-     "                            about D of all vertices; takes the options of importance\n"
+     "                            about D of all vertices (scene.pbrt for a pbrt-v4 scene,\n"
+     "                            scene.gltf/.glb for glTF); takes the options of importance\n"
      "      --method M            combined (default: importance budgets each mesh and\n"
      "                            weights its quadric error; open boundaries locked),\n"
      "                            importance (the paper's: importance orders collapses),\n"
@@ -130,7 +131,9 @@ static const char SPPM_OPTIONS[] =
     "                            last included, as Mitsuba's max_depth counts (default 16,\n"
     "                            the paper's; render: 64, with Russian roulette from 16)\n"
     "      --seed S              random seed (default 1)\n"
-    "      --device N            OpenCL device (see `idmr devices`)\n"
+    "      --device N            OpenCL device (see `idmr devices`); importance and reduce\n"
+    "                            also take a list (0,2) or all: the importance pass on those\n"
+    "                            devices at once, the same result as on the first alone\n"
     "      --quiet               no progress on stderr\n"
     "      --generic             kernels with every feature, not only the scene's\n";
 

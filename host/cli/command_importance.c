@@ -27,14 +27,15 @@ typedef struct importance_cli_job {
 static enum option_parse parse_option(int c, void *context, pass_arguments *arguments)
 {
     importance_cli_job *job = context;
-    return parse_importance_option(c, &job->options, &arguments->device_index);
+    return parse_importance_option(c, &job->options, &arguments->devices);
 }
 
 /* The pass and its outputs: this command's calls into passes/. */
-static int run_pass(device *d, const scene *s, const bvh *b, void *context)
+static int run_pass(device *d, unsigned int count, const scene *s, const bvh *b,
+                    void *context)
 {
     importance_cli_job *job = context;
-    if (importance_run(d, s, b, &job->options, &job->result))
+    if (importance_run_devices(d, count, s, b, &job->options, &job->result))
         return -1;
     cJSON *report = importance_report_json(s, d, &job->options, &job->result);
     importance_weights weights = importance_weights_of(&job->options);
@@ -52,10 +53,25 @@ static int run_pass(device *d, const scene *s, const bvh *b, void *context)
 static void print_summary(const importance_cli_job *job)
 {
     const importance_result *r = &job->result;
+    char devices[256] = "";
+    if (r->sppm.devices > 1) {
+        /* "on devices 0, 1 (paths 41%, 59%)": each device's share of all the paths */
+        size_t used = (size_t)snprintf(devices, sizeof devices, " on devices");
+        for (unsigned int k = 0; k < r->sppm.devices && used < sizeof devices; k++)
+            used += (size_t)snprintf(devices + used, sizeof devices - used, "%s %d",
+                                     k ? "," : "", r->sppm.device[k].index);
+        double all = (double)r->sppm.photons * r->sppm.iterations;
+        for (unsigned int k = 0; k < r->sppm.devices && used < sizeof devices && all > 0; k++)
+            used += (size_t)snprintf(devices + used, sizeof devices - used, "%s%.0f%%",
+                                     k ? ", " : " (paths ",
+                                     100.0 * (double)r->sppm.device[k].paths / all);
+        if (used < sizeof devices && all > 0)
+            snprintf(devices + used, sizeof devices - used, ")");
+    }
     fprintf(stderr,
-            "idmr: %u iterations of %u photon paths in %.1f s; outputs in %s/ (report.json, "
+            "idmr: %u iterations of %u photon paths in %.1f s%s; outputs in %s/ (report.json, "
             "importance.png, importance/*.ply, convergence.csv, simulation.bin)\n",
-            r->sppm.iterations, r->sppm.photons, r->sppm.seconds.total, job->output);
+            r->sppm.iterations, r->sppm.photons, r->sppm.seconds.total, devices, job->output);
 }
 
 int command_importance(int argc, char **argv)
@@ -78,7 +94,7 @@ int command_importance(int argc, char **argv)
     int status = scene_check_output_directory(s, job.output) ||
                  files_stage_begin(job.output, job.staging, sizeof job.staging);
     if (!status)
-        status = pass_setup_run(s, arguments.device_index, run_pass, &job);
+        status = pass_setup_run(s, &arguments.devices, run_pass, &job);
     if (job.staging[0])
         status = files_stage_end(job.staging, job.output, !status) || status ? -1 : 0;
     code = status ? fail() : 0;

@@ -9,6 +9,7 @@
 
 #include "cli/commands.h"
 #include "cli/options.h"
+#include "cli/pass_setup.h"
 #include "core/error.h"
 #include "device/device.h"
 #include "io/scene_load.h"
@@ -110,7 +111,7 @@ static enum option_parse parse_option(int c, void *context, pass_arguments *argu
         return option_result(
             parse_unsigned("--check-photons", optarg, 1, 1u << 30, &o->error.photons));
     default:
-        return parse_importance_option(c, &o->importance, &arguments->device_index);
+        return parse_importance_option(c, &o->importance, &arguments->devices);
     }
 }
 
@@ -127,11 +128,12 @@ static int run_reduce(const pass_arguments *arguments, const reduce_options *o)
                                 : scene_load(arguments->scene);
     if (!s)
         return fail();
-    device d;
-    int status = device_open(&d, arguments->device_index);
+    device devices[SPPM_MAX_DEVICES];
+    unsigned int count;
+    int status = pass_setup_open_devices(&arguments->devices, devices, &count);
     if (!status) {
-        status = reduce_run(&d, s, arguments->output, o);
-        device_close(&d);
+        status = reduce_run_devices(devices, count, s, arguments->output, o);
+        pass_setup_close_devices(devices, count);
     }
     int code = status ? fail() : 0;
     scene_free(s);

@@ -67,7 +67,7 @@ static enum option_parse parse_option(int c, void *context, pass_arguments *argu
         return option_result(parse_double("--exposure", optarg, -64, 64, &job->exposure));
     if (c == OPT_GAMMA || c == OPT_TOLERANCE || c == OPT_SHADOW_WEIGHT)
         return OPTION_IMPORTANCE_ONLY;
-    return parse_sppm_option(c, &job->options.sppm, &arguments->device_index);
+    return parse_sppm_option(c, &job->options.sppm, &arguments->devices);
 }
 
 /* The three files of the render, each written whole or not at all; where one cannot be written
@@ -100,8 +100,9 @@ static int write_outputs(render_cli_job *job, const scene *s, const device *d)
 
 /* The render and its outputs: this command's calls into passes/. The image's directory is made
  * only once the render is done, so an interrupted render leaves no empty one behind. */
-static int run_pass(device *d, const scene *s, const bvh *b, void *context)
+static int run_pass(device *d, unsigned int count, const scene *s, const bvh *b, void *context)
 {
+    (void)count; /* one: command_render() refuses more */
     render_cli_job *job = context;
     if (render_run(d, s, b, &job->options, &job->result))
         return -1;
@@ -136,6 +137,10 @@ int command_render(int argc, char **argv)
         return code;
     if (!arguments.output)
         return usage_error("render: -o IMAGE is required");
+    if (device_choice_several(&arguments.devices))
+        return usage_error("render: --device takes one device number: the renderer runs on one "
+                           "device (the importance pass, `importance` and `reduce`, takes "
+                           "--device all or a list)");
     if (render_paths_from(arguments.output, &job.paths))
         return IDMR_EXIT_INPUT;
     scene *s = scene_load(arguments.scene);
@@ -145,7 +150,7 @@ int command_render(int argc, char **argv)
                  scene_check_output_file(s, job.paths.png) ||
                  scene_check_output_file(s, job.paths.json);
     if (!status)
-        status = pass_setup_run(s, arguments.device_index, run_pass, &job);
+        status = pass_setup_run(s, &arguments.devices, run_pass, &job);
     code = status ? fail() : 0;
     if (!status)
         print_summary(&job);

@@ -96,7 +96,53 @@ static int parse_float(const char *option, const char *text, double min, double 
     return 0;
 }
 
-enum option_parse parse_sppm_option(int c, sppm_options *o, int *device_index)
+int device_choice_several(const device_choice *c)
+{
+    return c->all || c->count > 1;
+}
+
+int parse_device_choice(const char *text, device_choice *c)
+{
+    memset(c, 0, sizeof *c);
+    c->index = -1;
+    if (strcmp(text, "all") == 0) {
+        c->all = 1;
+        return 0;
+    }
+    const char *at = text;
+    unsigned int count = 0;
+    for (;;) {
+        size_t length = strcspn(at, ",");
+        char number[32];
+        unsigned int index;
+        if (length == 0 || length >= sizeof number)
+            return error_set(IDMR_EXIT_INPUT,
+                             "--device: '%s' is not a device number, a list of them (0,2) or "
+                             "'all' (idmr devices lists them)",
+                             text);
+        memcpy(number, at, length);
+        number[length] = '\0';
+        if (parse_unsigned("--device", number, 0, 1000, &index))
+            return -1;
+        for (unsigned int k = 0; k < count; k++)
+            if (c->list[k] == (int)index)
+                return error_set(IDMR_EXIT_INPUT, "--device: device %u is listed twice in '%s'",
+                                 index, text);
+        if (count == SPPM_MAX_DEVICES)
+            return error_set(IDMR_EXIT_INPUT, "--device: '%s' lists more than %d devices", text,
+                             SPPM_MAX_DEVICES);
+        c->list[count++] = (int)index;
+        at += length;
+        if (!*at)
+            break;
+        at++; /* the comma */
+    }
+    c->count = count;
+    c->index = c->list[0];
+    return 0;
+}
+
+enum option_parse parse_sppm_option(int c, sppm_options *o, device_choice *devices)
 {
     unsigned int whole;
     switch (c) {
@@ -117,10 +163,7 @@ enum option_parse parse_sppm_option(int c, sppm_options *o, int *device_index)
     case OPT_RADIUS:
         return option_result(parse_double("--radius", optarg, 1e-30, 1e30, &o->radius));
     case OPT_DEVICE:
-        if (parse_unsigned("--device", optarg, 0, 1000, &whole))
-            return OPTION_BAD_VALUE;
-        *device_index = (int)whole;
-        return OPTION_TAKEN;
+        return option_result(parse_device_choice(optarg, devices));
     case OPT_QUIET:
         o->progress = 0;
         progress_set_quiet(1); /* also for loading the scene */
@@ -138,7 +181,7 @@ enum option_parse parse_sppm_option(int c, sppm_options *o, int *device_index)
     }
 }
 
-enum option_parse parse_importance_option(int c, importance_options *o, int *device_index)
+enum option_parse parse_importance_option(int c, importance_options *o, device_choice *devices)
 {
     switch (c) {
     case OPT_TOLERANCE:
@@ -148,7 +191,7 @@ enum option_parse parse_importance_option(int c, importance_options *o, int *dev
     case OPT_SHADOW_WEIGHT:
         return option_result(parse_float("--shadow-weight", optarg, 0, 1e6, &o->shadow_weight));
     default:
-        return parse_sppm_option(c, &o->sppm, device_index);
+        return parse_sppm_option(c, &o->sppm, devices);
     }
 }
 
@@ -212,7 +255,8 @@ int parse_pass_arguments(int argc, char **argv, const struct option *table,
                          pass_option_parser parse, void *context, pass_arguments *arguments)
 {
     arguments->output = NULL;
-    arguments->device_index = -1;
+    memset(&arguments->devices, 0, sizeof arguments->devices);
+    arguments->devices.index = -1;
     int c;
     while ((c = getopt_long(argc, argv, ":o:", table, NULL)) != -1) {
         if (c == 'o') {

@@ -105,18 +105,35 @@ enum option_parse {
 /* OPTION_TAKEN when `status` (of a parse_*() call) is 0, else OPTION_BAD_VALUE. */
 enum option_parse option_result(int status);
 
-/* Applies SPPM option `c` (--device into *device_index). */
-enum option_parse parse_sppm_option(int c, sppm_options *o, int *device_index);
+/* What --device chose: one device (its number, or -1 for the default: $IDMR_DEVICE, else the
+ * first GPU, else device 0), every device (`all`), or a list of numbers (`0,2`; a list of one
+ * is one device). */
+typedef struct device_choice {
+    int index;            /* one device */
+    int all;              /* --device all */
+    unsigned int count;   /* > 1: the list below */
+    int list[SPPM_MAX_DEVICES];
+} device_choice;
+
+/* More than one device may be meant (all, or a list): for commands that take one. */
+int device_choice_several(const device_choice *c);
+
+/* --device's value `text` into *c: N, N,M,... (distinct, at most SPPM_MAX_DEVICES) or all. 0,
+ * or -1 with the error set (exit code 2). */
+int parse_device_choice(const char *text, device_choice *c);
+
+/* Applies SPPM option `c` (--device into *devices). */
+enum option_parse parse_sppm_option(int c, sppm_options *o, device_choice *devices);
 
 /* Applies importance option `c`, the SPPM ones included. */
-enum option_parse parse_importance_option(int c, importance_options *o, int *device_index);
+enum option_parse parse_importance_option(int c, importance_options *o, device_choice *devices);
 
 /* The command line of a pass command (importance, reduce, render) as far as they share it. */
 typedef struct pass_arguments {
     const char *command; /* the command's name, for messages */
     const char *scene;   /* the one SCENE argument */
     const char *output;  /* -o, --output; NULL if not given */
-    int device_index;    /* --device; -1: IDMR_DEVICE, else the first GPU */
+    device_choice devices; /* --device; by default one: IDMR_DEVICE, else the first GPU */
 } pass_arguments;
 
 /* A command's options besides -o: applies option `c` to the command's `context` (its options). */

@@ -54,6 +54,10 @@ typedef struct scene_mesh {
     int had_texcoords, had_normals; /* of a released mesh: what its geometry holds */
     float box_min[3], box_max[3]; /* of a released mesh: its bounding box */
     struct scene_mesh_source *source; /* how the loader reads it again; NULL: it cannot */
+    /* A pbrt-v4 scene (io/pbrt.h), for the writer; zero for the other formats. */
+    long source_offset;         /* byte offset of the `Shape` keyword in xml_file */
+    double object_to_world[16]; /* row-major: the transform the shape's points were given in */
+    int source_flipped;         /* the loader reversed the winding the statement gives */
 } scene_mesh;
 
 /* How a loader reads a mesh's geometry again (the loader's own type), and the functions it

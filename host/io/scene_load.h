@@ -1,5 +1,6 @@
 /* scene_load.h — the one entry every command loads a scene through: a Mitsuba XML file
- * (io/mitsuba.h) or a glTF 2.0 file (.gltf, .glb: io/gltf.h), told apart by the extension. */
+ * (io/mitsuba.h), a glTF 2.0 file (.gltf, .glb: io/gltf.h) or a pbrt-v4 file (.pbrt:
+ * io/pbrt.h), told apart by the extension. */
 #ifndef IDMR_SCENE_LOAD_H
 #define IDMR_SCENE_LOAD_H
 
@@ -11,10 +12,13 @@
 scene *scene_load(const char *path);
 
 /* As scene_load(), with the mesh files of at least release_from vertices released once read
- * (io/mitsuba.h, mitsuba_load_streaming; a glTF scene is loaded whole). */
+ * (io/mitsuba.h, mitsuba_load_streaming; a glTF or pbrt scene is loaded whole). */
 scene *scene_load_streaming(const char *path, uint32_t release_from);
 
 /* Whether the scene was read from a glTF file (and is written back as one). */
 int scene_is_gltf(const scene *s);
+
+/* Whether the scene was read from a pbrt-v4 file (and is written back as one). */
+int scene_is_pbrt(const scene *s);
 
 #endif

@@ -46,16 +46,24 @@ enum { CAMERA, LIGHT, SHADOW, SEEN_LIGHT, KINDS };
 static const char *const KIND_NAMES[KINDS] = {"camera importance", "light importance",
                                               "shadow importance", "seen light"};
 
+/* The pass's kernels and buffers on one device of the run. Camera importance, shadow
+ * importance and seen light are added on the first device only (sppm.h); every device adds
+ * light importance for its own photon paths. */
+typedef struct importance_device {
+    cl_kernel gather, path, shadow, centre_hits;
+    cl_mem gathered, accumulators[KINDS];
+    double path_seconds; /* its path walks, summed */
+} importance_device;
+
 /* The pass's part while the core runs. */
 typedef struct importance_pass {
     const importance_options *options;
     importance_result *result;
     int shadows; /* σ > 0: shadow rays */
     double total_power; /* Σ of the lights' luminous power (scene_finalize) */
-    cl_kernel gather, path, shadow, centre_hits;
-    cl_mem gathered, accumulators[KINDS];
+    importance_device device[SPPM_MAX_DEVICES]; /* by sppm.index */
     size_t words;     /* accumulator words: one per triangle (at least one) */
-    uint64_t *scratch; /* a read-back accumulator */
+    uint64_t *read_back[SPPM_MAX_DEVICES]; /* each device's accumulator of one kind, read back */
     double *previous;  /* each triangle's weighted sum before this iteration */
     unsigned int calm; /* iterations in a row with Δ below the tolerance */
 } importance_pass;
@@ -111,6 +119,7 @@ static uint64_t pass_bytes(const scene *s, unsigned int pixels, size_t slots)
 static int prepare(sppm *core, void *state)
 {
     importance_pass *p = state;
+    importance_device *d = p->device + core->index;
     /* Seen light in fixed point: the brightest emitter seen head-on through one specular
      * surface is IDMR_FIXED_SCALE units, as the largest Eq. 2 weight is; 0: nothing to see. */
     double brightest = brightest_visible_luminance(core->scene);
@@ -118,32 +127,32 @@ static int prepare(sppm *core, void *state)
     pass_sizes z = sizes_of(core->scene, core->pixels, core->slots);
     p->words = z.words;
     const device_buffer_request buffers[] = {
-        {&p->gathered, z.gathered, "gather counts"},
-        {&p->accumulators[CAMERA], z.accumulator, KIND_NAMES[CAMERA]},
-        {&p->accumulators[LIGHT], z.accumulator, KIND_NAMES[LIGHT]},
-        {&p->accumulators[SHADOW], z.accumulator, KIND_NAMES[SHADOW]},
-        {&p->accumulators[SEEN_LIGHT], z.accumulator, KIND_NAMES[SEEN_LIGHT]},
+        {&d->gathered, z.gathered, "gather counts"},
+        {&d->accumulators[CAMERA], z.accumulator, KIND_NAMES[CAMERA]},
+        {&d->accumulators[LIGHT], z.accumulator, KIND_NAMES[LIGHT]},
+        {&d->accumulators[SHADOW], z.accumulator, KIND_NAMES[SHADOW]},
+        {&d->accumulators[SEEN_LIGHT], z.accumulator, KIND_NAMES[SEEN_LIGHT]},
     };
-    p->scratch = xmalloc(p->words * sizeof *p->scratch);
-    p->previous = xcalloc(p->words, sizeof *p->previous);
-    if (device_create_kernel(core->program, "gather_count", &p->gather) ||
-        device_create_kernel(core->program, "path_importance", &p->path) ||
-        device_create_kernel(core->program, "pixel_centre_hits", &p->centre_hits) ||
-        (p->shadows && device_create_kernel(core->program, "shadow_rays", &p->shadow)) ||
+    if (!p->previous)
+        p->previous = xcalloc(p->words, sizeof *p->previous);
+    if (device_create_kernel(core->program, "gather_count", &d->gather) ||
+        device_create_kernel(core->program, "path_importance", &d->path) ||
+        device_create_kernel(core->program, "pixel_centre_hits", &d->centre_hits) ||
+        (p->shadows && device_create_kernel(core->program, "shadow_rays", &d->shadow)) ||
         device_buffers(core->dev, buffers, sizeof buffers / sizeof *buffers,
-                       &core->summary->buffer_bytes))
+                       &core->buffer_bytes))
         return -1;
     for (int k = 0; k < KINDS; k++)
-        if (device_clear(core->dev, p->accumulators[k], p->words * sizeof(cl_ulong),
+        if (device_clear(core->dev, d->accumulators[k], p->words * sizeof(cl_ulong),
                          KIND_NAMES[k]))
             return -1;
     return DEVICE_SET_ARGS_FROM(core->camera_paths, "camera_paths", core->camera_pass_argument,
-                                DEVICE_ARG(p->accumulators[CAMERA]),
-                                DEVICE_ARG(p->accumulators[SEEN_LIGHT]));
+                                DEVICE_ARG(d->accumulators[CAMERA]),
+                                DEVICE_ARG(d->accumulators[SEEN_LIGHT]));
 }
 
 /* One shadow ray per hit point (kernels/lib/shadows.h). */
-static int cast_shadow_rays(sppm *core, importance_pass *p)
+static int cast_shadow_rays(sppm *core, importance_device *p)
 {
     idmr_camera camera = core->scene->camera;
     cl_uint after_scene = 2 + DEVICE_SCENE_BUFFERS;
@@ -159,67 +168,94 @@ static int cast_shadow_rays(sppm *core, importance_pass *p)
                : 0;
 }
 
-/* The shadow rays, gather_count, then (when importance accumulates) the reverse path walk. */
+/* The shadow rays (first device only: their sum is counted once), gather_count, then (when
+ * importance accumulates) the reverse path walk of this device's paths. Runs on every device at
+ * once: it touches only the device's own part of the state. */
 static int gather(sppm *core, void *state)
 {
     importance_pass *p = state;
+    importance_device *d = p->device + core->index;
     size_t local = core->options->local_size;
-    if ((p->shadows && cast_shadow_rays(core, p)) ||
-        DEVICE_SET_ARGS(p->gather, "gather_count", DEVICE_ARG(core->params),
+    if ((p->shadows && core->index == 0 && cast_shadow_rays(core, d)) ||
+        DEVICE_SET_ARGS(d->gather, "gather_count", DEVICE_ARG(core->params),
                         DEVICE_ARG(core->photon_records), DEVICE_ARG(core->stored_count),
                         DEVICE_ARG(core->stored_slots), DEVICE_ARG(core->grid.cell_start),
                         DEVICE_ARG(core->grid.grid_hits),
-                        DEVICE_ARG(p->gathered)) ||
+                        DEVICE_ARG(d->gathered)) ||
         (core->stored &&
-         device_run(core->dev, p->gather, "gather_count", core->stored, local)))
+         device_run(core->dev, d->gather, "gather_count", core->stored, local)))
         return -1;
     if (!p->options->accumulate_importance)
         return 0;
     double start = monotonic_seconds();
-    if (DEVICE_SET_ARGS(p->path, "path_importance", DEVICE_ARG(core->params),
+    if (DEVICE_SET_ARGS(d->path, "path_importance", DEVICE_ARG(core->params),
                         DEVICE_ARG(core->photon_records), DEVICE_ARG(core->path_length),
-                        DEVICE_ARG(p->gathered), DEVICE_ARG(p->accumulators[LIGHT])) ||
-        device_run(core->dev, p->path, "path_importance", core->params.path_count, local))
+                        DEVICE_ARG(d->gathered), DEVICE_ARG(d->accumulators[LIGHT])) ||
+        (core->params.device_paths &&
+         device_run(core->dev, d->path, "path_importance", core->params.device_paths, local)))
         return -1;
-    p->result->path_seconds += monotonic_seconds() - start;
+    d->path_seconds += monotonic_seconds() - start;
     return 0;
 }
 
-/* Adds accumulator k × scale (per fixed-point unit) to `sums`, checking saturation, and clears
- * it; adds the total it added to *added where that is not NULL. */
-static int add_accumulator(sppm *core, importance_pass *p, int k, double *sums, double scale,
-                           double *added)
+int importance_add_words(double *sums, const uint64_t *const *words, unsigned int count,
+                         size_t n, double scale, const char *what, const char *remedy,
+                         double *added)
 {
     double total = 0;
-    size_t n = (size_t)core->scene->triangle_count;
-    if (n && device_read(core->dev, p->accumulators[k], n * sizeof *p->scratch, p->scratch,
-                         KIND_NAMES[k]))
-        return -1;
     for (size_t t = 0; t < n; t++) {
-        if (p->scratch[t] >= IDMR_FIXED_SATURATION)
-            return error_set(IDMR_EXIT_FAILURE,
-                             "%s of triangle %zu came within a factor 2 of the 64-bit fixed-point "
-                             "limit in one iteration; use %s",
-                             KIND_NAMES[k], t,
-                             k == LIGHT ? "fewer photons per iteration" : "a smaller --resolution");
-        double value = scale * (double)p->scratch[t];
+        /* each word and each partial sum below the saturation limit (2^62): no overflow */
+        uint64_t sum = 0;
+        for (unsigned int j = 0; j < count; j++)
+            if (words[j][t] >= IDMR_FIXED_SATURATION ||
+                (sum += words[j][t]) >= IDMR_FIXED_SATURATION)
+                return error_set(IDMR_EXIT_FAILURE,
+                                 "%s of triangle %zu came within a factor 2 of the 64-bit "
+                                 "fixed-point limit in one iteration; use %s",
+                                 what, t, remedy);
+        double value = scale * (double)sum; /* the one conversion */
         sums[t] += value;
         total += value;
-        CHECK_FINITE(sums[t], KIND_NAMES[k]);
+        CHECK_FINITE(sums[t], what);
     }
     if (added)
         *added += total;
-    return device_clear(core->dev, p->accumulators[k], p->words * sizeof(cl_ulong),
-                        KIND_NAMES[k]);
+    return 0;
 }
 
-/* Hit points found by the first iteration's photon vertices, for the report: the gather counts
- * of the stored slots (gather_count writes no other). */
+/* Reads accumulator k of the first `count` devices back and clears them, then adds them to
+ * `sums` (importance_add_words: as integers, × scale per fixed-point unit); adds the total it
+ * added to *added where that is not NULL. */
+static int add_accumulator(sppm *cores, unsigned int count, importance_pass *p, int k,
+                           double *sums, double scale, double *added)
+{
+    size_t n = (size_t)cores->scene->triangle_count;
+    for (unsigned int j = 0; j < count; j++) {
+        cl_mem accumulator = p->device[j].accumulators[k];
+        if (!p->read_back[j])
+            p->read_back[j] = xmalloc(p->words * sizeof *p->read_back[j]);
+        if ((n && device_read(cores[j].dev, accumulator, n * sizeof(cl_ulong), p->read_back[j],
+                              KIND_NAMES[k])) ||
+            device_clear(cores[j].dev, accumulator, p->words * sizeof(cl_ulong), KIND_NAMES[k]))
+            return count > 1 ? error_prefix("device %d (%s)", cores[j].dev->info.index,
+                                            cores[j].dev->info.name)
+                             : -1;
+    }
+    return importance_add_words(sums, (const uint64_t *const *)p->read_back, count, n, scale,
+                                KIND_NAMES[k],
+                                k == LIGHT ? "fewer photons per iteration"
+                                           : "a smaller --resolution",
+                                added);
+}
+
+/* Hit points found by the first iteration's photon vertices on one device, for the report:
+ * the gather counts of the stored slots (gather_count writes no other). */
 static int count_gathered(sppm *core, importance_pass *p)
 {
+    const importance_device *d = p->device + core->index;
     uint32_t *gathered = xmalloc(core->slots * sizeof *gathered);
     uint32_t *stored = xmalloc((core->stored + 1) * sizeof *stored);
-    int status = device_read(core->dev, p->gathered, core->slots * sizeof *gathered, gathered,
+    int status = device_read(core->dev, d->gathered, core->slots * sizeof *gathered, gathered,
                              "gather counts") ||
                  (core->stored && device_read(core->dev, core->stored_slots,
                                               core->stored * sizeof *stored, stored,
@@ -278,22 +314,30 @@ static double seen_light_gathers(const sppm *core, const importance_pass *p)
                               : 0.0;
 }
 
-static int collect(sppm *core, void *state, unsigned int n, int *stop, char *detail,
-                   size_t detail_size)
+/* Light importance from every device's photon paths; camera importance, shadow importance and
+ * seen light from the first device's alone (the others' camera paths add nothing, and they
+ * cast no shadow rays). */
+static int collect(sppm *cores, unsigned int count, void *state, unsigned int n, int *stop,
+                   char *detail, size_t detail_size)
 {
     importance_pass *p = state;
     importance_result *r = p->result;
+    sppm *core = cores;
     for (int k = CAMERA; k <= SHADOW; k++)
         if ((k != SHADOW || p->shadows) &&
-            add_accumulator(core, p, k, sums_of(r, k), 1.0 / IDMR_FIXED_SCALE, NULL))
+            add_accumulator(cores, k == LIGHT ? count : 1, p, k, sums_of(r, k),
+                            1.0 / IDMR_FIXED_SCALE, NULL))
             return -1;
     if (core->params.fixed_scale > 0 &&
-        add_accumulator(core, p, SEEN_LIGHT, r->light,
+        add_accumulator(cores, 1, p, SEEN_LIGHT, r->light,
                         seen_light_gathers(core, p) / core->params.fixed_scale,
                         &r->seen_light))
         return -1;
-    if (n == 0 && count_gathered(core, p))
-        return -1;
+    for (unsigned int j = 0; j < count && n == 0; j++)
+        if (count_gathered(cores + j, p))
+            return -1;
+    for (unsigned int j = 0; j < count; j++)
+        r->path_seconds = fmax(r->path_seconds, p->device[j].path_seconds);
     r->convergence[n] = convergence_change(p, core->scene, n + 1);
     snprintf(detail, detail_size, "change %.2e", r->convergence[n]);
     double tolerance = p->options->tolerance;
@@ -310,18 +354,19 @@ static int collect(sppm *core, void *state, unsigned int n, int *stop, char *det
 static int snapshot(sppm *core, void *state)
 {
     importance_pass *p = state;
+    const importance_device *d = p->device; /* snapshots are taken on one device */
     importance_snapshot *out = p->options->snapshot;
     uint64_t **fixed[KINDS] = {&out->camera_fixed, &out->light_fixed, &out->shadow_fixed,
                                &out->seen_light_fixed};
     free(out->gathered);
     out->gathered = xmalloc(core->slots * sizeof *out->gathered);
-    if (device_read(core->dev, p->gathered, core->slots * sizeof *out->gathered, out->gathered,
+    if (device_read(core->dev, d->gathered, core->slots * sizeof *out->gathered, out->gathered,
                     "gather counts"))
         return -1;
     for (int k = 0; k < KINDS; k++) {
         free(*fixed[k]);
         *fixed[k] = xmalloc(p->words * sizeof **fixed[k]);
-        if (device_read(core->dev, p->accumulators[k], p->words * sizeof(cl_ulong), *fixed[k],
+        if (device_read(core->dev, d->accumulators[k], p->words * sizeof(cl_ulong), *fixed[k],
                         KIND_NAMES[k]))
             return -1;
     }
@@ -329,17 +374,18 @@ static int snapshot(sppm *core, void *state)
 }
 
 /* The triangle seen through each pixel centre of the hit-point image, for the importance
- * image: one more kernel on the core's upload, not a second program or BVH. */
+ * image: one more kernel on the (first device's) core's upload, not a second program or BVH. */
 static int finish(sppm *core, void *state)
 {
-    importance_pass *p = state;
-    importance_result *r = p->result;
+    importance_pass *state_pass = state;
+    importance_device *p = state_pass->device + core->index;
+    importance_result *r = state_pass->result;
     size_t pixels = core->pixels;
     idmr_camera camera = core->scene->camera;
     cl_mem triangles = NULL;
     r->pixel_triangle = xmalloc(pixels * sizeof *r->pixel_triangle);
     size_t bytes = sizes_of(core->scene, core->pixels, core->slots).pixel_triangles;
-    core->summary->buffer_bytes += bytes;
+    core->buffer_bytes += bytes;
     int status =
         device_buffer(core->dev, CL_MEM_WRITE_ONLY, bytes, NULL, "pixel triangles",
                       &triangles) ||
@@ -358,11 +404,15 @@ static int finish(sppm *core, void *state)
 static void release(void *state)
 {
     importance_pass *p = state;
-    cl_kernel kernels[] = {p->gather, p->path, p->shadow, p->centre_hits};
-    device_release_kernels(kernels, sizeof kernels / sizeof *kernels);
-    device_release_buffers(&p->gathered, 1);
-    device_release_buffers(p->accumulators, KINDS);
-    free(p->scratch);
+    for (unsigned int j = 0; j < SPPM_MAX_DEVICES; j++) {
+        importance_device *d = p->device + j;
+        cl_kernel kernels[] = {d->gather, d->path, d->shadow, d->centre_hits};
+        device_release_kernels(kernels, sizeof kernels / sizeof *kernels);
+        device_release_buffers(&d->gathered, 1);
+        device_release_buffers(d->accumulators, KINDS);
+    }
+    for (unsigned int j = 0; j < SPPM_MAX_DEVICES; j++)
+        free(p->read_back[j]);
     free(p->previous);
 }
 
@@ -396,6 +446,12 @@ int importance_memory(const device *d, const scene *s, uint64_t bvh_bytes,
 int importance_run(device *d, const scene *s, const bvh *b, const importance_options *o,
                    importance_result *r)
 {
+    return importance_run_devices(d, 1, s, b, o, r);
+}
+
+int importance_run_devices(device *devices, unsigned int count, const scene *s, const bvh *b,
+                           const importance_options *o, importance_result *r)
+{
     memset(r, 0, sizeof *r);
     if (!(o->gamma >= 0) || !(o->shadow_weight >= 0))
         return error_set(IDMR_EXIT_INPUT, "importance: gamma and the shadow weight must be >= 0");
@@ -425,8 +481,8 @@ int importance_run(device *d, const scene *s, const bvh *b, const importance_opt
     pass.snapshot = o->snapshot ? snapshot : NULL;
     pass.finish = finish;
     pass.release = release;
-    int status =
-        sppm_run(d, s, b, &o->sppm, &pass, &r->sppm, o->snapshot ? &o->snapshot->core : NULL);
+    int status = sppm_run_devices(devices, count, s, b, &o->sppm, &pass, &r->sppm,
+                                  o->snapshot ? &o->snapshot->core : NULL);
     if (o->snapshot)
         o->snapshot->vertices = o->snapshot->core.photon_records;
     return status;

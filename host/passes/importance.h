@@ -105,7 +105,8 @@ struct importance_result {
     uint64_t gathered;       /* hit points found by photon vertices, first iteration */
     double seen_light;       /* the part of Σ_T light(T) that is light seen through specular
                                 surfaces, as gathers (above) */
-    double path_seconds;     /* the path walk, part of sppm.seconds.gather */
+    double path_seconds;     /* the path walk, part of sppm.seconds.gather (several devices:
+                                the most any device spent) */
     sppm_summary sppm;       /* iterations, radii, image size, photons, bytes, timings */
 };
 
@@ -133,7 +134,23 @@ int importance_memory(const device *d, const scene *s, uint64_t bvh_bytes,
  * error set. `r` is freed with importance_result_free() either way. */
 int importance_run(device *d, const scene *s, const bvh *b, const importance_options *o,
                    importance_result *r);
+
+/* importance_run() on the `count` devices of `devices` at once (passes/sppm.h): the photon
+ * paths split between them, camera-side sums from the first, the per-triangle integer sums
+ * added before their conversion, so that the result is a single device's bit for bit. */
+int importance_run_devices(device *devices, unsigned int count, const scene *s, const bvh *b,
+                           const importance_options *o, importance_result *r);
 void importance_result_free(importance_result *r);
+
+/* sums[t] += scale × Σ_j words[j][t] for t < n: the `count` devices' fixed-point words of one
+ * kind in one iteration, added as integers and converted to double once, so that the result is
+ * a single device's bit for bit whatever the split (converting each device's words and adding
+ * the doubles would round twice once a word passes 2^53). Adds the total it added to *added
+ * (may be NULL). Returns 0, or -1 with an error naming `what` and the triangle and suggesting
+ * `remedy` when a word or a sum reaches IDMR_FIXED_SATURATION. */
+int importance_add_words(double *sums, const uint64_t *const *words, unsigned int count,
+                         size_t n, double scale, const char *what, const char *remedy,
+                         double *added);
 
 /* A(T) of scene triangle t (above): its importance amount per iteration. */
 double importance_amount(const importance_result *r, const importance_weights *w, uint64_t t);

@@ -50,6 +50,20 @@ cJSON *importance_report_json(const scene *s, const device *d, const importance_
     cJSON_AddStringToObject(root, "build_options", run->build_options ? run->build_options : "");
     cJSON_AddNumberToObject(root, "device_bytes",
                             (double)(run->geometry_bytes + run->bvh_bytes + run->buffer_bytes));
+    /* Every device the pass ran on, and the photon paths it traced (sppm.h: split, rebalanced) */
+    cJSON *devices = cJSON_AddArrayToObject(root, "devices");
+    for (unsigned int k = 0; k < run->devices; k++) {
+        const sppm_device_share *share = run->device + k;
+        cJSON *each = cJSON_CreateObject();
+        cJSON_AddNumberToObject(each, "index", share->index);
+        cJSON_AddStringToObject(each, "name", share->name);
+        cJSON_AddNumberToObject(each, "paths", (double)share->paths);
+        cJSON_AddNumberToObject(each, "paths_last_iteration", share->last_paths);
+        cJSON_AddNumberToObject(each, "path_capacity", share->capacity);
+        cJSON_AddNumberToObject(each, "photon_seconds", share->photon_seconds);
+        cJSON_AddNumberToObject(each, "device_bytes", (double)share->bytes);
+        cJSON_AddItemToArray(devices, each);
+    }
     cJSON *first = cJSON_AddObjectToObject(root, "first_iteration");
     cJSON_AddNumberToObject(first, "hit_points", (double)run->hit_points);
     cJSON_AddNumberToObject(first, "photon_vertices", (double)run->photon_records);

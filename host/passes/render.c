@@ -97,7 +97,7 @@ static int prepare(sppm *core, void *state)
     p->hits = xmalloc(pixels * sizeof *p->hits);
     return device_create_kernel(core->program, "render_gather", &p->gather) ||
                    device_buffers(core->dev, buffers, sizeof buffers / sizeof *buffers,
-                                  &core->summary->buffer_bytes) ||
+                                  &core->buffer_bytes) ||
                    device_clear(core->dev, p->pixel_radiance, pixels * 3 * sizeof(cl_ulong),
                                 "pixel radiance") ||
                    DEVICE_SET_ARG(core->camera_paths, "camera_paths", core->camera_pass_argument,
@@ -122,10 +122,13 @@ static int gather(sppm *core, void *state)
 }
 
 /* Adds this iteration's estimate to the sum: the emission seen directly plus the photon
- * estimate, units / (fixed_scale π r²). Checks saturation; clears the accumulators. */
-static int collect(sppm *core, void *state, unsigned int n, int *stop, char *detail,
-                   size_t detail_size)
+ * estimate, units / (fixed_scale π r²). Checks saturation; clears the accumulators. The
+ * renderer runs on one device (render_run): `cores` is that device's core. */
+static int collect(sppm *cores, unsigned int count, void *state, unsigned int n, int *stop,
+                   char *detail, size_t detail_size)
 {
+    (void)count;
+    sppm *core = cores;
     render_pass *p = state;
     size_t pixels = core->pixels;
     const idmr_sppm_params *params = &core->params;

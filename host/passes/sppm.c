@@ -1,10 +1,13 @@
 /* sppm.c — the SPPM core under both passes (see sppm.h): upload, program, the core's buffers,
  * per-iteration parameters, the radius schedule, the iteration loop, progress, timings and
- * snapshots. A pass adds its work through the hooks of its sppm_pass. */
+ * snapshots; with several devices one core each, driven at once by one host thread each, and
+ * the split of the photon paths between them (sppm_split_paths, rebalance). A pass adds its
+ * work through the hooks of its sppm_pass. */
 #include "device/program.h"
 #include "passes/sppm.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,6 +16,7 @@
 #include "core/progress.h"
 
 #define MAX_PIXELS (1u << 26)
+#define SPPM_MAX_DEVICES_TEXT "16" /* SPPM_MAX_DEVICES, for messages */
 
 /* The initial gather radius in pixel footprints (sppm.h). */
 #define SPPM_RADIUS_FOOTPRINTS 2.5
@@ -125,18 +129,23 @@ char *sppm_build_options(const device *d, unsigned int features, int pass,
     return device_build_options(d, features, defines);
 }
 
+/* The program and the core's kernels on the core's device; the first device's build options
+ * are the summary's, and the build seconds of all of them are added up. */
 static int build_program(sppm *core, const sppm_pass *pass)
 {
     double start = monotonic_seconds();
     unsigned int features = core->options->generic ? IDMR_FEATURES_ALL : core->scene->features;
-    core->summary->build_options =
-        sppm_build_options(core->dev, features, pass->pass, pass->defines);
-    if (device_build_program(core->dev, "sppm.cl", core->summary->build_options, &core->program) ||
+    char *options = sppm_build_options(core->dev, features, pass->pass, pass->defines);
+    int status =
+        device_build_program(core->dev, "sppm.cl", options, &core->program) ||
         device_create_kernel(core->program, "camera_paths", &core->camera_paths) ||
-        device_create_kernel(core->program, "photon_paths", &core->photon_paths))
-        return -1;
-    core->summary->seconds.build = monotonic_seconds() - start;
-    return 0;
+        device_create_kernel(core->program, "photon_paths", &core->photon_paths);
+    if (core->index == 0)
+        core->summary->build_options = options;
+    else
+        free(options);
+    core->summary->seconds.build += monotonic_seconds() - start;
+    return status ? -1 : 0;
 }
 
 /* The sizes of the core's own buffers (hit points, photon path lengths, photon slots, the
@@ -153,6 +162,22 @@ static void core_sizes(unsigned int pixels, unsigned int photons, size_t record_
     bytes[4] = (size_t)photons * IDMR_PATH_VERTICES * sizeof(cl_uint);
 }
 
+/* The memory of one device's core whose slots hold `capacity` photon paths. */
+static void memory_of_capacity(const scene *s, uint64_t bvh_bytes, unsigned int pixels,
+                               unsigned int capacity, const sppm_pass *pass, sppm_memory *m)
+{
+    size_t bytes[CORE_BUFFERS];
+    core_sizes(pixels, capacity, pass->photon_record_bytes, bytes);
+    m->geometry = device_scene_geometry_bytes(s);
+    m->bvh = bvh_bytes;
+    m->core = hit_point_grid_bytes(pixels);
+    for (int k = 0; k < CORE_BUFFERS; k++)
+        m->core += bytes[k];
+    m->pass = pass->pass_bytes
+                  ? pass->pass_bytes(s, pixels, (size_t)capacity * IDMR_PATH_VERTICES)
+                  : 0;
+}
+
 int sppm_memory_of(const device *d, const scene *s, uint64_t bvh_bytes, const sppm_options *o,
                    const sppm_pass *pass, sppm_memory *m)
 {
@@ -160,17 +185,7 @@ int sppm_memory_of(const device *d, const scene *s, uint64_t bvh_bytes, const sp
     memset(&film, 0, sizeof film);
     if (check_inputs(d, s, o, pass, &film))
         return -1;
-    unsigned int pixels = film.width * film.height;
-    size_t bytes[CORE_BUFFERS];
-    core_sizes(pixels, film.photons, pass->photon_record_bytes, bytes);
-    m->geometry = device_scene_geometry_bytes(s);
-    m->bvh = bvh_bytes;
-    m->core = hit_point_grid_bytes(pixels);
-    for (int k = 0; k < CORE_BUFFERS; k++)
-        m->core += bytes[k];
-    m->pass = pass->pass_bytes
-                  ? pass->pass_bytes(s, pixels, (size_t)film.photons * IDMR_PATH_VERTICES)
-                  : 0;
+    memory_of_capacity(s, bvh_bytes, film.width * film.height, film.photons, pass, m);
     return 0;
 }
 
@@ -209,12 +224,11 @@ static int check_memory(const device *d, const sppm_options *o, const sppm_pass 
  * lengths, records) that do not change, bound in order. */
 static int allocate(sppm *core, const sppm_pass *pass)
 {
-    sppm_summary *summary = core->summary;
-    core->slots = (size_t)summary->photons * IDMR_PATH_VERTICES;
+    core->slots = (size_t)core->capacity * IDMR_PATH_VERTICES;
     if (hit_point_grid_create(core->dev, core->program, core->pixels, &core->grid))
         return -1;
     size_t bytes[CORE_BUFFERS];
-    core_sizes(core->pixels, summary->photons, pass->photon_record_bytes, bytes);
+    core_sizes(core->pixels, core->capacity, pass->photon_record_bytes, bytes);
     const device_buffer_request buffers[CORE_BUFFERS] = {
         {&core->hit_points, bytes[0], "hit points"},
         {&core->path_length, bytes[1], "photon path lengths"},
@@ -222,9 +236,9 @@ static int allocate(sppm *core, const sppm_pass *pass)
         {&core->stored_count, bytes[3], "stored photon count"},
         {&core->stored_slots, bytes[4], "stored photon slots"},
     };
-    summary->buffer_bytes = core->grid.bytes;
+    core->buffer_bytes = core->grid.bytes;
     if (device_buffers(core->dev, buffers, sizeof buffers / sizeof *buffers,
-                       &summary->buffer_bytes))
+                       &core->buffer_bytes))
         return -1;
     idmr_camera camera = core->scene->camera;
     cl_uint scene_first = 2, after_scene = scene_first + DEVICE_SCENE_BUFFERS;
@@ -273,11 +287,14 @@ static void params_begin(sppm *core)
     memcpy(params->scene_center, core->uploaded.center, sizeof params->scene_center);
     params->scene_radius = core->uploaded.radius;
     params->camera_depth = core->options->max_depth;
+    params->path_first = 0;
+    params->device_paths = core->summary->photons;
+    params->camera_sums = core->index == 0;
 }
 
-/* What the first iteration's paths decide, read back once: the initial gather radius² (from
- * the hit points, sppm_initial_radius2) and, for the reports, the valid hit points and stored
- * records (they change little between iterations). */
+/* What the first iteration's paths decide, read back once from the first device: the initial
+ * gather radius² (from the hit points, sppm_initial_radius2) and, for the reports, the valid
+ * hit points. */
 static int first_iteration(sppm *core, double *radius2)
 {
     idmr_hit_point *hit_points = xmalloc(core->pixels * sizeof *hit_points);
@@ -285,7 +302,6 @@ static int first_iteration(sppm *core, double *radius2)
                              hit_points, "hit points");
     for (size_t i = 0; i < core->pixels && !status; i++)
         core->summary->hit_points += hit_points[i].offset > 0.0f;
-    core->summary->photon_records = core->stored;
     double pinned = core->options->radius;
     if (!status)
         *radius2 = pinned > 0 ? pinned * pinned
@@ -295,13 +311,14 @@ static int first_iteration(sppm *core, double *radius2)
     return status ? -1 : 0;
 }
 
-/* Camera paths, photon paths, grid and the pass's gather, each stage timed (the queue is
- * drained between stages). After the first iteration's paths, first_iteration() reads back what
- * they decide (the initial radius, the report's counts; not timed as a stage); then the grid is
- * placed for radius² *radius2. */
-static int iterate(sppm *core, sppm_pass *pass, unsigned int n, double *radius2)
+/* One step of an iteration on one device's core. */
+typedef int (*core_step)(sppm *core, sppm_pass *pass);
+
+/* Camera paths, then this device's photon paths and the length of its stored-vertex list, each
+ * stage timed (the queue is drained between stages). */
+static int trace_paths(sppm *core, sppm_pass *pass)
 {
-    sppm_seconds *seconds = &core->summary->seconds;
+    (void)pass;
     size_t local = core->options->local_size;
     double t0 = monotonic_seconds();
     if (DEVICE_SET_ARG(core->camera_paths, "camera_paths", 0, core->params) ||
@@ -311,35 +328,190 @@ static int iterate(sppm *core, sppm_pass *pass, unsigned int n, double *radius2)
     cl_uint stored = 0;
     if (device_clear(core->dev, core->stored_count, sizeof(cl_uint), "stored photon count") ||
         DEVICE_SET_ARG(core->photon_paths, "photon_paths", 0, core->params) ||
-        device_run(core->dev, core->photon_paths, "photon_paths", core->params.path_count,
-                   local) ||
+        (core->params.device_paths &&
+         device_run(core->dev, core->photon_paths, "photon_paths", core->params.device_paths,
+                    local)) ||
         device_read(core->dev, core->stored_count, sizeof stored, &stored, "stored photon count"))
         return -1;
     core->stored = stored;
     double t2 = monotonic_seconds();
-    if (n == 0 && first_iteration(core, radius2))
+    core->seconds.camera += t1 - t0;
+    core->seconds.photon += t2 - t1;
+    core->photon_pass_seconds = t2 - t1;
+    return 0;
+}
+
+/* The grid over the hit points for radius² core->radius2, then the pass's gather. */
+static int gather_photons(sppm *core, sppm_pass *pass)
+{
+    hit_point_grid_place(&core->grid, core->scene, core->radius2, &core->params);
+    double t0 = monotonic_seconds();
+    if (hit_point_grid_build(core->dev, &core->grid, &core->params, core->hit_points,
+                             core->options->local_size))
         return -1;
-    hit_point_grid_place(&core->grid, core->scene, *radius2, &core->params);
-    core->summary->radius[n] = core->params.radius;
-    double t2_placed = monotonic_seconds();
-    if (hit_point_grid_build(core->dev, &core->grid, &core->params, core->hit_points, local))
-        return -1;
-    double t3 = monotonic_seconds();
+    double t1 = monotonic_seconds();
     if (pass->gather(core, pass->state))
         return -1;
-    double t4 = monotonic_seconds();
-    seconds->camera += t1 - t0;
-    seconds->photon += t2 - t1;
-    seconds->grid += t3 - t2_placed;
-    seconds->gather += t4 - t3;
+    core->seconds.grid += t1 - t0;
+    core->seconds.gather += monotonic_seconds() - t1;
     return 0;
+}
+
+/* A step on one core in a thread of its own, its error kept for the thread that waits. */
+typedef struct core_job {
+    sppm *core;
+    sppm_pass *pass;
+    core_step step;
+    int status, code;
+    char message[2048];
+} core_job;
+
+static void *run_core_job(void *argument)
+{
+    core_job *job = argument;
+    job->status = job->step(job->core, job->pass);
+    if (job->status) {
+        job->code = error_code();
+        snprintf(job->message, sizeof job->message, "%s", error_message());
+    }
+    return NULL;
+}
+
+/* `step` on every core at once, one host thread each (on this thread alone for one device);
+ * the first failure's error is set, naming its device. */
+static int on_every_core(sppm *cores, unsigned int count, sppm_pass *pass, core_step step)
+{
+    if (count == 1)
+        return step(cores, pass);
+    core_job jobs[SPPM_MAX_DEVICES];
+    pthread_t threads[SPPM_MAX_DEVICES];
+    int started[SPPM_MAX_DEVICES];
+    for (unsigned int k = 0; k < count; k++) {
+        jobs[k] = (core_job){.core = cores + k, .pass = pass, .step = step};
+        started[k] = pthread_create(threads + k, NULL, run_core_job, jobs + k) == 0;
+        if (!started[k])
+            run_core_job(jobs + k); /* no thread to be had: in turn, on this one */
+    }
+    for (unsigned int k = 0; k < count; k++)
+        if (started[k])
+            pthread_join(threads[k], NULL);
+    for (unsigned int k = 0; k < count; k++)
+        if (jobs[k].status)
+            return error_set(jobs[k].code ? jobs[k].code : IDMR_EXIT_FAILURE,
+                             "device %d (%s): %s", cores[k].dev->info.index,
+                             cores[k].dev->info.name, jobs[k].message);
+    return 0;
+}
+
+/* One iteration on every device: paths, then (the first device deciding the radius after the
+ * first iteration's paths, not timed as a stage) grid and gather; the summary's stage seconds
+ * become the most any device has spent in each. */
+static int iterate(sppm *cores, unsigned int count, sppm_pass *pass, unsigned int n,
+                   double *radius2)
+{
+    sppm_summary *summary = cores->summary;
+    if (on_every_core(cores, count, pass, trace_paths))
+        return -1;
+    if (n == 0) {
+        if (first_iteration(cores, radius2))
+            return -1;
+        for (unsigned int k = 0; k < count; k++)
+            summary->photon_records += cores[k].stored;
+    }
+    for (unsigned int k = 0; k < count; k++)
+        cores[k].radius2 = *radius2;
+    if (on_every_core(cores, count, pass, gather_photons))
+        return -1;
+    summary->radius[n] = cores->params.radius;
+    sppm_seconds *most = &summary->seconds;
+    for (unsigned int k = 0; k < count; k++) {
+        const sppm_seconds *each = &cores[k].seconds;
+        most->camera = fmax(most->camera, each->camera);
+        most->photon = fmax(most->photon, each->photon);
+        most->grid = fmax(most->grid, each->grid);
+        most->gather = fmax(most->gather, each->gather);
+        sppm_device_share *share = summary->device + k;
+        share->last_paths = cores[k].params.device_paths;
+        share->paths += cores[k].params.device_paths;
+        share->photon_seconds += cores[k].photon_pass_seconds;
+    }
+    return 0;
+}
+
+void sppm_split_paths(unsigned int total, unsigned int count, const double *weight,
+                      const unsigned int *capacity, unsigned int *counts)
+{
+    /* Water-filling: shares in proportion to the weights among the devices not yet full; a
+     * device whose share passes its capacity is filled and leaves; the rest is shared again. */
+    int full[SPPM_MAX_DEVICES] = {0};
+    double share[SPPM_MAX_DEVICES];
+    double left = total;
+    for (int changed = 1; changed;) {
+        changed = 0;
+        double weights = 0;
+        for (unsigned int k = 0; k < count; k++)
+            if (!full[k])
+                weights += weight[k];
+        for (unsigned int k = 0; k < count; k++)
+            if (!full[k])
+                share[k] = weights > 0 ? left * weight[k] / weights : 0;
+        for (unsigned int k = 0; k < count; k++)
+            if (!full[k] && share[k] > capacity[k]) {
+                full[k] = 1;
+                share[k] = capacity[k];
+                left -= capacity[k];
+                changed = 1;
+            }
+    }
+    /* Whole paths: each device its share rounded down, then the paths left over one at a time
+     * to the devices in order that have room. */
+    unsigned int given = 0;
+    for (unsigned int k = 0; k < count; k++) {
+        double whole = floor(share[k]);
+        counts[k] = whole > 0 ? (unsigned int)fmin(whole, capacity[k]) : 0;
+        given += counts[k];
+    }
+    for (unsigned int k = 0; given < total; k = (k + 1) % count)
+        if (counts[k] < capacity[k])
+            counts[k]++, given++;
+}
+
+/* Sets each device's range of the photon paths from `counts`. */
+static void set_ranges(sppm *cores, unsigned int count, const unsigned int *counts)
+{
+    unsigned int first = 0;
+    for (unsigned int k = 0; k < count; k++) {
+        cores[k].params.path_first = first;
+        cores[k].params.device_paths = counts[k];
+        first += counts[k];
+    }
+}
+
+/* The split after a measured iteration: each device's weight its paths per photon pass
+ * second (where it traced none or took no time, its share so far). */
+static void rebalance(sppm *cores, unsigned int count)
+{
+    double weight[SPPM_MAX_DEVICES];
+    unsigned int capacity[SPPM_MAX_DEVICES], counts[SPPM_MAX_DEVICES];
+    for (unsigned int k = 0; k < count; k++) {
+        double paths = cores[k].params.device_paths, seconds = cores[k].photon_pass_seconds;
+        weight[k] = paths > 0 && seconds > 0 ? paths / seconds : fmax(paths, 1.0);
+        capacity[k] = cores[k].capacity;
+    }
+    double slowest = weight[0];
+    for (unsigned int k = 1; k < count; k++)
+        slowest = fmin(slowest, weight[k]);
+    for (unsigned int k = 0; k < count; k++)
+        weight[k] /= slowest > 0 ? slowest : 1.0;
+    sppm_split_paths(cores->summary->photons, count, weight, capacity, counts);
+    set_ranges(cores, count, counts);
 }
 
 static int take_snapshot(sppm *core, size_t record_bytes, sppm_snapshot *out)
 {
     sppm_snapshot_free(out);
     out->params = core->params;
-    size_t paths = core->params.path_count, slots = core->slots;
+    size_t paths = core->params.device_paths, slots = core->slots;
     out->hit_points = xmalloc(core->pixels * sizeof *out->hit_points);
     out->photon_records = xmalloc(slots * record_bytes);
     out->path_length = xmalloc(paths * sizeof *out->path_length);
@@ -360,10 +532,11 @@ static int take_snapshot(sppm *core, size_t record_bytes, sppm_snapshot *out)
 }
 
 /* The iterations, until one of the stop rules (sppm.h) ends them. */
-static int run_iterations(sppm *core, sppm_pass *pass, sppm_snapshot *snapshot)
+static int run_iterations(sppm *cores, unsigned int count, sppm_pass *pass,
+                          sppm_snapshot *snapshot)
 {
-    const sppm_options *o = core->options;
-    sppm_summary *summary = core->summary;
+    const sppm_options *o = cores->options;
+    sppm_summary *summary = cores->summary;
     summary->radius = xcalloc(o->iterations, sizeof *summary->radius);
     double radius2 = 0; /* set after the first iteration's camera paths */
     progress bar;
@@ -371,15 +544,16 @@ static int run_iterations(sppm *core, sppm_pass *pass, sppm_snapshot *snapshot)
     double start = monotonic_seconds();
     int status = 0, stop = 0;
     for (unsigned int n = 0; n < o->iterations && !status && !stop; n++) {
-        core->params.iteration = n;
-        status = iterate(core, pass, n, &radius2) ||
-                 (snapshot && (take_snapshot(core, pass->photon_record_bytes, snapshot) ||
-                               (pass->snapshot && pass->snapshot(core, pass->state))));
+        for (unsigned int k = 0; k < count; k++)
+            cores[k].params.iteration = n;
+        status = iterate(cores, count, pass, n, &radius2) ||
+                 (snapshot && (take_snapshot(cores, pass->photon_record_bytes, snapshot) ||
+                               (pass->snapshot && pass->snapshot(cores, pass->state))));
         if (status)
             break;
         char detail[64] = "";
         double collect_start = monotonic_seconds();
-        status = pass->collect(core, pass->state, n, &stop, detail, sizeof detail);
+        status = pass->collect(cores, count, pass->state, n, &stop, detail, sizeof detail);
         if (status)
             break;
         summary->seconds.collect += monotonic_seconds() - collect_start;
@@ -387,6 +561,8 @@ static int run_iterations(sppm *core, sppm_pass *pass, sppm_snapshot *snapshot)
         progress_update(&bar, n + 1, detail);
         radius2 = sppm_next_radius2(radius2, n, o->alpha);
         CHECK_FINITE(radius2, "gather radius²");
+        if (count > 1 && !o->fixed_split && n >= 1 && n <= SPPM_REBALANCE_ITERATIONS)
+            rebalance(cores, count);
         if (o->time_limit > 0 && monotonic_seconds() - start >= o->time_limit)
             stop = 1;
     }
@@ -395,39 +571,118 @@ static int run_iterations(sppm *core, sppm_pass *pass, sppm_snapshot *snapshot)
     return status ? -1 : 0;
 }
 
-int sppm_run(device *d, const scene *s, const bvh *b, const sppm_options *o, sppm_pass *pass,
-             sppm_summary *summary, sppm_snapshot *snapshot)
+/* The first split (options' weights, else compute units) and each device's capacity. */
+static void first_split(const sppm_options *o, device *devices, unsigned int count,
+                        unsigned int photons, unsigned int *counts, unsigned int *capacity)
+{
+    double weight[SPPM_MAX_DEVICES];
+    unsigned int all[SPPM_MAX_DEVICES];
+    for (unsigned int k = 0; k < count; k++) {
+        double w = o->split ? o->split[k] : (double)devices[k].info.compute_units;
+        weight[k] = w > 0 && isfinite(w) ? w : 1.0;
+        all[k] = photons;
+    }
+    sppm_split_paths(photons, count, weight, all, counts);
+    for (unsigned int k = 0; k < count; k++) {
+        double room = count == 1 ? photons : ceil(counts[k] * SPPM_SHARE_HEADROOM);
+        capacity[k] = (unsigned int)fmax(1.0, fmin(room, photons));
+    }
+}
+
+/* A device's memory, checked; with several devices the error names it. */
+static int check_device_memory(const device *d, unsigned int count, const sppm_options *o,
+                               const sppm_pass *pass, const sppm_memory *m)
+{
+    if (!check_memory(d, o, pass, m))
+        return 0;
+    return count > 1 ? error_prefix("device %d (%s)", d->info.index, d->info.name) : -1;
+}
+
+int sppm_run_devices(device *devices, unsigned int count, const scene *s, const bvh *b,
+                     const sppm_options *o, sppm_pass *pass, sppm_summary *summary,
+                     sppm_snapshot *snapshot)
 {
     memset(summary, 0, sizeof *summary);
-    sppm_memory memory;
-    if (check_inputs(d, s, o, pass, summary) ||
-        sppm_memory_of(d, s, bvh_device_bytes(b), o, pass, &memory) ||
-        check_memory(d, o, pass, &memory)) {
+    if (count == 0 || count > SPPM_MAX_DEVICES || (snapshot && count > 1)) {
+        pass->release(pass->state);
+        return error_set(IDMR_EXIT_INPUT,
+                         count > 1 && count <= SPPM_MAX_DEVICES
+                             ? "%s: snapshots are taken on one device (asked for %u)"
+                             : "%s: a run takes 1 to " SPPM_MAX_DEVICES_TEXT " devices (asked for %u)",
+                         pass->name, count);
+    }
+    unsigned int counts[SPPM_MAX_DEVICES], capacity[SPPM_MAX_DEVICES];
+    sppm_memory memory[SPPM_MAX_DEVICES];
+    int status = check_inputs(devices, s, o, pass, summary);
+    if (!status) {
+        first_split(o, devices, count, summary->photons, counts, capacity);
+        for (unsigned int k = 0; k < count && !status; k++) {
+            memory_of_capacity(s, bvh_device_bytes(b), summary->width * summary->height,
+                               capacity[k], pass, memory + k);
+            status = check_device_memory(devices + k, count, o, pass, memory + k);
+        }
+    }
+    if (status) {
         pass->release(pass->state);
         return -1;
     }
-    sppm core = {.dev = d, .scene = s, .options = o, .summary = summary,
-                 .pixels = summary->width * summary->height};
-    int status = device_scene_upload(d, s, b, &core.uploaded);
+    summary->devices = count;
+    sppm cores[SPPM_MAX_DEVICES];
+    memset(cores, 0, sizeof cores);
+    for (unsigned int k = 0; k < count; k++) {
+        cores[k] = (sppm){.dev = devices + k, .index = k, .scene = s, .options = o,
+                          .summary = summary, .pixels = summary->width * summary->height,
+                          .capacity = capacity[k]};
+        sppm_device_share *share = summary->device + k;
+        share->index = devices[k].info.index;
+        snprintf(share->name, sizeof share->name, "%s", devices[k].info.name);
+        share->capacity = capacity[k];
+    }
+    unsigned int uploaded = 0;
+    for (; uploaded < count && !status; uploaded++) {
+        status = device_scene_upload(devices + uploaded, s, b, &cores[uploaded].uploaded);
+        if (status && count > 1)
+            error_prefix("device %d (%s)", devices[uploaded].info.index,
+                         devices[uploaded].info.name);
+    }
     if (o->release_bvh)
         bvh_free(o->release_bvh);
+    for (unsigned int k = 0; k < count && !status; k++) {
+        params_begin(cores + k);
+        status = build_program(cores + k, pass) || allocate(cores + k, pass) ||
+                 pass->prepare(cores + k, pass->state);
+        if (status && count > 1)
+            error_prefix("device %d (%s)", devices[k].info.index, devices[k].info.name);
+    }
     if (!status) {
-        summary->bvh_bytes = core.uploaded.bvh_bytes;
-        summary->geometry_bytes = core.uploaded.bytes - core.uploaded.bvh_bytes;
-        params_begin(&core);
-        status = build_program(&core, pass) || allocate(&core, pass) ||
-                 pass->prepare(&core, pass->state) || run_iterations(&core, pass, snapshot) ||
-                 (pass->finish && pass->finish(&core, pass->state));
+        summary->bvh_bytes = cores[0].uploaded.bvh_bytes;
+        summary->geometry_bytes = cores[0].uploaded.bytes - cores[0].uploaded.bvh_bytes;
+        set_ranges(cores, count, counts);
+        status = run_iterations(cores, count, pass, snapshot) ||
+                 (pass->finish && pass->finish(cores, pass->state));
     }
     pass->release(pass->state);
-    release(&core);
-    /* What was allocated is what sppm_memory_of() says a run allocates: budgets rely on it. */
-    uint64_t allocated = summary->geometry_bytes + summary->bvh_bytes + summary->buffer_bytes;
-    if (!status && allocated != sppm_memory_total(&memory))
-        status = error_set(IDMR_EXIT_FAILURE,
-                           "internal error: the %s pass allocated %llu bytes on the device, "
-                           "but sppm_memory_of() says %llu",
-                           pass->name, (unsigned long long)allocated,
-                           (unsigned long long)sppm_memory_total(&memory));
+    for (unsigned int k = 0; k < count; k++) {
+        summary->device[k].bytes = cores[k].uploaded.bytes + cores[k].buffer_bytes;
+        release(cores + k);
+    }
+    summary->buffer_bytes = cores[0].buffer_bytes;
+    /* What was allocated is what sppm_memory_of() says a run allocates: budgets rely on it.
+     * (The pass's finish hook runs on the first device alone: the others may allocate less.) */
+    for (unsigned int k = 0; k < count && !status; k++)
+        if (k == 0 ? summary->device[k].bytes != sppm_memory_total(memory + k)
+                   : summary->device[k].bytes > sppm_memory_total(memory + k))
+            status = error_set(IDMR_EXIT_FAILURE,
+                               "internal error: the %s pass allocated %llu bytes on device %d, "
+                               "but sppm_memory_of() says %llu",
+                               pass->name, (unsigned long long)summary->device[k].bytes,
+                               devices[k].info.index,
+                               (unsigned long long)sppm_memory_total(memory + k));
     return status ? -1 : 0;
+}
+
+int sppm_run(device *d, const scene *s, const bvh *b, const sppm_options *o, sppm_pass *pass,
+             sppm_summary *summary, sppm_snapshot *snapshot)
+{
+    return sppm_run_devices(d, 1, s, b, o, pass, summary, snapshot);
 }

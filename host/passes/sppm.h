@@ -24,7 +24,24 @@
  * of progressive photon mapping). Both passes use it.
  *
  * Stops: after options.iterations, after the iteration in which options.time_limit seconds pass
- * (when > 0), or when the pass's collect hook says so. */
+ * (when > 0), or when the pass's collect hook says so.
+ *
+ * Several devices (sppm_run_devices): each gets a core of its own (upload, program, buffers).
+ * Every device traces all camera paths (about 5 % of an iteration; every device's gather needs
+ * all hit points, and the camera streams are keyed by pixel, so devices that compute alike
+ * find the same hit points), but only the first device's camera paths add what the pass
+ * records (idmr_sppm_params.camera_sums; the importance pass also casts its shadow rays there
+ * alone). The photon paths of an iteration are split into contiguous ranges, one per device:
+ * device k traces paths [first_k, first_k + count_k), path p drawing from the stream keyed
+ * by p wherever it runs, gathers them against its own grid and walks them back. The collect
+ * hook gets every device's core and adds their integer sums before converting them, so the
+ * result is the one device's bit for bit, whatever the split. The split starts by the
+ * options' weights (default: compute units) and, unless fixed, follows each device's measured
+ * photon pass seconds per path after iterations 1 to SPPM_REBALANCE_ITERATIONS. A device's
+ * slots hold SPPM_SHARE_HEADROOM times its first share (at most all paths), and its memory is
+ * checked on its own: the whole scene plus those slots. The first device's radius rules (it
+ * decides it from its hit points); one host thread per device drives the devices at once,
+ * meeting after the paths (radius) and after the gathers (collect). */
 #ifndef IDMR_SPPM_H
 #define IDMR_SPPM_H
 
@@ -55,6 +72,9 @@ typedef struct sppm_options {
                                 (bvh_free) once uploaded, so that on a device sharing the
                                 host's memory they do not sit beside the device's copy */
     int generic;             /* build the all-features program instead of the scene's */
+    const double *split;     /* several devices: the first split of the photon paths, one
+                                weight > 0 per device (NULL: by compute units) */
+    int fixed_split;         /* keep the first split (no rebalancing; for tests) */
     int progress;            /* report progress on stderr */
 } sppm_options;
 
@@ -79,13 +99,32 @@ double sppm_initial_radius2(const scene *s, unsigned int width, const idmr_hit_p
                             size_t count);
 double sppm_next_radius2(double radius2, unsigned int n, float alpha);
 
+/* Devices one run takes at most; iterations after which the split follows the measured speeds;
+ * a device's photon slots against its first share. */
+#define SPPM_MAX_DEVICES 16
+#define SPPM_REBALANCE_ITERATIONS 3
+#define SPPM_SHARE_HEADROOM 1.5
+
 typedef struct sppm_seconds {
     double build;                                 /* kernel build (or program cache load) */
     double camera, photon, grid, gather, collect; /* summed over iterations */
     double total;                                 /* all iterations, build excluded */
 } sppm_seconds;
 
-/* What a run of the core did, for the passes' results and reports. */
+/* One device of a run: what it took of the photon paths. */
+typedef struct sppm_device_share {
+    int index;                /* its number (`idmr devices`) */
+    char name[128];
+    unsigned int capacity;    /* photon paths its slots hold */
+    unsigned int last_paths;  /* photon paths it traced in the last iteration */
+    uint64_t paths;           /* photon paths it traced, all iterations */
+    double photon_seconds;    /* its photon passes, summed */
+    uint64_t bytes;           /* its device memory: geometry, BVH and buffers */
+} sppm_device_share;
+
+/* What a run of the core did, for the passes' results and reports. With several devices the
+ * bytes are the first device's (each device's are in device[]), each stage's seconds the most
+ * any device spent in it, and the build seconds those of all devices' builds (made in turn). */
 typedef struct sppm_summary {
     unsigned int width, height; /* hit-point image */
     unsigned int photons;       /* photon paths per iteration */
@@ -98,6 +137,8 @@ typedef struct sppm_summary {
     uint64_t buffer_bytes;      /*                the core's and the pass's buffers */
     char *build_options;
     sppm_seconds seconds;
+    unsigned int devices;       /* devices the run used */
+    sppm_device_share device[SPPM_MAX_DEVICES];
 } sppm_summary;
 
 void sppm_summary_free(sppm_summary *summary);
@@ -117,6 +158,8 @@ void sppm_snapshot_free(sppm_snapshot *snapshot);
 /* The core while it runs; the pass's hooks read it and add their kernels' work. */
 typedef struct sppm {
     device *dev;
+    unsigned int index;     /* its place among the run's devices: 0 is the first, whose camera
+                               paths (and the pass's camera-side work) count */
     const scene *scene;
     const sppm_options *options;
     device_scene uploaded;
@@ -129,9 +172,14 @@ typedef struct sppm {
     size_t stored;                  /* the list's length this iteration, read back */
     hit_point_grid grid;
     unsigned int pixels;
-    size_t slots;                   /* photon record slots: paths × IDMR_PATH_VERTICES */
+    size_t slots;                   /* photon record slots: capacity × IDMR_PATH_VERTICES */
+    unsigned int capacity;          /* photon paths the slots hold (all of them on one device) */
+    double radius2;                 /* this iteration's gather radius², for the grid */
+    uint64_t buffer_bytes;          /* the core's and the pass's buffers on this device */
+    sppm_seconds seconds;           /* this device's stages, summed */
+    double photon_pass_seconds;     /* the last iteration's photon pass (for the split) */
     unsigned int camera_pass_argument; /* camera_paths' first argument after the core's */
-    idmr_sppm_params params; /* this iteration's */
+    idmr_sppm_params params; /* this iteration's (path_first, device_paths: this device's) */
     sppm_summary *summary;
 } sppm;
 
@@ -146,21 +194,22 @@ typedef struct sppm_pass {
      * hit-point image of `pixels` and `slots` photon slots, from the sizes its hooks allocate
      * (NULL: none). */
     uint64_t (*pass_bytes)(const scene *s, unsigned int pixels, size_t slots);
-    /* Once the program is built and the core's buffers exist: creates the pass's kernels and
-     * buffers (adding their bytes to core->summary->buffer_bytes), binds camera_paths' records
-     * (argument core->camera_pass_argument), and may set constant params. */
+    /* Once the program is built and the core's buffers exist, on each device's core in turn:
+     * creates the pass's kernels and buffers (adding their bytes to core->buffer_bytes), binds
+     * camera_paths' records (argument core->camera_pass_argument), and may set constant params. */
     int (*prepare)(sppm *core, void *state);
-    /* Every iteration, once the grid is built: the pass's gather kernels. */
+    /* Every iteration, once the grid is built: the pass's gather kernels, on every device's
+     * core at once (one host thread each: touch only what belongs to core->index). */
     int (*gather)(sppm *core, void *state);
-    /* Every iteration: reads the pass's accumulators back, adds them up and clears them;
-     * iteration n (from 0) has just finished. Sets *stop to end the run early, and may write a
-     * progress detail. */
-    int (*collect)(sppm *core, void *state, unsigned int n, int *stop, char *detail,
-                   size_t detail_size);
+    /* Every iteration, with the `count` devices' cores: reads the pass's accumulators back,
+     * adds them up (as integers, before any conversion) and clears them; iteration n (from 0)
+     * has just finished. Sets *stop to end the run early, and may write a progress detail. */
+    int (*collect)(sppm *cores, unsigned int count, void *state, unsigned int n, int *stop,
+                   char *detail, size_t detail_size);
     /* When a snapshot is asked for: copies the pass's buffers of the iteration (may be NULL). */
     int (*snapshot)(sppm *core, void *state);
-    /* After the last iteration, before the core is released (may be NULL); adds the bytes of
-     * any buffer it allocates to core->summary->buffer_bytes. */
+    /* After the last iteration, on the first device's core, before the cores are released (may
+     * be NULL); adds the bytes of any buffer it allocates to core->buffer_bytes. */
     int (*finish)(sppm *core, void *state);
     /* Releases what prepare created; always called, once (also when a run fails before
      * prepare: the state is then as the pass made it). */
@@ -191,5 +240,17 @@ uint64_t sppm_memory_total(const sppm_memory *m);
  * core buffers. Returns 0, or -1 with the error set. */
 int sppm_run(device *d, const scene *s, const bvh *b, const sppm_options *o, sppm_pass *pass,
              sppm_summary *summary, sppm_snapshot *snapshot);
+
+/* sppm_run() on the `count` devices of `devices` at once (above; at most SPPM_MAX_DEVICES):
+ * each device's memory is checked on its own, errors name the device. A snapshot is taken
+ * on one device only (refused with several). */
+int sppm_run_devices(device *devices, unsigned int count, const scene *s, const bvh *b,
+                     const sppm_options *o, sppm_pass *pass, sppm_summary *summary,
+                     sppm_snapshot *snapshot);
+
+/* Splits `total` photon paths over `count` devices in proportion to `weight` (each > 0), none
+ * above its `capacity` (Σ capacity >= total), into counts[]; whole paths, deterministic. */
+void sppm_split_paths(unsigned int total, unsigned int count, const double *weight,
+                      const unsigned int *capacity, unsigned int *counts);
 
 #endif

@@ -80,8 +80,20 @@ static int run_pass(reduce_state *st, unsigned int pass)
 
 int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
 {
-    reduce_state st = {.device = d, .scene = s, .simulated = s, .outdir = outdir, .options = o,
-                       .count = s->mesh_count, .target = o->target, .initial = o->initial};
+    return reduce_run_devices(d, 1, s, outdir, o);
+}
+
+int reduce_run_devices(device *devices, unsigned int count, scene *s, const char *outdir,
+                       const reduce_options *o)
+{
+    if (count > 1 && o->memory_budget)
+        return error_set(IDMR_EXIT_INPUT,
+                         "reduce: --memory-budget plans the scene for one device: give one "
+                         "--device number (%u devices were chosen)",
+                         count);
+    reduce_state st = {.device = devices, .device_count = count, .scene = s, .simulated = s,
+                       .outdir = outdir, .options = o, .count = s->mesh_count,
+                       .target = o->target, .initial = o->initial};
     st.passes = xcalloc(REDUCE_MAX_PASSES + 1, sizeof *st.passes);
     int status = reduce_options_check(&st) || reduce_memory_plan(&st);
     /* The budget leaves nothing to remove (the scene renders within it as it is): the scene is

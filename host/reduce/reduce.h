@@ -154,4 +154,10 @@ decimate_method reduce_method_collapses(reduce_method method);
  * with the error set. */
 int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o);
 
+/* reduce_run() with its importance passes on the `count` devices of `devices` at once
+ * (importance_run_devices: the same importance bit for bit as on the first alone). A memory
+ * budget plans for one device: with several, --memory-budget is refused. */
+int reduce_run_devices(device *devices, unsigned int count, scene *s, const char *outdir,
+                       const reduce_options *o);
+
 #endif

@@ -136,7 +136,8 @@ static int importance_with_stop_rule(reduce_state *st)
     int status = bvh_build(s, &b);
     options.sppm.release_bvh = &b; /* the host's copy is not needed once uploaded */
     if (!status) {
-        status = importance_run(st->device, s, &b, &options, &st->importance);
+        status = importance_run_devices(st->device, st->device_count, s, &b, &options,
+                                        &st->importance);
         bvh_free(&b);
     }
     free(c.budget);

@@ -344,6 +344,8 @@ int reduce_report_write(const reduce_state *st)
 /* The reduced scene's file name in OUTDIR. */
 static const char *reduced_scene_name(const scene *s)
 {
+    if (scene_is_pbrt(s))
+        return "scene.pbrt";
     return scene_is_gltf(s) ? gltf_output_name(s->file) : "scene.xml";
 }
 

@@ -112,7 +112,8 @@ typedef struct reduce_pass_record {
 typedef struct reduce_state {
     /* reduce_run(): what the run was given (options: replaced where the memory budget leaves
      * nothing to remove), and a record per importance pass */
-    device *device;
+    device *device;       /* the first of the devices: budgets and memory plans are its */
+    unsigned int device_count; /* the importance pass runs on device[0 .. device_count) */
     scene *scene;
     const char *outdir;   /* OUTDIR as given: what messages name */
     const reduce_options *options;

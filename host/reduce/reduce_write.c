@@ -2,7 +2,8 @@
  * reduced scene in the staging directory. A Mitsuba scene: meshes/NAME.ply for every mesh the
  * plan decimated (each read back and checked: io/ply_check.h) and scene.xml, the input's XML
  * with those shapes pointing to them (io/mitsuba_write.h); a glTF scene: scene.gltf (.glb) with
- * the decimated meshes in it (io/gltf.h). */
+ * the decimated meshes in it (io/gltf.h); a pbrt-v4 scene: meshes/NAME.ply in each shape's own
+ * space and scene.pbrt, the input's text with those Shape statements naming them (io/pbrt.h). */
 #include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -14,6 +15,7 @@
 #include "io/gltf.h"
 #include "io/mesh_io.h"
 #include "io/mitsuba_write.h"
+#include "io/pbrt.h"
 #include "io/ply_check.h"
 #include "io/scene_load.h"
 #include "passes/importance_outputs.h"
@@ -56,8 +58,40 @@ static int write_reduced_gltf(reduce_state *st)
     return status;
 }
 
+/* A pbrt-v4 scene: OUTDIR/meshes/NAME.ply for every decimated mesh, in the space its Shape
+ * statement gives points in (io/pbrt.h: pbrt_mesh_to_object_space), then OUTDIR/scene.pbrt, the
+ * input's text with those statements naming them. */
+static int write_reduced_pbrt(reduce_state *st, const char *meshes)
+{
+    const scene *s = st->scene;
+    if (st->options->bundle)
+        warn("--bundle is not applied to a pbrt scene: its paths are written relative to %s "
+             "(or absolute)",
+             st->outdir);
+    int status = files_make_directory(meshes);
+    st->ply = xcalloc(st->count + 1, sizeof *st->ply);
+    pbrt_replacement *replacements = xcalloc(st->count + 1, sizeof *replacements);
+    for (size_t m = 0; m < st->count && !status; m++) {
+        if (!st->plan.decimate[m])
+            continue;
+        char path[PATH_MAX];
+        mesh_data object;
+        name_ply(st, m);
+        snprintf(path, sizeof path, "%s/%s", st->staging, st->ply[m]);
+        status = pbrt_mesh_to_object_space(&s->meshes[m], &st->output[m].mesh, &object) ||
+                 mesh_io_write_ply(path, &object, NULL, NULL, NULL) || ply_check_written(path);
+        mesh_data_free(&object);
+        replacements[st->meshes_written++] = (pbrt_replacement){
+            s->meshes[m].xml_file, s->meshes[m].source_offset, s->meshes[m].xml_line, st->ply[m]};
+    }
+    if (!status)
+        status = pbrt_write_reduced(s->file, st->staging, replacements, st->meshes_written);
+    free(replacements);
+    return status;
+}
+
 /* OUTDIR/meshes/NAME.ply for every decimated mesh, then OUTDIR/scene.xml pointing to them; or,
- * for a glTF scene, OUTDIR/scene.gltf (.glb). */
+ * for a glTF scene, OUTDIR/scene.gltf (.glb); for a pbrt-v4 scene, OUTDIR/scene.pbrt. */
 int reduce_write(reduce_state *st)
 {
     const scene *s = st->scene;
@@ -69,6 +103,11 @@ int reduce_write(reduce_state *st)
     }
     char meshes[PATH_MAX];
     snprintf(meshes, sizeof meshes, "%s/meshes", st->staging);
+    if (scene_is_pbrt(s)) {
+        int status = write_reduced_pbrt(st, meshes);
+        st->seconds_write = monotonic_seconds() - start;
+        return status;
+    }
     int status = files_make_directory(meshes);
     st->ply = xcalloc(st->count + 1, sizeof *st->ply);
     mitsuba_replacement *replacements = xcalloc(st->count + 1, sizeof *replacements);

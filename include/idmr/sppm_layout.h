@@ -51,7 +51,7 @@ typedef struct idmr_sppm_params {
     unsigned int width; /* hit-point image: one camera path per pixel */
     unsigned int height;
 
-    unsigned int path_count; /* photon paths this iteration */
+    unsigned int path_count; /* photon paths this iteration, on all devices together */
     unsigned int light_count;
     unsigned int cell_count; /* hash-grid buckets (a power of two) */
     unsigned int triangle_count;
@@ -64,10 +64,21 @@ typedef struct idmr_sppm_params {
 
     float scene_center[3];
     float scene_radius; /* bounding sphere: directional lights start outside it */
+
+    /* The photon paths this device traces: [path_first, path_first + device_paths) of the
+     * path_count, into its slots from 0 (path path_first + i in slot i); one device: 0 and
+     * path_count. Path p draws from the stream keyed by p wherever it runs. */
+    unsigned int path_first;
+    unsigned int device_paths;
+    unsigned int camera_sums; /* 1: camera paths add what the pass records (the first device);
+                                 0: they leave only hit points (the others: counted once) */
+    unsigned int pad;
 } idmr_sppm_params;
 
-IDMR_STATIC_ASSERT(sizeof(idmr_sppm_params) == 64, "idmr_sppm_params is 64 bytes");
+IDMR_STATIC_ASSERT(sizeof(idmr_sppm_params) == 80, "idmr_sppm_params is 80 bytes");
 IDMR_OFFSET_ASSERT(idmr_sppm_params, radius, 32);
 IDMR_OFFSET_ASSERT(idmr_sppm_params, scene_center, 48);
+IDMR_OFFSET_ASSERT(idmr_sppm_params, path_first, 64);
+IDMR_OFFSET_ASSERT(idmr_sppm_params, camera_sums, 72);
 
 #endif

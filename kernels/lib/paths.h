@@ -13,7 +13,8 @@
  *                 (the emission × the mirrors' colours) to the seen-light sum of every specular
  *                 triangle on the way, the first IDMR_SEEN_LIGHT_CHAIN of them: the light a
  *                 camera sees in a glint or through glass, which no photon gather records
- *                 (importance.h turns it into gathers)
+ *                 (importance.h turns it into gathers); both only where params->camera_sums
+ *                 (the first device of a run: the others' camera paths leave hit points only)
  *     render      carries the specular throughput (a mirror's colour), adds the emission it
  *                 sees (an area light's front, the environment once it leaves the scene) and
  *                 ends at the back of a one-sided surface (black, no hit point); from
@@ -104,6 +105,8 @@ typedef struct specular_chain {
 inline void credit_seen_light(const idmr_sppm_params *params, const specular_chain *chain,
                               float3 emitted, volatile global fixed_word *seen_light)
 {
+    if (!params->camera_sums)
+        return; /* another device counts them */
     float3 seen = chain->colour * emitted;
     float units = idmr_luminance(seen.x, seen.y, seen.z) * params->fixed_scale;
     if (!(units > 0.0f))
@@ -152,8 +155,9 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
         float offset = surface_offset(scene, hit.triangle, origin);
         global const idmr_material *m = triangle_material(scene, hit.triangle);
 #if PASS_IMPORTANCE && IDMR_ACCUMULATE_IMPORTANCE && IDMR_CAMERA_IMPORTANCE
-        fixed_add(records, hit.triangle,
-                  weight_units(idmr_eq2_weight(n.x, n.y, n.z, d.x, d.y, d.z)));
+        if (params->camera_sums)
+            fixed_add(records, hit.triangle,
+                      weight_units(idmr_eq2_weight(n.x, n.y, n.z, d.x, d.y, d.z)));
 #endif
 #if PASS_RENDER
         radiance += throughput * surface_emission(scene, params->light_count, hit.triangle, d, n);

@@ -15,6 +15,9 @@
  *                      fingerprint and closing checksum are first set to what the reader
  *                      expects, so the fuzzer reaches the checks behind them (a damaged
  *                      checksum is a compare that needs no fuzzing)
+ *   fuzz_pbrt_input    the bytes are a pbrt-v4 scene in up to three files, split as for
+ *                      fuzz_scene_input: scene.pbrt, a.pbrt (for Include), m.ply (for plymesh);
+ *                      the scene is loaded with pbrt_load()
  *   fuzz_gltf_input    the bytes are one glTF file: scene.glb when they begin with "glTF",
  *                      else scene.gltf (its buffers as data: URIs or the GLB's BIN chunk), loaded
  *                      with gltf_load(): the document reader and checks, then Assimp on what
@@ -35,6 +38,7 @@
 #include "io/gltf.h"
 #include "io/mesh_io.h"
 #include "io/mitsuba.h"
+#include "io/pbrt.h"
 #include "passes/importance_file.h"
 
 #define FUZZ_FILE_SEPARATOR "--idmr-fuzz-next-file--\n"
@@ -80,6 +84,30 @@ static inline int fuzz_scene_input(const uint8_t *data, size_t size, const char 
     snprintf(path, sizeof path, "%s/scene.xml", dir);
     error_clear();
     scene *s = mitsuba_load(path);
+    if (!s)
+        return 0;
+    scene_free(s);
+    return 1;
+}
+
+static const char *const fuzz_pbrt_files[] = {"scene.pbrt", "a.pbrt", "m.ply"};
+#define FUZZ_PBRT_FILES (sizeof fuzz_pbrt_files / sizeof *fuzz_pbrt_files)
+
+static inline int fuzz_pbrt_input(const uint8_t *data, size_t size, const char *dir)
+{
+    size_t length = strlen(FUZZ_FILE_SEPARATOR);
+    for (size_t f = 0; f < FUZZ_PBRT_FILES; f++) {
+        size_t end = fuzz_part_end(data, size);
+        if (fuzz_write(dir, fuzz_pbrt_files[f], data, end))
+            abort(); /* the harness's own failure, not the reader's */
+        size_t next = end + length <= size ? end + length : size;
+        data += next;
+        size -= next;
+    }
+    char path[4096];
+    snprintf(path, sizeof path, "%s/scene.pbrt", dir);
+    error_clear();
+    scene *s = pbrt_load(path);
     if (!s)
         return 0;
     scene_free(s);
