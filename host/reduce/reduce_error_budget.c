@@ -19,7 +19,8 @@
  * Check renders: the hit-point film at --check-resolution (default 0.25) of the scene's,
  * --check-iterations (16) of --check-photons (50,000) photon paths: sized for a CPU; the error
  * they measure is the change at that film size (the same at any size for what covers many
- * pixels; a change of a pixel or two is averaged into the larger pixels). */
+ * pixels; a change of a pixel or two is averaged into the larger pixels). They run on the first
+ * device (st->device) whatever devices the importance pass shares. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
