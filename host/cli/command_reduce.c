@@ -1,6 +1,8 @@
 /* command_reduce.c — `idmr reduce SCENE --target D -o OUTDIR [options]`: the reduced scene
- * (reduce/reduce.h: importance pass, budget, decimation, writing OUTDIR). Options: the
- * importance pass's (options.h) and the reduction's own. */
+ * (reduce/reduce.h: importance pass, budget, decimation, writing OUTDIR); `--max-error E` (or
+ * `--max-error-relative F`) instead of --target searches the smallest D within that image
+ * error (reduce_error_budget.c). Options: the importance pass's (options.h) and the
+ * reduction's own. */
 #include <malloc.h>
 #include <stdlib.h>
 #include <string.h>
@@ -17,7 +19,18 @@
 typedef struct reduce_cli_request {
     reduce_options options;
     int have_target;
+    int error_bounds; /* --max-error and --max-error-relative given: at most one may be */
+    int search_options; /* --max-error-step and --check-* given: only with one of them */
 } reduce_cli_request;
+
+/* --max-error E or --max-error-relative F (reduce.h, reduce_error_options). */
+static enum option_parse parse_error_bound(reduce_cli_request *request, const char *name,
+                                           reduce_error_bound bound)
+{
+    request->error_bounds++;
+    request->options.error.bound = bound;
+    return option_result(parse_double(name, optarg, 0, 1e30, &request->options.error.max_error));
+}
 
 static enum option_parse parse_option(int c, void *context, pass_arguments *arguments)
 {
@@ -72,6 +85,31 @@ static enum option_parse parse_option(int c, void *context, pass_arguments *argu
     case OPT_RANKING_TOLERANCE:
         return option_result(
             parse_double("--ranking-tolerance", optarg, 0, 2, &o->ranking_tolerance));
+    case OPT_MAX_ERROR:
+        return parse_error_bound(request, "--max-error", REDUCE_ERROR_ABSOLUTE);
+    case OPT_MAX_ERROR_RELATIVE:
+        return parse_error_bound(request, "--max-error-relative", REDUCE_ERROR_RELATIVE);
+    case OPT_MAX_ERROR_STEP:
+    case OPT_CHECK_ITERATIONS:
+    case OPT_CHECK_RESOLUTION:
+    case OPT_CHECK_PHOTONS:
+        request->search_options++;
+        break;
+    default:
+        break;
+    }
+    switch (c) {
+    case OPT_MAX_ERROR_STEP:
+        return option_result(parse_double("--max-error-step", optarg, 1e-6, 10, &o->error.step));
+    case OPT_CHECK_ITERATIONS:
+        return option_result(
+            parse_unsigned("--check-iterations", optarg, 1, 1u << 20, &o->error.iterations));
+    case OPT_CHECK_RESOLUTION:
+        return option_result(
+            parse_double("--check-resolution", optarg, 1e-3, 4, &o->error.resolution));
+    case OPT_CHECK_PHOTONS:
+        return option_result(
+            parse_unsigned("--check-photons", optarg, 1, 1u << 30, &o->error.photons));
     default:
         return parse_importance_option(c, &o->importance, &arguments->devices);
     }
@@ -123,16 +161,33 @@ int command_reduce(int argc, char **argv)
         {"initial", required_argument, NULL, OPT_INITIAL},
         {"passes", required_argument, NULL, OPT_PASSES},
         {"memory-budget", required_argument, NULL, OPT_MEMORY_BUDGET},
+        {"max-error", required_argument, NULL, OPT_MAX_ERROR},
+        {"max-error-relative", required_argument, NULL, OPT_MAX_ERROR_RELATIVE},
+        {"max-error-step", required_argument, NULL, OPT_MAX_ERROR_STEP},
+        {"check-iterations", required_argument, NULL, OPT_CHECK_ITERATIONS},
+        {"check-resolution", required_argument, NULL, OPT_CHECK_RESOLUTION},
+        {"check-photons", required_argument, NULL, OPT_CHECK_PHOTONS},
         {0, 0, 0, 0}};
-    reduce_cli_request request = {.have_target = 0};
+    reduce_cli_request request = {.have_target = 0, .error_bounds = 0, .search_options = 0};
     reduce_options_default(&request.options);
     request.options.importance.sppm.progress = 1;
     request.options.keep = xcalloc((size_t)argc + 1, sizeof *request.options.keep);
     pass_arguments arguments = {.command = "reduce"};
     int code = parse_pass_arguments(argc, argv, table, parse_option, &request, &arguments);
-    if (!code && (!arguments.output || (!request.have_target && !request.options.memory_budget)))
-        code = usage_error("reduce: -o OUTDIR and --target D or --memory-budget BYTES are "
-                           "required");
+    int searched = request.options.error.bound != REDUCE_ERROR_NONE;
+    if (!code && request.error_bounds > 1)
+        code = usage_error("reduce: give one of --max-error E and --max-error-relative F, not "
+                           "both");
+    if (!code && searched && request.have_target)
+        code = usage_error("reduce: --target D and --max-error are exclusive: --max-error "
+                           "searches for the target");
+    if (!code && !searched && request.search_options)
+        code = usage_error("reduce: --max-error-step and --check-* are for --max-error or "
+                           "--max-error-relative");
+    if (!code && (!arguments.output ||
+                  (!request.have_target && !request.options.memory_budget && !searched)))
+        code = usage_error("reduce: -o OUTDIR and --target D or --memory-budget BYTES (or "
+                           "--max-error E) are required");
     if (!code && !request.have_target)
         request.options.target = 1.0; /* the budget alone sets it */
     if (!code && request.options.simulation &&

@@ -48,6 +48,12 @@ enum option_id {
     OPT_INITIAL,
     OPT_PASSES,
     OPT_MEMORY_BUDGET,
+    OPT_MAX_ERROR,
+    OPT_MAX_ERROR_RELATIVE,
+    OPT_MAX_ERROR_STEP,
+    OPT_CHECK_ITERATIONS,
+    OPT_CHECK_RESOLUTION,
+    OPT_CHECK_PHOTONS,
 };
 
 /* Options of the SPPM core, shared by `importance`, `reduce` and `render` (-o among them). */

@@ -26,6 +26,7 @@ static void state_free(reduce_state *st)
     reduce_write_free(st);
     forget_reduction(st);
     reduce_passes_free(st);
+    reduce_error_budget_free(st);
     free(st->passes);
 }
 
@@ -67,8 +68,14 @@ static int run_pass(reduce_state *st, unsigned int pass)
     if (st->options->passes > 1 && st->options->importance.sppm.progress)
         fprintf(stderr, "idmr: pass %u of %u: importance on %llu vertices\n", pass,
                 st->options->passes, (unsigned long long)st->simulated->vertex_count);
-    return reduce_importance(st) || reduce_plan_budget(st) || reduce_decimation(st) ||
-           record_pass(st, importance_before, reduction_before);
+    if (reduce_importance(st))
+        return -1;
+    /* With --max-error the target is searched for: the budget and decimation run at every D
+     * the search measures, and last at the D it found. */
+    int status = st->options->error.bound != REDUCE_ERROR_NONE
+                     ? reduce_error_budget(st)
+                     : reduce_plan_budget(st) || reduce_decimation(st);
+    return status || record_pass(st, importance_before, reduction_before);
 }
 
 int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)

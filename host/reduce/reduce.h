@@ -5,7 +5,8 @@
  *   OUTDIR/meshes/NAME.ply   the decimated meshes (world space)
  *   (a glTF scene instead: OUTDIR/scene.gltf + scene.bin, or scene.glb, io/gltf.h)
  *   OUTDIR/report.json       the importance report's keys, plus target, method, per mesh
- *                            factor / vertices_before / vertices_after, per-stage seconds
+ *                            factor / vertices_before / vertices_after, per-stage seconds;
+ *                            with --max-error, error_budget: the curve the search walked
  *   OUTDIR/importance.png, importance/, convergence.csv   (method importance)
  *
  * Methods (reduce_method): "importance" (the paper's: importance sets each mesh's budget, Eq. 3,
@@ -38,7 +39,8 @@
  * reduce_passes.c (the initial reduction, the scene each pass simulates, the remapping),
  * reduce_importance.c (the importance pass, with factor_stop.c saying when it has learnt
  * enough), reduce_budget.c (the plan of Eq. 3), reduce_decimation.c (with the compensation
- * rounds), reduce_write.c and reduce_report.c; and reduce_inputs.c (what the stages ask of each
+ * rounds), reduce_error_budget.c (--max-error: the target searched for by rendering each
+ * reduction, error_search.h), reduce_write.c and reduce_report.c; and reduce_inputs.c (what the stages ask of each
  * mesh). The stages share the reduce_state of reduce_stages.h. */
 #ifndef IDMR_REDUCE_H
 #define IDMR_REDUCE_H
@@ -70,8 +72,33 @@ typedef enum reduce_method {
     REDUCE_COMBINED,
 } reduce_method;
 
+/* --max-error E or --max-error-relative F (reduce_error_budget.c, error_search.h): the target is
+ * searched for instead of given. */
+typedef enum reduce_error_bound {
+    REDUCE_ERROR_NONE,     /* --target (or --memory-budget) sets D */
+    REDUCE_ERROR_ABSOLUTE, /* max_error in the units of `idmr compare --paired` */
+    REDUCE_ERROR_RELATIVE, /* max_error times the original render's mean radiance */
+} reduce_error_bound;
+
+typedef struct reduce_error_options {
+    reduce_error_bound bound;
+    double max_error;        /* E (>= 0), or the fraction F of the mean radiance */
+    double step;             /* the search ends when the passing and failing D are within a
+                                ratio of 1 + step (default 0.1) */
+    unsigned int iterations; /* SPPM iterations of each check render (default 16) */
+    double resolution;       /* scale of the scene's film for the check renders (default 0.25) */
+    unsigned int photons;    /* photon paths per iteration of a check render (default 50,000;
+                                0: the device's default) */
+} reduce_error_options;
+
+#define REDUCE_ERROR_STEP 0.1
+#define REDUCE_ERROR_ITERATIONS 16u
+#define REDUCE_ERROR_RESOLUTION 0.25
+#define REDUCE_ERROR_PHOTONS 50000u
+
 typedef struct reduce_options {
     importance_options importance;
+    reduce_error_options error; /* --max-error: the target searched for (bound set) */
     double target;           /* D: fraction of all vertices to keep, (0, 1] */
     reduce_method method;
     double factor_tolerance; /* stop the importance pass once the decimation factors move less

@@ -1,5 +1,6 @@
 /* reduce_options.c — the options of `idmr reduce`: defaults, the method's name, and the options
  * stage, which checks them against each other and the scene (see reduce.h, reduce_stages.h). */
+#include <math.h>
 #include <string.h>
 
 #include "core/error.h"
@@ -20,6 +21,10 @@ void reduce_options_default(reduce_options *o)
     o->max_normal_angle = 60.0;
     o->uv_weight = DECIMATE_UV_WEIGHT;
     o->normal_weight = DECIMATE_NORMAL_WEIGHT;
+    o->error.step = REDUCE_ERROR_STEP;
+    o->error.iterations = REDUCE_ERROR_ITERATIONS;
+    o->error.resolution = REDUCE_ERROR_RESOLUTION;
+    o->error.photons = REDUCE_ERROR_PHOTONS;
 }
 
 /* The methods, as --method names them, with how each chooses collapses. */
@@ -66,6 +71,35 @@ decimate_method reduce_method_collapses(reduce_method method)
     return DECIMATE_QUADRIC;
 }
 
+/* --max-error (or --max-error-relative) at least 0 and finite, the search's step and check
+ * renders sane, and none of the options that set the target or stage the reduction beside it
+ * (--memory-budget, --initial, --passes): the search reuses one importance pass of the whole
+ * scene for every budget it measures. */
+static int reduce_error_options_check(const reduce_options *o)
+{
+    const reduce_error_options *e = &o->error;
+    if (e->bound == REDUCE_ERROR_NONE)
+        return 0;
+    const char *name = e->bound == REDUCE_ERROR_RELATIVE ? "--max-error-relative" : "--max-error";
+    if (!(e->max_error >= 0) || !isfinite(e->max_error))
+        return error_set(IDMR_EXIT_INPUT, "%s must be a finite number of at least 0, not %g",
+                         name, e->max_error);
+    if (!(e->step > 0 && e->step <= 10))
+        return error_set(IDMR_EXIT_INPUT, "--max-error-step must be in (0, 10], not %g",
+                         e->step);
+    if (e->iterations < 1)
+        return error_set(IDMR_EXIT_INPUT, "--check-iterations must be at least 1");
+    if (!(e->resolution > 0 && e->resolution <= 4))
+        return error_set(IDMR_EXIT_INPUT, "--check-resolution must be in (0, 4], not %g",
+                         e->resolution);
+    if (o->memory_budget || o->initial < 1 || o->passes > 1)
+        return error_set(IDMR_EXIT_INPUT, "%s searches the target over one importance pass of "
+                                          "the whole scene: it cannot be combined with "
+                                          "--memory-budget, --initial or --passes",
+                         name);
+    return 0;
+}
+
 /* --target and --initial in (0, 1], --passes in 1 .. REDUCE_MAX_PASSES and only with a method
  * that has an importance pass (and not with --simulation, a pass of the whole scene); every
  * --keep name is a mesh of the scene. */
@@ -89,6 +123,8 @@ int reduce_options_check(const reduce_state *st)
         return error_set(IDMR_EXIT_INPUT, "--simulation is a pass over the whole scene: it "
                                           "cannot be combined with --initial, --passes or "
                                           "--memory-budget");
+    if (reduce_error_options_check(o))
+        return -1;
     for (size_t k = 0; k < o->keep_count; k++) {
         size_t m = 0;
         while (m < s->mesh_count && strcmp(s->meshes[m].name, o->keep[k]))

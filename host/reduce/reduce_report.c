@@ -188,6 +188,69 @@ static void add_memory(cJSON *root, const reduce_state *st)
     cJSON_AddNumberToObject(memory, "fit_rounds", st->fit_rounds);
 }
 
+/* The error budget's search (null without --max-error): the bound, the check renders, the curve
+ * walked (each step's D, vertices, paired error and standard error, seconds), the D chosen, and
+ * the seconds of the search against those of the plain reduce at that D. */
+static void add_error_budget(cJSON *root, const reduce_state *st)
+{
+    const reduce_error_options *o = &st->options->error;
+    const reduce_error_state *e = &st->error_search;
+    if (o->bound == REDUCE_ERROR_NONE) {
+        cJSON_AddNullToObject(root, "error_budget");
+        return;
+    }
+    cJSON *budget = cJSON_AddObjectToObject(root, "error_budget");
+    cJSON_AddNumberToObject(budget, "max_error", e->max_error);
+    if (o->bound == REDUCE_ERROR_RELATIVE)
+        cJSON_AddNumberToObject(budget, "max_error_relative", o->max_error);
+    else
+        cJSON_AddNullToObject(budget, "max_error_relative");
+    cJSON_AddNumberToObject(budget, "mean_radiance", e->mean_radiance);
+    cJSON_AddStringToObject(budget, "criterion", "error + standard_error <= max_error");
+    cJSON_AddNumberToObject(budget, "step", o->step);
+    cJSON_AddNumberToObject(budget, "floor", e->floor);
+    cJSON_AddNumberToObject(budget, "steps_failed_by_noise", e->noise_decided);
+    cJSON *check = cJSON_AddObjectToObject(budget, "check_render");
+    cJSON_AddNumberToObject(check, "iterations", o->iterations);
+    cJSON_AddNumberToObject(check, "photons", o->photons);
+    cJSON_AddNumberToObject(check, "resolution", o->resolution);
+    cJSON_AddNumberToObject(check, "width", e->width);
+    cJSON_AddNumberToObject(check, "height", e->height);
+    cJSON_AddNumberToObject(check, "first_radius", e->radius);
+    cJSON *seeds = cJSON_AddArrayToObject(check, "seeds");
+    cJSON_AddItemToArray(seeds, cJSON_CreateNumber(1));
+    cJSON_AddItemToArray(seeds, cJSON_CreateNumber(2));
+    cJSON *curve = cJSON_AddArrayToObject(budget, "curve");
+    for (size_t k = 0; k < e->result.count; k++) {
+        const error_search_step *s = &e->result.steps[k];
+        cJSON *item = cJSON_CreateObject();
+        cJSON_AddNumberToObject(item, "target", s->target);
+        cJSON_AddNumberToObject(item, "vertices", (double)s->vertices);
+        cJSON_AddNumberToObject(item, "error", s->error);
+        cJSON_AddNumberToObject(item, "standard_error", s->standard_error);
+        cJSON_AddNumberToObject(item, "mse", s->mse);
+        cJSON_AddNumberToObject(item, "mse_standard_error", s->mse_standard_error);
+        cJSON_AddBoolToObject(item, "measured", s->measured);
+        cJSON_AddBoolToObject(item, "within", s->passes);
+        cJSON_AddNumberToObject(item, "seconds", s->seconds);
+        cJSON_AddItemToArray(curve, item);
+    }
+    const error_search_step *chosen = &e->result.steps[e->result.chosen];
+    cJSON *result = cJSON_AddObjectToObject(budget, "chosen");
+    cJSON_AddNumberToObject(result, "target", e->result.target);
+    cJSON_AddNumberToObject(result, "vertices", (double)st->vertices_after);
+    cJSON_AddNumberToObject(result, "error", chosen->error);
+    cJSON_AddNumberToObject(result, "standard_error", chosen->standard_error);
+    cJSON *seconds = cJSON_AddObjectToObject(budget, "seconds");
+    cJSON_AddNumberToObject(seconds, "originals", e->seconds_originals);
+    cJSON_AddNumberToObject(seconds, "search", e->seconds_search);
+    /* What `reduce --target D` at the D found takes: the importance pass, one plan and
+     * decimation, the writing. */
+    cJSON_AddNumberToObject(seconds, "plain_reduce",
+                            st->seconds_importance + e->seconds_final_decimation +
+                                st->seconds_write);
+}
+
 /* The peaks of the run: the most device memory a pass allocated, and the process's resident
  * set (getrusage: the largest it has been). */
 static void add_peaks(cJSON *root, const reduce_state *st)
@@ -252,6 +315,7 @@ static cJSON *report_json(const reduce_state *st)
     if (reduce_method_uses_importance(o->method))
         add_passes(root, st);
     add_memory(root, st);
+    add_error_budget(root, st);
     add_peaks(root, st);
     add_seconds(cJSON_GetObjectItem(root, "seconds"), st);
     cJSON *meshes = cJSON_GetObjectItem(root, "meshes");

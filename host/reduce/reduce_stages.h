@@ -40,6 +40,10 @@
  *                reduce_passes.c's reduce_remapped_spill and reduce_remapped_restore);
  *                reduce_run() then forgets the budget and decimation and runs them again, and
  *                the fit after them; last, the run's peak memory checked against the budget
+ *   error budget with --max-error, in place of budget and decimation: the original rendered
+ *                with two seeds, then budget and decimation again at each D the search
+ *                (error_search.h) measures, the reduced scene rendered in memory; left
+ *                decimated at the D found: error_search (reduce_error_budget.c)
  *   write        meshes/NAME.ply and scene.xml: ply, meshes_written (reduce_write.c)
  *   report       report.json (with the importance outputs) and the closing line
  *                (reduce_report.c)
@@ -66,6 +70,7 @@
 #include <cjson/cJSON.h>
 
 #include "reduce/budget.h"
+#include "reduce/error_search.h"
 #include "reduce/factor_stop.h"
 #include "reduce/reduce.h"
 
@@ -78,6 +83,22 @@ typedef struct factor_checkpoint {
 /* The memory plan's estimate of the BVH's device bytes per triangle (reduce_memory.c): a little
  * above the largest measured, so the plan errs on the small side; the fit corrects it. */
 #define REDUCE_BVH_BYTES_PER_TRIANGLE 100.0
+
+/* What the error-budget stage found (reduce_error_budget.c; report.json: error_budget). */
+typedef struct reduce_error_state {
+    double max_error;          /* E in the units of the paired error (the relative bound times
+                                  mean_radiance) */
+    double mean_radiance;      /* of the original's check renders, over pixels and channels */
+    double floor;              /* the smallest D the plan can ask for */
+    double radius;             /* the first gather radius every check render shares */
+    unsigned int width, height; /* the check renders' film */
+    error_search_result result; /* the curve walked and the D chosen */
+    unsigned int noise_decided; /* steps below the D found that failed by their standard error
+                                   alone (error <= E < error + standard error): a warning */
+    double seconds_originals;  /* the original's two renders */
+    double seconds_search;     /* the whole stage: originals, steps and the final decimation */
+    double seconds_final_decimation; /* the decimation at the D chosen (budget included) */
+} reduce_error_state;
 
 /* What one importance pass and the reduction after it did (report.json: passes). */
 typedef struct reduce_pass_record {
@@ -149,6 +170,9 @@ typedef struct reduce_state {
     unsigned int seams_freed;       /* meshes whose attribute seams were freed */
     uint64_t vertices_after;       /* vertices of the reduced scene */
     double seconds_decimation;
+
+    /* error budget (with --max-error; reduce_error_budget.c): */
+    reduce_error_state error_search;
 
     /* write: */
     char **ply;                    /* per decimated mesh, its file relative to outdir */
@@ -295,6 +319,16 @@ int reduce_decimation(reduce_state *st);
 decimate_output *reduce_decimation_take_output(reduce_state *st);
 /* Frees what the decimation stage left (outputs, reasons, counts), so that it can run again. */
 void reduce_decimation_forget(reduce_state *st);
+
+/* ---- error budget (reduce_error_budget.c) ---- */
+
+/* With --max-error, in place of the budget and decimation stages: renders the original with
+ * two seeds, searches the smallest D whose reduced scene is within the bound (error_search.h;
+ * each step plans, decimates and renders the reduced scene in memory), and leaves the budget
+ * and decimation stages' results at that D. 0, or -1 with the error set. */
+int reduce_error_budget(reduce_state *st);
+/* Frees what the error-budget stage left. */
+void reduce_error_budget_free(reduce_state *st);
 
 /* ---- write (reduce_write.c) ---- */
 
