@@ -145,9 +145,10 @@ inline float ggx_g1(float cos_v, float alpha)
  * chooses its coating with probability Fresnel(cos_i), which the lobe's Fresnel factor cancels;
  * otherwise its diffuse base, sampled cosine-weighted, weighs ρ (1 - F(cos_o)) / (1 - F_dr,ext):
  * the light leaving through the coating (see brdf()). That factor has mean 1 over the cosine
- * lobe, and the roulette runs after the direction is drawn with survival
- * min(1, max3(ρ (1 - F_o) / (1 - F_dr))), so the weight's largest channel is at most
- * 1 / survival and the estimate stays unbiased.
+ * lobe. The roulette runs after the direction is drawn, with survival
+ * min(1, max3(ρ (1 - F_o) / (1 - F_dr))) <= 1, and the weight is divided by it, so the estimate
+ * stays unbiased; the weight's largest channel is 1, or at most max3(ρ) / (1 - F_dr) where the
+ * survival is 1.
  * Roughness is at least IDMR_MIN_GLOSSY_ROUGHNESS, so that a glossy lobe is never a delta the
  * renderer's density estimate cannot see. */
 #define IDMR_MIN_GLOSSY_ROUGHNESS 0.05f
