@@ -29,6 +29,33 @@ inline float fresnel_dielectric(float cos_i, float eta)
     return 0.5f * (rs * rs + rp * rp);
 }
 
+/* A plastic's relative index of refraction int_ior / ext_ior, 1 (no interface) where either is
+ * not positive, so that no Fresnel factor becomes NaN. */
+inline float plastic_eta(const global idmr_material *m)
+{
+    float eta = m->int_ior / m->ext_ior;
+    return m->int_ior > 0.0f && m->ext_ior > 0.0f && isfinite(eta) ? eta : 1.0f;
+}
+
+/* 1 - F_dr,ext(eta): the part of uniform diffuse (cosine-weighted) light from outside that a
+ * smooth interface of relative index eta = int_ior / ext_ior transmits, F_dr,ext =
+ * 2 ∫_0^1 F(μ) μ dμ. Polynomial fits in eta (Egan & Hilgeman 1973 below 1, d'Eon & Irving 2011
+ * above): within 3e-5 relative of a 4000-point Gauss-Legendre quadrature of
+ * fresnel_dielectric for 1.01 <= eta <= 2.4, 5e-4 at 3, 2e-3 at 4, 1.2e-3 for 0.5 <= eta < 1.
+ * By reciprocity it equals eta² (1 - F_dr,int), the factor Mitsuba's plastic divides by. */
+inline float plastic_diffuse_transmittance(float eta)
+{
+    float f;
+    if (eta < 1.0f) {
+        f = -1.4399f * eta * eta + 0.7099f * eta + 0.6681f + 0.0636f / eta;
+    } else {
+        float r = 1.0f / eta;
+        f = 0.919317f +
+            r * (-3.4793f + r * (6.75335f + r * (-7.80989f + r * (4.98554f - 1.36881f * r))));
+    }
+    return 1.0f - clamp(f, 0.0f, 0.999f);
+}
+
 /* The outcome of one scattering event. */
 #define SCATTER_ABSORBED 0
 #define SCATTER_DIFFUSE 1  /* a non-specular lobe: camera paths end here */
@@ -115,7 +142,13 @@ inline float ggx_g1(float cos_v, float alpha)
  *
  * Glossy lobes (GGX): the microfacet normal h is sampled in proportion to D(h) cos θ_h, so the
  * weight of the reflection is the lobe colour × G(i, o) |i·h| / (cos_i cos θ_h). A plastic
- * chooses its coating with probability Fresnel(cos_i), which the lobe's Fresnel factor cancels.
+ * chooses its coating with probability Fresnel(cos_i), which the lobe's Fresnel factor cancels;
+ * otherwise its diffuse base, sampled cosine-weighted, weighs ρ (1 - F(cos_o)) / (1 - F_dr,ext):
+ * the light leaving through the coating (see brdf()). That factor has mean 1 over the cosine
+ * lobe. The roulette runs after the direction is drawn, with survival
+ * min(1, max3(ρ (1 - F_o) / (1 - F_dr))) <= 1, and the weight is divided by it, so the estimate
+ * stays unbiased; the weight's largest channel is 1, or at most max3(ρ) / (1 - F_dr) where the
+ * survival is 1.
  * Roughness is at least IDMR_MIN_GLOSSY_ROUGHNESS, so that a glossy lobe is never a delta the
  * renderer's density estimate cannot see. */
 #define IDMR_MIN_GLOSSY_ROUGHNESS 0.05f
@@ -141,8 +174,9 @@ inline int scatter(const global idmr_material *m, float3 *d, float3 n, float3 ns
     if (m->kind == IDMR_MATERIAL_GLOSSY) {
         bool metal = max3(diffuse) <= 0.0f;
         float cos_i = fmax(0.0f, -dot(*d, n_side));
+        float eta = plastic_eta(m);
         /* A plastic's coating reflects with Fresnel probability, a metal always. */
-        float f = metal ? 1.0f : fresnel_dielectric(cos_i, m->ext_ior / m->int_ior);
+        float f = metal ? 1.0f : fresnel_dielectric(cos_i, 1.0f / eta);
         if (idmr_rng_float(rng) < f) {
             float3 colour = vload3(0, m->specular);
             float survival = max3(colour);
@@ -161,6 +195,19 @@ inline int scatter(const global idmr_material *m, float3 *d, float3 n, float3 ns
             *d = out;
             return SCATTER_DIFFUSE;
         }
+        /* The diffuse base under the coating. */
+        float3 out = sample_cosine(n_side, rng);
+        float cos_o = dot(out, n_side);
+        if (cos_o <= 0.0f)
+            return SCATTER_ABSORBED;
+        float3 base = diffuse * ((1.0f - fresnel_dielectric(cos_o, 1.0f / eta)) /
+                                 plastic_diffuse_transmittance(eta));
+        float survival = fmin(1.0f, max3(base));
+        if (idmr_rng_float(rng) >= survival)
+            return SCATTER_ABSORBED;
+        *d = out;
+        *weight = base / survival;
+        return SCATTER_DIFFUSE;
     }
 #endif
     float survival = max3(diffuse);
@@ -176,7 +223,12 @@ inline int scatter(const global idmr_material *m, float3 *d, float3 n, float3 ns
  * caller makes sure that side reflects: the front, or either side of a two-sided material).
  * It matches what scatter() samples: Lambert ρ/π; a metal's GGX lobe colour × D G /
  * (4 cos_i cos_o); a plastic's coating weighted by Fresnel(cos_i) over its diffuse base
- * weighted by 1 - Fresnel(cos_i). Zero when either direction is below the surface. */
+ *     ρ/π (1 - F(cos_i)) (1 - F(cos_o)) / (1 - F_dr,ext(η)),   η = int_ior / ext_ior:
+ * light enters through the coating, scatters diffusely under it (internal reflections
+ * included) and leaves through it again (Mitsuba 3's plastic, whose η² (1 - F_dr,int) equals
+ * 1 - F_dr,ext by reciprocity). The base's directional albedo stays ρ (1 - F(cos_i)). The
+ * Fresnel factors are the smooth interface's, rough plastics included (Mitsuba uses the rough
+ * interface's transmittance there). Zero when either direction is below the surface. */
 inline float3 brdf(const global idmr_material *m, float3 incoming, float3 outgoing, float3 n_side)
 {
     float cos_i = -dot(incoming, n_side), cos_o = dot(outgoing, n_side);
@@ -186,7 +238,11 @@ inline float3 brdf(const global idmr_material *m, float3 incoming, float3 outgoi
 #if HAS_FEATURE(IDMR_FEATURE_GLOSSY)
     if (m->kind == IDMR_MATERIAL_GLOSSY) {
         bool metal = max3(diffuse) <= 0.0f;
-        float f = metal ? 1.0f : fresnel_dielectric(cos_i, m->ext_ior / m->int_ior);
+        float eta = plastic_eta(m);
+        float f = metal ? 1.0f : fresnel_dielectric(cos_i, 1.0f / eta);
+        float base = metal ? 0.0f
+                           : (1.0f - f) * (1.0f - fresnel_dielectric(cos_o, 1.0f / eta)) /
+                                 plastic_diffuse_transmittance(eta);
         float alpha = fmax(m->roughness, IDMR_MIN_GLOSSY_ROUGHNESS);
         float3 h = normalize(outgoing - incoming);
         float cos_h = dot(h, n_side);
@@ -195,7 +251,7 @@ inline float3 brdf(const global idmr_material *m, float3 incoming, float3 outgoi
         float distribution = cos_h > 0.0f ? a2 / (PI_F * denominator * denominator) : 0.0f;
         float shadowing = ggx_g1(cos_i, alpha) * ggx_g1(cos_o, alpha);
         return f * vload3(0, m->specular) * (distribution * shadowing / (4.0f * cos_i * cos_o)) +
-               (1.0f - f) * diffuse;
+               base * diffuse;
     }
 #endif
     return diffuse;
