@@ -14,6 +14,7 @@
 
 #include "core/error.h"
 #include "core/progress.h"
+#include "core/ranks.h"
 
 #define MAX_PIXELS (1u << 26)
 #define SPPM_MAX_DEVICES_TEXT "16" /* SPPM_MAX_DEVICES, for messages */
@@ -287,9 +288,9 @@ static void params_begin(sppm *core)
     memcpy(params->scene_center, core->uploaded.center, sizeof params->scene_center);
     params->scene_radius = core->uploaded.radius;
     params->camera_depth = core->options->max_depth;
-    params->path_first = 0;
-    params->device_paths = core->summary->photons;
-    params->camera_sums = core->index == 0;
+    params->path_first = core->rank_first;
+    params->device_paths = core->rank_paths;
+    params->camera_sums = core->index == 0 && ranks_rank() == 0;
 }
 
 /* What the first iteration's paths decide, read back once from the first device: the initial
@@ -410,14 +411,22 @@ static int iterate(sppm *cores, unsigned int count, sppm_pass *pass, unsigned in
                    double *radius2)
 {
     sppm_summary *summary = cores->summary;
-    if (on_every_core(cores, count, pass, trace_paths))
-        return -1;
+    int status = on_every_core(cores, count, pass, trace_paths);
     if (n == 0) {
-        if (first_iteration(cores, radius2))
+        /* Under mpirun, rank 0's radius rules, and the stored records are all ranks'. */
+        status = status || first_iteration(cores, radius2);
+        if (ranks_sync(status, NULL))
             return -1;
+        ranks_broadcast(radius2, sizeof *radius2);
+        uint64_t stored = 0;
         for (unsigned int k = 0; k < count; k++)
-            summary->photon_records += cores[k].stored;
+            stored += cores[k].stored;
+        if (pass->ranks)
+            ranks_sum_words(&stored, 1);
+        summary->photon_records = stored;
     }
+    if (status)
+        return -1;
     for (unsigned int k = 0; k < count; k++)
         cores[k].radius2 = *radius2;
     if (on_every_core(cores, count, pass, gather_photons))
@@ -479,7 +488,7 @@ void sppm_split_paths(unsigned int total, unsigned int count, const double *weig
 /* Sets each device's range of the photon paths from `counts`. */
 static void set_ranges(sppm *cores, unsigned int count, const unsigned int *counts)
 {
-    unsigned int first = 0;
+    unsigned int first = cores->rank_first;
     for (unsigned int k = 0; k < count; k++) {
         cores[k].params.path_first = first;
         cores[k].params.device_paths = counts[k];
@@ -503,7 +512,7 @@ static void rebalance(sppm *cores, unsigned int count)
         slowest = fmin(slowest, weight[k]);
     for (unsigned int k = 0; k < count; k++)
         weight[k] /= slowest > 0 ? slowest : 1.0;
-    sppm_split_paths(cores->summary->photons, count, weight, capacity, counts);
+    sppm_split_paths(cores->rank_paths, count, weight, capacity, counts);
     set_ranges(cores, count, counts);
 }
 
@@ -565,6 +574,10 @@ static int run_iterations(sppm *cores, unsigned int count, sppm_pass *pass,
             rebalance(cores, count);
         if (o->time_limit > 0 && monotonic_seconds() - start >= o->time_limit)
             stop = 1;
+        /* Under mpirun every rank stops after the same iteration: when any says stop (the
+         * collect hook's rules decide alike on the ranks' common sums; the time limit on
+         * each rank's clock). */
+        status = ranks_sync(0, &stop);
     }
     progress_end(&bar);
     summary->seconds.total = monotonic_seconds() - start;
@@ -613,9 +626,15 @@ int sppm_run_devices(device *devices, unsigned int count, const scene *s, const 
     }
     unsigned int counts[SPPM_MAX_DEVICES], capacity[SPPM_MAX_DEVICES];
     sppm_memory memory[SPPM_MAX_DEVICES];
+    unsigned int rank_first = 0, rank_paths = 0;
     int status = check_inputs(devices, s, o, pass, summary);
     if (!status) {
-        first_split(o, devices, count, summary->photons, counts, capacity);
+        /* this rank's photon paths (all of them in one process, or for a pass that does not
+         * add its sums over ranks) */
+        rank_paths = summary->photons;
+        if (pass->ranks)
+            ranks_split(summary->photons, &rank_first, &rank_paths);
+        first_split(o, devices, count, rank_paths, counts, capacity);
         for (unsigned int k = 0; k < count && !status; k++) {
             memory_of_capacity(s, bvh_device_bytes(b), summary->width * summary->height,
                                capacity[k], pass, memory + k);
@@ -632,7 +651,8 @@ int sppm_run_devices(device *devices, unsigned int count, const scene *s, const 
     for (unsigned int k = 0; k < count; k++) {
         cores[k] = (sppm){.dev = devices + k, .index = k, .scene = s, .options = o,
                           .summary = summary, .pixels = summary->width * summary->height,
-                          .capacity = capacity[k]};
+                          .capacity = capacity[k], .rank_first = rank_first,
+                          .rank_paths = rank_paths};
         sppm_device_share *share = summary->device + k;
         share->index = devices[k].info.index;
         snprintf(share->name, sizeof share->name, "%s", devices[k].info.name);
