@@ -611,6 +611,54 @@ static int check_device_memory(const device *d, unsigned int count, const sppm_o
     return count > 1 ? error_prefix("device %d (%s)", d->info.index, d->info.name) : -1;
 }
 
+/* FNV-1a over `bytes` at `data`, continuing `hash`. */
+static uint64_t fnv1a(uint64_t hash, const void *data, size_t bytes)
+{
+    const unsigned char *p = data;
+    for (size_t i = 0; i < bytes; i++)
+        hash = (hash ^ p[i]) * 0x100000001b3ull;
+    return hash;
+}
+
+/* What every rank of a run must share: the pass, the options that change its numbers and the
+ * scene's shape (its counts, mesh by mesh). */
+static uint64_t run_fingerprint(const scene *s, const sppm_options *o, const sppm_pass *pass,
+                                const sppm_summary *summary)
+{
+    const double numbers[] = {pass->pass, o->iterations, summary->photons, o->seed, o->alpha,
+                              summary->width, summary->height, o->max_depth, o->radius,
+                              o->generic, (double)s->triangle_count, (double)s->light_count,
+                              (double)s->mesh_count, (double)s->features};
+    uint64_t hash = fnv1a(0xcbf29ce484222325ull, numbers, sizeof numbers);
+    if (pass->defines)
+        hash = fnv1a(hash, pass->defines, strlen(pass->defines));
+    for (size_t m = 0; m < s->mesh_count; m++) {
+        const uint32_t counts[2] = {s->meshes[m].vertex_count, s->meshes[m].triangle_count};
+        hash = fnv1a(hash, counts, sizeof counts);
+    }
+    return hash;
+}
+
+/* Under mpirun: every rank runs the same pass on the same scene (a rank with another scene or
+ * other options would add sums of another simulation); the first meeting of the ranks in a
+ * run, so a rank that failed before it stops the others here. */
+static int check_ranks_agree(const scene *s, const sppm_options *o, const sppm_pass *pass,
+                             const sppm_summary *summary)
+{
+    if (ranks_count() == 1)
+        return 0;
+    if (ranks_sync(0, NULL))
+        return -1;
+    uint64_t mine = run_fingerprint(s, o, pass, summary), first = mine;
+    ranks_broadcast(&first, sizeof first);
+    if (first != mine)
+        return error_set(IDMR_EXIT_INPUT,
+                         "the %s pass has another scene or other options than on rank 0: every "
+                         "rank must run the same command on the same scene",
+                         pass->name);
+    return 0;
+}
+
 int sppm_run_devices(device *devices, unsigned int count, const scene *s, const bvh *b,
                      const sppm_options *o, sppm_pass *pass, sppm_summary *summary,
                      sppm_snapshot *snapshot)
@@ -641,6 +689,7 @@ int sppm_run_devices(device *devices, unsigned int count, const scene *s, const 
             status = check_device_memory(devices + k, count, o, pass, memory + k);
         }
     }
+    status = status || check_ranks_agree(s, o, pass, summary);
     if (status) {
         pass->release(pass->state);
         return -1;
