@@ -47,7 +47,7 @@ static void devices_print(const device_info *list, size_t count)
                ranks_library()[0] ? ranks_library() : "yes", ranks_count(),
                ranks_count() == 1 ? "" : "s");
     else
-        printf("mpi: not in this build (Open MPI was not found when it was built)\n");
+        printf("mpi: not in this build\n");
 }
 
 int command_devices(int argc, char **argv)

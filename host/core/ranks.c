@@ -19,19 +19,20 @@
 
 #define RANKS_MESSAGE_MAX 2048
 
-static int active;        /* MPI started: more than one rank may run */
 static int my_rank;       /* 0 without MPI */
 static int rank_count = 1;
+
+#if IDMR_MPI
+static int active;        /* MPI started: more than one rank may run */
 static int broken;        /* a sync saw a failure: no more communication */
-static int remote;        /* the error set is another rank's */
 static int failed_code;   /* the failing rank's exit code, once broken */
 static char failure[RANKS_MESSAGE_MAX + 64]; /* "rank R of N: message", once broken */
 static int exit_code;     /* this rank's exit code, from ranks_finish() (0 before) */
 static int failure_said;  /* the failing rank had a message (a usage error prints its own) */
+#endif
 
 int ranks_rank(void) { return my_rank; }
 int ranks_count(void) { return rank_count; }
-int ranks_error_is_remote(void) { return remote; }
 
 int ranks_built(void)
 {
@@ -50,6 +51,17 @@ void ranks_split(unsigned int total, unsigned int *first, unsigned int *count)
     *count = (unsigned int)(end - begin);
 }
 
+/* Whether mpirun (Open MPI, or a PMI/PMIx launcher) started this process. */
+static int launched_by_mpirun(void)
+{
+    static const char *const names[] = {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK",
+                                        "PMI_SIZE"};
+    for (size_t i = 0; i < sizeof names / sizeof *names; i++)
+        if (getenv(names[i]))
+            return 1;
+    return 0;
+}
+
 #if IDMR_MPI
 
 const char *ranks_library(void)
@@ -65,17 +77,6 @@ const char *ranks_library(void)
             *comma = '\0';
     }
     return version;
-}
-
-/* Whether mpirun (Open MPI, or a PMI/PMIx launcher) started this process. */
-static int launched_by_mpirun(void)
-{
-    static const char *const names[] = {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK",
-                                        "PMI_SIZE"};
-    for (size_t i = 0; i < sizeof names / sizeof *names; i++)
-        if (getenv(names[i]))
-            return 1;
-    return 0;
 }
 
 void ranks_init(int *argc, char ***argv)
@@ -157,10 +158,8 @@ int ranks_sync(int status, int *flag)
     failure_said = sent.message[0] != '\0';
     snprintf(failure, sizeof failure, "rank %d of %d: %s", failing, rank_count,
              failure_said ? sent.message : "failed (see its messages above)");
-    if (my_rank != failing) {
-        remote = 1;
+    if (my_rank != failing)
         error_set(failed_code, "%s", failure);
-    }
     return -1;
 }
 
@@ -219,7 +218,19 @@ void ranks_broadcast(void *data, size_t bytes)
 #else /* no MPI in this build: one rank */
 
 const char *ranks_library(void) { return ""; }
-void ranks_init(int *argc, char ***argv) { (void)argc, (void)argv; }
+void ranks_init(int *argc, char ***argv)
+{
+    (void)argc, (void)argv;
+    /* N copies of a build without MPI would each run the whole command into one OUTDIR. */
+    const char *size = getenv("OMPI_COMM_WORLD_SIZE");
+    if (!size)
+        size = getenv("PMI_SIZE");
+    if (launched_by_mpirun() && size && atoi(size) > 1) {
+        fprintf(stderr, "idmr: this idmr was built without MPI (`idmr devices`): run it without "
+                        "mpirun, or build it where Open MPI is installed\n");
+        exit(IDMR_EXIT_INPUT);
+    }
+}
 int ranks_finish(int code) { return code; }
 int ranks_sync(int status, int *flag) { (void)flag; return status ? -1 : 0; }
 void ranks_sum_words(uint64_t *words, size_t n) { (void)words, (void)n; }

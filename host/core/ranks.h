@@ -41,9 +41,6 @@ const char *ranks_library(void); /* the MPI library's version line, or "" */
  * ranks). *flag (may be NULL) becomes 1 on every rank when it is 1 on any (a stop). */
 int ranks_sync(int status, int *flag);
 
-/* Whether the error set is another rank's (ranks_sync): the command prints nothing of it. */
-int ranks_error_is_remote(void);
-
 /* After a successful ranks_sync(): words[0..n) becomes the sum over all ranks, exactly (as
  * 64-bit integers). A sum that would pass 2^64 becomes UINT64_MAX (callers check words against
  * their saturation limit, far below). */
