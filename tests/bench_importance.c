@@ -150,7 +150,7 @@ static void scaling_ranks(const char *scene_path)
     setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
     setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
     char out[4096];
-    snprintf(out, sizeof out, "%s.ranks-out", scene_path);
+    snprintf(out, sizeof out, "%.4000s.ranks-out", scene_path);
     double one = 1e30, two = 1e30;
     for (int round = 0; round < ROUNDS; round++) {
         double a = command_seconds("", scene_path, out);
