@@ -350,9 +350,9 @@ static int has_kind(const sppm *core, const importance_pass *p, int k)
 
 /* Light importance from every device's photon paths; camera importance, shadow importance and
  * seen light from the first device's alone (the others' camera paths add nothing, and they
- * cast no shadow rays). Under mpirun the same on every rank, then each kind's words are
- * added over the ranks (exact: integers) before the one conversion; on the ranks after the
- * first, the first device's camera-side words are zero. */
+ * cast no shadow rays). Under mpirun the same on every rank, then the light words are added
+ * over the ranks (exact: integers) and the camera-side words (rank 0's alone: zero on the
+ * others) copied from rank 0, before the one conversion. */
 static int collect(sppm *cores, unsigned int count, void *state, unsigned int n, int *stop,
                    char *detail, size_t detail_size)
 {
@@ -368,9 +368,14 @@ static int collect(sppm *cores, unsigned int count, void *state, unsigned int n,
         status = count_gathered(cores + j, p, &gathered);
     if (ranks_sync(status, NULL))
         return -1;
+    /* light importance from every rank's paths: summed; the camera side is rank 0's alone
+     * (zero elsewhere): copied from it, which is the same sum at less cost */
+    size_t n_words = (size_t)core->scene->triangle_count;
     for (int k = 0; k < KINDS; k++)
-        if (has_kind(core, p, k))
-            ranks_sum_words(p->combined[k], (size_t)core->scene->triangle_count);
+        if (has_kind(core, p, k) && k == LIGHT)
+            ranks_sum_words(p->combined[k], n_words);
+        else if (has_kind(core, p, k))
+            ranks_broadcast(p->combined[k], n_words * sizeof *p->combined[k]);
     if (n == 0) {
         ranks_sum_words(&gathered, 1);
         r->gathered = gathered;
