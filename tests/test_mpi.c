@@ -10,6 +10,8 @@
  *   - `reduce` on 2 ranks with the stop rule deciding (a loose --factor-tolerance): it stops
  *     after the same iteration on every rank, the one the plain run stops after;
  *   - `importance` on 2 and on 3 ranks (paths split unevenly): simulation.bin byte for byte;
+ *   - `reduce --passes 2 --initial 0.5` on 2 ranks of two PoCL devices each (--device all):
+ *     the same reduced scene as one process on one device;
  *   - a rank that fails (an MPMD command line gives rank 1 a scene that does not exist, or
  *     another seed, which the ranks' first meeting in the pass refuses): the run exits with
  *     the failing rank's code, the message names the rank, and nothing is left (no output, no
@@ -119,6 +121,33 @@ static void test_stop_rule_decides_alike_on_the_ranks(void **state)
     remove_tree(dir);
 }
 
+/* Two passes (--initial, --passes 2: the ranks decimate the first pass's result, which the
+ * second simulates) on 2 ranks of two PoCL devices each (--device all in every rank): the
+ * ranges split over ranks, then over each rank's devices; the same scene as one process on
+ * one device. */
+static void test_two_passes_on_ranks_of_two_devices(void **state)
+{
+    (void)state;
+    need_mpi();
+    char dir[64];
+    make_temp_dir(dir, "idmr-test-mpi");
+    const char *options = "--target 0.2 --iterations 3 --passes 2 --initial 0.5 " FAST;
+    run_result r = run("bin/idmr reduce " SCENE " %s -o %s/one", options, dir);
+    assert_succeeded(&r);
+    run_free(&r);
+    r = run("POCL_DEVICES='pthread pthread' " MPIRUN " -x POCL_DEVICES -n 2 bin/idmr reduce "
+            SCENE " %s --device all -o %s/two",
+            options, dir);
+    assert_succeeded(&r);
+    run_free(&r);
+    r = run("grep -c '\"paths\"' %s/two/report.json", dir); /* rank 0's two devices */
+    assert_succeeded(&r);
+    assert_string_equal(r.out, "2\n");
+    run_free(&r);
+    assert_same_reduction(dir);
+    remove_tree(dir);
+}
+
 /* `importance` on 2 and 3 ranks (20000 paths do not split evenly in 3): simulation.bin, the
  * importance maps and the convergence series byte for byte. */
 static void test_importance_on_two_and_three_ranks(void **state)
@@ -221,6 +250,7 @@ int main(void)
         cmocka_unit_test(test_reduce_on_two_ranks_writes_the_same_scene),
         cmocka_unit_test(test_stop_rule_decides_alike_on_the_ranks),
         cmocka_unit_test(test_importance_on_two_and_three_ranks),
+        cmocka_unit_test(test_two_passes_on_ranks_of_two_devices),
         cmocka_unit_test(test_a_failing_rank_fails_the_run),
         cmocka_unit_test(test_render_refused_and_devices_says_mpi),
     };
