@@ -12,6 +12,8 @@
  *   - `importance` on 2 and on 3 ranks (paths split unevenly): simulation.bin byte for byte;
  *   - `reduce --passes 2 --initial 0.5` on 2 ranks of two PoCL devices each (--device all):
  *     the same reduced scene as one process on one device;
+ *   - the glass of water (13 meshes decimated, shared by 3 ranks and copied back): the same
+ *     reduced scene;
  *   - a rank that fails (an MPMD command line gives rank 1 a scene that does not exist, or
  *     another seed, which the ranks' first meeting in the pass refuses): the run exits with
  *     the failing rank's code, the message names the rank, and nothing is left (no output, no
@@ -60,16 +62,16 @@ static void need_mpi(void)
     "    return v\n"                                                                           \
     "print(json.dumps(core(json.load(open(sys.argv[1]))), sort_keys=True, indent=1))' "
 
-/* The two reduced scenes in dir/one and dir/two: every file the same byte for byte, except
- * report.json, whose computed part is. */
-static void assert_same_reduction(const char *dir)
+/* The two reduced scenes in dir/one (one process) and dir/two (`ranks` ranks): every file the
+ * same byte for byte, except report.json, whose computed part is. */
+static void assert_same_reduction(const char *dir, int ranks)
 {
     run_result r = run("cd %s && diff -r -x report.json one two && "
                        REPORT_CORE "one/report.json > one.core && " REPORT_CORE
                        "two/report.json > two.core && diff one.core two.core && "
-                       "grep -q '\"ranks\":[[:space:]]*2' two/report.json && "
+                       "grep -q '\"ranks\":[[:space:]]*%d' two/report.json && "
                        "! grep -q '\"ranks\"' one/report.json && ls one/meshes/*.ply >/dev/null",
-                       dir);
+                       dir, ranks);
     assert_succeeded(&r);
     run_free(&r);
 }
@@ -90,7 +92,7 @@ static void test_reduce_on_two_ranks_writes_the_same_scene(void **state)
     /* one voice: rank 0's closing line, once */
     assert_null(strstr(r.err, "idmr: warning"));
     run_free(&r);
-    assert_same_reduction(dir);
+    assert_same_reduction(dir, 2);
     remove_tree(dir);
 }
 
@@ -110,7 +112,7 @@ static void test_stop_rule_decides_alike_on_the_ranks(void **state)
     r = run(MPIRUN " -n 2 bin/idmr reduce " SCENE " %s -o %s/two", options, dir);
     assert_succeeded(&r);
     run_free(&r);
-    assert_same_reduction(dir);
+    assert_same_reduction(dir, 2);
     /* it did stop early (else this case tests nothing the first does not) */
     r = run("python3 -c 'import json, sys; r = json.load(open(sys.argv[1])); "
             "print(r[\"iterations\"] < 20)' %s/two/report.json",
@@ -144,7 +146,31 @@ static void test_two_passes_on_ranks_of_two_devices(void **state)
     assert_succeeded(&r);
     assert_string_equal(r.out, "2\n");
     run_free(&r);
-    assert_same_reduction(dir);
+    assert_same_reduction(dir, 2);
+    remove_tree(dir);
+}
+
+/* Bitterli's glass of water (16 meshes, 13 decimated: shared by the ranks, largest first, and
+ * copied back to every rank) on 3 ranks: the one-process scene. */
+static void test_decimation_shared_by_three_ranks(void **state)
+{
+    (void)state;
+    need_mpi();
+    char dir[64];
+    make_temp_dir(dir, "idmr-test-mpi");
+    const char *scene_path = "../shared/data/scenes/glass-of-water/scene-without-mesh000.xml";
+    const char *options = "--target 0.3 --iterations 2 --photons 10000 --resolution 0.2 --quiet";
+    run_result r = run("bin/idmr reduce %s %s -o %s/one", scene_path, options, dir);
+    assert_succeeded(&r);
+    run_free(&r);
+    r = run(MPIRUN " -n 3 bin/idmr reduce %s %s -o %s/two", scene_path, options, dir);
+    assert_succeeded(&r);
+    run_free(&r);
+    r = run("ls %s/two/meshes | wc -l", dir);
+    assert_succeeded(&r);
+    assert_true(atoi(r.out) >= 10);
+    run_free(&r);
+    assert_same_reduction(dir, 3);
     remove_tree(dir);
 }
 
@@ -251,6 +277,7 @@ int main(void)
         cmocka_unit_test(test_stop_rule_decides_alike_on_the_ranks),
         cmocka_unit_test(test_importance_on_two_and_three_ranks),
         cmocka_unit_test(test_two_passes_on_ranks_of_two_devices),
+        cmocka_unit_test(test_decimation_shared_by_three_ranks),
         cmocka_unit_test(test_a_failing_rank_fails_the_run),
         cmocka_unit_test(test_render_refused_and_devices_says_mpi),
     };

@@ -215,6 +215,12 @@ void ranks_broadcast(void *data, size_t bytes)
         broadcast_from(data, bytes, 0);
 }
 
+void ranks_broadcast_from(void *data, size_t bytes, int root)
+{
+    if (active && rank_count > 1)
+        broadcast_from(data, bytes, root);
+}
+
 #else /* no MPI in this build: one rank */
 
 const char *ranks_library(void) { return ""; }
@@ -235,5 +241,9 @@ int ranks_finish(int code) { return code; }
 int ranks_sync(int status, int *flag) { (void)flag; return status ? -1 : 0; }
 void ranks_sum_words(uint64_t *words, size_t n) { (void)words, (void)n; }
 void ranks_broadcast(void *data, size_t bytes) { (void)data, (void)bytes; }
+void ranks_broadcast_from(void *data, size_t bytes, int root)
+{
+    (void)data, (void)bytes, (void)root;
+}
 
 #endif

@@ -46,8 +46,10 @@ int ranks_sync(int status, int *flag);
  * their saturation limit, far below). */
 void ranks_sum_words(uint64_t *words, size_t n);
 
-/* After a successful ranks_sync(): rank 0's `bytes` at `data` copied to every rank. */
+/* After a successful ranks_sync(): rank 0's `bytes` at `data` copied to every rank; or rank
+ * `root`'s (every rank passes the same root and size). */
 void ranks_broadcast(void *data, size_t bytes);
+void ranks_broadcast_from(void *data, size_t bytes, int root);
 
 /* The photon paths [*first, *first + *count) of `total` that this rank traces: contiguous
  * ranges in rank order, as even as whole paths allow. */

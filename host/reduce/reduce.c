@@ -68,10 +68,8 @@ static int run_pass(reduce_state *st, unsigned int pass)
     if (st->options->passes > 1 && st->options->importance.sppm.progress && ranks_rank() == 0)
         fprintf(stderr, "idmr: pass %u of %u: importance on %llu vertices\n", pass,
                 st->options->passes, (unsigned long long)st->simulated->vertex_count);
-    /* Under mpirun the ranks after the first take part in the importance passes; they
-     * decimate only what a next pass simulates, and write nothing (ranks_rank() == 0 does). */
-    if (ranks_rank() != 0 && pass == st->options->passes)
-        return reduce_importance(st);
+    /* Under mpirun every rank runs every stage (the importance pass and the decimation are
+     * shared: core/ranks.h, reduce_ranks.c); rank 0 alone writes. */
     return reduce_importance(st) || reduce_plan_budget(st) || reduce_decimation(st) ||
            record_pass(st, importance_before, reduction_before);
 }
