@@ -8,7 +8,8 @@
  *     importance image, the convergence series, and report.json without what differs by
  *     nature (seconds, device bytes, the rank's devices and the rank count);
  *   - `reduce` on 2 ranks with the stop rule deciding (a loose --factor-tolerance): it stops
- *     after the same iteration on every rank, the one the plain run stops after;
+ *     after the same iteration on every rank, the one the plain run stops after; and a time
+ *     limit that passes in the first iteration stops every rank after it;
  *   - `importance` on 2 and on 3 ranks (paths split unevenly): simulation.bin byte for byte;
  *   - `reduce --passes 2 --initial 0.5` on 2 ranks of two PoCL devices each (--device all):
  *     the same reduced scene as one process on one device;
@@ -119,6 +120,16 @@ static void test_stop_rule_decides_alike_on_the_ranks(void **state)
             dir);
     assert_succeeded(&r);
     assert_string_equal(r.out, "True\n");
+    run_free(&r);
+    /* a time limit that passes in the first iteration: every rank stops after it, as one
+     * process does */
+    r = run("bin/idmr importance " SCENE " --iterations 50 --time-limit 0.001 " FAST
+            " -o %s/time-one && " MPIRUN " -n 2 bin/idmr importance " SCENE
+            " --iterations 50 --time-limit 0.001 " FAST " -o %s/time-two && "
+            "cmp %s/time-one/simulation.bin %s/time-two/simulation.bin && "
+            "grep -q '\"iterations\":[[:space:]]*1,' %s/time-two/report.json",
+            dir, dir, dir, dir, dir);
+    assert_succeeded(&r);
     run_free(&r);
     remove_tree(dir);
 }
