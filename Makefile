@@ -7,8 +7,9 @@
 # which the test and bench programs (tests/test_*.c, tests/bench_*.c) link as well.
 #
 # Dependencies: compiler and linker flags come from pkg-config for every library that has a .pc
-# file (Embree has none on Debian 12 and is linked by name). They are written once to
-# build/$(config)/flags.mk, *after* scripts/install-deps.sh has installed what is missing, and
+# file (Embree has none on Debian 12 and is linked by name); MPI's, where Open MPI is installed
+# (optional: without it idmr builds and runs as one process; `make MPI=0` leaves it out). They
+# are written once to build/$(config)/flags.mk, *after* scripts/install-deps.sh has installed what is missing, and
 # make reads them from there (it restarts itself once the file is made). The installer runs only
 # when something is missing: flags.mk is remade when it does not exist, when the Makefile or the
 # installer changed, or when a quick check (pkg-config and Embree's header) finds a gap.
@@ -19,6 +20,9 @@ BUILD := build/$(config)
 WARNINGS := -Wall -Wextra -Wshadow -Wno-unused-parameter
 PKG_MODULES := libxml-2.0 libcjson OpenCL openmesh OpenImageIO assimp zlib
 TEST_PKG_MODULES := cmocka
+# MPI is optional: where Open MPI's pkg-config file (or mpicc) is found, idmr is built with
+# -DIDMR_MPI=1 and runs as MPI ranks under mpirun (host/core/ranks.h); elsewhere, without.
+MPI_PKG_MODULE := ompi-c
 EMBREE_HEADER := /usr/include/embree3/rtcore.h
 
 CPPFLAGS += -Iinclude -Ihost -DIDMR_ROOT=\"$(CURDIR)\" -DCL_TARGET_OPENCL_VERSION=120
@@ -79,17 +83,30 @@ $(FLAGS): Makefile scripts/install-deps.sh
 	@mkdir -p $(dir $@)
 	@set -e; cflags=$$(pkg-config --cflags $(PKG_MODULES)); libs=$$(pkg-config --libs $(PKG_MODULES)); \
 	 test_libs=$$(pkg-config --libs $(TEST_PKG_MODULES)); \
+	 if pkg-config --exists $(MPI_PKG_MODULE); then \
+	   mpi_cflags="-DIDMR_MPI=1 $$(pkg-config --cflags $(MPI_PKG_MODULE))"; \
+	   mpi_libs=$$(pkg-config --libs $(MPI_PKG_MODULE)); \
+	 elif command -v mpicc >/dev/null 2>&1 && mpicc --showme:compile >/dev/null 2>&1; then \
+	   mpi_cflags="-DIDMR_MPI=1 $$(mpicc --showme:compile)"; mpi_libs=$$(mpicc --showme:link); \
+	 else mpi_cflags=""; mpi_libs=""; fi; \
 	 { echo "# written by make from pkg-config: $(PKG_MODULES) $(TEST_PKG_MODULES)"; \
 	   echo "PKG_CFLAGS := $$cflags"; echo "PKG_LIBS := $$libs -lembree3"; \
-	   echo "TEST_LIBS := $$test_libs"; } > $@.tmp
+	   echo "TEST_LIBS := $$test_libs"; \
+	   echo "# MPI (optional: empty where Open MPI is not installed)"; \
+	   echo "MPI_CFLAGS := $$mpi_cflags"; echo "MPI_LIBS := $$mpi_libs"; } > $@.tmp
 	@cmp -s $@.tmp $@ && rm -f $@.tmp || mv -f $@.tmp $@
 
 # Installs the Debian packages when one is missing (nothing to do otherwise).
 deps:
 	@scripts/install-deps.sh
 
-CPPFLAGS += $(PKG_CFLAGS)
-LDLIBS = $(PKG_LIBS) -lstdc++ -lm -pthread
+# `make MPI=0` builds without MPI where it is installed (use another BUILD=, or make clean).
+ifeq ($(MPI),0)
+  MPI_CFLAGS :=
+  MPI_LIBS :=
+endif
+CPPFLAGS += $(PKG_CFLAGS) $(MPI_CFLAGS)
+LDLIBS = $(PKG_LIBS) $(MPI_LIBS) -lstdc++ -lm -pthread
 
 # ---- the CLI and the library ----
 

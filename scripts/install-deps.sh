@@ -3,7 +3,8 @@
 # missing. Idempotent: with everything present it only asks dpkg (and pip) and exits 0.
 #
 #   scripts/install-deps.sh            the Debian packages (needs root or sudo only when one is
-#                                      missing)
+#                                      missing); Open MPI among them, which idmr uses where it
+#                                      is installed (the build without it works as well)
 #   scripts/install-deps.sh --python   also the Python tools of the evaluation, into .venv/ in
 #                                      the repository (Mitsuba 3, the second renderer; NVIDIA's
 #                                      FLIP evaluator; trimesh, pygltflib and jsonschema, the
@@ -15,7 +16,7 @@ cd "$(dirname "$0")/.."
 
 PACKAGES="build-essential pkg-config pocl-opencl-icd ocl-icd-opencl-dev opencl-headers clinfo
 libembree-dev libopenmesh-dev libopenimageio-dev libxml2-dev libcjson-dev libcmocka-dev
-libmeshoptimizer-dev libassimp-dev assimp-testmodels zlib1g-dev
+libmeshoptimizer-dev libassimp-dev assimp-testmodels zlib1g-dev libopenmpi-dev openmpi-bin
 python3-matplotlib python3-numpy python3-venv"
 
 PYTHON_PACKAGES="mitsuba==3.9.1 drjit==1.5.0 flip-evaluator==1.7 numpy==2.4.6 trimesh==4.12.2

@@ -4,23 +4,33 @@
  *
  *   importance-iteration: seconds=<s> plain=<s> ratio=<importance/plain> photons=<n> ...
  *
- *   scaling: devices=<n> seconds=<s> speedup=<one device's seconds / s>
+ *   scaling: devices=<n> ranks=1 seconds=<s> speedup=<one device's seconds / s>
+ *   scaling: devices=1 ranks=<n> seconds=<s> speedup=<one process's seconds / s>
  *
  * the pass on every OpenCL device at once (importance_run_devices: photon paths split, the
  * same sums bit for bit) against the default device alone, per iteration; where PoCL is asked
  * for no devices in particular, POCL_DEVICES="pthread pthread" gives it two CPU devices (on a
  * machine of 2 cores they share those cores: no speed-up is to be expected there).
  *
+ * and the pass shared by MPI ranks (`mpirun -n 2 bin/idmr importance`, core/ranks.h) against
+ * `bin/idmr importance` run plainly, per iteration as each run's report.json gives it (where the
+ * build has no MPI, or mpirun is missing, that line says so instead). On 2 cores the ranks
+ * share them (each PoCL device starts a thread per core): no speed-up is to be expected there.
+ *
  * Each variant runs one iteration first (the runtime compiles kernels lazily on first use),
  * then ITERATIONS; the variants alternate ROUNDS times and the best per-iteration time of each
  * counts (shared machines are noisy; the least disturbed run is the truest). */
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
+
+#include <cjson/cJSON.h>
 
 #include "bench_common.h"
 #include "device/bvh.h"
 #include "device/device.h"
 #include "core/error.h"
+#include "core/ranks.h"
 #include "passes/importance.h"
 #include "io/mitsuba.h"
 
@@ -77,10 +87,87 @@ static void scaling(device *d, const scene *s, const bvh *b)
         several = seconds < several ? seconds : several;
         importance_result_free(&r);
     }
-    printf("scaling: devices=1 seconds=%.3f speedup=1.00 device=\"%s\"\n", one, d->info.name);
-    printf("scaling: devices=%u seconds=%.3f speedup=%.2f\n", count, several, one / several);
+    printf("scaling: devices=1 ranks=1 seconds=%.3f speedup=1.00 device=\"%s\"\n", one,
+           d->info.name);
+    printf("scaling: devices=%u ranks=1 seconds=%.3f speedup=%.2f\n", count, several,
+           one / several);
     for (unsigned int k = 0; k < count; k++)
         device_close(all + k);
+}
+
+/* A whole text file, malloc'd, or NULL. */
+static char *read_text(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    size_t size = 0, capacity = 1 << 16, got;
+    char *text = xmalloc(capacity);
+    while ((got = fread(text + size, 1, capacity - size - 1, f)) > 0)
+        if ((size += got) + 1 >= capacity)
+            text = xrealloc(text, capacity *= 2);
+    text[size] = '\0';
+    fclose(f);
+    return text;
+}
+
+/* `launcher bin/idmr importance SCENE` (RANK_ITERATIONS iterations, default photons): the
+ * seconds per iteration its report.json gives (build excluded), or a negative value. */
+#define RANK_ITERATIONS 4
+static double command_seconds(const char *launcher, const char *scene_path, const char *out)
+{
+    char command[4096];
+    snprintf(command, sizeof command,
+             "rm -rf %s && %s bin/idmr importance %s --device 0 --iterations %d --quiet -o %s",
+             out, launcher, scene_path, RANK_ITERATIONS, out);
+    if (system(command) != 0) {
+        fprintf(stderr, "bench_importance: '%s' failed\n", command);
+        return -1;
+    }
+    char report_path[4096];
+    snprintf(report_path, sizeof report_path, "%s/report.json", out);
+    char *text = read_text(report_path);
+    cJSON *report = text ? cJSON_Parse(text) : NULL;
+    const cJSON *total = cJSON_GetObjectItem(cJSON_GetObjectItem(report, "seconds"), "total");
+    const cJSON *iterations = cJSON_GetObjectItem(report, "iterations");
+    double seconds = cJSON_IsNumber(total) && cJSON_IsNumber(iterations) &&
+                             iterations->valuedouble > 0
+                         ? total->valuedouble / iterations->valuedouble
+                         : -1;
+    cJSON_Delete(report);
+    free(text);
+    return seconds;
+}
+
+/* The ranks line: 2 MPI ranks against one process, one device each, best of ROUNDS each. */
+static void scaling_ranks(const char *scene_path)
+{
+    if (!ranks_built() || system("command -v mpirun >/dev/null 2>&1") != 0) {
+        printf("scaling: ranks not measured (%s)\n",
+               ranks_built() ? "mpirun not found" : "this build has no MPI");
+        return;
+    }
+    setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
+    setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+    setenv("OMPI_MCA_btl_vader_single_copy_mechanism", "none", 0); /* as test_mpi */
+    char out[4096];
+    snprintf(out, sizeof out, "%.4000s.ranks-out", scene_path);
+    double one = 1e30, two = 1e30;
+    for (int round = 0; round < ROUNDS; round++) {
+        double a = command_seconds("", scene_path, out);
+        double b = command_seconds("mpirun --oversubscribe -n 2", scene_path, out);
+        if (a < 0 || b < 0)
+            exit(1);
+        one = a < one ? a : one;
+        two = b < two ? b : two;
+    }
+    char command[4200];
+    snprintf(command, sizeof command, "rm -rf %s", out);
+    if (system(command) != 0)
+        fprintf(stderr, "bench_importance: cannot remove %s\n", out);
+    printf("scaling: devices=1 ranks=1 seconds=%.3f speedup=1.00 (bin/idmr importance)\n", one);
+    printf("scaling: devices=1 ranks=2 seconds=%.3f speedup=%.2f (mpirun -n 2)\n", two,
+           one / two);
 }
 
 int main(void)
@@ -128,6 +215,7 @@ int main(void)
            stage[1][0], stage[1][1], stage[1][2], stage[1][3], stage[1][4], stage[0][0],
            stage[0][1]);
     scaling(&d, s, &b);
+    scaling_ranks(path);
     bvh_free(&b);
     device_close(&d);
     scene_free(s);

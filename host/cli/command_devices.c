@@ -1,5 +1,6 @@
 /* command_devices.c — `idmr devices [--json]`: the OpenCL platforms and devices, as a table
- * with the default device named, or as a JSON array of objects (one per device). */
+ * with the default device named and whether this build has MPI (core/ranks.h), or as a JSON
+ * array of objects (one per device). */
 #include <getopt.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -7,6 +8,7 @@
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "core/json.h"
+#include "core/ranks.h"
 #include "device/device.h"
 
 static cJSON *devices_json(const device_info *list, size_t count)
@@ -39,6 +41,13 @@ static void devices_print(const device_info *list, size_t count)
                list[i].int64_atomics ? "" : " (no 64-bit atomics)");
     const char *env = getenv("IDMR_DEVICE");
     printf("default: %s\n", env && *env ? "IDMR_DEVICE" : "first GPU, else device 0");
+    if (ranks_built())
+        printf("mpi: %s (run under mpirun, the importance pass is shared by the ranks; %d "
+               "rank%s now)\n",
+               ranks_library()[0] ? ranks_library() : "yes", ranks_count(),
+               ranks_count() == 1 ? "" : "s");
+    else
+        printf("mpi: not in this build\n");
 }
 
 int command_devices(int argc, char **argv)

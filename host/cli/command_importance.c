@@ -3,7 +3,8 @@
  * into a staging directory published as DIR when all succeeded (core/files.h: nothing
  * half-written on failure or interrupt), with the simulation itself (simulation.bin,
  * passes/importance_file.h: `idmr reduce --simulation` reuses it), then one summary line on
- * stderr. Options: the importance pass's (options.h). */
+ * stderr. Options: the importance pass's (options.h). Under mpirun every rank runs the pass on
+ * its share of the photon paths (core/ranks.h) and rank 0 writes the outputs. */
 #include <stdio.h>
 #include <string.h>
 
@@ -11,6 +12,7 @@
 #include "cli/options.h"
 #include "cli/pass_setup.h"
 #include "core/files.h"
+#include "core/ranks.h"
 #include "io/scene_load.h"
 #include "passes/importance.h"
 #include "passes/importance_file.h"
@@ -37,6 +39,8 @@ static int run_pass(device *d, unsigned int count, const scene *s, const bvh *b,
     importance_cli_job *job = context;
     if (importance_run_devices(d, count, s, b, &job->options, &job->result))
         return -1;
+    if (ranks_rank() != 0) /* under mpirun, rank 0 writes the outputs */
+        return 0;
     cJSON *report = importance_report_json(s, d, &job->options, &job->result);
     importance_weights weights = importance_weights_of(&job->options);
     double **values = importance_vertex_values(&job->result, s, &weights);
@@ -92,13 +96,16 @@ int command_importance(int argc, char **argv)
     if (!s)
         return fail();
     int status = scene_check_output_directory(s, job.output) ||
-                 files_stage_begin(job.output, job.staging, sizeof job.staging);
+                 (ranks_rank() == 0 &&
+                  files_stage_begin(job.output, job.staging, sizeof job.staging));
     if (!status)
         status = pass_setup_run(s, &arguments.devices, run_pass, &job);
+    /* Under mpirun, DIR is published once every rank has done its part (core/ranks.h). */
+    status = ranks_sync(status, NULL);
     if (job.staging[0])
         status = files_stage_end(job.staging, job.output, !status) || status ? -1 : 0;
     code = status ? fail() : 0;
-    if (!status)
+    if (!status && ranks_rank() == 0)
         print_summary(&job);
     importance_result_free(&job.result);
     scene_free(s);

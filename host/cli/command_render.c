@@ -14,6 +14,7 @@
 #include "core/error.h"
 #include "core/files.h"
 #include "core/json.h"
+#include "core/ranks.h"
 #include "io/scene_load.h"
 #include "passes/render.h"
 
@@ -141,6 +142,11 @@ int command_render(int argc, char **argv)
         return usage_error("render: --device takes one device number: the renderer runs on one "
                            "device (the importance pass, `importance` and `reduce`, takes "
                            "--device all or a list)");
+    if (ranks_count() > 1)
+        return usage_error("render: the renderer runs as one process: run it without mpirun "
+                           "(%d ranks were started; `importance` and `reduce` share their "
+                           "importance pass between ranks)",
+                           ranks_count());
     if (render_paths_from(arguments.output, &job.paths))
         return IDMR_EXIT_INPUT;
     scene *s = scene_load(arguments.scene);

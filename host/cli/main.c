@@ -11,7 +11,9 @@
  *
  * Each command lives in command_<name>.c (commands.h); what they share of their options, in
  * options.c. Exit codes (core/error.h): 0 success, 1 runtime failure, 2 bad input or usage.
- * Every failure prints one "idmr: ..." message naming the file, element or call that failed. */
+ * Every failure prints one "idmr: ..." message naming the file, element or call that failed.
+ * Under mpirun (core/ranks.h) every rank runs the command; rank 0 prints the run's one failure
+ * message, naming the rank that failed, once all ranks have met in ranks_finish(). */
 #include <errno.h>
 #include <getopt.h>
 #include <stdio.h>
@@ -20,6 +22,7 @@
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "core/error.h"
+#include "core/ranks.h"
 
 #define IDMR_VERSION "0.1.0"
 
@@ -91,11 +94,12 @@ static int dispatch(int argc, char **argv)
  * full disk must not end with exit 0 and half a JSON object. */
 int main(int argc, char **argv)
 {
+    ranks_init(&argc, &argv);
     int code = dispatch(argc, argv);
     if (fflush(stdout) != 0 || ferror(stdout)) {
         fprintf(stderr, "idmr: cannot write standard output: %s\n",
                 errno ? strerror(errno) : "write error");
-        return code ? code : IDMR_EXIT_FAILURE;
+        code = code ? code : IDMR_EXIT_FAILURE;
     }
-    return code;
+    return ranks_finish(code);
 }

@@ -12,15 +12,20 @@
 
 #include "core/error.h"
 #include "core/progress.h"
+#include "core/ranks.h"
 
 int fail(void)
 {
-    fprintf(stderr, "idmr: %s\n", error_message());
+    /* Under mpirun, rank 0 prints the failure of the run, naming its rank (ranks_finish). */
+    if (ranks_count() == 1)
+        fprintf(stderr, "idmr: %s\n", error_message());
     return error_code();
 }
 
 int usage_error(const char *fmt, ...)
 {
+    if (ranks_rank() != 0) /* every rank parses the same command line: rank 0 says it */
+        return IDMR_EXIT_INPUT;
     va_list args;
     va_start(args, fmt);
     fputs("idmr: ", stderr);

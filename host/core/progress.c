@@ -1,5 +1,6 @@
 /* progress.c — clock, resident memory and progress display (see progress.h). */
 #include "core/progress.h"
+#include "core/ranks.h"
 
 #include <stdio.h>
 #include <time.h>
@@ -27,7 +28,7 @@ void progress_begin(progress *p, const char *label, unsigned int total, int enab
 {
     p->label = label;
     p->total = total ? total : 1;
-    p->enabled = enabled;
+    p->enabled = enabled && ranks_rank() == 0; /* under mpirun, rank 0 reports */
     p->terminal = isatty(STDERR_FILENO);
     p->next_line = 0;
     p->done = 0;

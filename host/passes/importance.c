@@ -11,6 +11,7 @@
 
 #include "core/error.h"
 #include "core/progress.h"
+#include "core/ranks.h"
 
 #define STOP_AFTER_CALM_ITERATIONS 3
 #define PER_MILLION_SAMPLES 1e6
@@ -64,6 +65,7 @@ typedef struct importance_pass {
     importance_device device[SPPM_MAX_DEVICES]; /* by sppm.index */
     size_t words;     /* accumulator words: one per triangle (at least one) */
     uint64_t *read_back[SPPM_MAX_DEVICES]; /* each device's accumulator of one kind, read back */
+    uint64_t *combined[KINDS]; /* each kind's words, the devices' (and ranks') added */
     double *previous;  /* each triangle's weighted sum before this iteration */
     unsigned int calm; /* iterations in a row with Δ below the tolerance */
 } importance_pass;
@@ -176,7 +178,7 @@ static int gather(sppm *core, void *state)
     importance_pass *p = state;
     importance_device *d = p->device + core->index;
     size_t local = core->options->local_size;
-    if ((p->shadows && core->index == 0 && cast_shadow_rays(core, d)) ||
+    if ((p->shadows && core->params.camera_sums && cast_shadow_rays(core, d)) ||
         DEVICE_SET_ARGS(d->gather, "gather_count", DEVICE_ARG(core->params),
                         DEVICE_ARG(core->photon_records), DEVICE_ARG(core->stored_count),
                         DEVICE_ARG(core->stored_slots), DEVICE_ARG(core->grid.cell_start),
@@ -223,11 +225,16 @@ int importance_add_words(double *sums, const uint64_t *const *words, unsigned in
     return 0;
 }
 
-/* Reads accumulator k of the first `count` devices back and clears them, then adds them to
- * `sums` (importance_add_words: as integers, × scale per fixed-point unit); adds the total it
- * added to *added where that is not NULL. */
-static int add_accumulator(sppm *cores, unsigned int count, importance_pass *p, int k,
-                           double *sums, double scale, double *added)
+/* The remedy a saturation error of kind k names. */
+static const char *remedy_of(int k)
+{
+    return k == LIGHT ? "fewer photons per iteration" : "a smaller --resolution";
+}
+
+/* Reads accumulator k of the first `count` devices back, clears them, and adds their words as
+ * integers into p->combined[k] (importance_add_words' checks: no word or partial sum at the
+ * saturation limit). */
+static int read_accumulator(sppm *cores, unsigned int count, importance_pass *p, int k)
 {
     size_t n = (size_t)cores->scene->triangle_count;
     for (unsigned int j = 0; j < count; j++) {
@@ -241,16 +248,36 @@ static int add_accumulator(sppm *cores, unsigned int count, importance_pass *p, 
                                             cores[j].dev->info.name)
                              : -1;
     }
-    return importance_add_words(sums, (const uint64_t *const *)p->read_back, count, n, scale,
-                                KIND_NAMES[k],
-                                k == LIGHT ? "fewer photons per iteration"
-                                           : "a smaller --resolution",
-                                added);
+    if (!p->combined[k])
+        p->combined[k] = xmalloc(p->words * sizeof *p->combined[k]);
+    uint64_t *sum = p->combined[k];
+    for (size_t t = 0; t < n; t++) {
+        sum[t] = 0;
+        for (unsigned int j = 0; j < count; j++)
+            if (p->read_back[j][t] >= IDMR_FIXED_SATURATION ||
+                (sum[t] += p->read_back[j][t]) >= IDMR_FIXED_SATURATION)
+                return error_set(IDMR_EXIT_FAILURE,
+                                 "%s of triangle %zu came within a factor 2 of the 64-bit "
+                                 "fixed-point limit in one iteration; use %s",
+                                 KIND_NAMES[k], t, remedy_of(k));
+    }
+    return 0;
+}
+
+/* p->combined[k] (every device's and rank's words) added to `sums` (importance_add_words: × scale
+ * per fixed-point unit, the one conversion); adds the total it added to *added where that is
+ * not NULL. */
+static int add_combined(const sppm *core, importance_pass *p, int k, double *sums, double scale,
+                        double *added)
+{
+    const uint64_t *words[1] = {p->combined[k]};
+    return importance_add_words(sums, words, 1, (size_t)core->scene->triangle_count, scale,
+                                KIND_NAMES[k], remedy_of(k), added);
 }
 
 /* Hit points found by the first iteration's photon vertices on one device, for the report:
  * the gather counts of the stored slots (gather_count writes no other). */
-static int count_gathered(sppm *core, importance_pass *p)
+static int count_gathered(sppm *core, importance_pass *p, uint64_t *found)
 {
     const importance_device *d = p->device + core->index;
     uint32_t *gathered = xmalloc(core->slots * sizeof *gathered);
@@ -261,7 +288,7 @@ static int count_gathered(sppm *core, importance_pass *p)
                                               core->stored * sizeof *stored, stored,
                                               "stored photon slots"));
     for (size_t i = 0; i < core->stored && !status; i++)
-        p->result->gathered += gathered[stored[i]];
+        *found += gathered[stored[i]];
     free(gathered);
     free(stored);
     return status;
@@ -314,28 +341,53 @@ static double seen_light_gathers(const sppm *core, const importance_pass *p)
                               : 0.0;
 }
 
+/* Whether the pass has accumulator k this run (camera and light always; shadow importance
+ * with shadow rays; seen light where an emitter can be seen). */
+static int has_kind(const sppm *core, const importance_pass *p, int k)
+{
+    return k == SHADOW ? p->shadows : k == SEEN_LIGHT ? core->params.fixed_scale > 0 : 1;
+}
+
 /* Light importance from every device's photon paths; camera importance, shadow importance and
  * seen light from the first device's alone (the others' camera paths add nothing, and they
- * cast no shadow rays). */
+ * cast no shadow rays). Under mpirun the same on every rank, then the light words are added
+ * over the ranks (exact: integers) and the camera-side words (rank 0's alone: zero on the
+ * others) copied from rank 0, before the one conversion. */
 static int collect(sppm *cores, unsigned int count, void *state, unsigned int n, int *stop,
                    char *detail, size_t detail_size)
 {
     importance_pass *p = state;
     importance_result *r = p->result;
     sppm *core = cores;
-    for (int k = CAMERA; k <= SHADOW; k++)
-        if ((k != SHADOW || p->shadows) &&
-            add_accumulator(cores, k == LIGHT ? count : 1, p, k, sums_of(r, k),
-                            1.0 / IDMR_FIXED_SCALE, NULL))
-            return -1;
-    if (core->params.fixed_scale > 0 &&
-        add_accumulator(cores, 1, p, SEEN_LIGHT, r->light,
-                        seen_light_gathers(core, p) / core->params.fixed_scale,
-                        &r->seen_light))
+    int status = 0;
+    for (int k = 0; k < KINDS && !status; k++)
+        if (has_kind(core, p, k))
+            status = read_accumulator(cores, k == LIGHT ? count : 1, p, k);
+    uint64_t gathered = 0;
+    for (unsigned int j = 0; j < count && n == 0 && !status; j++)
+        status = count_gathered(cores + j, p, &gathered);
+    if (ranks_sync(status, NULL))
         return -1;
-    for (unsigned int j = 0; j < count && n == 0; j++)
-        if (count_gathered(cores + j, p))
+    /* light importance from every rank's paths: summed; the camera side is rank 0's alone
+     * (zero elsewhere): copied from it, which is the same sum at less cost */
+    size_t n_words = (size_t)core->scene->triangle_count;
+    for (int k = 0; k < KINDS; k++)
+        if (has_kind(core, p, k) && k == LIGHT)
+            ranks_sum_words(p->combined[k], n_words);
+        else if (has_kind(core, p, k))
+            ranks_broadcast(p->combined[k], n_words * sizeof *p->combined[k]);
+    if (n == 0) {
+        ranks_sum_words(&gathered, 1);
+        r->gathered = gathered;
+    }
+    for (int k = CAMERA; k <= SHADOW; k++)
+        if (has_kind(core, p, k) &&
+            add_combined(core, p, k, sums_of(r, k), 1.0 / IDMR_FIXED_SCALE, NULL))
             return -1;
+    if (has_kind(core, p, SEEN_LIGHT) &&
+        add_combined(core, p, SEEN_LIGHT, r->light,
+                     seen_light_gathers(core, p) / core->params.fixed_scale, &r->seen_light))
+        return -1;
     for (unsigned int j = 0; j < count; j++)
         r->path_seconds = fmax(r->path_seconds, p->device[j].path_seconds);
     r->convergence[n] = convergence_change(p, core->scene, n + 1);
@@ -413,6 +465,8 @@ static void release(void *state)
     }
     for (unsigned int j = 0; j < SPPM_MAX_DEVICES; j++)
         free(p->read_back[j]);
+    for (int k = 0; k < KINDS; k++)
+        free(p->combined[k]);
     free(p->previous);
 }
 
@@ -433,6 +487,7 @@ static sppm_pass pass_on_core(void)
     return (sppm_pass){.name = "importance",
                        .pass = IDMR_SPPM_IMPORTANCE,
                        .photon_record_bytes = sizeof(idmr_photon_vertex),
+                       .ranks = 1,
                        .pass_bytes = pass_bytes};
 }
 

@@ -9,6 +9,7 @@
 #include "core/error.h"
 #include "core/files.h"
 #include "core/json.h"
+#include "core/ranks.h"
 #include "io/image.h"
 #include "io/mesh_io.h"
 #include "io/ply_check.h"
@@ -64,6 +65,10 @@ cJSON *importance_report_json(const scene *s, const device *d, const importance_
         cJSON_AddNumberToObject(each, "device_bytes", (double)share->bytes);
         cJSON_AddItemToArray(devices, each);
     }
+    /* Under mpirun (core/ranks.h): the ranks that shared the photon paths; `devices` is then
+     * rank 0's, with its own share of the paths. */
+    if (ranks_count() > 1)
+        cJSON_AddNumberToObject(root, "ranks", ranks_count());
     cJSON *first = cJSON_AddObjectToObject(root, "first_iteration");
     cJSON_AddNumberToObject(first, "hit_points", (double)run->hit_points);
     cJSON_AddNumberToObject(first, "photon_vertices", (double)run->photon_records);

@@ -14,6 +14,7 @@
 
 #include "core/error.h"
 #include "core/progress.h"
+#include "core/ranks.h"
 
 #define MAX_PIXELS (1u << 26)
 #define SPPM_MAX_DEVICES_TEXT "16" /* SPPM_MAX_DEVICES, for messages */
@@ -287,9 +288,9 @@ static void params_begin(sppm *core)
     memcpy(params->scene_center, core->uploaded.center, sizeof params->scene_center);
     params->scene_radius = core->uploaded.radius;
     params->camera_depth = core->options->max_depth;
-    params->path_first = 0;
-    params->device_paths = core->summary->photons;
-    params->camera_sums = core->index == 0;
+    params->path_first = core->rank_first;
+    params->device_paths = core->rank_paths;
+    params->camera_sums = core->index == 0 && ranks_rank() == 0;
 }
 
 /* What the first iteration's paths decide, read back once from the first device: the initial
@@ -410,14 +411,22 @@ static int iterate(sppm *cores, unsigned int count, sppm_pass *pass, unsigned in
                    double *radius2)
 {
     sppm_summary *summary = cores->summary;
-    if (on_every_core(cores, count, pass, trace_paths))
-        return -1;
+    int status = on_every_core(cores, count, pass, trace_paths);
     if (n == 0) {
-        if (first_iteration(cores, radius2))
+        /* Under mpirun, rank 0's radius rules, and the stored records are all ranks'. */
+        status = status || first_iteration(cores, radius2);
+        if (ranks_sync(status, NULL))
             return -1;
+        ranks_broadcast(radius2, sizeof *radius2);
+        uint64_t stored = 0;
         for (unsigned int k = 0; k < count; k++)
-            summary->photon_records += cores[k].stored;
+            stored += cores[k].stored;
+        if (pass->ranks)
+            ranks_sum_words(&stored, 1);
+        summary->photon_records = stored;
     }
+    if (status)
+        return -1;
     for (unsigned int k = 0; k < count; k++)
         cores[k].radius2 = *radius2;
     if (on_every_core(cores, count, pass, gather_photons))
@@ -479,7 +488,7 @@ void sppm_split_paths(unsigned int total, unsigned int count, const double *weig
 /* Sets each device's range of the photon paths from `counts`. */
 static void set_ranges(sppm *cores, unsigned int count, const unsigned int *counts)
 {
-    unsigned int first = 0;
+    unsigned int first = cores->rank_first;
     for (unsigned int k = 0; k < count; k++) {
         cores[k].params.path_first = first;
         cores[k].params.device_paths = counts[k];
@@ -503,7 +512,7 @@ static void rebalance(sppm *cores, unsigned int count)
         slowest = fmin(slowest, weight[k]);
     for (unsigned int k = 0; k < count; k++)
         weight[k] /= slowest > 0 ? slowest : 1.0;
-    sppm_split_paths(cores->summary->photons, count, weight, capacity, counts);
+    sppm_split_paths(cores->rank_paths, count, weight, capacity, counts);
     set_ranges(cores, count, counts);
 }
 
@@ -565,6 +574,10 @@ static int run_iterations(sppm *cores, unsigned int count, sppm_pass *pass,
             rebalance(cores, count);
         if (o->time_limit > 0 && monotonic_seconds() - start >= o->time_limit)
             stop = 1;
+        /* Under mpirun every rank stops after the same iteration: when any says stop (the
+         * collect hook's rules decide alike on the ranks' common sums; the time limit on
+         * each rank's clock). */
+        status = ranks_sync(0, &stop);
     }
     progress_end(&bar);
     summary->seconds.total = monotonic_seconds() - start;
@@ -598,6 +611,54 @@ static int check_device_memory(const device *d, unsigned int count, const sppm_o
     return count > 1 ? error_prefix("device %d (%s)", d->info.index, d->info.name) : -1;
 }
 
+/* FNV-1a over `bytes` at `data`, continuing `hash`. */
+static uint64_t fnv1a(uint64_t hash, const void *data, size_t bytes)
+{
+    const unsigned char *p = data;
+    for (size_t i = 0; i < bytes; i++)
+        hash = (hash ^ p[i]) * 0x100000001b3ull;
+    return hash;
+}
+
+/* What every rank of a run must share: the pass, the options that change its numbers and the
+ * scene's shape (its counts, mesh by mesh). */
+static uint64_t run_fingerprint(const scene *s, const sppm_options *o, const sppm_pass *pass,
+                                const sppm_summary *summary)
+{
+    const double numbers[] = {pass->pass, o->iterations, summary->photons, o->seed, o->alpha,
+                              summary->width, summary->height, o->max_depth, o->radius,
+                              o->generic, (double)s->triangle_count, (double)s->light_count,
+                              (double)s->mesh_count, (double)s->features};
+    uint64_t hash = fnv1a(0xcbf29ce484222325ull, numbers, sizeof numbers);
+    if (pass->defines)
+        hash = fnv1a(hash, pass->defines, strlen(pass->defines));
+    for (size_t m = 0; m < s->mesh_count; m++) {
+        const uint32_t counts[2] = {s->meshes[m].vertex_count, s->meshes[m].triangle_count};
+        hash = fnv1a(hash, counts, sizeof counts);
+    }
+    return hash;
+}
+
+/* Under mpirun: every rank runs the same pass on the same scene (a rank with another scene or
+ * other options would add sums of another simulation); the first meeting of the ranks in a
+ * run, so a rank that failed before it stops the others here. */
+static int check_ranks_agree(const scene *s, const sppm_options *o, const sppm_pass *pass,
+                             const sppm_summary *summary)
+{
+    if (ranks_count() == 1)
+        return 0;
+    if (ranks_sync(0, NULL))
+        return -1;
+    uint64_t mine = run_fingerprint(s, o, pass, summary), first = mine;
+    ranks_broadcast(&first, sizeof first);
+    if (first != mine)
+        return error_set(IDMR_EXIT_INPUT,
+                         "the %s pass has another scene or other options than on rank 0: every "
+                         "rank must run the same command on the same scene",
+                         pass->name);
+    return 0;
+}
+
 int sppm_run_devices(device *devices, unsigned int count, const scene *s, const bvh *b,
                      const sppm_options *o, sppm_pass *pass, sppm_summary *summary,
                      sppm_snapshot *snapshot)
@@ -613,15 +674,22 @@ int sppm_run_devices(device *devices, unsigned int count, const scene *s, const 
     }
     unsigned int counts[SPPM_MAX_DEVICES], capacity[SPPM_MAX_DEVICES];
     sppm_memory memory[SPPM_MAX_DEVICES];
+    unsigned int rank_first = 0, rank_paths = 0;
     int status = check_inputs(devices, s, o, pass, summary);
     if (!status) {
-        first_split(o, devices, count, summary->photons, counts, capacity);
+        /* this rank's photon paths (all of them in one process, or for a pass that does not
+         * add its sums over ranks) */
+        rank_paths = summary->photons;
+        if (pass->ranks)
+            ranks_split(summary->photons, &rank_first, &rank_paths);
+        first_split(o, devices, count, rank_paths, counts, capacity);
         for (unsigned int k = 0; k < count && !status; k++) {
             memory_of_capacity(s, bvh_device_bytes(b), summary->width * summary->height,
                                capacity[k], pass, memory + k);
             status = check_device_memory(devices + k, count, o, pass, memory + k);
         }
     }
+    status = status || check_ranks_agree(s, o, pass, summary);
     if (status) {
         pass->release(pass->state);
         return -1;
@@ -632,7 +700,8 @@ int sppm_run_devices(device *devices, unsigned int count, const scene *s, const 
     for (unsigned int k = 0; k < count; k++) {
         cores[k] = (sppm){.dev = devices + k, .index = k, .scene = s, .options = o,
                           .summary = summary, .pixels = summary->width * summary->height,
-                          .capacity = capacity[k]};
+                          .capacity = capacity[k], .rank_first = rank_first,
+                          .rank_paths = rank_paths};
         sppm_device_share *share = summary->device + k;
         share->index = devices[k].info.index;
         snprintf(share->name, sizeof share->name, "%s", devices[k].info.name);

@@ -174,6 +174,7 @@ typedef struct sppm {
     unsigned int pixels;
     size_t slots;                   /* photon record slots: capacity × IDMR_PATH_VERTICES */
     unsigned int capacity;          /* photon paths the slots hold (all of them on one device) */
+    unsigned int rank_first, rank_paths; /* this MPI rank's photon paths (all in one process) */
     double radius2;                 /* this iteration's gather radius², for the grid */
     uint64_t buffer_bytes;          /* the core's and the pass's buffers on this device */
     sppm_seconds seconds;           /* this device's stages, summed */
@@ -188,6 +189,8 @@ typedef struct sppm_pass {
     const char *name;            /* "importance", "render": the progress label */
     int pass;                    /* IDMR_SPPM_IMPORTANCE or IDMR_SPPM_RENDER */
     const char *defines;         /* more build options (-D ...), or NULL */
+    int ranks;                   /* under mpirun: the collect hook adds its sums over the ranks
+                                    (core/ranks.h), so the photon paths are split over them */
     size_t photon_record_bytes;  /* one record of the photon slots */
     void *state;                 /* the pass's own data, handed to every hook */
     /* The bytes of the pass's own device buffers (prepare's and finish's) on scene s with a

@@ -9,6 +9,7 @@
 #include <stdlib.h>
 
 #include "core/error.h"
+#include "core/ranks.h"
 #include "reduce/reduce_stages.h"
 
 /* Frees what the budget and decimation stages left, so that they can run again. */
@@ -65,9 +66,10 @@ static int run_pass(reduce_state *st, unsigned int pass)
     double reduction_before = st->seconds_budget + st->seconds_decimation;
     if (pass > 1 && next_pass(st))
         return -1;
-    if (st->options->passes > 1 && st->options->importance.sppm.progress)
+    if (st->options->passes > 1 && st->options->importance.sppm.progress && ranks_rank() == 0)
         fprintf(stderr, "idmr: pass %u of %u: importance on %llu vertices\n", pass,
                 st->options->passes, (unsigned long long)st->simulated->vertex_count);
+<<<<<<< HEAD
     if (reduce_importance(st))
         return -1;
     /* With --max-error the target is searched for: the budget and decimation run at every D
@@ -76,6 +78,12 @@ static int run_pass(reduce_state *st, unsigned int pass)
                      ? reduce_error_budget(st)
                      : reduce_plan_budget(st) || reduce_decimation(st);
     return status || record_pass(st, importance_before, reduction_before);
+=======
+    /* Under mpirun every rank runs every stage (the importance pass and the decimation are
+     * shared: core/ranks.h, reduce_ranks.c); rank 0 alone writes. */
+    return reduce_importance(st) || reduce_plan_budget(st) || reduce_decimation(st) ||
+           record_pass(st, importance_before, reduction_before);
+>>>>>>> mpi
 }
 
 int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
@@ -91,6 +99,12 @@ int reduce_run_devices(device *devices, unsigned int count, scene *s, const char
                          "reduce: --memory-budget plans the scene for one device: give one "
                          "--device number (%u devices were chosen)",
                          count);
+    if (ranks_count() > 1 && o->memory_budget)
+        return error_set(IDMR_EXIT_INPUT,
+                         "reduce: --memory-budget plans the scene for one device: run it "
+                         "without mpirun (%d ranks were started)",
+                         ranks_count());
+    int lead = ranks_rank() == 0; /* writes the output (under mpirun, rank 0 alone) */
     reduce_state st = {.device = devices, .device_count = count, .scene = s, .simulated = s,
                        .outdir = outdir, .options = o, .count = s->mesh_count,
                        .target = o->target, .initial = o->initial};
@@ -108,7 +122,7 @@ int reduce_run_devices(device *devices, unsigned int count, scene *s, const char
         st.options = o = &as_is;
         st.initial = 1.0;
     }
-    status = status || reduce_outdir_prepare(&st) || reduce_initial(&st);
+    status = status || (lead && reduce_outdir_prepare(&st)) || reduce_initial(&st);
     for (unsigned int pass = 1; !status && pass <= o->passes; pass++)
         status = run_pass(&st, pass);
     /* Under a memory budget, the reduced scene decimated again at a lower target while its
@@ -127,10 +141,12 @@ int reduce_run_devices(device *devices, unsigned int count, scene *s, const char
         if (!status && st.pass_count) /* the last pass's reduction is this one now */
             st.passes[st.pass_count - 1].vertices_after = st.vertices_after;
     }
-    status = status || reduce_write(&st) || reduce_report_write(&st) ||
-             reduce_memory_check_peak(&st);
+    status = status || (lead && (reduce_write(&st) || reduce_report_write(&st) ||
+                                 reduce_memory_check_peak(&st)));
+    /* Published only once every rank has done its part (core/ranks.h; one process: no-op). */
+    status = ranks_sync(status, NULL);
     status = reduce_outdir_finish(&st, !status);
-    if (!status)
+    if (!status && lead)
         reduce_report_summary(&st);
     state_free(&st);
     return status ? -1 : 0;

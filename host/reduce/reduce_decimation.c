@@ -37,6 +37,7 @@
 
 #include "core/error.h"
 #include "core/progress.h"
+#include "core/ranks.h"
 #include "reduce/reduce_stages.h"
 
 #define COMPENSATION_ROUNDS 4
@@ -118,6 +119,25 @@ int reduce_decimate_meshes(reduce_state *st, const decimate_input *inputs,
             order[n++] = (sized_mesh){inputs[m].vertex_count, m};
         }
     qsort(order, n, sizeof *order, larger_first);
+    /* Under mpirun the ranks share the meshes (reduce_ranks.c): each decimates its own, largest
+     * first, and every output is copied to every rank afterwards. */
+    size_t all = n, *meshes = NULL;
+    int *owner = NULL;
+    if (ranks_count() > 1 && !streaming) {
+        meshes = xcalloc(all + 1, sizeof *meshes);
+        owner = xcalloc(all + 1, sizeof *owner);
+        uint32_t *sizes = xcalloc(all + 1, sizeof *sizes);
+        for (size_t i = 0; i < all; i++) {
+            meshes[i] = order[i].mesh;
+            sizes[i] = order[i].vertices;
+        }
+        reduce_ranks_assign(sizes, all, owner);
+        free(sizes);
+        n = 0;
+        for (size_t i = 0; i < all; i++)
+            if (owner[i] == ranks_rank())
+                order[n++] = order[i];
+    }
     /* Meshes in memory go in one call; released ones `threads` at a time, each read again just
      * before and released just after, so host memory holds the meshes in flight. */
     size_t group = streaming ? threads : n;
@@ -173,6 +193,10 @@ int reduce_decimate_meshes(reduce_state *st, const decimate_input *inputs,
         }
     }
     progress_end(&bar);
+    if (meshes)
+        status = reduce_ranks_share(status, meshes, owner, all, inputs, outputs);
+    free(meshes);
+    free(owner);
     free(order);
     free(jobs);
     free(results);

@@ -309,6 +309,19 @@ int reduce_decimate_meshes(reduce_state *st, const decimate_input *inputs,
                            decimate_method method, const char *label, int keep_history,
                            decimate_output *outputs);
 
+/* ---- ranks (reduce_ranks.c) ---- */
+
+/* Under mpirun: the owner rank of each of `n` meshes of `vertices` (largest first), each mesh in
+ * turn to the rank with the fewest vertices so far (the lowest on a tie): the same on every
+ * rank. */
+void reduce_ranks_assign(const uint32_t *vertices, size_t n, int *owner);
+/* Under mpirun, once each rank has decimated its meshes (status: its own success): agrees on
+ * the status (ranks_sync), then copies the output of each meshes[i] from rank owner[i] into
+ * outputs[meshes[i]] on every other rank, so every rank holds them all. One process: returns
+ * status. Returns 0, or -1 with the error set (a failing rank's). */
+int reduce_ranks_share(int status, const size_t *meshes, const int *owner, size_t n,
+                       const decimate_input *inputs, decimate_output *outputs);
+
 /* Decimates the meshes the plan decimates, in parallel, largest first, then plans again with the
  * floors meshes reached and relaxes locks where the request cannot be met otherwise. A mesh
  * whose decimation keeps at least as many vertices as it has (below a target under its count)
