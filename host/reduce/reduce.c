@@ -69,21 +69,16 @@ static int run_pass(reduce_state *st, unsigned int pass)
     if (st->options->passes > 1 && st->options->importance.sppm.progress && ranks_rank() == 0)
         fprintf(stderr, "idmr: pass %u of %u: importance on %llu vertices\n", pass,
                 st->options->passes, (unsigned long long)st->simulated->vertex_count);
-<<<<<<< HEAD
+    /* Under mpirun every rank runs every stage (the importance pass and the decimation are
+     * shared: core/ranks.h, reduce_ranks.c); rank 0 alone writes. With --max-error (one
+     * process only: below) the target is searched for: the budget and decimation run at every
+     * D the search measures, and last at the D it found. */
     if (reduce_importance(st))
         return -1;
-    /* With --max-error the target is searched for: the budget and decimation run at every D
-     * the search measures, and last at the D it found. */
     int status = st->options->error.bound != REDUCE_ERROR_NONE
                      ? reduce_error_budget(st)
                      : reduce_plan_budget(st) || reduce_decimation(st);
     return status || record_pass(st, importance_before, reduction_before);
-=======
-    /* Under mpirun every rank runs every stage (the importance pass and the decimation are
-     * shared: core/ranks.h, reduce_ranks.c); rank 0 alone writes. */
-    return reduce_importance(st) || reduce_plan_budget(st) || reduce_decimation(st) ||
-           record_pass(st, importance_before, reduction_before);
->>>>>>> mpi
 }
 
 int reduce_run(device *d, scene *s, const char *outdir, const reduce_options *o)
@@ -102,6 +97,11 @@ int reduce_run_devices(device *devices, unsigned int count, scene *s, const char
     if (ranks_count() > 1 && o->memory_budget)
         return error_set(IDMR_EXIT_INPUT,
                          "reduce: --memory-budget plans the scene for one device: run it "
+                         "without mpirun (%d ranks were started)",
+                         ranks_count());
+    if (ranks_count() > 1 && o->error.bound != REDUCE_ERROR_NONE)
+        return error_set(IDMR_EXIT_INPUT,
+                         "reduce: --max-error renders its checks in one process: run it "
                          "without mpirun (%d ranks were started)",
                          ranks_count());
     int lead = ranks_rank() == 0; /* writes the output (under mpirun, rank 0 alone) */
