@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "core/error.h"
+#include "core/hash.h"
 #include "core/files.h"
 
 static const char MAGIC[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '4'};
@@ -21,7 +22,6 @@ static const char MAGIC_VERSION_2[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '2'};
 /* Version 3 had no checksum: a damaged file could pass for a good one. */
 static const char MAGIC_VERSION_3[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '3'};
 enum { KIND_CAMERA = 1, KIND_SHADOW = 2 };
-#define FNV_OFFSET 0xcbf29ce484222325ull
 
 /* The fixed-size part after the magic. */
 typedef struct simulation_header {
@@ -31,21 +31,13 @@ typedef struct simulation_header {
     double seen_light;
 } simulation_header;
 
-static uint64_t fnv1a(uint64_t hash, const void *bytes, size_t size)
-{
-    const unsigned char *b = bytes;
-    for (size_t i = 0; i < size; i++)
-        hash = (hash ^ b[i]) * 0x100000001b3ull;
-    return hash;
-}
-
 int importance_file_fingerprint(const scene *s, uint64_t *fingerprint)
 {
-    uint64_t hash = FNV_OFFSET;
+    uint64_t hash = HASH_FNV1A_START;
     for (size_t m = 0; m < s->mesh_count; m++) {
         const scene_mesh *mesh = &s->meshes[m];
-        hash = fnv1a(hash, mesh->positions, 3 * sizeof(float) * mesh->vertex_count);
-        hash = fnv1a(hash, mesh->indices, 3 * sizeof(uint32_t) * mesh->triangle_count);
+        hash = hash_fnv1a(hash, mesh->positions, 3 * sizeof(float) * mesh->vertex_count);
+        hash = hash_fnv1a(hash, mesh->indices, 3 * sizeof(uint32_t) * mesh->triangle_count);
     }
     FILE *f = fopen(s->file, "rb");
     if (!f)
@@ -53,7 +45,7 @@ int importance_file_fingerprint(const scene *s, uint64_t *fingerprint)
     unsigned char block[65536];
     size_t got;
     while ((got = fread(block, 1, sizeof block, f)) > 0)
-        hash = fnv1a(hash, block, got);
+        hash = hash_fnv1a(hash, block, got);
     int failed = ferror(f);
     fclose(f);
     if (failed)
@@ -107,7 +99,7 @@ int importance_file_write(const char *path, const scene *s, const importance_opt
     memcpy(at, r->light, per_kind), at += per_kind;
     memcpy(at, r->shadow, per_kind), at += per_kind;
     memcpy(at, r->pixel_triangle, pixels_bytes(&h)), at += pixels_bytes(&h);
-    uint64_t checksum = fnv1a(FNV_OFFSET, bytes, body);
+    uint64_t checksum = hash_fnv1a(HASH_FNV1A_START, bytes, body);
     memcpy(at, &checksum, sizeof checksum);
     int status = files_write_atomic(path, bytes, size);
     free(bytes);
@@ -254,7 +246,8 @@ static unsigned char *read_checked(const char *path, size_t *size)
             status = read_failure(path);
     }
     if (!status) {
-        uint64_t stored, computed = fnv1a(FNV_OFFSET, bytes, (size_t)promised - sizeof stored);
+        uint64_t stored,
+            computed = hash_fnv1a(HASH_FNV1A_START, bytes, (size_t)promised - sizeof stored);
         memcpy(&stored, bytes + promised - sizeof stored, sizeof stored);
         if (stored != computed)
             status = error_set(IDMR_EXIT_INPUT,

@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "core/error.h"
+#include "core/hash.h"
 #include "core/progress.h"
 #include "core/ranks.h"
 
@@ -611,15 +612,6 @@ static int check_device_memory(const device *d, unsigned int count, const sppm_o
     return count > 1 ? error_prefix("device %d (%s)", d->info.index, d->info.name) : -1;
 }
 
-/* FNV-1a over `bytes` at `data`, continuing `hash`. */
-static uint64_t fnv1a(uint64_t hash, const void *data, size_t bytes)
-{
-    const unsigned char *p = data;
-    for (size_t i = 0; i < bytes; i++)
-        hash = (hash ^ p[i]) * 0x100000001b3ull;
-    return hash;
-}
-
 /* What every rank of a run must share: the pass, the options that change its numbers and the
  * scene's shape (its counts, mesh by mesh). */
 static uint64_t run_fingerprint(const scene *s, const sppm_options *o, const sppm_pass *pass,
@@ -629,12 +621,12 @@ static uint64_t run_fingerprint(const scene *s, const sppm_options *o, const spp
                               summary->width, summary->height, o->max_depth, o->radius,
                               o->generic, (double)s->triangle_count, (double)s->light_count,
                               (double)s->mesh_count, (double)s->features};
-    uint64_t hash = fnv1a(0xcbf29ce484222325ull, numbers, sizeof numbers);
+    uint64_t hash = hash_fnv1a(HASH_FNV1A_START, numbers, sizeof numbers);
     if (pass->defines)
-        hash = fnv1a(hash, pass->defines, strlen(pass->defines));
+        hash = hash_fnv1a(hash, pass->defines, strlen(pass->defines));
     for (size_t m = 0; m < s->mesh_count; m++) {
         const uint32_t counts[2] = {s->meshes[m].vertex_count, s->meshes[m].triangle_count};
-        hash = fnv1a(hash, counts, sizeof counts);
+        hash = hash_fnv1a(hash, counts, sizeof counts);
     }
     return hash;
 }
