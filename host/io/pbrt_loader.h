@@ -105,6 +105,11 @@ void pbrt_params_free(pbrt_params *params);
 
 /* The parameter `name` (any type, marked used), or NULL. */
 pbrt_param *pbrt_param_find(pbrt_params *params, const char *name);
+/* The parameter `name` checked to have one of the types (NULL-terminated, the first named in
+ * the message) and `count` values (0: any); *out NULL when absent. 0, or -1 with the error set
+ * (file and line). */
+int pbrt_param_typed(const char *file, pbrt_params *params, const char *name,
+                     const char *const *types, size_t count, pbrt_param **out);
 /* Typed look-ups: the fallback when absent; a parameter of another type, or with another count
  * than one value, is an error naming it. */
 int pbrt_param_float(const char *file, pbrt_params *params, const char *name, double fallback,

@@ -240,10 +240,8 @@ pbrt_param *pbrt_param_find(pbrt_params *params, const char *name)
     return NULL;
 }
 
-/* The parameter `name` checked to have one of the types (NULL-terminated) and `count` values
- * (0: any); *out NULL when absent. */
-static int typed(const char *file, pbrt_params *params, const char *name, const char *const *types,
-                 size_t count, pbrt_param **out)
+int pbrt_param_typed(const char *file, pbrt_params *params, const char *name,
+                     const char *const *types, size_t count, pbrt_param **out)
 {
     pbrt_param *p = pbrt_param_find(params, name);
     *out = p;
@@ -268,7 +266,7 @@ int pbrt_param_float(const char *file, pbrt_params *params, const char *name, do
     static const char *const types[] = {"float", "integer", NULL};
     pbrt_param *p;
     *out = fallback;
-    if (typed(file, params, name, types, 1, &p))
+    if (pbrt_param_typed(file, params, name, types, 1, &p))
         return -1;
     if (p)
         *out = p->numbers[0];
@@ -281,7 +279,7 @@ int pbrt_param_int(const char *file, pbrt_params *params, const char *name, long
     static const char *const types[] = {"integer", NULL};
     pbrt_param *p;
     *out = fallback;
-    if (typed(file, params, name, types, 1, &p))
+    if (pbrt_param_typed(file, params, name, types, 1, &p))
         return -1;
     if (p)
         *out = (long)p->numbers[0];
@@ -294,7 +292,7 @@ int pbrt_param_bool(const char *file, pbrt_params *params, const char *name, int
     static const char *const types[] = {"bool", NULL};
     pbrt_param *p;
     *out = fallback;
-    if (typed(file, params, name, types, 1, &p))
+    if (pbrt_param_typed(file, params, name, types, 1, &p))
         return -1;
     if (p)
         *out = p->numbers[0] != 0.0;
@@ -307,7 +305,7 @@ int pbrt_param_string(const char *file, pbrt_params *params, const char *name,
     static const char *const types[] = {"string", "texture", NULL};
     pbrt_param *p;
     *out = fallback;
-    if (typed(file, params, name, types, 1, &p))
+    if (pbrt_param_typed(file, params, name, types, 1, &p))
         return -1;
     if (p)
         *out = p->strings[0];
@@ -322,7 +320,7 @@ int pbrt_param_point3(const char *file, pbrt_params *params, const char *name,
     pbrt_param *p;
     for (int k = 0; k < 3; k++)
         out[k] = fallback[k];
-    if (typed(file, params, name, types, 3, &p))
+    if (pbrt_param_typed(file, params, name, types, 3, &p))
         return -1;
     for (int k = 0; p && k < 3; k++)
         out[k] = p->numbers[k];

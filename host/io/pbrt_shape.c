@@ -151,17 +151,10 @@ static void mesh_copy(const mesh_data *from, mesh_data *to)
 static int number_array(const char *file, pbrt_params *params, const char *name,
                         const char *const *types, size_t per, pbrt_param **out)
 {
-    pbrt_param *p = pbrt_param_find(params, name);
-    *out = p;
-    if (!p)
-        return 0;
-    int match = 0;
-    for (size_t i = 0; types[i]; i++)
-        match |= strcmp(p->type, types[i]) == 0;
-    if (!match)
-        return pbrt_fail(file, p->line, "\"%s %s\" should be of type %s", p->type, p->name,
-                         types[0]);
-    if (p->number_count % per)
+    if (pbrt_param_typed(file, params, name, types, 0, out))
+        return -1;
+    pbrt_param *p = *out;
+    if (p && p->number_count % per)
         return pbrt_fail(file, p->line, "\"%s %s\": %zu values, not a multiple of %zu", p->type,
                          p->name, p->number_count, per);
     return 0;
