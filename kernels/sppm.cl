@@ -4,22 +4,21 @@
  *   camera_paths      one camera path per pixel (lib/paths.h): hit points, and what the pass
  *                     records (importance: camera importance, then the light seen through
  *                     specular surfaces; render: throughput and emission)
- *   photon_paths      one photon path per work-item into its slot of records (lib/paths.h),
- *                     and the slots it stored appended to the stored-vertex list; work-item
- *                     i traces path params.path_first + i (several devices: each its range,
- *                     host/passes/sppm.h) into slot i
+ *   photon_paths      one photon path per work-item (lib/paths.h), its records appended to
+ *                     the dense list of records and their places noted in the path's slot of
+ *                     record_index; work-item i traces path params.path_first + i (several
+ *                     devices: each its range, host/passes/sppm.h) into slot i
  *   grid_count, scan_chunks, scan_chunk_sums, scan_apply, grid_scatter
  *                     the hash grid over the hit points by counting sort (lib/hit_point_grid.h)
  * importance pass (paper 3.2, 3.3, 4.1; host/passes/importance.c):
- *   gather_count      per stored photon vertex (the stored-vertex list): the hit points that
- *                     gather it
+ *   gather_count      per photon vertex of the dense list: the hit points that gather it
  *   path_importance   per path, from its last vertex back: running sum s of gather counts;
  *                     vertex j adds weight_j × s to its triangle's light importance
  *   shadow_rays       per hit point, one shadow ray: its occluder gets shadow importance
  *                     (lib/shadows.h; built with IDMR_SHADOW_IMPORTANCE=1)
  *   pixel_centre_hits the triangle seen through each pixel centre (the importance image)
  * render pass (host/passes/render.c):
- *   render_gather     per stored photon (the stored-vertex list): every hit point that gathers it gets
+ *   render_gather     per photon of the dense list: every hit point that gathers it gets
  *                     throughput × BRDF × flux, added in fixed point to its pixel
  *
  * Argument order: params first, then (for path kernels) the camera and SCENE_BUFFERS
@@ -50,27 +49,23 @@ kernel void camera_paths(idmr_sppm_params params, idmr_camera camera, SCENE_BUFF
     camera_path(&scene, &params, camera, pixel, hit_points, records SEEN_LIGHT_ARGUMENT);
 }
 
-/* The stored-vertex list (stored_count, stored_slots): the slots that hold a record, so that
- * the gathers take one work-item per stored photon (about 1.7 per path) and not one per slot
- * (IDMR_PATH_VERTICES per path). A path appends its slots where one atomic add puts them, so the
- * list's order changes from run to run; what the gathers add per slot does not depend on it,
- * and their sums are integers, so results stay the same bit for bit. */
+/* The records of all paths, one after the other (stored_count of them), so that the gathers
+ * take one work-item per record and read the records in a row: a fixed slot of
+ * IDMR_PATH_VERTICES records per path, about 1.7 of them used, left a gather reading one cache
+ * line per record from memory. A record goes where an atomic add puts it, so the list's order
+ * changes from run to run; what the gathers add per record does not depend on it, and their
+ * sums are integers, so results stay the same bit for bit. */
 kernel void photon_paths(idmr_sppm_params params, SCENE_BUFFERS, global uint *path_length,
                          global photon_record *records, volatile global uint *stored_count,
-                         global uint *stored_slots)
+                         global uint *record_index)
 {
     uint slot = get_global_id(0); /* this device's path slot: path path_first + slot */
     if (slot >= params.device_paths)
         return;
     scene_view scene = SCENE_VIEW();
-    uint length = photon_path(&scene, &params, params.path_first + slot,
-                              records + (size_t)slot * IDMR_PATH_VERTICES);
-    path_length[slot] = length;
-    if (length == 0)
-        return;
-    uint first = atomic_add(stored_count, length);
-    for (uint j = 0; j < length; j++)
-        stored_slots[first + j] = slot * IDMR_PATH_VERTICES + j;
+    path_record_list list = {records, stored_count,
+                             record_index + (size_t)slot * IDMR_PATH_VERTICES};
+    path_length[slot] = photon_path(&scene, &params, params.path_first + slot, list);
 }
 
 kernel void grid_count(idmr_sppm_params params, global const idmr_hit_point *hit_points,
@@ -127,15 +122,14 @@ kernel void grid_scatter(idmr_sppm_params params, global const idmr_hit_point *h
 
 #if PASS_IMPORTANCE
 
-/* gathered[slot] for the stored slots only (path_importance reads no other). */
+/* gathered[v] for each record v of the list. */
 kernel void gather_count(idmr_sppm_params params, global const idmr_photon_vertex *vertices,
-                         global const uint *stored_count, global const uint *stored_slots,
-                         global const uint *cell_start, global const idmr_hit_point *grid_hits,
-                         global uint *gathered)
+                         global const uint *stored_count, global const uint *cell_start,
+                         global const idmr_hit_point *grid_hits, global uint *gathered)
 {
-    if (get_global_id(0) >= *stored_count)
+    uint v = get_global_id(0), count = 0;
+    if (v >= *stored_count)
         return;
-    uint v = stored_slots[get_global_id(0)], count = 0;
     float3 p = vload3(0, vertices[v].position), side = vload3(0, vertices[v].normal);
     float r2 = params.radius * params.radius;
     uint buckets[8];
@@ -147,19 +141,21 @@ kernel void gather_count(idmr_sppm_params params, global const idmr_photon_verte
 }
 
 kernel void path_importance(idmr_sppm_params params, global const idmr_photon_vertex *vertices,
-                            global const uint *path_length, global const uint *gathered,
+                            global const uint *path_length, global const uint *record_index,
+                            global const uint *gathered,
                             volatile global fixed_word *light_importance)
 {
     uint path = get_global_id(0); /* this device's path slot */
     if (path >= params.device_paths)
         return;
-    uint base = path * IDMR_PATH_VERTICES;
+    global const uint *index = record_index + (size_t)path * IDMR_PATH_VERTICES;
     ulong running = 0;
     for (int j = (int)path_length[path] - 1; j >= 0; j--) {
-        running += gathered[base + j];
+        uint v = index[j];
+        running += gathered[v];
         if (running != 0ul)
-            fixed_add(light_importance, vertices[base + j].triangle,
-                      weight_units(vertices[base + j].weight) * running);
+            fixed_add(light_importance, vertices[v].triangle,
+                      weight_units(vertices[v].weight) * running);
     }
 }
 
@@ -210,7 +206,7 @@ inline ulong radiance_units(float c, float scale)
 }
 
 kernel void render_gather(idmr_sppm_params params, global const idmr_render_photon *photons,
-                          global const uint *stored_count, global const uint *stored_slots,
+                          global const uint *stored_count,
                           global const idmr_render_hit *render_hits,
                           global const idmr_material *materials, global const uint *cell_start,
                           global const idmr_hit_point *grid_hits,
@@ -218,7 +214,7 @@ kernel void render_gather(idmr_sppm_params params, global const idmr_render_phot
 {
     if (get_global_id(0) >= *stored_count)
         return;
-    global const idmr_render_photon *photon = photons + stored_slots[get_global_id(0)];
+    global const idmr_render_photon *photon = photons + get_global_id(0);
     float3 p = vload3(0, photon->position), side = vload3(0, photon->normal);
     float3 incoming = vload3(0, photon->direction);
     float3 flux = (float3)(photon->flux_r, photon->flux_g, photon->flux_b);

@@ -191,7 +191,7 @@ int main(void)
         seconds_per_iteration(&d, s, &b, variant, 1, &r);
         importance_result_free(&r);
     }
-    double stage[2][5] = {{0}};
+    double stage[2][6] = {{0}};
     for (int round = 0; round < ROUNDS; round++)
         for (int variant = 0; variant < 2; variant++) {
             double seconds = seconds_per_iteration(&d, s, &b, variant, ITERATIONS, &r);
@@ -201,8 +201,10 @@ int main(void)
                 st[0] = r.sppm.seconds.camera / r.sppm.iterations;
                 st[1] = r.sppm.seconds.photon / r.sppm.iterations;
                 st[2] = r.sppm.seconds.grid / r.sppm.iterations;
-                st[3] = (r.sppm.seconds.gather - r.path_seconds) / r.sppm.iterations;
+                st[3] = (r.sppm.seconds.gather - r.path_seconds - r.shadow_seconds) /
+                        r.sppm.iterations;
                 st[4] = r.path_seconds / r.sppm.iterations;
+                st[5] = r.shadow_seconds / r.sppm.iterations;
             }
             importance_result_free(&r);
         }
@@ -210,10 +212,10 @@ int main(void)
            "device=\"%s\"\n",
            best[1], best[0], best[1] / best[0], sppm_default_photons(&d),
            (unsigned long long)s->triangle_count, d.info.name);
-    printf("importance-iteration: stages camera=%.3f photon=%.3f grid=%.3f gather=%.3f "
-           "path=%.3f (plain: camera=%.3f photon=%.3f)\n",
-           stage[1][0], stage[1][1], stage[1][2], stage[1][3], stage[1][4], stage[0][0],
-           stage[0][1]);
+    printf("importance-iteration: stages camera=%.3f photon=%.3f grid=%.3f shadow=%.3f "
+           "gather=%.3f path=%.3f gather/photon=%.2f (plain: camera=%.3f photon=%.3f)\n",
+           stage[1][0], stage[1][1], stage[1][2], stage[1][5], stage[1][3], stage[1][4],
+           stage[1][3] / stage[1][1], stage[0][0], stage[0][1]);
     scaling(&d, s, &b);
     scaling_ranks(path);
     bvh_free(&b);

@@ -104,16 +104,49 @@ static void test_grid_cells_never_saturate(void **state)
                 fail_msg("scene to %g, radius %g: cell %g, %g cells out", limits[a], radii[b],
                          cell, reach / cell);
         }
-    /* Cells stay 2r (and a little more) where that is in range. */
+    /* Cells stay 2r (and a little more) where floats are fine enough. */
     idmr_sppm_params params;
-    grid_cells_for(1e5, 1e-2, &params);
-    assert_float_equal(params.cell_size, 2e-2 * 1.0001, 1e-8);
+    grid_cells_for(10.0, 1e-2, &params);
+    assert_float_equal(params.cell_size, (2e-2 + ldexp(10.0 + 1e-2, -22)) * 1.0001, 1e-8);
+}
+
+/* A gather reads the cells of p - r and p + r only (kernels/lib/hit_point_grid.h,
+ * grid_buckets_near), computed in float as the kernel does: they must be the same cell or
+ * neighbours for every p of the scene, also where the radius is as small as the floats'
+ * spacing (there, cells of exactly 2r let the two fall 2 cells apart and a hit point at p itself
+ * was missed). */
+static void test_grid_ball_reaches_neighbouring_cells_only(void **state)
+{
+    const double limits[] = {1.0, 1e5, 3e7};
+    const double radii[] = {1e-2, 4e-3, 1e-3, 1e-7};
+    size_t apart = 0, points = 0;
+    for (size_t a = 0; a < 3; a++)
+        for (size_t b = 0; b < 4; b++) {
+            idmr_sppm_params params;
+            grid_cells_for(limits[a], radii[b], &params);
+            float r = params.radius, cell = params.cell_size;
+            /* points up to the scene's edge, many of them where floats are coarsest */
+            for (int i = 0; i < 200000; i++) {
+                float p = (float)(limits[a] * (1.0 - (double)i / 1e7));
+                volatile float low = p - r, high = p + r; /* rounded to float, as the kernel */
+                volatile float low_cells = low / cell, high_cells = high / cell;
+                long lo = (long)floorf(low_cells), hi = (long)floorf(high_cells);
+                points++;
+                if (hi - lo > 1 && apart++ < 3)
+                    print_message("  scene to %g, radius %g: p %.9g in cells %ld .. %ld\n",
+                                  limits[a], radii[b], p, lo, hi);
+            }
+        }
+    print_message("  %zu points, %zu whose ball reaches more than 2 cells on an axis\n", points,
+                  apart);
+    assert_int_equal(apart, 0);
 }
 
 int main(void)
 {
     const struct CMUnitTest host_tests[] = {
         cmocka_unit_test(test_grid_cells_never_saturate),
+        cmocka_unit_test(test_grid_ball_reaches_neighbouring_cells_only),
     };
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_long_run_camera_importance_is_eq2),

@@ -99,7 +99,11 @@ void hit_point_grid_place(const hit_point_grid *g, const scene *s, double radius
     for (int k = 0; k < 3; k++)
         farthest = fmax(farthest, fmax(fabs(s->bbox_min[k]), fabs(s->bbox_max[k])));
     farthest += params->radius;
-    double cell_size = fmax(2.0 * params->radius * 1.0001, farthest / HIT_POINT_GRID_MAX_CELL);
+    /* A gather reads the cells of p - r and p + r (kernels/lib/hit_point_grid.h); they must be
+     * the same or neighbours, and the kernel's p ± r and their quotients by the cell each round
+     * by up to 2^-24 of `farthest`: so the cell exceeds 2r + 2^-22 farthest. */
+    double cell_size = fmax((2.0 * params->radius + ldexp(farthest, -22)) * 1.0001,
+                            farthest / HIT_POINT_GRID_MAX_CELL);
     params->cell_size = (float)cell_size * (1.0f + FLT_EPSILON);
     params->cell_count = g->cells;
 }

@@ -2,8 +2,8 @@
  * built on the device by counting sort: cell counts with atomics, a three-step prefix sum, a
  * scatter of copies of the hit points by cell (a gather reads a cell's hit points in a row). Part of the SPPM core (passes/sppm.h).
  *
- * The cells are 2r (and a little more) wide for the gather radius r, so a gather ball touches
- * at most 2 x 2 x 2 of them, and they are counted in 64 bits from the world origin: where the
+ * The cells are 2r (and a little more, for rounding where floats are coarse) wide for the
+ * gather radius r, so a gather ball touches at most 2 x 2 x 2 of them, and they are counted in 64 bits from the world origin: where the
  * scene reaches farther than HIT_POINT_GRID_MAX_CELL cells of that size (a small radius in a
  * vast scene), the cells grow to keep every cell number in range. Buckets are a power of two,
  * at least twice the hit points, at least 1024. */

@@ -53,7 +53,8 @@ static const char *const KIND_NAMES[KINDS] = {"camera importance", "light import
 typedef struct importance_device {
     cl_kernel gather, path, shadow, centre_hits;
     cl_mem gathered, accumulators[KINDS];
-    double path_seconds; /* its path walks, summed */
+    double path_seconds;   /* its path walks, summed */
+    double shadow_seconds; /* its shadow rays, summed */
 } importance_device;
 
 /* The pass's part while the core runs. */
@@ -178,11 +179,13 @@ static int gather(sppm *core, void *state)
     importance_pass *p = state;
     importance_device *d = p->device + core->index;
     size_t local = core->options->local_size;
-    if ((p->shadows && core->params.camera_sums && cast_shadow_rays(core, d)) ||
-        DEVICE_SET_ARGS(d->gather, "gather_count", DEVICE_ARG(core->params),
+    double shadows_start = monotonic_seconds();
+    if (p->shadows && core->params.camera_sums && cast_shadow_rays(core, d))
+        return -1;
+    d->shadow_seconds += monotonic_seconds() - shadows_start;
+    if (DEVICE_SET_ARGS(d->gather, "gather_count", DEVICE_ARG(core->params),
                         DEVICE_ARG(core->photon_records), DEVICE_ARG(core->stored_count),
-                        DEVICE_ARG(core->stored_slots), DEVICE_ARG(core->grid.cell_start),
-                        DEVICE_ARG(core->grid.grid_hits),
+                        DEVICE_ARG(core->grid.cell_start), DEVICE_ARG(core->grid.grid_hits),
                         DEVICE_ARG(d->gathered)) ||
         (core->stored &&
          device_run(core->dev, d->gather, "gather_count", core->stored, local)))
@@ -192,7 +195,8 @@ static int gather(sppm *core, void *state)
     double start = monotonic_seconds();
     if (DEVICE_SET_ARGS(d->path, "path_importance", DEVICE_ARG(core->params),
                         DEVICE_ARG(core->photon_records), DEVICE_ARG(core->path_length),
-                        DEVICE_ARG(d->gathered), DEVICE_ARG(d->accumulators[LIGHT])) ||
+                        DEVICE_ARG(core->record_index), DEVICE_ARG(d->gathered),
+                        DEVICE_ARG(d->accumulators[LIGHT])) ||
         (core->params.device_paths &&
          device_run(core->dev, d->path, "path_importance", core->params.device_paths, local)))
         return -1;
@@ -276,21 +280,17 @@ static int add_combined(const sppm *core, importance_pass *p, int k, double *sum
 }
 
 /* Hit points found by the first iteration's photon vertices on one device, for the report:
- * the gather counts of the stored slots (gather_count writes no other). */
+ * the gather counts of its list of records. */
 static int count_gathered(sppm *core, importance_pass *p, uint64_t *found)
 {
     const importance_device *d = p->device + core->index;
-    uint32_t *gathered = xmalloc(core->slots * sizeof *gathered);
-    uint32_t *stored = xmalloc((core->stored + 1) * sizeof *stored);
-    int status = device_read(core->dev, d->gathered, core->slots * sizeof *gathered, gathered,
-                             "gather counts") ||
-                 (core->stored && device_read(core->dev, core->stored_slots,
-                                              core->stored * sizeof *stored, stored,
-                                              "stored photon slots"));
+    uint32_t *gathered = xmalloc((core->stored + 1) * sizeof *gathered);
+    int status = core->stored && device_read(core->dev, d->gathered,
+                                             core->stored * sizeof *gathered, gathered,
+                                             "gather counts");
     for (size_t i = 0; i < core->stored && !status; i++)
-        *found += gathered[stored[i]];
+        *found += gathered[i];
     free(gathered);
-    free(stored);
     return status;
 }
 
@@ -388,8 +388,10 @@ static int collect(sppm *cores, unsigned int count, void *state, unsigned int n,
         add_combined(core, p, SEEN_LIGHT, r->light,
                      seen_light_gathers(core, p) / core->params.fixed_scale, &r->seen_light))
         return -1;
-    for (unsigned int j = 0; j < count; j++)
+    for (unsigned int j = 0; j < count; j++) {
         r->path_seconds = fmax(r->path_seconds, p->device[j].path_seconds);
+        r->shadow_seconds = fmax(r->shadow_seconds, p->device[j].shadow_seconds);
+    }
     r->convergence[n] = convergence_change(p, core->scene, n + 1);
     snprintf(detail, detail_size, "change %.2e", r->convergence[n]);
     double tolerance = p->options->tolerance;
@@ -411,10 +413,15 @@ static int snapshot(sppm *core, void *state)
     uint64_t **fixed[KINDS] = {&out->camera_fixed, &out->light_fixed, &out->shadow_fixed,
                                &out->seen_light_fixed};
     free(out->gathered);
-    out->gathered = xmalloc(core->slots * sizeof *out->gathered);
-    if (device_read(core->dev, d->gathered, core->slots * sizeof *out->gathered, out->gathered,
-                    "gather counts"))
+    out->gathered = NULL;
+    uint32_t *list = xmalloc((core->stored + 1) * sizeof *list);
+    if (core->stored && device_read(core->dev, d->gathered, core->stored * sizeof *list, list,
+                                    "gather counts")) {
+        free(list);
         return -1;
+    }
+    out->gathered = sppm_snapshot_by_slot(&out->core, list, sizeof *list);
+    free(list);
     for (int k = 0; k < KINDS; k++) {
         free(*fixed[k]);
         *fixed[k] = xmalloc(p->words * sizeof **fixed[k]);

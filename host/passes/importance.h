@@ -68,7 +68,7 @@
 typedef struct importance_snapshot {
     sppm_snapshot core;             /* hit points, path lengths, params, photon records */
     const idmr_photon_vertex *vertices; /* core.photon_records as the pass's records */
-    uint32_t *gathered;             /* params.path_count * IDMR_PATH_VERTICES */
+    uint32_t *gathered;             /* gather counts by slot, as core.photon_records */
     uint64_t *camera_fixed;         /* this iteration's accumulators, fixed point */
     uint64_t *light_fixed;
     uint64_t *shadow_fixed;         /* zero without shadow rays */
@@ -107,6 +107,7 @@ struct importance_result {
                                 surfaces, as gathers (above) */
     double path_seconds;     /* the path walk, part of sppm.seconds.gather (several devices:
                                 the most any device spent) */
+    double shadow_seconds;   /* the shadow rays, part of sppm.seconds.gather (the same) */
     sppm_summary sppm;       /* iterations, radii, image size, photons, bytes, timings */
 };
 

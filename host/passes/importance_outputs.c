@@ -83,7 +83,9 @@ cJSON *importance_report_json(const scene *s, const device *d, const importance_
     cJSON_AddNumberToObject(seconds, "camera", run->seconds.camera);
     cJSON_AddNumberToObject(seconds, "photon", run->seconds.photon);
     cJSON_AddNumberToObject(seconds, "grid", run->seconds.grid);
-    cJSON_AddNumberToObject(seconds, "gather", run->seconds.gather - r->path_seconds);
+    cJSON_AddNumberToObject(seconds, "shadow", r->shadow_seconds);
+    cJSON_AddNumberToObject(seconds, "gather",
+                            run->seconds.gather - r->path_seconds - r->shadow_seconds);
     cJSON_AddNumberToObject(seconds, "path", r->path_seconds);
     cJSON_AddNumberToObject(seconds, "readback", run->seconds.collect);
     cJSON_AddNumberToObject(seconds, "total", run->seconds.total);

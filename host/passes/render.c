@@ -111,7 +111,7 @@ static int gather(sppm *core, void *state)
     render_pass *p = state;
         return DEVICE_SET_ARGS(p->gather, "render_gather", DEVICE_ARG(core->params),
                            DEVICE_ARG(core->photon_records), DEVICE_ARG(core->stored_count),
-                           DEVICE_ARG(core->stored_slots), DEVICE_ARG(p->render_hits),
+                           DEVICE_ARG(p->render_hits),
                            DEVICE_ARG(core->uploaded.materials),
                            DEVICE_ARG(core->grid.cell_start), DEVICE_ARG(core->grid.grid_hits),
                            DEVICE_ARG(p->pixel_radiance)) ||

@@ -86,8 +86,21 @@ void sppm_snapshot_free(sppm_snapshot *snapshot)
     free(snapshot->hit_points);
     free(snapshot->photon_records);
     free(snapshot->path_length);
-    free(snapshot->stored_slots);
+    free(snapshot->record_index);
     memset(snapshot, 0, sizeof *snapshot);
+}
+
+void *sppm_snapshot_by_slot(const sppm_snapshot *snapshot, const void *list, size_t bytes)
+{
+    size_t paths = snapshot->params.device_paths;
+    unsigned char *out = xcalloc(paths * IDMR_PATH_VERTICES + 1, bytes);
+    for (size_t p = 0; p < paths; p++)
+        for (size_t j = 0; j < snapshot->path_length[p]; j++) {
+            size_t slot = p * IDMR_PATH_VERTICES + j;
+            memcpy(out + slot * bytes,
+                   (const unsigned char *)list + snapshot->record_index[slot] * bytes, bytes);
+        }
+    return out;
 }
 
 /* What the core needs of the scene and the options; sets the summary's image and photons. */
@@ -150,8 +163,8 @@ static int build_program(sppm *core, const sppm_pass *pass)
     return status ? -1 : 0;
 }
 
-/* The sizes of the core's own buffers (hit points, photon path lengths, photon slots, the
- * stored-vertex list's length and slots), in allocate()'s order: one place for the allocation
+/* The sizes of the core's own buffers (hit points, photon path lengths, the list of photon
+ * records, its length, the record index), in allocate()'s order: one place for the allocation
  * and sppm_memory_of(). */
 #define CORE_BUFFERS 5
 static void core_sizes(unsigned int pixels, unsigned int photons, size_t record_bytes,
@@ -234,9 +247,9 @@ static int allocate(sppm *core, const sppm_pass *pass)
     const device_buffer_request buffers[CORE_BUFFERS] = {
         {&core->hit_points, bytes[0], "hit points"},
         {&core->path_length, bytes[1], "photon path lengths"},
-        {&core->photon_records, bytes[2], "photon paths"},
-        {&core->stored_count, bytes[3], "stored photon count"},
-        {&core->stored_slots, bytes[4], "stored photon slots"},
+        {&core->photon_records, bytes[2], "photon records"},
+        {&core->stored_count, bytes[3], "photon record count"},
+        {&core->record_index, bytes[4], "photon record index"},
     };
     core->buffer_bytes = core->grid.bytes;
     if (device_buffers(core->dev, buffers, sizeof buffers / sizeof *buffers,
@@ -256,7 +269,7 @@ static int allocate(sppm *core, const sppm_pass *pass)
                                         1 + DEVICE_SCENE_BUFFERS, DEVICE_ARG(core->path_length),
                                         DEVICE_ARG(core->photon_records),
                                         DEVICE_ARG(core->stored_count),
-                                        DEVICE_ARG(core->stored_slots))
+                                        DEVICE_ARG(core->record_index))
                ? -1
                : 0;
 }
@@ -266,7 +279,7 @@ static void release(sppm *core)
     cl_kernel kernels[] = {core->camera_paths, core->photon_paths};
     device_release_kernels(kernels, sizeof kernels / sizeof *kernels);
     cl_mem buffers[] = {core->hit_points, core->path_length, core->photon_records,
-                        core->stored_count, core->stored_slots};
+                        core->stored_count, core->record_index};
     device_release_buffers(buffers, sizeof buffers / sizeof *buffers);
     hit_point_grid_release(&core->grid);
     if (core->program)
@@ -328,12 +341,12 @@ static int trace_paths(sppm *core, sppm_pass *pass)
         return -1;
     double t1 = monotonic_seconds();
     cl_uint stored = 0;
-    if (device_clear(core->dev, core->stored_count, sizeof(cl_uint), "stored photon count") ||
+    if (device_clear(core->dev, core->stored_count, sizeof(cl_uint), "photon record count") ||
         DEVICE_SET_ARG(core->photon_paths, "photon_paths", 0, core->params) ||
         (core->params.device_paths &&
          device_run(core->dev, core->photon_paths, "photon_paths", core->params.device_paths,
                     local)) ||
-        device_read(core->dev, core->stored_count, sizeof stored, &stored, "stored photon count"))
+        device_read(core->dev, core->stored_count, sizeof stored, &stored, "photon record count"))
         return -1;
     core->stored = stored;
     double t2 = monotonic_seconds();
@@ -523,22 +536,23 @@ static int take_snapshot(sppm *core, size_t record_bytes, sppm_snapshot *out)
     out->params = core->params;
     size_t paths = core->params.device_paths, slots = core->slots;
     out->hit_points = xmalloc(core->pixels * sizeof *out->hit_points);
-    out->photon_records = xmalloc(slots * record_bytes);
-    out->path_length = xmalloc(paths * sizeof *out->path_length);
+    out->path_length = xmalloc((paths + 1) * sizeof *out->path_length);
+    out->record_index = xmalloc(slots * sizeof *out->record_index);
     out->stored = core->stored;
-    out->stored_slots = xmalloc((core->stored + 1) * sizeof *out->stored_slots);
-    return device_read(core->dev, core->hit_points, core->pixels * sizeof *out->hit_points,
-                       out->hit_points, "hit points") ||
-                   device_read(core->dev, core->photon_records, slots * record_bytes,
-                               out->photon_records, "photon paths") ||
-                   device_read(core->dev, core->path_length, paths * sizeof *out->path_length,
-                               out->path_length, "photon path lengths") ||
-                   (core->stored &&
-                    device_read(core->dev, core->stored_slots,
-                                core->stored * sizeof *out->stored_slots, out->stored_slots,
-                                "stored photon slots"))
-               ? -1
-               : 0;
+    void *list = xmalloc((core->stored + 1) * record_bytes);
+    int status =
+        device_read(core->dev, core->hit_points, core->pixels * sizeof *out->hit_points,
+                    out->hit_points, "hit points") ||
+        (paths && device_read(core->dev, core->path_length, paths * sizeof *out->path_length,
+                              out->path_length, "photon path lengths")) ||
+        device_read(core->dev, core->record_index, slots * sizeof *out->record_index,
+                    out->record_index, "photon record index") ||
+        (core->stored && device_read(core->dev, core->photon_records,
+                                     core->stored * record_bytes, list, "photon records"));
+    if (!status)
+        out->photon_records = sppm_snapshot_by_slot(out, list, record_bytes);
+    free(list);
+    return status ? -1 : 0;
 }
 
 /* The iterations, until one of the stop rules (sppm.h) ends them. */

@@ -131,7 +131,7 @@ typedef struct sppm_summary {
     unsigned int iterations;    /* run */
     double *radius;             /* gather radius per iteration run */
     uint64_t hit_points;        /* valid hit points, first iteration */
-    uint64_t photon_records;    /* records stored in the photon slots, first iteration */
+    uint64_t photon_records;    /* photon records stored, first iteration */
     uint64_t geometry_bytes;    /* device memory: the scene's geometry buffers */
     uint64_t bvh_bytes;         /*                the BVH */
     uint64_t buffer_bytes;      /*                the core's and the pass's buffers */
@@ -147,13 +147,21 @@ void sppm_summary_free(sppm_summary *summary);
 typedef struct sppm_snapshot {
     idmr_sppm_params params;
     idmr_hit_point *hit_points; /* params.width * params.height */
-    void *photon_records;       /* params.path_count * IDMR_PATH_VERTICES of the pass's records */
-    uint32_t *path_length;      /* params.path_count */
-    uint32_t *stored_slots;     /* the stored-vertex list (sppm.stored_slots), `stored` long */
-    size_t stored;
+    /* the pass's records by slot: path p's record j at p * IDMR_PATH_VERTICES + j for
+     * j < path_length[p], zero past it (copied out of the device's list) */
+    void *photon_records;
+    uint32_t *path_length;   /* params.path_count */
+    uint32_t *record_index;  /* the device's: path p's record j at list place
+                                record_index[p * IDMR_PATH_VERTICES + j] */
+    size_t stored;           /* records in the device's list */
 } sppm_snapshot;
 
 void sppm_snapshot_free(sppm_snapshot *snapshot);
+
+/* A copy, in slot order (as photon_records above), of `list`: one element of `bytes` per record
+ * of the device's list, in the list's order (the records themselves, or what a kernel wrote per
+ * record). Slots without a record are zero. */
+void *sppm_snapshot_by_slot(const sppm_snapshot *snapshot, const void *list, size_t bytes);
 
 /* The core while it runs; the pass's hooks read it and add their kernels' work. */
 typedef struct sppm {
@@ -165,14 +173,14 @@ typedef struct sppm {
     device_scene uploaded;
     cl_program program;
     cl_kernel camera_paths, photon_paths;
-    cl_mem hit_points, path_length, photon_records;
-    /* the stored-vertex list (kernels/sppm.cl, photon_paths): its length and the slots that
-     * hold a record; the gathers run over it */
-    cl_mem stored_count, stored_slots;
+    /* photon_records: the records of all photon paths, one after the other (kernels/sppm.cl,
+     * photon_paths), stored_count of them, the gathers' list; record_index: where each path's
+     * records sit in it (idmr/sppm_layout.h) */
+    cl_mem hit_points, path_length, photon_records, stored_count, record_index;
     size_t stored;                  /* the list's length this iteration, read back */
     hit_point_grid grid;
     unsigned int pixels;
-    size_t slots;                   /* photon record slots: capacity × IDMR_PATH_VERTICES */
+    size_t slots;                   /* photon records at most: capacity × IDMR_PATH_VERTICES */
     unsigned int capacity;          /* photon paths the slots hold (all of them on one device) */
     unsigned int rank_first, rank_paths; /* this MPI rank's photon paths (all in one process) */
     double radius2;                 /* this iteration's gather radius², for the grid */

@@ -1,10 +1,10 @@
 /* idmr/importance_layout.h — what the importance pass adds on the device to the SPPM core's
  * buffers (idmr/sppm_layout.h):
  *
- *   idmr_photon_vertex   photon record slots[paths * IDMR_PATH_VERTICES]: a vertex at every
- *                        surface interaction of a photon path, specular ones too
- *   uint                 gathered[paths * IDMR_PATH_VERTICES]: hit points within the radius of
- *                        each vertex
+ *   idmr_photon_vertex   the photon records (idmr/sppm_layout.h): a vertex at every surface
+ *                        interaction of a photon path, specular ones too
+ *   uint                 gathered[stored_count]: hit points within the radius of each vertex,
+ *                        in the records' order
  *   fixed_word           camera_importance[triangles], light_importance[triangles]: Eq. 2
  *                        weights in 64-bit fixed point (kernels/lib/fixed_point.h)
  *

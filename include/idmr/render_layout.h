@@ -5,7 +5,7 @@
  *                                                  estimate at the hit point needs, and the
  *                                                  radiance of emitters the camera path saw
  *                                                  directly (or through specular surfaces)
- *   idmr_render_photon  photon record slots[paths * IDMR_PATH_VERTICES]: one photon per
+ *   idmr_render_photon  the photon records (idmr/sppm_layout.h): one photon per
  *                                                  non-specular surface a path reached, on a
  *                                                  side that reflects
  *   fixed_word          pixel_radiance[pixels * 3] this iteration's photon estimate per pixel

@@ -4,13 +4,13 @@
  *   idmr_sppm_params   per-iteration constants, passed by value to every kernel
  *   idmr_hit_point     hit_points[pixels]: one slot per pixel of the hit-point image; valid = 0
  *                      when the camera path found no non-specular surface
- *   uint               path_length[paths]: photon path p's records sit at slots
- *                      p * IDMR_PATH_VERTICES + j, j < path_length[p], so a path is consecutive
- *                      in memory; what a record holds is the pass's (idmr/importance_layout.h,
- *                      idmr/render_layout.h)
- *   uint               stored_count, stored_slots[paths * IDMR_PATH_VERTICES]: the slots that
- *                      hold a record this iteration, listed by photon_paths; the gathers run
- *                      over them
+ *   record             records[stored_count]: the records of all photon paths in one dense list,
+ *                      each put where an atomic add placed it (at most
+ *                      paths * IDMR_PATH_VERTICES); the gathers run over it; what a record
+ *                      holds is the pass's (idmr/importance_layout.h, idmr/render_layout.h)
+ *   uint               path_length[paths], record_index[paths * IDMR_PATH_VERTICES]: path p's
+ *                      record j is records[record_index[p * IDMR_PATH_VERTICES + j]], for
+ *                      j < path_length[p]
  * The hash grid over hit points: cell_start[cells + 1] (prefix sums of the counts, computed in
  * chunks of IDMR_SCAN_CHUNK cells) and grid_hits[pixels] (copies of the hit points sorted by
  * cell).

@@ -10,9 +10,9 @@
  *   grid_scatter     grid_hits: copies of the hit points sorted by bucket, so that a gather
  *                    reads each bucket's hit points one after the other (their `pixel` says
  *                    whose they are)
- * The cell size is at least twice the gather radius (the host sets it), so a ball of that
- * radius touches at most 2 x 2 x 2 cells; grid_buckets_near() lists their buckets once each
- * (two cells may hash to one bucket). Host side: host/passes/hit_point_grid.c. */
+ * The cell size is at least twice the gather radius (the host sets it, rounding included), so a
+ * ball of that radius touches at most 2 x 2 x 2 cells; grid_buckets_near() lists their buckets
+ * once each (two cells may hash to one bucket). Host side: host/passes/hit_point_grid.c. */
 #ifndef IDMR_KERNEL_HIT_POINT_GRID_H
 #define IDMR_KERNEL_HIT_POINT_GRID_H
 
@@ -60,9 +60,10 @@ inline void exclusive_scan(global uint *values, uint count)
 
 /* The distinct buckets of the cells that the ball of radius params->radius around p touches,
  * into buckets[8]; returns how many. Along each axis the ball reaches the cell of p - r and that
- * of p + r and none between: a cell is wider than the ball, and where floats are coarser than
- * a cell, p - r and p + r round to the same or to neighbouring floats (rounding is monotonic,
- * so a hit point between them lies in one of their two cells). */
+ * of p + r and none between: a hit point that gathers p is closer than r on every axis, and
+ * rounding is monotonic, so its cell lies between those two; and the host makes a cell wider
+ * than the ball by more than the rounding of p ± r and of their quotients by the cell, so the
+ * two are the same cell or neighbours. */
 inline uint grid_buckets_near(float3 p, const idmr_sppm_params *params, uint buckets[8])
 {
     float r = params->radius;
@@ -88,7 +89,7 @@ inline uint grid_buckets_near(float3 p, const idmr_sppm_params *params, uint buc
 inline bool hit_point_gathers(global const idmr_hit_point *hp, float3 p, float3 side, float r2)
 {
     float3 delta = vload3(0, hp->position) - p;
-    return dot(delta, delta) < r2 && dot(vload3(0, hp->normal), side) > 1e-3f;
+    return (dot(delta, delta) < r2) & (dot(vload3(0, hp->normal), side) > 1e-3f); /* no branch */
 }
 
 #endif

@@ -23,8 +23,10 @@
  *                 deep glass costs little and stays unbiased up to camera_depth
  *   photon path   one per work-item, emitted by a light chosen in proportion to power, scattered
  *                 with Russian roulette at every surface (materials.h), at most
- *                 IDMR_PHOTON_BOUNCES interactions and IDMR_PATH_VERTICES records, which fill
- *                 the path's slot in order (path p's record j at p * IDMR_PATH_VERTICES + j).
+ *                 IDMR_PHOTON_BOUNCES interactions and IDMR_PATH_VERTICES records, each
+ *                 appended to the dense list of records where an atomic add puts it, its place
+ *                 noted in the path's slot of record_index (path p's record j at
+ *                 records[record_index[p * IDMR_PATH_VERTICES + j]]).
  *     importance  records a vertex (triangle, side normal, Eq. 2 weight) at every surface,
  *                 specular ones too; paths carry no flux
  *     render      records a photon (flux, direction, side normal) at every non-specular surface
@@ -55,7 +57,8 @@
 #endif
 
 /* What a pass's paths record into: camera_records, the camera paths' buffer (importance: camera
- * importance per triangle; render: one record per pixel), and photon_record, a photon slot. */
+ * importance per triangle; render: one record per pixel), and photon_record, a photon path's
+ * record. */
 #if PASS_IMPORTANCE
 #define CAMERA_STREAM IDMR_STREAM_IMPORTANCE_CAMERA
 #define PHOTON_STREAM IDMR_STREAM_IMPORTANCE_PHOTON
@@ -213,9 +216,25 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
 #endif
 }
 
-/* Traces photon path `path` into its slot of records; returns how many it stored. */
+/* Where a photon path's records go: the dense list of all paths' records, its length, and the
+ * path's slot of record_index (idmr/sppm_layout.h). */
+typedef struct path_record_list {
+    global photon_record *records;
+    volatile global uint *count;
+    global uint *index; /* IDMR_PATH_VERTICES entries */
+} path_record_list;
+
+/* Appends record r as the path's record `j`. */
+inline void append_record(path_record_list list, uint j, photon_record r)
+{
+    uint at = atomic_inc(list.count);
+    list.records[at] = r;
+    list.index[j] = at;
+}
+
+/* Traces photon path `path` into the list; returns how many records it stored. */
 inline uint photon_path(const scene_view *scene, const idmr_sppm_params *params, uint path,
-                        global photon_record *slot)
+                        path_record_list list)
 {
     idmr_rng rng = idmr_rng_init(params->seed, params->iteration, PHOTON_STREAM, path);
     float3 origin, d, emitted;
@@ -242,7 +261,7 @@ inline uint photon_path(const scene_view *scene, const idmr_sppm_params *params,
         v.triangle = hit.triangle;
         vstore3(n_side, 0, v.normal);
         v.weight = idmr_eq2_weight(n.x, n.y, n.z, d.x, d.y, d.z);
-        slot[stored++] = v;
+        append_record(list, stored++, v);
 #else
         if (!material_is_specular(m) && side_reflects(m, d, n)) {
             idmr_render_photon photon;
@@ -252,7 +271,7 @@ inline uint photon_path(const scene_view *scene, const idmr_sppm_params *params,
             photon.flux_r = flux.x;
             photon.flux_g = flux.y;
             photon.flux_b = flux.z;
-            slot[stored++] = photon;
+            append_record(list, stored++, photon);
         }
 #endif
         float3 weight;
