@@ -23,6 +23,11 @@
 #define IDMR_MATERIAL_TWOSIDED (1u << 0)
 #define IDMR_MATERIAL_THIN (1u << 1)
 
+/* The least GGX alpha a glossy lobe is simulated with (kernels/lib/materials.h): a smoother one
+ * is simulated as this rough, so that no glossy lobe is a delta the density estimate cannot
+ * see. */
+#define IDMR_MIN_GLOSSY_ROUGHNESS 0.05f
+
 typedef struct idmr_material {
     float reflectance[3]; /* linear RGB albedo of the diffuse part */
     unsigned int kind;

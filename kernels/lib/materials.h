@@ -149,9 +149,8 @@ inline float ggx_g1(float cos_v, float alpha)
  * min(1, max3(ρ (1 - F_o) / (1 - F_dr))) <= 1, and the weight is divided by it, so the estimate
  * stays unbiased; the weight's largest channel is 1, or at most max3(ρ) / (1 - F_dr) where the
  * survival is 1.
- * Roughness is at least IDMR_MIN_GLOSSY_ROUGHNESS, so that a glossy lobe is never a delta the
- * renderer's density estimate cannot see. */
-#define IDMR_MIN_GLOSSY_ROUGHNESS 0.05f
+ * Roughness is at least IDMR_MIN_GLOSSY_ROUGHNESS (idmr/material.h), so that a glossy lobe is
+ * never a delta the renderer's density estimate cannot see. */
 inline int scatter(const global idmr_material *m, float3 *d, float3 n, float3 ns, idmr_rng *rng,
                    float3 *weight)
 {
