@@ -560,6 +560,34 @@ static void test_shape_mirrored_builtin(void **state)
     scene_free(s);
 }
 
+/* Every shading normal of m points away from `center` (an outward sphere or tetrahedron). */
+static void assert_normals_outward(const scene_mesh *m, const double center[3])
+{
+    assert_non_null(m->normals);
+    for (uint32_t v = 0; v < m->vertex_count; v++) {
+        double out = 0;
+        for (int k = 0; k < 3; k++)
+            out += (m->positions[3 * v + k] - center[k]) * m->normals[3 * v + k];
+        if (!(out > 0))
+            fail_msg("mesh '%s' vertex %u: the normal (%g, %g, %g) points inward", m->name, v,
+                     m->normals[3 * v], m->normals[3 * v + 1], m->normals[3 * v + 2]);
+    }
+}
+
+/* A mirrored sphere keeps its outside out: its winding (volume) and its shading normals, which
+ * are transformed by the inverse transpose (the cofactor alone would turn them in). */
+static void test_shape_mirrored_sphere_normals(void **state)
+{
+    scene *s = load_scene("3.0.0", "  <shape type=\"sphere\">\n"
+                                   "    <transform name=\"to_world\"><scale x=\"-1\"/>"
+                                   "<translate x=\"5\"/></transform>\n"
+                                   "  </shape>\n");
+    static const double center[3] = {5, 0, 0};
+    assert_true(mesh_volume(&s->meshes[0]) > 0.97 * 4.0 / 3.0 * M_PI);
+    assert_normals_outward(&s->meshes[0], center);
+    scene_free(s);
+}
+
 static void test_shape_cube(void **state)
 {
     scene *s = load_scene("3.0.0", "  <shape type=\"cube\" id=\"box\">\n"
@@ -1029,6 +1057,145 @@ static void test_include_fan_out_is_bounded(void **state)
 }
 
 /* ---------------------------------------------------------------------------------------- */
+/* Instancing: shapegroup and instance, flattened into world-space copies                    */
+
+/* A tetrahedron at the origin, wound outward (volume 1/6). */
+static const char *tet_obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+                             "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+
+/* A shapegroup of two shapes (the tetrahedron moved to x + 0.5, a rectangle shrunk to half and
+ * lifted to z = 2, facing +z) placed three times: moved by x + 10, scaled by 2 and moved by
+ * y + 10, mirrored in z. The group's shapes start on lines 3 and 7, the instances on 11, 15
+ * and 19. */
+static const char *instanced_body =
+    "  <shape type=\"shapegroup\" id=\"G\">\n"
+    "    <shape type=\"obj\">\n"
+    "      <string name=\"filename\" value=\"tet.obj\"/>\n"
+    "      <transform name=\"to_world\"><translate x=\"0.5\"/></transform>\n"
+    "    </shape>\n"
+    "    <shape type=\"rectangle\">\n"
+    "      <transform name=\"to_world\"><scale value=\"0.5\"/><translate z=\"2\"/>"
+    "</transform>\n"
+    "    </shape>\n"
+    "  </shape>\n"
+    "  <shape type=\"instance\" id=\"a\">\n"
+    "    <ref id=\"G\"/>\n"
+    "    <transform name=\"to_world\"><translate x=\"10\"/></transform>\n"
+    "  </shape>\n"
+    "  <shape type=\"instance\">\n"
+    "    <ref name=\"shapegroup\" id=\"G\"/>\n"
+    "    <transform name=\"to_world\"><scale value=\"2\"/><translate y=\"10\"/></transform>\n"
+    "  </shape>\n"
+    "  <shape type=\"instance\" id=\"m\">\n"
+    "    <ref id=\"G\"/>\n"
+    "    <transform name=\"to_world\"><scale z=\"-1\"/></transform>\n"
+    "  </shape>\n";
+
+/* Mesh m has a vertex at (x, y, z). */
+static void assert_has_vertex(const scene_mesh *m, double x, double y, double z)
+{
+    for (uint32_t v = 0; v < m->vertex_count; v++)
+        if (fabs(m->positions[3 * v] - x) < 1e-5 && fabs(m->positions[3 * v + 1] - y) < 1e-5 &&
+            fabs(m->positions[3 * v + 2] - z) < 1e-5)
+            return;
+    fail_msg("mesh '%s' has no vertex at (%g, %g, %g)", m->name, x, y, z);
+}
+
+/* A copy of the tetrahedron: its four corners at offset + scale * (tet moved to x + 0.5), in
+ * the mirror when z_sign is -1, still wound outward with its normals pointing out. */
+static void check_tet_copy(const scene_mesh *m, const double offset[3], double scale,
+                           double z_sign)
+{
+    static const double corners[4][3] = {{0.5, 0, 0}, {1.5, 0, 0}, {0.5, 1, 0}, {0.5, 0, 1}};
+    double center[3] = {0, 0, 0};
+    assert_int_equal(m->vertex_count, 4);
+    assert_int_equal(m->triangle_count, 4);
+    for (int c = 0; c < 4; c++) {
+        double p[3] = {offset[0] + scale * corners[c][0], offset[1] + scale * corners[c][1],
+                       offset[2] + scale * z_sign * corners[c][2]};
+        assert_has_vertex(m, p[0], p[1], p[2]);
+        for (int k = 0; k < 3; k++)
+            center[k] += p[k] / 4.0;
+    }
+    assert_float_equal(mesh_volume(m), scale * scale * scale / 6.0, 1e-5);
+    assert_normals_outward(m, center);
+}
+
+/* A copy of the rectangle: corners offset + scale * (±0.5, ±0.5, 2 z_sign), its triangles (and
+ * shading normals, if any) facing z_sign (the mirror turns the normal, as Mitsuba turns it by
+ * the inverse transpose). */
+static void check_rectangle_copy(const scene_mesh *m, const double offset[3], double scale,
+                                 double z_sign)
+{
+    assert_int_equal(m->vertex_count, 4);
+    assert_int_equal(m->triangle_count, 2);
+    for (int corner = 0; corner < 4; corner++)
+        assert_has_vertex(m, offset[0] + scale * (corner & 1 ? 0.5 : -0.5),
+                          offset[1] + scale * (corner & 2 ? 0.5 : -0.5),
+                          offset[2] + scale * 2.0 * z_sign);
+    for (uint32_t t = 0; t < m->triangle_count; t++) {
+        double n[3];
+        triangle_normal(m, t, n);
+        assert_true(n[2] * z_sign > 0);
+    }
+    for (uint32_t v = 0; m->normals && v < m->vertex_count; v++)
+        assert_true(m->normals[3 * v + 2] * z_sign > 0.99);
+}
+
+static void test_instances_flattened(void **state)
+{
+    write_file("tet.obj", tet_obj);
+    scene *s = load_scene("3.0.0", instanced_body);
+    static const char *const names[] = {"a/tet", "a/rectangle", "G/tet",
+                                        "G/rectangle", "m/tet", "m/rectangle"};
+    static const int instance_lines[] = {11, 11, 15, 15, 19, 19};
+    assert_int_equal(s->mesh_count, 6);
+    assert_int_equal(s->triangle_count, 18);
+    for (size_t i = 0; i < 6; i++) {
+        assert_string_equal(s->meshes[i].name, names[i]);
+        assert_int_equal(s->meshes[i].xml_line, i % 2 ? 7 : 3);
+        assert_int_equal(s->meshes[i].instance_xml_line, instance_lines[i]);
+        assert_non_null(strstr(s->meshes[i].instance_xml_file, "scene.xml"));
+    }
+    static const double moved[3] = {10, 0, 0}, lifted[3] = {0, 10, 0}, origin[3] = {0, 0, 0};
+    check_tet_copy(&s->meshes[0], moved, 1, 1);
+    check_rectangle_copy(&s->meshes[1], moved, 1, 1);
+    check_tet_copy(&s->meshes[2], lifted, 2, 1);
+    check_rectangle_copy(&s->meshes[3], lifted, 2, 1);
+    check_tet_copy(&s->meshes[4], origin, 1, -1);
+    check_rectangle_copy(&s->meshes[5], origin, 1, -1);
+    assert_vec3(s->bbox_min, -1, -0.5, -2, EPS);
+    assert_vec3(s->bbox_max, 11.5, 12, 4, EPS);
+    scene_free(s);
+}
+
+/* Mitsuba 0.5 names them alike (toWorld); the group's shapes read again (streaming) come back
+ * placed as the load placed them. */
+static void test_instances_old_dialect_and_restored(void **state)
+{
+    write_file("tet.obj", tet_obj);
+    scene *s = load_scene("0.5.0",
+                          "  <shape type=\"shapegroup\" id=\"G\">\n"
+                          "    <shape type=\"obj\">\n"
+                          "      <string name=\"filename\" value=\"tet.obj\"/>\n"
+                          "      <transform name=\"toWorld\"><translate x=\"0.5\"/></transform>\n"
+                          "    </shape>\n"
+                          "  </shape>\n"
+                          "  <shape type=\"instance\">\n"
+                          "    <ref id=\"G\"/>\n"
+                          "    <transform name=\"toWorld\"><scale z=\"-1\"/></transform>\n"
+                          "  </shape>\n");
+    static const double origin[3] = {0, 0, 0};
+    assert_int_equal(s->mesh_count, 1);
+    check_tet_copy(&s->meshes[0], origin, 1, -1);
+    scene_mesh_release(s, 0);
+    assert_true(s->meshes[0].released);
+    assert_int_equal(scene_mesh_restore(s, 0), 0);
+    check_tet_copy(&s->meshes[0], origin, 1, -1);
+    scene_free(s);
+}
+
+/* ---------------------------------------------------------------------------------------- */
 /* Errors: the message names scene.xml, the line and the element, and says what is wrong     */
 
 typedef struct error_case {
@@ -1127,6 +1294,49 @@ static const error_case error_cases[] = {
      "    <integer name=\"max_depth\" value=\"$depth\"/>\n"
      "  </integrator>\n",
      3, "<integer name=\"max_depth\">", "undefined parameter '$depth'", NULL},
+    {"error_instance_unknown_id", "3.0.0",
+     "  <shape type=\"instance\">\n"
+     "    <ref id=\"nowhere\"/>\n"
+     "  </shape>\n",
+     3, "<ref id=\"nowhere\">", "unknown id 'nowhere'", NULL},
+    {"error_instance_of_a_bsdf", "3.0.0",
+     "  <bsdf type=\"diffuse\" id=\"grey\"/>\n"
+     "  <shape type=\"instance\">\n"
+     "    <ref id=\"grey\"/>\n"
+     "  </shape>\n",
+     4, "<ref id=\"grey\">", "'grey' is not a shapegroup", NULL},
+    {"error_instance_without_ref", "3.0.0",
+     "  <shape type=\"shapegroup\" id=\"G\">\n"
+     "    <shape type=\"cube\"/>\n"
+     "  </shape>\n"
+     "  <shape type=\"instance\">\n"
+     "    <transform name=\"to_world\"><translate x=\"1\"/></transform>\n"
+     "  </shape>\n",
+     5, "<shape type=\"instance\">", "needs a <ref", NULL},
+    {"error_shapegroup_with_emitter", "3.0.0",
+     "  <shape type=\"shapegroup\" id=\"G\">\n"
+     "    <shape type=\"rectangle\">\n"
+     "      <emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter>\n"
+     "    </shape>\n"
+     "  </shape>\n",
+     3, "<shape type=\"rectangle\">", "area emitter inside a shapegroup", NULL},
+    {"error_shapegroup_nested", "3.0.0",
+     "  <shape type=\"shapegroup\" id=\"G\">\n"
+     "    <shape type=\"shapegroup\" id=\"H\">\n"
+     "      <shape type=\"cube\"/>\n"
+     "    </shape>\n"
+     "  </shape>\n",
+     3, "<shape type=\"shapegroup\" id=\"H\">", "nested instancing", NULL},
+    {"error_shapegroup_shape_fails_in_instance", "3.0.0",
+     "  <shape type=\"shapegroup\" id=\"G\">\n"
+     "    <shape type=\"ply\">\n"
+     "      <string name=\"filename\" value=\"absent.ply\"/>\n"
+     "    </shape>\n"
+     "  </shape>\n"
+     "  <shape type=\"instance\" id=\"first\">\n"
+     "    <ref id=\"G\"/>\n"
+     "  </shape>\n",
+     7, "<shape type=\"instance\" id=\"first\">", "absent.ply", "scene.xml:3:"},
     {"error_envmap_missing_file", "3.0.0",
      "  <emitter type=\"envmap\">\n"
      "    <string name=\"filename\" value=\"absent-sky.exr\"/>\n"
@@ -1367,6 +1577,9 @@ int main(void)
         cmocka_unit_test(test_unread_properties_warn),
         cmocka_unit_test(test_shape_rectangle),
         cmocka_unit_test(test_shape_mirrored_builtin),
+        cmocka_unit_test(test_shape_mirrored_sphere_normals),
+        cmocka_unit_test(test_instances_flattened),
+        cmocka_unit_test(test_instances_old_dialect_and_restored),
         cmocka_unit_test(test_obj_oriented_by_its_normals),
         cmocka_unit_test(test_obj_face_normals_keep_winding),
         cmocka_unit_test(test_shape_cube),

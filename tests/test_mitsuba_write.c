@@ -221,6 +221,8 @@ static void replace_mesh(const scene_mesh *m, mitsuba_replacement *r, char *ply,
     r->xml_line = m->xml_line;
     r->ply = ply;
     r->face_normals = m->flat_normals;
+    r->instance_file = m->instance_xml_file;
+    r->instance_line = m->instance_xml_line;
 }
 
 /* Output mesh b of input mesh a: the same geometry and light; a replaced one comes from its
@@ -844,6 +846,107 @@ static void test_v05_properties_and_paths(void **state)
 }
 
 /* ---------------------------------------------------------------------------------------- */
+/* Instances: flattened into world-space copies, the shapegroup gone                        */
+
+/* A shapegroup in a fragment (a tetrahedron OBJ with an inline bsdf that has an id, and a
+ * rectangle) placed twice by the scene, moved and mirrored. */
+static const char instanced_scene[] = "<scene version=\"3.0.0\">\n"
+                                      "    <include filename=\"parts/group.xml\"/>\n"
+                                      "    <shape type=\"instance\" id=\"a\">\n"
+                                      "        <ref id=\"G\"/>\n"
+                                      "        <transform name=\"to_world\">\n"
+                                      "            <translate x=\"10\"/>\n"
+                                      "        </transform>\n"
+                                      "    </shape>\n"
+                                      "    <shape type=\"instance\" id=\"m\">\n"
+                                      "        <ref name=\"shapegroup\" id=\"G\"/>\n"
+                                      "        <transform name=\"to_world\">\n"
+                                      "            <scale z=\"-1\"/>\n"
+                                      "        </transform>\n"
+                                      "    </shape>\n"
+                                      "</scene>\n";
+static const char instanced_group[] =
+    "<scene version=\"3.0.0\">\n"
+    "    <shape type=\"shapegroup\" id=\"G\">\n"
+    "        <shape type=\"obj\" id=\"tet\">\n"
+    "            <string name=\"filename\" value=\"tet.obj\"/>\n"
+    "            <bsdf type=\"diffuse\" id=\"red\">\n"
+    "                <rgb name=\"reflectance\" value=\"0.8, 0.1, 0.1\"/>\n"
+    "            </bsdf>\n"
+    "        </shape>\n"
+    "        <shape type=\"rectangle\">\n"
+    "            <transform name=\"to_world\">\n"
+    "                <translate z=\"2\"/>\n"
+    "            </transform>\n"
+    "        </shape>\n"
+    "    </shape>\n"
+    "</scene>\n";
+static const char *const instanced_files[] = {"scene.xml", "parts/group.xml", "tet.obj"};
+
+static scene *write_instanced_scene(snapshot *inputs)
+{
+    make_subdir(in_dir, "parts");
+    write_text(in_dir, "scene.xml", instanced_scene);
+    write_text(in_dir, "parts/group.xml", instanced_group);
+    write_text(in_dir, "tet.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+                                  "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+    snapshot_files(inputs, in_dir, instanced_files, ARRAY_COUNT(instanced_files));
+    return test_load_scene(path_in(in_dir, "scene.xml"));
+}
+
+/* As replace_mesh, for mesh m of s written as meshes/copy<m>.ply (a copy's name holds a '/'). */
+static void replace_copy(const scene *s, size_t m, mitsuba_replacement *r, char *ply,
+                         size_t size)
+{
+    const scene_mesh *mesh = &s->meshes[m];
+    mesh_data data = {mesh->vertex_count, mesh->triangle_count, mesh->positions, mesh->indices,
+                      NULL, NULL, 0};
+    snprintf(ply, size, "meshes/copy%zu.ply", m);
+    write_ply(path_in(out_dir, ply), &data);
+    *r = (mitsuba_replacement){mesh->xml_file,           mesh->xml_line, ply, mesh->flat_normals,
+                               mesh->instance_xml_file, mesh->instance_xml_line};
+}
+
+/* Every copy replaced by its PLY: the output has the same meshes in the same order, no
+ * shapegroup or instance is left (in the scene or the fragment's copy), and the inline bsdf's
+ * id is written once (Mitsuba 3 refuses a repeated id). */
+static void test_instances_flattened(void **state)
+{
+    snapshot inputs = {0};
+    scene *input = write_instanced_scene(&inputs);
+    mitsuba_replacement replacements[4];
+    char ply[4][64];
+    assert_int_equal(input->mesh_count, 4);
+    for (size_t i = 0; i < 4; i++) {
+        replace_copy(input, i, &replacements[i], ply[i], sizeof ply[i]);
+        assert_non_null(replacements[i].instance_file);
+    }
+    error_clear();
+    if (mitsuba_write_reduced(path_in(in_dir, "scene.xml"), out_dir, replacements, 4, 0))
+        fail_msg("mitsuba_write_reduced failed: %s", error_message());
+    scene *output = test_load_scene(path_in(out_dir, "scene.xml"));
+    assert_int_equal(output->mesh_count, 4);
+    for (size_t i = 0; i < 4; i++) {
+        assert_same_mesh(&input->meshes[i], &output->meshes[i]);
+        assert_string_equal(output->meshes[i].shape_type, "ply");
+        assert_null(output->meshes[i].instance_xml_file);
+    }
+    assert_int_equal(output->material_count, input->material_count);
+    char *text = read_output("scene.xml");
+    char *fragment = read_output("includes/group.xml");
+    assert_lacks(text, "instance");
+    assert_lacks(fragment, "shapegroup");
+    assert_int_equal(count_substrings(text, "id=\"red\""), 1);
+    assert_int_equal(count_substrings(text, "id=\"tet\""), 1);
+    assert_int_equal(count_substrings(text, "meshes/copy"), 4);
+    free(text);
+    free(fragment);
+    scene_free(output);
+    scene_free(input);
+    snapshot_check(&inputs);
+}
+
+/* ---------------------------------------------------------------------------------------- */
 /* Errors                                                                                   */
 
 /* mitsuba_write_reduced fails with an input error whose message holds `where` and `what` (may
@@ -868,9 +971,25 @@ static void write_failing_replacement(const char *file, int line, const char *wh
     write_scene3();
     snapshot_files(&inputs, in_dir, scene3_files, ARRAY_COUNT(scene3_files));
     snprintf(path, sizeof path, "%s", file[0] == '/' ? file : path_in(in_dir, file));
-    mitsuba_replacement r = {path, line, "meshes/x.ply", 0};
+    mitsuba_replacement r = {path, line, "meshes/x.ply", 0, NULL, 0};
     snprintf(where, sizeof where, "%s:%d:", path, line);
     assert_write_fails(path_in(in_dir, "scene.xml"), &r, 1, where, what);
+    snapshot_check(&inputs);
+}
+
+/* A copy whose instance element is not at the line it names is an error naming that line. */
+static void test_error_instance_not_at_line(void **state)
+{
+    snapshot inputs = {0};
+    scene *input = write_instanced_scene(&inputs);
+    mitsuba_replacement r;
+    char ply[64], where[PATH_MAX + 16];
+    replace_copy(input, 0, &r, ply, sizeof ply);
+    r.instance_line = 2; /* the <include> */
+    snprintf(where, sizeof where, "%s:2:", r.instance_file);
+    assert_write_fails(path_in(in_dir, "scene.xml"), &r, 1, where,
+                       "no <shape type=\"instance\">");
+    scene_free(input);
     snapshot_check(&inputs);
 }
 
@@ -900,8 +1019,8 @@ static void test_error_shape_replaced_twice(void **state)
     const char *scene_file = path_in(in_dir, "scene.xml");
     scene *s = test_load_scene(scene_file);
     const scene_mesh *quad = test_find_mesh(s, "quad");
-    mitsuba_replacement twice[2] = {{quad->xml_file, quad->xml_line, "meshes/a.ply", 0},
-                                    {quad->xml_file, quad->xml_line, "meshes/b.ply", 0}};
+    mitsuba_replacement twice[2] = {{quad->xml_file, quad->xml_line, "meshes/a.ply", 0, NULL, 0},
+                                    {quad->xml_file, quad->xml_line, "meshes/b.ply", 0, NULL, 0}};
     assert_write_fails(scene_file, twice, 2, "scene.xml:", "replaced twice");
     scene_free(s);
     snapshot_check(&inputs);
@@ -1028,6 +1147,8 @@ int main(void)
         WRITER_TEST(test_v05_scene_reloads),
         WRITER_TEST(test_v05_replaced_shapes_text),
         WRITER_TEST(test_v05_properties_and_paths),
+        WRITER_TEST(test_instances_flattened),
+        WRITER_TEST(test_error_instance_not_at_line),
         WRITER_TEST(test_error_no_shape_at_line),
         WRITER_TEST(test_error_no_shape_at_fragment_line),
         WRITER_TEST(test_error_file_not_in_scene),

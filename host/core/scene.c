@@ -33,6 +33,7 @@ void scene_free(scene *s)
         free(m->shape_type);
         free(m->file);
         free(m->xml_file);
+        free(m->instance_xml_file);
         free(m->positions);
         free(m->indices);
         free(m->texcoords);

@@ -58,6 +58,11 @@ typedef struct scene_mesh {
     long source_offset;         /* byte offset of the `Shape` keyword in xml_file */
     double object_to_world[16]; /* row-major: the transform the shape's points were given in */
     int source_flipped;         /* the loader reversed the winding the statement gives */
+    /* A Mitsuba scene's copy of a shapegroup's shape placed by a <shape type="instance">
+     * (instances are flattened: io/mitsuba_shape.c): the file and line of the instance element
+     * (xml_file and xml_line name the group's <shape>); NULL and 0 for any other mesh. */
+    char *instance_xml_file;
+    int instance_xml_line;
 } scene_mesh;
 
 /* How a loader reads a mesh's geometry again (the loader's own type), and the functions it

@@ -16,7 +16,8 @@
  *   mitsuba_bsdf.c       <bsdf> → material
  *   mitsuba_sensor.c     <sensor> → camera
  *   mitsuba_emitter.c    <emitter> → light
- *   mitsuba_shape.c      <shape> → world-space mesh with its material and area light
+ *   mitsuba_shape.c      <shape> → world-space mesh with its material and area light;
+ *                        shapegroups and their instances (flattened into world-space copies)
  *
  * Every function here that can fail returns -1 with the error set through mitsuba_fail() (or
  * error_set()/error_prefix()) and 0 on success, unless it says otherwise. Nodes of included
@@ -64,6 +65,7 @@ typedef struct loader {
     size_t include_count; /* <include> elements read so far */
     uint32_t release_from; /* mesh files with at least this many vertices are released once
                               read (scene_mesh_release: streaming); 0: none */
+    int instance_warned;   /* the warning that instances are flattened was given */
 } loader;
 
 /* What was not read (mitsuba_unread.c). Marks node (may be NULL) as read by some reader;

@@ -2,7 +2,19 @@
  * read through OpenMesh, oriented by their normals unless face_normals is set) and built-in
  * shapes (rectangle, cube, disk, sphere, tessellated by host/io/shapes.h); to_world and
  * flip_normals; a bsdf by <ref> or inline (none: Mitsuba's diffuse 0.5); an area emitter inline
- * or by <ref>. A mesh is named by its id, else its file's stem, else its type. */
+ * or by <ref>. A mesh is named by its id, else its file's stem, else its type.
+ *
+ * Instancing (Mitsuba 3 and 0.5 alike): a <shape type="shapegroup" id=...> holds shapes and
+ * makes no geometry itself; a <shape type="instance"> naming it by <ref id=...> places a copy of
+ * each of its shapes: the shape as it would be read at the top level (by its own to_world),
+ * then moved as Mitsuba 3 moves an instance's geometry: points by the instance's to_world,
+ * normals by its inverse transpose, and the winding flipped under a mirror, so that the surface
+ * keeps its side (a mesh file under a mirroring to_world of its own does not: Mitsuba takes its
+ * front from the world-space winding). Instances are flattened, as the pbrt-v4 reader
+ * flattens ObjectInstance: each copy is a world-space mesh of its own, named "<instance id,
+ * else group id>/<shape name>" (the scene numbers repeats: "G/leaf.2"), and remembers its
+ * instance element for the writer (scene_mesh.instance_xml_file/line). As in Mitsuba 3, a
+ * shapegroup may not hold a shapegroup or an instance, nor a shape with an area emitter. */
 #include "io/mitsuba_loader.h"
 
 #include <errno.h>
@@ -27,6 +39,8 @@ static int is_mesh_file_type(const char *type)
 struct scene_mesh_source {
     char *file;          /* resolved */
     xform to_world;
+    int instanced;       /* a copy an instance placed, under instance_to_world */
+    xform instance_to_world;
     int face_normals;    /* the shape's face_normals: no shading normals */
     int flip_tex_coords; /* an OBJ's v turned as Mitsuba turns it (v -> 1 - v) */
     int flip_normals;
@@ -39,9 +53,22 @@ static void source_free(scene_mesh_source *source)
     free(source);
 }
 
-/* The source of a mesh file shape from its properties; *written gets the path as in the file.
- * NULL with the error set. */
-static scene_mesh_source *shape_source(loader *ld, xmlNodePtr node, const char **written)
+/* Moves geometry by `to_world` as Mitsuba moves a built-in shape or an instance: points by it,
+ * normals by its inverse transpose, and under a mirror the winding flipped (the surface keeps
+ * its side). */
+static void transform_keeping_side(mesh_data *mesh, const xform *to_world)
+{
+    shapes_transform(mesh, to_world);
+    if (xform_determinant3(to_world) < 0.0) {
+        shapes_reverse_normals(mesh); /* the cofactor's normals → the inverse transpose's */
+        shapes_flip_winding(mesh);
+    }
+}
+
+/* The source of a mesh file shape from its properties (placed by instance_to_world, NULL when
+ * not an instance's copy); *written gets the path as in the file. NULL with the error set. */
+static scene_mesh_source *shape_source(loader *ld, xmlNodePtr node,
+                                       const xform *instance_to_world, const char **written)
 {
     scene_mesh_source *source = xcalloc(1, sizeof *source);
     if (mitsuba_prop_string(node, "filename", NULL, written))
@@ -56,6 +83,9 @@ static scene_mesh_source *shape_source(loader *ld, xmlNodePtr node, const char *
         goto fail;
     }
     /* Mitsuba's front side comes from the file's normals unless face_normals is set. */
+    source->instanced = instance_to_world != NULL;
+    if (instance_to_world)
+        source->instance_to_world = *instance_to_world;
     if (mitsuba_prop_bool(node, "face_normals", 0, &source->face_normals) ||
         mitsuba_prop_transform(node, "to_world", &source->to_world) ||
         mitsuba_prop_bool(node, "flip_normals", 0, &source->flip_normals) ||
@@ -92,6 +122,8 @@ static int source_geometry(const scene_mesh_source *source, mesh_data *mesh, int
         shapes_smooth_normals(mesh);
     if (source->flip_normals)
         shapes_flip_winding(mesh);
+    if (source->instanced)
+        transform_keeping_side(mesh, &source->instance_to_world);
     return 0;
 }
 
@@ -138,11 +170,13 @@ static int shape_builtin(xmlNodePtr node, const char *type, mesh_data *mesh)
     return 0;
 }
 
-/* The shape's geometry in world space, with Mitsuba's shading normals: a mesh file's from its
- * source (source_geometry; *source gets it), a built-in shape's from shapes.h (their normals;
- * *source NULL). *file_normals says whether the normals are the mesh file's own, and
- * *flat_normals whether those shade the mesh flat (shapes_normals_flat). */
-static int shape_geometry(loader *ld, xmlNodePtr node, const char *type, mesh_data *mesh,
+/* The shape's geometry in world space (placed by instance_to_world, NULL when not an instance's
+ * copy), with Mitsuba's shading normals: a mesh file's from its source (source_geometry;
+ * *source gets it), a built-in shape's from shapes.h (their normals; *source NULL).
+ * *file_normals says whether the normals are the mesh file's own, and *flat_normals whether
+ * those shade the mesh flat (shapes_normals_flat). */
+static int shape_geometry(loader *ld, xmlNodePtr node, const char *type,
+                          const xform *instance_to_world, mesh_data *mesh,
                           scene_mesh_source **source, const char **written, int *file_normals,
                           int *flat_normals)
 {
@@ -153,7 +187,7 @@ static int shape_geometry(loader *ld, xmlNodePtr node, const char *type, mesh_da
         return mitsuba_fail(node,
                             "unsupported shape type 'serialized' (convert the mesh to PLY or OBJ)");
     if (is_mesh_file_type(type)) {
-        *source = shape_source(ld, node, written);
+        *source = shape_source(ld, node, instance_to_world, written);
         if (!*source)
             return -1;
         return source_geometry(*source, mesh, file_normals, flat_normals)
@@ -170,12 +204,13 @@ static int shape_geometry(loader *ld, xmlNodePtr node, const char *type, mesh_da
         return mitsuba_fail(node, "unsupported shape type '%s'", type);
     if (status < 0)
         return -1;
-    shapes_transform(mesh, &to_world);
-    /* A built-in shape's normal is transformed as a normal, so a mirror flips its winding. */
-    if (xform_determinant3(&to_world) < 0.0)
-        flip = !flip;
+    /* A built-in shape's normal is transformed as a normal (Mitsuba: the inverse transpose,
+     * which keeps a sphere's outside out). */
+    transform_keeping_side(mesh, &to_world);
     if (flip)
         shapes_flip_winding(mesh);
+    if (instance_to_world)
+        transform_keeping_side(mesh, instance_to_world);
     return 0;
 }
 
@@ -252,7 +287,17 @@ static int shape_material(loader *ld, const bsdf_parsed *inline_bsdf, mitsuba_id
     return mitsuba_bsdf_add(ld, inline_bsdf, name);
 }
 
-int mitsuba_load_shape(loader *ld, xmlNodePtr node)
+/* Where a shape is put: a top-level shape by its own to_world (instance NULL); a shapegroup's
+ * shape once per instance, under instance_to_world and named after name_prefix. */
+typedef struct shape_placement {
+    xmlNodePtr instance;
+    xform instance_to_world;
+    const char *name_prefix; /* the instance's id, else the group's */
+} shape_placement;
+
+/* Reads the shape `node` into a world-space scene mesh (placement: NULL, or the instance that
+ * puts a copy of it). */
+static int load_placed_shape(loader *ld, xmlNodePtr node, const shape_placement *placement)
 {
     const char *type, *written = NULL;
     shape_parts parts;
@@ -260,7 +305,7 @@ int mitsuba_load_shape(loader *ld, xmlNodePtr node)
     bsdf_parsed inline_bsdf;
     mesh_data mesh;
     scene_mesh_source *source = NULL;
-    char name[256];
+    char name[520], shape_own_name[256];
     memset(&light, 0, sizeof light);
     if (mitsuba_require_attr(node, "type", &type) || shape_find_parts(ld, node, &parts))
         return -1;
@@ -271,12 +316,17 @@ int mitsuba_load_shape(loader *ld, xmlNodePtr node)
         (parts.emitter && mitsuba_emitter_area(ld, parts.emitter, &light)))
         return -1;
     int file_normals = 0, flat_normals = 0;
-    if (shape_geometry(ld, node, type, &mesh, &source, &written, &file_normals, &flat_normals)) {
+    if (shape_geometry(ld, node, type, placement ? &placement->instance_to_world : NULL, &mesh,
+                       &source, &written, &file_normals, &flat_normals)) {
         mesh_data_free(&mesh);
         source_free(source);
         return -1;
     }
-    shape_name(node, type, written, name, sizeof name);
+    shape_name(node, type, written, shape_own_name, sizeof shape_own_name);
+    if (placement)
+        snprintf(name, sizeof name, "%s/%s", placement->name_prefix, shape_own_name);
+    else
+        snprintf(name, sizeof name, "%s", shape_own_name);
     scene_mesh *added = scene_add_mesh(ld->s, name, type, source ? source->file : NULL,
                                        (int)xmlGetLineNo(node), mesh.vertex_count, mesh.positions,
                                        mesh.triangle_count, mesh.indices, mesh.texcoords);
@@ -293,8 +343,92 @@ int mitsuba_load_shape(loader *ld, xmlNodePtr node)
         return -1;
     added->material = (uint32_t)material;
     added->xml_file = xstrdup(mitsuba_node_file(node));
+    if (placement) {
+        added->instance_xml_file = xstrdup(mitsuba_node_file(placement->instance));
+        added->instance_xml_line = (int)xmlGetLineNo(placement->instance);
+    }
     added->light = parts.emitter ? scene_add_light(ld->s, &light) : -1;
     if (ld->release_from && added->vertex_count >= ld->release_from)
         scene_mesh_release(ld->s, ld->s->mesh_count - 1);
     return 0;
+}
+
+static int is_shape_of_type(xmlNodePtr node, const char *type)
+{
+    const char *written = mitsuba_attr(node, "type");
+    return mitsuba_is_tag(node, "shape") && written && strcmp(written, type) == 0;
+}
+
+/* A <shape type="shapegroup">: its shapes are checked (no nested instancing, no emitters, as
+ * in Mitsuba 3) and it is registered under its id for the instances; no geometry yet. */
+static int load_shapegroup(loader *ld, xmlNodePtr node)
+{
+    if (!mitsuba_attr(node, "id"))
+        return mitsuba_fail(node, "a shapegroup needs an id (instances name it by <ref id=...>)");
+    MITSUBA_FOR_EACH_ELEMENT(child, node)
+    {
+        if (!mitsuba_is_tag(child, "shape"))
+            continue;
+        shape_parts parts;
+        if (is_shape_of_type(child, "shapegroup") || is_shape_of_type(child, "instance"))
+            return mitsuba_fail(child, "nested instancing is not allowed: a shapegroup cannot "
+                                       "hold a shapegroup or an instance (Mitsuba 3)");
+        if (shape_find_parts(ld, child, &parts))
+            return -1;
+        if (parts.emitter)
+            return mitsuba_fail(child, "an area emitter inside a shapegroup is not allowed "
+                                       "(Mitsuba 3 does not instance emitters)");
+    }
+    return mitsuba_id_register(ld, node);
+}
+
+/* A <shape type="instance">: a world-space copy of each shape of the shapegroup its <ref>
+ * names, under its to_world. */
+static int load_instance(loader *ld, xmlNodePtr node)
+{
+    xmlNodePtr ref = NULL;
+    MITSUBA_FOR_EACH_ELEMENT(child, node)
+    {
+        if (mitsuba_is_tag(child, "ref") && !ref)
+            ref = child;
+    }
+    if (!ref)
+        return mitsuba_fail(node, "an instance needs a <ref id=\"...\"/> naming a shapegroup");
+    mitsuba_mark_read(ref);
+    mitsuba_id *entry = mitsuba_ref_resolve(ld, ref);
+    if (!entry)
+        return -1;
+    if (!is_shape_of_type(entry->node, "shapegroup"))
+        return mitsuba_fail(ref, "'%s' is not a shapegroup (an instance places a shapegroup)",
+                            entry->id);
+    shape_placement placement = {node, xform_identity(), NULL};
+    if (mitsuba_prop_transform(node, "to_world", &placement.instance_to_world))
+        return -1;
+    const char *id = mitsuba_attr(node, "id");
+    placement.name_prefix = id && id[0] ? id : entry->id;
+    if (!ld->instance_warned)
+        mitsuba_warn_at(node, "instances are flattened (each one becomes world-space meshes of "
+                              "its own)");
+    ld->instance_warned = 1;
+    MITSUBA_FOR_EACH_ELEMENT(child, entry->node)
+    {
+        if (!mitsuba_is_tag(child, "shape"))
+            continue;
+        mitsuba_mark_read(child);
+        if (load_placed_shape(ld, child, &placement))
+            return mitsuba_fail_prefix(node);
+    }
+    return 0;
+}
+
+int mitsuba_load_shape(loader *ld, xmlNodePtr node)
+{
+    const char *type;
+    if (mitsuba_require_attr(node, "type", &type))
+        return -1;
+    if (strcmp(type, "shapegroup") == 0)
+        return load_shapegroup(ld, node);
+    if (strcmp(type, "instance") == 0)
+        return load_instance(ld, node);
+    return load_placed_shape(ld, node, NULL);
 }

@@ -9,8 +9,7 @@
 
 #include "io/mitsuba_xml.h"
 
-/* Unlinks and frees `node` with the blank text before it (its indentation). */
-static void remove_with_indent(xmlNodePtr node)
+void mitsuba_unlink_with_indent(xmlNodePtr node)
 {
     xmlNodePtr before = node->prev;
     if (before && before->type == XML_TEXT_NODE && xmlIsBlankNode(before)) {
@@ -18,6 +17,12 @@ static void remove_with_indent(xmlNodePtr node)
         xmlFreeNode(before);
     }
     xmlUnlinkNode(node);
+}
+
+/* Unlinks and frees `node` with the blank text before it (its indentation). */
+static void remove_with_indent(xmlNodePtr node)
+{
+    mitsuba_unlink_with_indent(node);
     xmlFreeNode(node);
 }
 
@@ -46,6 +51,35 @@ static void add_before_first(xmlNodePtr shape, xmlNodePtr first, xmlNodePtr elem
     } else if (indent[0]) {
         xmlAddPrevSibling(element, xmlNewDocText(shape->doc, (const xmlChar *)text));
     }
+}
+
+/* Each blank text in `node`'s subtree indented by `from` after a newline is indented by `to`
+ * instead (what follows `from` is kept: deeper levels stay deeper). */
+static void shift_indentation(xmlNodePtr node, const char *from, const char *to)
+{
+    for (xmlNodePtr child = node->children; child; child = child->next) {
+        if (child->type == XML_ELEMENT_NODE)
+            shift_indentation(child, from, to);
+        if (child->type != XML_TEXT_NODE || !xmlIsBlankNode(child) || !child->content)
+            continue;
+        const char *text = (const char *)child->content;
+        const char *line = strrchr(text, '\n');
+        if (!line || strncmp(line + 1, from, strlen(from)) != 0)
+            continue;
+        char shifted[600];
+        snprintf(shifted, sizeof shifted, "%.*s\n%s%s", (int)(line - text), text, to,
+                 line + 1 + strlen(from));
+        xmlNodeSetContent(child, (const xmlChar *)shifted);
+    }
+}
+
+void mitsuba_insert_before(xmlNodePtr sibling, xmlNodePtr element, xmlNodePtr indented_as)
+{
+    char from[256], to[256];
+    indentation_of(indented_as, from, sizeof from);
+    indentation_of(sibling, to, sizeof to);
+    shift_indentation(element, from, to);
+    add_before_first(sibling->parent, sibling, element);
 }
 
 /* Adds element as the only element child of `shape`, one level deeper than the shape. */
@@ -103,6 +137,16 @@ static int property_dropped(const char *type, xmlNodePtr child)
            (strcmp(type, "obj") == 0 && is_any_property(child, obj, sizeof obj / sizeof *obj));
 }
 
+/* Whether the document is in the dialect before Mitsuba 2 (camelCase names: version 0.x, 1.x). */
+static int is_old_dialect(xmlDocPtr doc)
+{
+    xmlNodePtr root = xmlDocGetRootElement(doc);
+    xmlChar *version = root ? xmlGetProp(root, (const xmlChar *)"version") : NULL;
+    int old_dialect = version && version[0] >= '0' && version[0] <= '1' && version[1] == '.';
+    xmlFree(version);
+    return old_dialect;
+}
+
 /* A built-in shape with edges (all but the sphere), or one whose normals were flat
  * (flat_normals), is shaded flat; as a PLY without normals Mitsuba would smooth it (a cube's
  * corners), so it says face_normals, in the document's dialect (faceNormals before version 2),
@@ -118,10 +162,7 @@ static void keep_flat_shading(xmlNodePtr shape, const char *type, int flat_norma
     for (xmlNodePtr child = xmlFirstElementChild(shape); child; child = xmlNextElementSibling(child))
         if (mitsuba_is_property(child, "face_normals"))
             return;
-    xmlNodePtr root = xmlDocGetRootElement(shape->doc);
-    xmlChar *version = root ? xmlGetProp(root, (const xmlChar *)"version") : NULL;
-    int old_dialect = version && version[0] >= '0' && version[0] <= '1' && version[1] == '.';
-    xmlFree(version);
+    int old_dialect = is_old_dialect(shape->doc);
     xmlNodePtr element = xmlNewDocNode(shape->doc, NULL, (const xmlChar *)"boolean", NULL);
     xmlNewProp(element, (const xmlChar *)"name",
                (const xmlChar *)(old_dialect ? "faceNormals" : "face_normals"));

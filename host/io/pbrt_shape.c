@@ -89,8 +89,7 @@ static int place_mesh(pbrt_loader *ld, const shape_record *rec, mesh_data *mesh,
     if (mesh->normals) {
         xform_apply_normals(to_world, mesh->normals, mesh->vertex_count);
         if (flipped) /* the cofactor turns a normal under a mirror; R reverses it */
-            for (size_t i = 0; i < 3 * (size_t)mesh->vertex_count; i++)
-                mesh->normals[i] = -mesh->normals[i];
+            shapes_reverse_normals(mesh);
         orient_by_normals(mesh);
     } else if (flipped) {
         shapes_flip_winding(mesh);

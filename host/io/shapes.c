@@ -125,6 +125,12 @@ void shapes_flip_winding(mesh_data *mesh)
     }
 }
 
+void shapes_reverse_normals(mesh_data *mesh)
+{
+    for (size_t i = 0; mesh->normals && i < 3 * (size_t)mesh->vertex_count; i++)
+        mesh->normals[i] = -mesh->normals[i];
+}
+
 void shapes_transform(mesh_data *mesh, const xform *to_world)
 {
     xform_apply_points(to_world, mesh->positions, mesh->vertex_count);

@@ -33,6 +33,11 @@ void shapes_sphere(const double center[3], double radius, unsigned int rings, un
 /* Reverses every triangle's winding (Mitsuba's flip_normals). */
 void shapes_flip_winding(mesh_data *mesh);
 
+/* Reverses every normal (if any). After shapes_transform() under a mirroring transform it
+ * turns the cofactor-transformed normals (xform_apply_normals) into the inverse transpose's,
+ * the surface's side kept. */
+void shapes_reverse_normals(mesh_data *mesh);
+
 /* Applies `to_world` to the positions (and the normals, if any: xform_apply_normals); the
  * winding is kept. (For built-in shapes Mitsuba
  * transforms the normal, so a mirroring transform needs shapes_flip_winding() as well; for

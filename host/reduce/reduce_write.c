@@ -1,8 +1,9 @@
 /* reduce_write.c — the write stage of `idmr reduce` (see reduce.h, reduce_stages.h): the
  * reduced scene in the staging directory. A Mitsuba scene: meshes/NAME.ply for every mesh the
- * plan decimated (each read back and checked: io/ply_check.h) and scene.xml, the input's XML
- * with those shapes pointing to them (io/mitsuba_write.h); a glTF scene: scene.gltf (.glb) with
- * the decimated meshes in it (io/gltf.h); a pbrt-v4 scene: meshes/NAME.ply in each shape's own
+ * plan decimated and every copy an instance placed (each read back and checked:
+ * io/ply_check.h) and scene.xml, the input's XML with those shapes pointing to them and its
+ * instances flattened (io/mitsuba_write.h); a glTF scene: scene.gltf (.glb) with the decimated
+ * meshes in it (io/gltf.h); a pbrt-v4 scene: meshes/NAME.ply in each shape's own
  * space and scene.pbrt, the input's text with those Shape statements naming them (io/pbrt.h). */
 #include <limits.h>
 #include <stdio.h>
@@ -41,6 +42,21 @@ static void name_ply(reduce_state *st, size_t m)
     snprintf(st->ply[m], length, "meshes/%s.ply", name);
     for (unsigned int suffix = 2; ply_name_taken(st, m); suffix++)
         snprintf(st->ply[m], length, "meshes/%s.%u.ply", name, suffix);
+}
+
+/* Mesh m as loaded (read again if it was released: streaming) into the PLY at path. */
+static int write_whole_mesh(scene *s, size_t m, const char *path)
+{
+    int released = s->meshes[m].released;
+    if (scene_mesh_restore(s, m))
+        return -1;
+    const scene_mesh *mesh = &s->meshes[m];
+    mesh_data data = {mesh->vertex_count, mesh->triangle_count, mesh->positions, mesh->indices,
+                      mesh->texcoords,    mesh->normals,        0};
+    int status = mesh_io_write_ply(path, &data, NULL, NULL, NULL);
+    if (released)
+        scene_mesh_release(s, m);
+    return status;
 }
 
 /* A glTF scene: OUTDIR/scene.gltf or scene.glb with the decimated meshes in it (io/gltf.h). */
@@ -111,19 +127,27 @@ int reduce_write(reduce_state *st)
     int status = files_make_directory(meshes);
     st->ply = xcalloc(st->count + 1, sizeof *st->ply);
     mitsuba_replacement *replacements = xcalloc(st->count + 1, sizeof *replacements);
+    size_t replaced = 0;
     for (size_t m = 0; m < st->count && !status; m++) {
-        if (!st->plan.decimate[m])
+        const scene_mesh *mesh = &s->meshes[m];
+        /* An instance's copy is written whole where the plan left it so: the writer flattens
+         * every instance (io/mitsuba_write.h). */
+        if (!st->plan.decimate[m] && !mesh->instance_xml_file)
             continue;
         char path[PATH_MAX];
         name_ply(st, m);
         snprintf(path, sizeof path, "%s/%s", st->staging, st->ply[m]);
-        status = mesh_io_write_ply(path, &st->output[m].mesh, NULL, NULL, NULL) ||
+        status = (st->plan.decimate[m] ? mesh_io_write_ply(path, &st->output[m].mesh, NULL, NULL,
+                                                           NULL)
+                                       : write_whole_mesh(st->scene, m, path)) ||
                  ply_check_written(path);
-        replacements[st->meshes_written++] = (mitsuba_replacement){
-            s->meshes[m].xml_file, s->meshes[m].xml_line, st->ply[m], s->meshes[m].flat_normals};
+        st->meshes_written += st->plan.decimate[m] != 0;
+        replacements[replaced++] = (mitsuba_replacement){
+            mesh->xml_file,     mesh->xml_line,          st->ply[m],
+            mesh->flat_normals, mesh->instance_xml_file, mesh->instance_xml_line};
     }
     if (!status)
-        status = mitsuba_write_reduced(s->file, st->staging, replacements, st->meshes_written,
+        status = mitsuba_write_reduced(s->file, st->staging, replacements, replaced,
                                        st->options->bundle);
     free(replacements);
     st->seconds_write = monotonic_seconds() - start;
