@@ -141,7 +141,9 @@ static void test_search_bounds(void **state)
     assert_true(r.steps[r.chosen].target == 0.003);
     for (size_t k = 0; k < r.count; k++)
         assert_true(r.steps[k].passes);
-    assert_int_equal(c.calls, 5); /* 0.25, 0.0625, 0.0156, 0.0039, 0.003 */
+    /* 0.25, then down to the floor: 0.25 / 64 (the longest jump the line through D = 1 and 0.25
+     * asks for), 0.003 */
+    assert_int_equal(c.calls, 3);
     error_search_result_free(&r);
     /* nothing to decimate (floor 1): D = 1 without a measure */
     c.calls = 0;
@@ -149,6 +151,75 @@ static void test_search_bounds(void **state)
     assert_true(r.target == 1.0);
     assert_int_equal(c.calls, 0);
     error_search_result_free(&r);
+}
+
+/* error(D) = scale · D^-power (+ a deterministic noise of relative size `noise`, from a hash of
+ * D), a constant standard error: the falling power law that the search's line models, and,
+ * with noise or a jump, curves it does not. */
+typedef struct power_curve {
+    double scale, power, noise, standard_error;
+    double jump_below, jump; /* error + jump below D = jump_below (a glint lost) */
+    unsigned int calls;
+} power_curve;
+
+static int measure_power(double target, error_search_step *step, void *context)
+{
+    power_curve *c = context;
+    c->calls++;
+    uint64_t bits;
+    memcpy(&bits, &target, sizeof bits);
+    bits = (bits ^ (bits >> 29)) * 0xbf58476d1ce4e5b9ull;
+    bits ^= bits >> 32;
+    double wobble = (double)(bits % 2001) / 1000.0 - 1.0; /* in [-1, 1] */
+    step->error = c->scale * pow(target, -c->power) * (1.0 + c->noise * wobble) +
+                  (target < c->jump_below ? c->jump : 0.0);
+    step->standard_error = c->standard_error;
+    step->vertices = (uint64_t)(target * 1e6 + 0.5);
+    return 0;
+}
+
+/* On a power law the line through two steps lands near the crossing: fewer steps than a
+ * bisection (0.25, 0.0625, 0.0156 and four bisections of [0.0156, 0.0625] to 10 %: seven). */
+static void test_search_interpolates(void **state)
+{
+    /* error + se = 0.0006 D^-0.75 + 0.0001 <= 0.01 for D >= (0.0099 / 0.0006)^(-1 / 0.75) */
+    power_curve c = {.scale = 0.0006, .power = 0.75, .standard_error = 0.0001};
+    error_search_result r;
+    assert_int_equal(error_search_run(0.01, 0.1, 1e-5, measure_power, &c, &r), 0);
+    double exact = pow(0.0099 / 0.0006, -1.0 / 0.75);
+    assert_true(r.target >= exact && r.target <= exact * 1.1);
+    assert_smallest_within_step(&r, 0.01, 0.1);
+    assert_true(c.calls <= 5);
+    error_search_result_free(&r);
+}
+
+/* Whatever the curve (powers, noise that makes it rise as D shrinks in places, a jump the line
+ * cannot see), the result is the smallest measured pass with a measured failure within a step
+ * below it, and the narrowing stays within twice a bisection's steps (the safeguard promises
+ * three times: a halving at least every three steps; these curves need no more than twice). */
+static void test_search_any_curve(void **state)
+{
+    const double steps[] = {0.1, 0.02, 0.5};
+    unsigned int most = 0;
+    for (unsigned int k = 0; k < 600; k++) {
+        power_curve c = {.scale = 1e-4 * (1 + k % 7), .power = 0.2 + 0.15 * (k % 11),
+                         .noise = (k % 3) * 0.3, .standard_error = 1e-5 * (k % 5),
+                         .jump_below = k % 4 == 0 ? 0.002 * (1 + k % 13) : 0,
+                         .jump = 0.01 * (k % 2)};
+        double step = steps[k % 3], max_error = 0.002 * (1 + k % 17);
+        error_search_result r;
+        assert_int_equal(error_search_run(max_error, step, 1e-6, measure_power, &c, &r), 0);
+        if (r.target < 1.0 && r.target > 1e-6)
+            assert_smallest_within_step(&r, max_error, step);
+        /* bracketing from 1 to 1e-6 by at least 4 (10 steps), then twice the bisection of one
+         * factor of 64 to the step */
+        unsigned int bound = 10 + 2 * (unsigned int)ceil(log2(log(64.0) / log1p(step)) + 1);
+        if (c.calls > bound)
+            fail_msg("curve %u: %u steps, more than %u", k, c.calls, bound);
+        most = c.calls > most ? c.calls : most;
+        error_search_result_free(&r);
+    }
+    print_message("  at most %u steps over 600 curves\n", most);
 }
 
 static void test_search_refusals(void **state)
@@ -441,6 +512,13 @@ static void test_max_error_sphere(void **state)
             coarsest_error = e;
         }
         assert_true(number(item, "seconds") >= 0);
+        /* where a measured step's seconds went: its decimation and the renders' iterations */
+        const cJSON *stages = object(item, "seconds_by_stage");
+        if (cJSON_IsTrue(object(item, "measured")))
+            assert_true(number(stages, "decimation") > 0 && number(stages, "iterations") > 0 &&
+                        number(stages, "decimation") + number(stages, "bvh") +
+                                number(stages, "iterations") <=
+                            number(item, "seconds"));
     }
     assert_true(failing_below);
     assert_true(coarsest_error > number(chosen, "error"));
@@ -641,6 +719,8 @@ int main(void)
     const struct CMUnitTest host_tests[] = {
         cmocka_unit_test(test_search_on_curve),
         cmocka_unit_test(test_search_counts_standard_error),
+        cmocka_unit_test(test_search_interpolates),
+        cmocka_unit_test(test_search_any_curve),
         cmocka_unit_test(test_search_bounds),
         cmocka_unit_test(test_search_refusals),
         cmocka_unit_test(test_paired_exact),

@@ -8,16 +8,27 @@
  * that is only within E by its noise does not count, so the result errs on the side of more
  * vertices.
  *
- *   bracket   from hi = 1 down by ERROR_SEARCH_BRACKET at a time (D = hi / 4, clamped to the
- *             floor) while the steps pass; the first step that fails is lo. A floor that passes
- *             ends the search there (a huge E: as small as the plan can go).
- *   bisect    on log D: D = sqrt(lo · hi), a pass lowers hi, a failure raises lo, until
- *             hi / lo <= 1 + step.
+ * The search measures the verdict's value u = error + standard error and models it between two
+ * measured steps as a line in (log D, log u) (the error falls roughly as a power of D), or in
+ * (log D, u) where one end is D = 1 (u = 0):
  *
- * The result is hi: the smallest D measured to pass, with a failing D below it within one step
- * (or the floor, or 1 when every measured D failed). The error need not fall monotonically
- * (noise, a budget that moves a glint): the search trusts the bracket it holds, as any
- * bisection does, and every step it measured is in the curve. */
+ *   bracket   from hi = 1 down while the steps pass, to the floor at most: the first step to
+ *             hi / ERROR_SEARCH_BRACKET, each later one to half a step above where the line
+ *             through the last two passing steps (D = 1 among them) crosses E, going down at
+ *             least ERROR_SEARCH_BRACKET and at most ERROR_SEARCH_LONGEST_JUMP times. The first
+ *             step that fails is lo. A floor that passes ends the search there (a huge E).
+ *   narrow    on log D between lo and hi: half a step above where the line through lo and hi
+ *             crosses E (a pass there, then a failure a step below, end the search), kept
+ *             (nearly) a step inside both ends; the geometric mean sqrt(lo · hi) instead where
+ *             that line does not fall, where the bracket is within two steps, and where the
+ *             last two steps did not halve it (so it halves at least every three steps). A
+ *             pass lowers hi, a failure raises lo, until hi / lo <= 1 + step.
+ *
+ * Where each step goes changes only how many steps are measured, not what the result means:
+ * it is hi, the smallest D measured to pass, with a failing D below it within one step (or the
+ * floor, or 1 when every measured D failed). The error need not fall monotonically (noise, a
+ * budget that moves a glint): the search trusts the bracket it holds, as any bisection does,
+ * and every step it measured is in the curve. */
 #ifndef IDMR_ERROR_SEARCH_H
 #define IDMR_ERROR_SEARCH_H
 
@@ -26,8 +37,20 @@
 
 /* How far each bracketing step goes down in D. */
 #define ERROR_SEARCH_BRACKET 4.0
+/* The most an extrapolation goes down from the smallest passing D in one bracketing step. */
+#define ERROR_SEARCH_LONGEST_JUMP 64.0
 /* The most steps measured; bracketing and bisection within 10 % from 1 to 1e-9 take 31. */
 #define ERROR_SEARCH_MAX_STEPS 64
+
+/* Where a measure's seconds went (the check renders' two seeds added up). */
+typedef struct error_search_seconds {
+    double decimation; /* the plan (Eq. 3) and the decimation at D */
+    double bvh;        /* the BVH of the scene rendered */
+    double program;    /* the renders' program builds (or program cache loads) */
+    double setup;      /* the rest of the renders outside their iterations: upload, buffers */
+    double iterations; /* the renders' iterations */
+    double compare;    /* the paired error of the images */
+} error_search_seconds;
 
 /* One point of the curve walked. */
 typedef struct error_search_step {
@@ -37,6 +60,7 @@ typedef struct error_search_step {
     double standard_error; /* its standard error */
     double mse, mse_standard_error; /* the mean squared change behind it (may be < 0) */
     double seconds;        /* the measure's: decimation and renders */
+    error_search_seconds stages; /* seconds by stage (the measure fills it; may stay 0) */
     int measured;          /* 0 for D = 1, which needs no render */
     int passes;            /* error + standard_error <= max_error */
 } error_search_step;

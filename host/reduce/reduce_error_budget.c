@@ -61,18 +61,28 @@ static render_options check_options(const reduce_state *st, unsigned int k)
     return r;
 }
 
-/* Renders scene s with both seeds into images[0..1] (malloc'd); the first render of the
- * original sets the shared radius. 0, or -1 with the error set. */
-static int render_pair(reduce_state *st, const scene *s, float *images[2])
+/* Renders scene s with both seeds into images[0..1] (malloc'd), with its BVH `built` (NULL:
+ * built here), adding the seconds of the BVH and the renders' stages to *stages; the first
+ * render of the original sets the shared radius. 0, or -1 with the error set. */
+static int render_pair(reduce_state *st, const scene *s, const bvh *built, float *images[2],
+                       error_search_seconds *stages)
 {
-    bvh b;
-    if (bvh_build(s, &b))
+    bvh own = {0};
+    double start = monotonic_seconds();
+    if (!built && bvh_build(s, &own))
         return -1;
+    const bvh *b = built ? built : &own;
+    stages->bvh += monotonic_seconds() - start;
     int status = 0;
     for (unsigned int k = 0; k < 2 && !status; k++) {
         render_options options = check_options(st, k);
         render_result r;
-        status = render_run(st->device, s, &b, &options, &r);
+        double render_start = monotonic_seconds();
+        status = render_run(st->device, s, b, &options, &r);
+        double render_seconds = monotonic_seconds() - render_start;
+        stages->program += r.sppm.seconds.build;
+        stages->iterations += r.sppm.seconds.total;
+        stages->setup += fmax(0.0, render_seconds - r.sppm.seconds.build - r.sppm.seconds.total);
         reduce_error_state *e = &st->error_search;
         if (!status && e->width && (r.sppm.width != e->width || r.sppm.height != e->height))
             status = error_set(IDMR_EXIT_FAILURE, "--max-error: a check render of the reduced "
@@ -88,7 +98,7 @@ static int render_pair(reduce_state *st, const scene *s, float *images[2])
         }
         render_result_free(&r);
     }
-    bvh_free(&b);
+    bvh_free(&own);
     return status;
 }
 
@@ -117,13 +127,15 @@ static int measure(double target, error_search_step *step, void *context)
     double start = monotonic_seconds();
     if (decimate_at(c, target))
         return -1;
+    step->stages.decimation = c->seconds_decimation;
     scene *reduced = reduce_view_of(st, st->output);
     if (!reduced)
         return -1;
     float *images[2] = {NULL, NULL};
-    int status = render_pair(st, reduced, images);
+    int status = render_pair(st, reduced, NULL, images, &step->stages);
     scene_view_free(reduced);
     if (!status) {
+        double compare_start = monotonic_seconds();
         image_paired_error paired;
         image_paired_error_of(c->original[0], c->original[1], images[0], images[1],
                               (int)st->error_search.width, (int)st->error_search.height, 0,
@@ -133,6 +145,7 @@ static int measure(double target, error_search_step *step, void *context)
         step->standard_error = paired.rmse_standard_error;
         step->mse = paired.mse;
         step->mse_standard_error = paired.mse_standard_error;
+        step->stages.compare = monotonic_seconds() - compare_start;
     }
     free(images[0]);
     free(images[1]);
@@ -181,18 +194,29 @@ static double mean_radiance(const search_context *c, size_t values)
     return values ? sum / (double)values : 0.0;
 }
 
+/* The BVH kept from the importance pass for the originals, freed. */
+static void forget_original_bvh(reduce_state *st)
+{
+    if (st->error_search.has_original_bvh)
+        bvh_free(&st->error_search.original_bvh);
+    st->error_search.has_original_bvh = 0;
+}
+
 int reduce_error_budget(reduce_state *st)
 {
     const reduce_options *o = st->options;
     reduce_error_state *e = &st->error_search;
     double start = monotonic_seconds();
     search_context c = {.st = st};
+    memset(&e->originals_stages, 0, sizeof e->originals_stages);
     int verbose = o->importance.sppm.progress;
     if (verbose)
         fprintf(stderr, "idmr: max-error: rendering the original (seeds 1 and 2, %u iterations "
                         "of %u photon paths, film scale %g)\n",
                 o->error.iterations, o->error.photons, o->error.resolution);
-    int status = render_pair(st, st->scene, c.original);
+    int status = render_pair(st, st->scene, e->has_original_bvh ? &e->original_bvh : NULL,
+                             c.original, &e->originals_stages);
+    forget_original_bvh(st);
     e->seconds_originals = monotonic_seconds() - start;
     if (!status) {
         size_t values = 3 * (size_t)e->width * e->height;
@@ -238,5 +262,6 @@ int reduce_error_budget(reduce_state *st)
 
 void reduce_error_budget_free(reduce_state *st)
 {
+    forget_original_bvh(st);
     error_search_result_free(&st->error_search.result);
 }

@@ -134,11 +134,19 @@ static int importance_with_stop_rule(reduce_state *st)
     options.checkpoint_context = &c;
     bvh b;
     int status = bvh_build(s, &b);
-    options.sppm.release_bvh = &b; /* the host's copy is not needed once uploaded */
+    /* The host's copy is not needed once uploaded, unless --max-error renders this scene again
+     * (the originals of its check renders: reduce_error_budget.c) */
+    int keep = o->error.bound != REDUCE_ERROR_NONE && s == st->scene;
+    options.sppm.release_bvh = keep ? NULL : &b;
     if (!status) {
         status = importance_run_devices(st->device, st->device_count, s, &b, &options,
                                         &st->importance);
-        bvh_free(&b);
+        if (!status && keep && !st->error_search.has_original_bvh) {
+            st->error_search.original_bvh = b;
+            st->error_search.has_original_bvh = 1;
+        } else {
+            bvh_free(&b);
+        }
     }
     free(c.budget);
     free(c.previous_target);

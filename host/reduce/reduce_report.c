@@ -188,6 +188,18 @@ static void add_memory(cJSON *root, const reduce_state *st)
     cJSON_AddNumberToObject(memory, "fit_rounds", st->fit_rounds);
 }
 
+/* A measure's seconds by stage, as an object named `name` of parent. */
+static void add_search_seconds(cJSON *parent, const char *name, const error_search_seconds *t)
+{
+    cJSON *stages = cJSON_AddObjectToObject(parent, name);
+    cJSON_AddNumberToObject(stages, "decimation", t->decimation);
+    cJSON_AddNumberToObject(stages, "bvh", t->bvh);
+    cJSON_AddNumberToObject(stages, "program", t->program);
+    cJSON_AddNumberToObject(stages, "setup", t->setup);
+    cJSON_AddNumberToObject(stages, "iterations", t->iterations);
+    cJSON_AddNumberToObject(stages, "compare", t->compare);
+}
+
 /* The error budget's search (null without --max-error): the bound, the check renders, the curve
  * walked (each step's D, vertices, paired error and standard error, seconds), the D chosen, and
  * the seconds of the search against those of the plain reduce at that D. */
@@ -221,8 +233,15 @@ static void add_error_budget(cJSON *root, const reduce_state *st)
     cJSON_AddItemToArray(seeds, cJSON_CreateNumber(1));
     cJSON_AddItemToArray(seeds, cJSON_CreateNumber(2));
     cJSON *curve = cJSON_AddArrayToObject(budget, "curve");
+    error_search_seconds steps_total = {0};
     for (size_t k = 0; k < e->result.count; k++) {
         const error_search_step *s = &e->result.steps[k];
+        steps_total.decimation += s->stages.decimation;
+        steps_total.bvh += s->stages.bvh;
+        steps_total.program += s->stages.program;
+        steps_total.setup += s->stages.setup;
+        steps_total.iterations += s->stages.iterations;
+        steps_total.compare += s->stages.compare;
         cJSON *item = cJSON_CreateObject();
         cJSON_AddNumberToObject(item, "target", s->target);
         cJSON_AddNumberToObject(item, "vertices", (double)s->vertices);
@@ -233,6 +252,7 @@ static void add_error_budget(cJSON *root, const reduce_state *st)
         cJSON_AddBoolToObject(item, "measured", s->measured);
         cJSON_AddBoolToObject(item, "within", s->passes);
         cJSON_AddNumberToObject(item, "seconds", s->seconds);
+        add_search_seconds(item, "seconds_by_stage", &s->stages);
         cJSON_AddItemToArray(curve, item);
     }
     const error_search_step *chosen = &e->result.steps[e->result.chosen];
@@ -243,6 +263,9 @@ static void add_error_budget(cJSON *root, const reduce_state *st)
     cJSON_AddNumberToObject(result, "standard_error", chosen->standard_error);
     cJSON *seconds = cJSON_AddObjectToObject(budget, "seconds");
     cJSON_AddNumberToObject(seconds, "originals", e->seconds_originals);
+    add_search_seconds(seconds, "originals_by_stage", &e->originals_stages);
+    add_search_seconds(seconds, "steps_by_stage", &steps_total);
+    cJSON_AddNumberToObject(seconds, "final_decimation", e->seconds_final_decimation);
     cJSON_AddNumberToObject(seconds, "search", e->seconds_search);
     /* What `reduce --target D` at the D found takes: the importance pass, one plan and
      * decimation, the writing. */

@@ -96,6 +96,10 @@ typedef struct reduce_error_state {
     unsigned int noise_decided; /* steps below the D found that failed by their standard error
                                    alone (error <= E < error + standard error): a warning */
     double seconds_originals;  /* the original's two renders */
+    error_search_seconds originals_stages; /* and where they went (BVH, renders' stages) */
+    bvh original_bvh;          /* the scene's BVH, kept from the importance pass for the
+                                  originals' renders (freed after them) */
+    int has_original_bvh;
     double seconds_search;     /* the whole stage: originals, steps and the final decimation */
     double seconds_final_decimation; /* the decimation at the D chosen (budget included) */
 } reduce_error_state;
