@@ -180,7 +180,9 @@ static int header_line(ply_reader *r, char *line, long number, int *seen_format,
             return header_fail(r, number, "too many elements");
         ply_element *e = &r->elements[r->element_count++];
         memset(e, 0, sizeof *e);
-        snprintf(e->name, sizeof e->name, "%s", words[1]);
+        if (strlen(words[1]) >= sizeof e->name)
+            return header_fail(r, number, "an element name of more than 63 characters");
+        memcpy(e->name, words[1], strlen(words[1]) + 1);
         e->count = n;
         if (strcmp(e->name, "vertex") == 0)
             r->vertices = n;
