@@ -1,9 +1,11 @@
-/* trace.cl — ray batches through the BVH: closest hit and any hit (occlusion).
+/* trace.cl — ray batches through the BVH: closest hit and any hit (occlusion), through the
+ * flat BVH and through the two-level BVH of an instanced scene.
  * Used by the traversal tests (against Embree), the shading tests and the traversal
  * benchmark; the light transport kernels call traverse_closest()/traverse_any() from
- * traverse.h directly. */
+ * traverse.h directly (they do not use the instanced traversal yet). */
 #include "lib/shading.h"
 #include "lib/traverse.h"
+#include "lib/traverse_instanced.h"
 
 /* Ray i (of ray_count) as origin (xyz) with tmin (w) and direction (xyz) with tmax (w); false
  * past the last ray. */
@@ -38,6 +40,34 @@ kernel void trace_any(global const idmr_ray *rays, global idmr_hit *hits, uint r
     if (load_ray(rays, ray_count, get_global_id(0), &o, &d))
         hits[get_global_id(0)] =
             occlusion_hit(traverse_any(nodes, leaves, o.xyz, d.xyz, o.w, d.w), d.w);
+}
+
+kernel void trace_instanced_closest(global const idmr_ray *rays, global idmr_instance_hit *hits,
+                                    uint ray_count, global const idmr_bvh_node *top_nodes,
+                                    global const idmr_instance *instances,
+                                    global const idmr_bvh_node *nodes,
+                                    global const idmr_triangle4 *leaves)
+{
+    float4 o, d;
+    if (load_ray(rays, ray_count, get_global_id(0), &o, &d))
+        hits[get_global_id(0)] = traverse_instanced_closest(top_nodes, instances, nodes, leaves,
+                                                            o.xyz, d.xyz, o.w, d.w);
+}
+
+/* Any hit: triangle 1 when occluded, t = tmax, instance IDMR_NO_HIT. */
+kernel void trace_instanced_any(global const idmr_ray *rays, global idmr_instance_hit *hits,
+                                uint ray_count, global const idmr_bvh_node *top_nodes,
+                                global const idmr_instance *instances,
+                                global const idmr_bvh_node *nodes,
+                                global const idmr_triangle4 *leaves)
+{
+    float4 o, d;
+    if (!load_ray(rays, ray_count, get_global_id(0), &o, &d))
+        return;
+    idmr_hit any = occlusion_hit(
+        traverse_instanced_any(top_nodes, instances, nodes, leaves, o.xyz, d.xyz, o.w, d.w), d.w);
+    idmr_instance_hit out = {any.t, any.u, any.v, any.triangle, IDMR_NO_HIT, {0, 0, 0}};
+    hits[get_global_id(0)] = out;
 }
 
 /* The shading normal (lib/shading.h) at each closest hit; zero where a ray hit nothing. For the

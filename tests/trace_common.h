@@ -92,17 +92,18 @@ static inline void trace_set_ray(idmr_ray *r, const float o[3], const float d[3]
     r->tmax = tmax;
 }
 
-/* Incoherent rays: origins uniform in the (slightly grown) scene box, directions uniform on
- * the sphere; ray i draws from the stream (seed, 0, IDMR_STREAM_TEST, i) of idmr/rng.h. */
-static inline void trace_random_rays(const scene *s, idmr_ray *rays, size_t count,
-                                     unsigned int seed)
+/* Incoherent rays: origins uniform in the box (lo, hi) grown by 5% on each side, directions
+ * uniform on the sphere; ray i draws from the stream (seed, 0, IDMR_STREAM_TEST, i) of
+ * idmr/rng.h. */
+static inline void trace_random_rays_in_box(const float lo[3], const float hi[3], idmr_ray *rays,
+                                            size_t count, unsigned int seed)
 {
     for (size_t i = 0; i < count; i++) {
         idmr_rng rng = idmr_rng_init(seed, 0, IDMR_STREAM_TEST, (unsigned int)i);
         float o[3], d[3];
         for (int k = 0; k < 3; k++) {
-            float extent = s->bbox_max[k] - s->bbox_min[k];
-            o[k] = s->bbox_min[k] - 0.05f * extent + 1.1f * extent * idmr_rng_float(&rng);
+            float extent = hi[k] - lo[k];
+            o[k] = lo[k] - 0.05f * extent + 1.1f * extent * idmr_rng_float(&rng);
         }
         float z = 1.0f - 2.0f * idmr_rng_float(&rng);
         float phi = 6.2831853f * idmr_rng_float(&rng);
@@ -112,6 +113,13 @@ static inline void trace_random_rays(const scene *s, idmr_ray *rays, size_t coun
         d[2] = z;
         trace_set_ray(&rays[i], o, d, 0.0f, INFINITY);
     }
+}
+
+/* Incoherent rays in the scene's box (trace_random_rays_in_box). */
+static inline void trace_random_rays(const scene *s, idmr_ray *rays, size_t count,
+                                     unsigned int seed)
+{
+    trace_random_rays_in_box(s->bbox_min, s->bbox_max, rays, count, seed);
 }
 
 /* ---- cameras: the project's one camera-ray formula (idmr/camera.h) ---- */
@@ -191,19 +199,29 @@ static inline void trace_camera_rays(const idmr_camera *c, idmr_ray *rays, unsig
     }
 }
 
-/* A camera outside the scene box looking at its centre from direction (1, 0.6, 1.6). */
-static inline idmr_camera trace_overview_camera(const scene *s, unsigned int width,
-                                                unsigned int height)
+/* A camera outside the box (lo, hi) looking at its centre from direction (1, 0.6, 1.6). */
+static inline idmr_camera trace_overview_camera_of_box(const float lo[3], const float hi[3],
+                                                       unsigned int width, unsigned int height)
 {
     float center[3], away[3] = {1.0f, 0.6f, 1.6f}, origin[3];
     const float up[3] = {0, 1, 0};
     trace_normalize(away);
-    float diagonal = (float)scene_diagonal(s);
+    double d2 = 0;
+    for (int k = 0; k < 3; k++)
+        d2 += hi[k] > lo[k] ? ((double)hi[k] - lo[k]) * ((double)hi[k] - lo[k]) : 0;
+    float diagonal = (float)sqrt(d2);
     for (int k = 0; k < 3; k++) {
-        center[k] = 0.5f * (s->bbox_min[k] + s->bbox_max[k]);
+        center[k] = 0.5f * (lo[k] + hi[k]);
         origin[k] = center[k] + 1.2f * diagonal * away[k];
     }
     return trace_look_at(origin, center, up, width, height, 0.45f);
+}
+
+/* A camera outside the scene box looking at its centre (trace_overview_camera_of_box). */
+static inline idmr_camera trace_overview_camera(const scene *s, unsigned int width,
+                                                unsigned int height)
+{
+    return trace_overview_camera_of_box(s->bbox_min, s->bbox_max, width, height);
 }
 
 /* ---- OpenCL side ---- */
@@ -214,14 +232,16 @@ typedef struct trace_device {
     cl_program program;
     cl_kernel closest;
     cl_kernel any;
+    cl_kernel instanced_closest; /* the two-level BVH (instance_common.h) */
+    cl_kernel instanced_any;
 } trace_device;
 
 static inline void trace_device_close(trace_device *t)
 {
-    if (t->closest)
-        clReleaseKernel(t->closest);
-    if (t->any)
-        clReleaseKernel(t->any);
+    cl_kernel kernels[] = {t->closest, t->any, t->instanced_closest, t->instanced_any};
+    for (size_t i = 0; i < sizeof kernels / sizeof kernels[0]; i++)
+        if (kernels[i])
+            clReleaseKernel(kernels[i]);
     if (t->program)
         clReleaseProgram(t->program);
     memset(t, 0, sizeof *t);
@@ -237,7 +257,9 @@ static inline int trace_device_open(trace_device *t, device *d)
     int status = device_build_program(d, "trace.cl", options, &t->program);
     free(options);
     if (status || device_create_kernel(t->program, "trace_closest", &t->closest) ||
-        device_create_kernel(t->program, "trace_any", &t->any)) {
+        device_create_kernel(t->program, "trace_any", &t->any) ||
+        device_create_kernel(t->program, "trace_instanced_closest", &t->instanced_closest) ||
+        device_create_kernel(t->program, "trace_instanced_any", &t->instanced_any)) {
         trace_device_close(t);
         return -1;
     }
@@ -260,17 +282,23 @@ typedef struct trace_geometry {
     cl_mem leaves;
 } trace_geometry;
 
-static inline int trace_geometry_upload(trace_device *t, const scene *s, trace_geometry *g)
+/* Uploads the BVH already built in g->tree. */
+static inline int trace_geometry_upload_tree(trace_device *t, trace_geometry *g)
 {
-    memset(g, 0, sizeof *g);
-    if (bvh_build(s, &g->tree))
-        return -1;
     if (device_buffer(t->dev, CL_MEM_READ_ONLY, g->tree.node_count * sizeof(idmr_bvh_node),
                       g->tree.nodes, "BVH nodes", &g->nodes) ||
         device_buffer(t->dev, CL_MEM_READ_ONLY, g->tree.leaf_count * sizeof(idmr_triangle4),
                       g->tree.leaves, "BVH leaves", &g->leaves))
         return -1;
     return 0;
+}
+
+static inline int trace_geometry_upload(trace_device *t, const scene *s, trace_geometry *g)
+{
+    memset(g, 0, sizeof *g);
+    if (bvh_build(s, &g->tree))
+        return -1;
+    return trace_geometry_upload_tree(t, g);
 }
 
 static inline void trace_geometry_release(trace_geometry *g)
@@ -282,34 +310,46 @@ static inline void trace_geometry_release(trace_geometry *g)
     bvh_free(&g->tree);
 }
 
-/* Traces `count` rays with the closest (any = 0) or any-hit kernel; *seconds gets the kernel
+/* Runs trace kernel k (rays, hits, ray count, then its geometry, which the caller has set from
+ * argument 3 on) over `count` rays into hits of `hit_size` bytes each; *seconds gets the kernel
  * time (upload and download excluded) when not NULL. */
-static inline int trace_device_run(trace_device *t, const trace_geometry *g,
-                                   const idmr_ray *rays, idmr_hit *hits, size_t count, int any,
+static inline int trace_kernel_run(trace_device *t, cl_kernel k, const char *name,
+                                   const idmr_ray *rays, void *hits, size_t hit_size, size_t count,
                                    size_t local, double *seconds)
 {
     cl_mem ray_buffer, hit_buffer;
     if (device_buffer(t->dev, CL_MEM_READ_ONLY, count * sizeof *rays, rays, "rays", &ray_buffer))
         return -1;
-    if (device_buffer(t->dev, CL_MEM_WRITE_ONLY, count * sizeof *hits, NULL, "hits", &hit_buffer)) {
+    if (device_buffer(t->dev, CL_MEM_WRITE_ONLY, count * hit_size, NULL, "hits", &hit_buffer)) {
         clReleaseMemObject(ray_buffer);
         return -1;
     }
-    cl_kernel k = any ? t->any : t->closest;
-    const char *name = any ? "trace_any" : "trace_closest";
     cl_uint n = (cl_uint)count;
     int status = DEVICE_SET_ARGS(k, name, DEVICE_ARG(ray_buffer), DEVICE_ARG(hit_buffer),
-                                 DEVICE_ARG(n), DEVICE_ARG(g->nodes), DEVICE_ARG(g->leaves));
+                                 DEVICE_ARG(n));
     double start = trace_seconds();
     if (!status)
         status = device_run(t->dev, k, name, count, local);
     if (seconds)
         *seconds = trace_seconds() - start;
     if (!status)
-        status = device_read(t->dev, hit_buffer, count * sizeof *hits, hits, "hits");
+        status = device_read(t->dev, hit_buffer, count * hit_size, hits, "hits");
     clReleaseMemObject(ray_buffer);
     clReleaseMemObject(hit_buffer);
     return status;
+}
+
+/* Traces `count` rays with the closest (any = 0) or any-hit kernel; *seconds gets the kernel
+ * time (upload and download excluded) when not NULL. */
+static inline int trace_device_run(trace_device *t, const trace_geometry *g,
+                                   const idmr_ray *rays, idmr_hit *hits, size_t count, int any,
+                                   size_t local, double *seconds)
+{
+    cl_kernel k = any ? t->any : t->closest;
+    const char *name = any ? "trace_any" : "trace_closest";
+    if (DEVICE_SET_ARGS_FROM(k, name, 3, DEVICE_ARG(g->nodes), DEVICE_ARG(g->leaves)))
+        return -1;
+    return trace_kernel_run(t, k, name, rays, hits, sizeof *hits, count, local, seconds);
 }
 
 /* ---- Embree reference ---- */

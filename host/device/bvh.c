@@ -2,9 +2,11 @@
  *
  * Embree calls the callbacks from its worker threads and builds a pointer tree in its own
  * thread-local memory: inner nodes (build_node) with up to four children and their boxes, and
- * leaves (build_leaf) listing primitive ids. bvh_build() gathers the non-degenerate triangles as
- * build primitives (build_input), runs the build (build_tree), then walks that tree depth-first
- * and writes the flat arrays: nodes in depth-first order, each leaf as one triangle packet. */
+ * leaves (build_leaf) listing primitive ids. bvh_build_meshes() gathers the non-degenerate
+ * triangles as build primitives (build_input), runs the build (build_tree), then walks that
+ * tree depth-first and writes the flat arrays: nodes in depth-first order, each leaf as one
+ * triangle packet. bvh_build_boxes() runs the same steps on plain boxes, each leaf one box
+ * whose reference is written into its parent's slot (no packet). */
 #include "device/bvh.h"
 
 #include <embree3/rtcore.h>
@@ -30,19 +32,25 @@ typedef struct build_node {
 typedef struct build_leaf {
     int type;
     unsigned int count;
-    unsigned int primitives[]; /* indices into the builder's triangle list */
+    unsigned int primitives[]; /* primIDs: indices into the builder's triangle list, or boxes */
 } build_leaf;
 
-typedef struct builder {
-    const float (*vertices)[3][3]; /* per build primitive: its three world-space vertices */
-    const uint32_t *scene_triangle;  /* per build primitive: its scene-global triangle index */
+typedef struct builder builder;
+
+struct builder {
+    const float (*vertices)[3][3]; /* per build primitive: its three vertices; NULL: boxes */
+    const uint32_t *scene_triangle;  /* per build primitive: its leaf-lane triangle index */
+    /* The reference a parent's slot gets for a leaf: a triangle packet (append_leaf), or the
+     * box itself (box_leaf). */
+    int (*leaf_reference)(builder *b, const build_leaf *leaf);
+    int overfull_leaf; /* box_leaf met a leaf of more than one box */
     idmr_bvh_node *nodes;
     size_t node_count, node_capacity;
     idmr_triangle4 *leaves;
     size_t leaf_count, leaf_capacity;
     size_t reference_count;
     int depth;
-} builder;
+};
 
 /* ---- Embree device ---- */
 
@@ -201,6 +209,14 @@ static int append_leaf(builder *b, const build_leaf *leaf)
     return ~(int)b->leaf_count++;
 }
 
+/* A leaf of bvh_build_boxes() is its one box: ~box index. */
+static int box_leaf(builder *b, const build_leaf *leaf)
+{
+    b->overfull_leaf |= leaf->count != 1;
+    b->reference_count += leaf->count;
+    return ~(int)leaf->primitives[0];
+}
+
 static void set_slot_bounds(idmr_bvh_node *node, int slot, const struct RTCBounds *box)
 {
     node->min_x[slot] = box->lower_x;
@@ -219,7 +235,7 @@ static void flatten(builder *b, const build_node *src, size_t index, int depth)
     for (unsigned int slot = 0; slot < src->child_count; slot++) {
         const int *type = src->children[slot];
         if (*type == BUILD_LEAF) {
-            int ref = append_leaf(b, src->children[slot]);
+            int ref = b->leaf_reference(b, src->children[slot]);
             b->nodes[index].child[slot] = ref;
             set_slot_bounds(&b->nodes[index], (int)slot, &src->bounds[slot]);
         } else {
@@ -231,10 +247,11 @@ static void flatten(builder *b, const build_node *src, size_t index, int depth)
     }
 }
 
-/* ---- bvh_build() ---- */
+/* ---- the build ---- */
 
-/* The build primitives: one per non-degenerate scene triangle, with room for the references
- * that spatial splits add. vertices[] and scene_triangle[] are indexed by primID. */
+/* The build primitives: one per non-degenerate triangle, with room for the references that
+ * spatial splits add; vertices[] and scene_triangle[] are indexed by primID. Or one per
+ * non-empty box (bvh_build_boxes), primID the box index, no vertices. */
 typedef struct build_input {
     float (*vertices)[3][3];
     uint32_t *scene_triangle;
@@ -255,26 +272,50 @@ static void set_primitive(struct RTCBuildPrimitive *p, const float v[3][3], unsi
     p->primID = id;
 }
 
-/* Gathers the non-degenerate triangles of the scene; counts the others in *degenerate. */
-static void gather_primitives(const scene *s, build_input *in, size_t *degenerate)
+/* True when the triangle has no area: its edges' cross product, in double as
+ * scene_mesh_triangle_area() computes it, is zero. */
+static int triangle_is_degenerate(const float v[3][3])
 {
-    in->capacity = 2 * (size_t)s->triangle_count + 16; /* room for spatial-split references */
-    in->vertices = xmalloc((size_t)s->triangle_count * sizeof *in->vertices + 1);
-    in->scene_triangle = xmalloc((size_t)s->triangle_count * sizeof *in->scene_triangle + 1);
-    in->prims = aligned_alloc(32, in->capacity * sizeof *in->prims);
-    if (!in->prims) {
+    double e1[3], e2[3];
+    for (int k = 0; k < 3; k++) {
+        e1[k] = (double)v[1][k] - v[0][k];
+        e2[k] = (double)v[2][k] - v[0][k];
+    }
+    return e1[1] * e2[2] - e1[2] * e2[1] == 0.0 && e1[2] * e2[0] - e1[0] * e2[2] == 0.0 &&
+           e1[0] * e2[1] - e1[1] * e2[0] == 0.0;
+}
+
+/* Room for `capacity` build primitives, aligned as Embree wants them. */
+static struct RTCBuildPrimitive *allocate_primitives(size_t capacity)
+{
+    struct RTCBuildPrimitive *prims = aligned_alloc(32, capacity * sizeof *prims);
+    if (!prims) {
         fprintf(stderr, "idmr: out of memory (BVH build primitives)\n");
         exit(IDMR_EXIT_FAILURE);
     }
+    return prims;
+}
+
+/* Gathers the non-degenerate triangles of the meshes; counts the others in *degenerate. */
+static void gather_primitives(const bvh_mesh *meshes, size_t mesh_count, build_input *in,
+                              size_t *degenerate)
+{
+    size_t triangle_count = 0;
+    for (size_t m = 0; m < mesh_count; m++)
+        triangle_count += meshes[m].triangle_count;
+    in->capacity = 2 * triangle_count + 16; /* room for spatial-split references */
+    in->vertices = xmalloc(triangle_count * sizeof *in->vertices + 1);
+    in->scene_triangle = xmalloc(triangle_count * sizeof *in->scene_triangle + 1);
+    in->prims = allocate_primitives(in->capacity);
     in->count = 0;
-    for (size_t m = 0; m < s->mesh_count; m++) {
-        const scene_mesh *mesh = &s->meshes[m];
+    for (size_t m = 0; m < mesh_count; m++) {
+        const bvh_mesh *mesh = &meshes[m];
         for (uint32_t t = 0; t < mesh->triangle_count; t++) {
             float(*v)[3] = in->vertices[in->count];
             for (int k = 0; k < 3; k++)
                 memcpy(v[k], &mesh->positions[3 * (size_t)mesh->indices[3 * (size_t)t + k]],
                        sizeof v[k]);
-            if (scene_mesh_triangle_area(mesh, t) == 0.0) {
+            if (triangle_is_degenerate((const float(*)[3])v)) {
                 (*degenerate)++;
                 continue;
             }
@@ -285,6 +326,31 @@ static void gather_primitives(const scene *s, build_input *in, size_t *degenerat
     }
 }
 
+/* Gathers the non-empty boxes; counts the empty ones in *empty. */
+static void gather_boxes(const bvh_box *boxes, size_t count, build_input *in, size_t *empty)
+{
+    memset(in, 0, sizeof *in);
+    in->capacity = count + 1;
+    in->prims = allocate_primitives(in->capacity);
+    for (size_t i = 0; i < count; i++) {
+        const bvh_box *box = &boxes[i];
+        if (!(box->min[0] <= box->max[0] && box->min[1] <= box->max[1] &&
+              box->min[2] <= box->max[2])) {
+            (*empty)++;
+            continue;
+        }
+        struct RTCBuildPrimitive *p = &in->prims[in->count++];
+        p->lower_x = box->min[0];
+        p->lower_y = box->min[1];
+        p->lower_z = box->min[2];
+        p->upper_x = box->max[0];
+        p->upper_y = box->max[1];
+        p->upper_z = box->max[2];
+        p->geomID = 0;
+        p->primID = (unsigned int)i;
+    }
+}
+
 static void free_primitives(build_input *in)
 {
     free(in->prims);
@@ -292,19 +358,22 @@ static void free_primitives(build_input *in)
     free(in->scene_triangle);
 }
 
-/* rtcBuildBVH's arguments: high quality (spatial splits), our width, depth and leaf sizes, and
- * the callbacks that build into `b`. */
+/* rtcBuildBVH's arguments: our width and depth, and the callbacks that build into `b`. Triangles
+ * (b->vertices set): high quality (spatial splits) and packets of up to four; boxes: binned SAH
+ * (a box cannot be split) and one box per leaf. */
 static struct RTCBuildArguments build_arguments(RTCBVH tree, build_input *in, builder *b)
 {
     struct RTCBuildArguments args = rtcDefaultBuildArguments();
-    args.buildQuality = RTC_BUILD_QUALITY_HIGH; /* enables spatial splits */
+    int triangles = b->vertices != NULL;
+    args.buildQuality = triangles ? RTC_BUILD_QUALITY_HIGH /* enables spatial splits */
+                                  : RTC_BUILD_QUALITY_MEDIUM;
     args.maxBranchingFactor = IDMR_BVH_WIDTH;
     args.maxDepth = IDMR_BVH_MAX_DEPTH;
     /* Leaves are tested as packets of four: the SAH counts triangles in blocks of four, and a
      * packet test costs about two box tests of a node (measured, make bench). */
-    args.sahBlockSize = IDMR_BVH_MAX_LEAF_SIZE;
+    args.sahBlockSize = triangles ? IDMR_BVH_MAX_LEAF_SIZE : 1;
     args.minLeafSize = 1;
-    args.maxLeafSize = IDMR_BVH_MAX_LEAF_SIZE;
+    args.maxLeafSize = triangles ? IDMR_BVH_MAX_LEAF_SIZE : 1;
     args.traversalCost = 1.0f;
     args.intersectionCost = 2.0f;
     args.bvh = tree;
@@ -315,15 +384,15 @@ static struct RTCBuildArguments build_arguments(RTCBVH tree, build_input *in, bu
     args.setNodeChildren = set_children;
     args.setNodeBounds = set_bounds;
     args.createLeaf = create_leaf;
-    args.splitPrimitive = split_primitive;
+    args.splitPrimitive = triangles ? split_primitive : NULL;
     args.userPtr = b;
     return args;
 }
 
-/* A tiny scene whose root is one leaf: hang it under the root node, boxed by all primitives. */
+/* A tiny input whose root is one leaf: hang it under the root node, boxed by all primitives. */
 static void hang_root_leaf(builder *b, size_t root, const build_leaf *leaf, const build_input *in)
 {
-    b->nodes[root].child[0] = append_leaf(b, leaf);
+    b->nodes[root].child[0] = b->leaf_reference(b, leaf);
     struct RTCBounds all = {INFINITY, INFINITY, INFINITY, 0, -INFINITY, -INFINITY, -INFINITY, 0};
     for (size_t i = 0; i < in->count; i++) {
         all.lower_x = fminf(all.lower_x, in->prims[i].lower_x);
@@ -337,7 +406,7 @@ static void hang_root_leaf(builder *b, size_t root, const build_leaf *leaf, cons
     b->depth = 1;
 }
 
-/* Builds the tree of the gathered primitives under flat node `root` (an empty scene leaves the
+/* Builds the tree of the gathered primitives under flat node `root` (no primitives leave the
  * root's slots empty). Returns 0, or -1 with the error set. */
 static int build_tree(RTCDevice device, build_input *in, builder *b, size_t root)
 {
@@ -352,7 +421,8 @@ static int build_tree(RTCDevice device, build_input *in, builder *b, size_t root
     int status = 0;
     if (!top) {
         if (!*error_message())
-            error_set(IDMR_EXIT_FAILURE, "rtcBuildBVH failed on %zu triangles", in->count);
+            error_set(IDMR_EXIT_FAILURE, "rtcBuildBVH failed on %zu %s", in->count,
+                      b->vertices ? "triangles" : "boxes");
         status = -1;
     } else if (*(const int *)top == BUILD_LEAF) {
         hang_root_leaf(b, root, top, in);
@@ -376,36 +446,76 @@ static int check_limits(const builder *b)
     if (b->depth > IDMR_BVH_MAX_DEPTH)
         return error_set(IDMR_EXIT_FAILURE, "BVH depth %d exceeds the traversal stack's limit %d",
                          b->depth, IDMR_BVH_MAX_DEPTH);
+    if (b->overfull_leaf)
+        return error_set(IDMR_EXIT_FAILURE, "rtcBuildBVH made a leaf of several boxes (one asked)");
     return 0;
+}
+
+/* Builds the gathered primitives `in` (freed here) into out. Returns 0, or -1 with the error
+ * set and nothing to free. */
+static int build_flat(build_input *in, builder *b, bvh *out, double start)
+{
+    RTCDevice device = bvh_embree_device();
+    int status = -1;
+    if (!device)
+        error_set(IDMR_EXIT_FAILURE, "rtcNewDevice failed: Embree could not start");
+    else {
+        size_t root = append_node(b);
+        status = build_tree(device, in, b, root);
+    }
+    free_primitives(in);
+    if (status == 0)
+        status = check_limits(b);
+    if (status != 0) {
+        free(b->nodes);
+        free(b->leaves);
+        return -1;
+    }
+    out->nodes = b->nodes;
+    out->node_count = b->node_count;
+    out->leaves = b->leaves;
+    out->leaf_count = b->leaf_count;
+    out->reference_count = b->reference_count;
+    out->depth = b->depth;
+    out->build_seconds = monotonic_seconds() - start;
+    return 0;
+}
+
+int bvh_build_meshes(const bvh_mesh *meshes, size_t mesh_count, bvh *out)
+{
+    memset(out, 0, sizeof *out);
+    double start = monotonic_seconds();
+    build_input in;
+    gather_primitives(meshes, mesh_count, &in, &out->degenerate_count);
+    builder b = {.vertices = (const float(*)[3][3])in.vertices,
+                 .scene_triangle = in.scene_triangle,
+                 .leaf_reference = append_leaf};
+    return build_flat(&in, &b, out, start);
+}
+
+int bvh_build_boxes(const bvh_box *boxes, size_t count, bvh *out)
+{
+    memset(out, 0, sizeof *out);
+    double start = monotonic_seconds();
+    if (count > (size_t)INT32_MAX)
+        return error_set(IDMR_EXIT_INPUT, "%zu boxes for a BVH; the kernels address %d", count,
+                         INT32_MAX);
+    build_input in;
+    gather_boxes(boxes, count, &in, &out->degenerate_count);
+    builder b = {.leaf_reference = box_leaf};
+    return build_flat(&in, &b, out, start);
 }
 
 int bvh_build(const scene *s, bvh *out)
 {
-    memset(out, 0, sizeof *out);
-    double start = monotonic_seconds();
-    RTCDevice device = bvh_embree_device();
-    if (!device)
-        return error_set(IDMR_EXIT_FAILURE, "rtcNewDevice failed: Embree could not start");
-    build_input in;
-    gather_primitives(s, &in, &out->degenerate_count);
-    builder b = {.vertices = (const float(*)[3][3])in.vertices, .scene_triangle = in.scene_triangle};
-    size_t root = append_node(&b);
-    int status = build_tree(device, &in, &b, root);
-    free_primitives(&in);
-    if (status == 0)
-        status = check_limits(&b);
-    if (status != 0) {
-        free(b.nodes);
-        free(b.leaves);
+    bvh_mesh *meshes = xmalloc(s->mesh_count * sizeof *meshes + 1);
+    for (size_t m = 0; m < s->mesh_count; m++)
+        meshes[m] = (bvh_mesh){s->meshes[m].positions, s->meshes[m].indices,
+                               s->meshes[m].triangle_count, s->meshes[m].first_triangle};
+    int status = bvh_build_meshes(meshes, s->mesh_count, out);
+    free(meshes);
+    if (status)
         return -1;
-    }
-    out->nodes = b.nodes;
-    out->node_count = b.node_count;
-    out->leaves = b.leaves;
-    out->leaf_count = b.leaf_count;
-    out->reference_count = b.reference_count;
-    out->depth = b.depth;
-    out->build_seconds = monotonic_seconds() - start;
     log_verbose("BVH: %zu nodes, %zu leaves, %zu triangle references (%zu degenerate triangles "
                 "left out), depth %d, %.2f s",
                 out->node_count, out->leaf_count, out->reference_count, out->degenerate_count,

@@ -4,7 +4,11 @@
  *
  * Leaf packets carry the scene-global index of each triangle; scene_mesh_of_triangle() maps
  * that to (mesh, triangle in mesh). Degenerate (zero-area) triangles are left out: no ray can
- * hit them. */
+ * hit them.
+ *
+ * The same builder works on plain triangle arrays (bvh_build_meshes: a scene's meshes, or one
+ * prototype of an instanced scene, host/device/instance_bvh.h) and on plain boxes
+ * (bvh_build_boxes: the top level of an instanced scene, one box per leaf). */
 #ifndef IDMR_BVH_HOST_H
 #define IDMR_BVH_HOST_H
 
@@ -20,7 +24,7 @@ typedef struct bvh {
     idmr_triangle4 *leaves; /* one packet per leaf */
     size_t leaf_count;
     size_t reference_count;  /* triangles in all leaves: may repeat one (spatial splits) */
-    size_t degenerate_count; /* scene triangles left out */
+    size_t degenerate_count; /* scene triangles left out (bvh_build_boxes: empty boxes) */
     int depth;               /* levels of nodes, root = 1 */
     double build_seconds;
 } bvh;
@@ -28,6 +32,32 @@ typedef struct bvh {
 /* Builds the BVH of a finalised scene. Returns 0, or -1 with the error set (an Embree error,
  * or a tree deeper than the kernels' traversal stack allows). */
 int bvh_build(const scene *s, bvh *out);
+
+/* One triangle mesh for bvh_build_meshes(): leaf lanes number its triangle t as
+ * first_triangle + t. */
+typedef struct bvh_mesh {
+    const float *positions;  /* xyz per vertex */
+    const uint32_t *indices; /* three vertex indices per triangle */
+    uint32_t triangle_count;
+    uint32_t first_triangle;
+} bvh_mesh;
+
+/* Builds the BVH of `mesh_count` meshes' triangles (bvh_build() is this on a scene's meshes).
+ * Returns 0, or -1 with the error set, as bvh_build(). */
+int bvh_build_meshes(const bvh_mesh *meshes, size_t mesh_count, bvh *out);
+
+/* An axis-aligned box; min > max on an axis is an empty box. */
+typedef struct bvh_box {
+    float min[3];
+    float max[3];
+} bvh_box;
+
+/* Builds a BVH over `count` boxes (binned SAH, no spatial splits) whose leaves are single
+ * boxes: a node's child[k] < 0 is box ~child[k] itself (no leaf packets: leaf_count is 0,
+ * reference_count counts the boxes placed). Empty boxes are left out (counted in
+ * degenerate_count). Returns 0, or -1 with the error set. */
+int bvh_build_boxes(const bvh_box *boxes, size_t count, bvh *out);
+
 void bvh_free(bvh *b);
 
 /* Bytes the node and leaf arrays take on the device. */

@@ -12,7 +12,8 @@
  * Traversal works on references (idmr/bvh_layout.h: >= 0 a node, < 0 a leaf). At a node the hit
  * children are taken in slot order with a bit scan; one hit is followed at once, two are
  * ordered by entry distance (the far one pushed), three or four go through a sorting network
- * and all but the nearest are pushed. A popped reference that starts beyond the current hit
+ * and all but the nearest are pushed (traverse_order_children, which the instanced traversal
+ * of traverse_instanced.h shares, as it shares the node and leaf tests). A popped reference that starts beyond the current hit
  * is skipped. Any hit stops at the first intersection. The stack holds at most
  * 3 * IDMR_BVH_MAX_DEPTH + 1 entries (the builder enforces the depth). */
 #ifndef IDMR_TRAVERSE_H
@@ -203,17 +204,88 @@ inline bool traverse_leaf_any(const traverse_ray *r, global const idmr_triangle4
         (ra) = r_;                                                                           \
     } while (0)
 
+/* Of a node's hit children (mask != 0, entry distances t4): returns the nearest one's
+ * reference and pushes the others' on the stack, farthest deepest. One hit child is returned
+ * at once, two are ordered by entry distance, three or four go through a sorting network. */
+inline int traverse_order_children(global const idmr_bvh_node *node, float4 t4, int mask,
+                                   int *stack_ref, float *stack_t, int *top)
+{
+    float entry[4] = {t4.x, t4.y, t4.z, t4.w};
+    int k0 = traverse_lowest_bit(mask);
+    mask &= mask - 1;
+    int r0 = node->child[k0];
+    if (mask == 0)
+        return r0;
+    float t0 = entry[k0];
+    int k1 = traverse_lowest_bit(mask);
+    mask &= mask - 1;
+    int r1 = node->child[k1];
+    float t1 = entry[k1];
+    if (mask == 0) {
+        TRAVERSE_ORDER(t0, r0, t1, r1);
+        stack_ref[*top] = r1;
+        stack_t[(*top)++] = t1;
+        return r0;
+    }
+    int k2 = traverse_lowest_bit(mask);
+    mask &= mask - 1;
+    int r2 = node->child[k2];
+    float t2 = entry[k2];
+    int r3 = 0;
+    float t3 = INFINITY;
+    if (mask != 0) {
+        int k3 = traverse_lowest_bit(mask);
+        r3 = node->child[k3];
+        t3 = entry[k3];
+    }
+    TRAVERSE_ORDER(t0, r0, t1, r1);
+    TRAVERSE_ORDER(t2, r2, t3, r3);
+    TRAVERSE_ORDER(t0, r0, t2, r2);
+    TRAVERSE_ORDER(t1, r1, t3, r3);
+    TRAVERSE_ORDER(t1, r1, t2, r2);
+    if (t3 != INFINITY) {
+        stack_ref[*top] = r3;
+        stack_t[(*top)++] = t3;
+    }
+    stack_ref[*top] = r2;
+    stack_t[(*top)++] = t2;
+    stack_ref[*top] = r1;
+    stack_t[(*top)++] = t1;
+    return r0;
+}
+
+/* Of a node's hit children (mask != 0), in slot order: returns the first one's reference and
+ * pushes the others' (any hit: no order). */
+inline int traverse_push_children(global const idmr_bvh_node *node, int mask, int *stack_ref,
+                                  int *top)
+{
+    int first = node->child[traverse_lowest_bit(mask)];
+    mask &= mask - 1;
+    while (mask != 0) {
+        stack_ref[(*top)++] = node->child[traverse_lowest_bit(mask)];
+        mask &= mask - 1;
+    }
+    return first;
+}
+
+/* A hit record with no hit yet: t = tmax. */
+inline idmr_hit traverse_no_hit(float tmax)
+{
+    idmr_hit hit;
+    hit.t = tmax;
+    hit.u = 0.0f;
+    hit.v = 0.0f;
+    hit.triangle = IDMR_NO_HIT;
+    return hit;
+}
+
 /* Closest hit along origin + t*direction, t in (tmin, tmax). */
 inline idmr_hit traverse_closest(global const idmr_bvh_node *nodes,
                                  global const idmr_triangle4 *leaves, float3 origin,
                                  float3 direction, float tmin, float tmax)
 {
     traverse_ray r = traverse_setup(origin, direction);
-    idmr_hit hit;
-    hit.t = tmax;
-    hit.u = 0.0f;
-    hit.v = 0.0f;
-    hit.triangle = IDMR_NO_HIT;
+    idmr_hit hit = traverse_no_hit(tmax);
 
     int stack_ref[IDMR_BVH_STACK_SIZE];
     float stack_t[IDMR_BVH_STACK_SIZE];
@@ -225,51 +297,7 @@ inline idmr_hit traverse_closest(global const idmr_bvh_node *nodes,
             int mask;
             float4 t4 = traverse_node_boxes(&r, node, tmin, hit.t, &mask);
             if (mask != 0) {
-                float entry[4] = {t4.x, t4.y, t4.z, t4.w};
-                int k0 = traverse_lowest_bit(mask);
-                mask &= mask - 1;
-                int r0 = node->child[k0];
-                if (mask == 0) {
-                    ref = r0;
-                    continue;
-                }
-                float t0 = entry[k0];
-                int k1 = traverse_lowest_bit(mask);
-                mask &= mask - 1;
-                int r1 = node->child[k1];
-                float t1 = entry[k1];
-                if (mask == 0) {
-                    TRAVERSE_ORDER(t0, r0, t1, r1);
-                    stack_ref[top] = r1;
-                    stack_t[top++] = t1;
-                    ref = r0;
-                    continue;
-                }
-                int k2 = traverse_lowest_bit(mask);
-                mask &= mask - 1;
-                int r2 = node->child[k2];
-                float t2 = entry[k2];
-                int r3 = 0;
-                float t3 = INFINITY;
-                if (mask != 0) {
-                    int k3 = traverse_lowest_bit(mask);
-                    r3 = node->child[k3];
-                    t3 = entry[k3];
-                }
-                TRAVERSE_ORDER(t0, r0, t1, r1);
-                TRAVERSE_ORDER(t2, r2, t3, r3);
-                TRAVERSE_ORDER(t0, r0, t2, r2);
-                TRAVERSE_ORDER(t1, r1, t3, r3);
-                TRAVERSE_ORDER(t1, r1, t2, r2);
-                if (t3 != INFINITY) {
-                    stack_ref[top] = r3;
-                    stack_t[top++] = t3;
-                }
-                stack_ref[top] = r2;
-                stack_t[top++] = t2;
-                stack_ref[top] = r1;
-                stack_t[top++] = t1;
-                ref = r0;
+                ref = traverse_order_children(node, t4, mask, stack_ref, stack_t, &top);
                 continue;
             }
         } else {
@@ -302,12 +330,7 @@ inline bool traverse_any(global const idmr_bvh_node *nodes, global const idmr_tr
             int mask;
             traverse_node_boxes(&r, node, tmin, tmax, &mask);
             if (mask != 0) {
-                ref = node->child[traverse_lowest_bit(mask)];
-                mask &= mask - 1;
-                while (mask != 0) {
-                    stack_ref[top++] = node->child[traverse_lowest_bit(mask)];
-                    mask &= mask - 1;
-                }
+                ref = traverse_push_children(node, mask, stack_ref, &top);
                 continue;
             }
         } else {
