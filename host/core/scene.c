@@ -355,14 +355,20 @@ double scene_mesh_triangle_area(const scene_mesh *m, uint32_t t)
 {
     const float *v[3];
     triangle_vertices(m, t, v);
+    return triangle_area(v[0], v[1], v[2]);
+}
+
+double triangle_area(const float *a, const float *b, const float *c)
+{
+    const float *v[3] = {a, b, c};
     double e1[3], e2[3];
     for (int k = 0; k < 3; k++) {
         e1[k] = (double)v[1][k] - v[0][k];
         e2[k] = (double)v[2][k] - v[0][k];
     }
-    double c[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                   e1[0] * e2[1] - e1[1] * e2[0]};
-    return 0.5 * sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    double cross[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                       e1[0] * e2[1] - e1[1] * e2[0]};
+    return 0.5 * sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
 }
 
 double scene_diagonal(const scene *s)

@@ -228,6 +228,9 @@ int scene_finalize(scene *s);
 /* Area of triangle t of mesh m, from the cross product in double: accurate for slivers, and
  * exactly 0 for degenerate triangles (collinear or repeated vertices). */
 double scene_mesh_triangle_area(const scene_mesh *m, uint32_t t);
+/* The area of the triangle (a, b, c), in double from the float corners (0 exactly when the
+ * edges' cross product is: what "degenerate" means everywhere in idmr). */
+double triangle_area(const float *a, const float *b, const float *c);
 
 /* Area of scene triangle `triangle` (0 for degenerate ones). */
 double scene_triangle_area(const scene *s, uint64_t triangle);

@@ -272,17 +272,10 @@ static void set_primitive(struct RTCBuildPrimitive *p, const float v[3][3], unsi
     p->primID = id;
 }
 
-/* True when the triangle has no area: its edges' cross product, in double as
- * scene_mesh_triangle_area() computes it, is zero. */
+/* True when the triangle has no area (core/scene.h, triangle_area). */
 static int triangle_is_degenerate(const float v[3][3])
 {
-    double e1[3], e2[3];
-    for (int k = 0; k < 3; k++) {
-        e1[k] = (double)v[1][k] - v[0][k];
-        e2[k] = (double)v[2][k] - v[0][k];
-    }
-    return e1[1] * e2[2] - e1[2] * e2[1] == 0.0 && e1[2] * e2[0] - e1[0] * e2[2] == 0.0 &&
-           e1[0] * e2[1] - e1[1] * e2[0] == 0.0;
+    return triangle_area(v[0], v[1], v[2]) == 0.0;
 }
 
 /* Room for `capacity` build primitives, aligned as Embree wants them. */
