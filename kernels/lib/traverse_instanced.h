@@ -40,6 +40,19 @@ inline traverse_ray traverse_instance_ray(global const idmr_instance *inst, floa
     return traverse_setup(o, d);
 }
 
+/* Enters instance `inst`: its prototype's nodes and leaves into *level_nodes and
+ * *prototype_leaves; returns the ray in its object space. */
+inline traverse_ray traverse_enter_instance(global const idmr_instance *inst, float3 origin,
+                                            float3 direction, global const idmr_bvh_node *nodes,
+                                            global const idmr_triangle4 *leaves,
+                                            global const idmr_bvh_node **level_nodes,
+                                            global const idmr_triangle4 **prototype_leaves)
+{
+    *level_nodes = nodes + inst->node_offset;
+    *prototype_leaves = leaves + inst->leaf_offset;
+    return traverse_instance_ray(inst, origin, direction);
+}
+
 /* Closest hit along origin + t*direction, t in (tmin, tmax): t, u, v, the prototype's
  * triangle and the instance (both IDMR_NO_HIT when nothing is hit). */
 inline idmr_instance_hit traverse_instanced_closest(global const idmr_bvh_node *top_nodes,
@@ -73,10 +86,8 @@ inline idmr_instance_hit traverse_instanced_closest(global const idmr_bvh_node *
             }
         } else if (instance < 0) {
             instance = ~ref;
-            global const idmr_instance *inst = instances + instance;
-            ray = traverse_instance_ray(inst, origin, direction);
-            level_nodes = nodes + inst->node_offset;
-            prototype_leaves = leaves + inst->leaf_offset;
+            ray = traverse_enter_instance(instances + instance, origin, direction, nodes, leaves,
+                                          &level_nodes, &prototype_leaves);
             instance_base = top;
             ref = 0;
             continue;
@@ -131,10 +142,8 @@ inline bool traverse_instanced_any(global const idmr_bvh_node *top_nodes,
             }
         } else if (instance < 0) {
             instance = ~ref;
-            global const idmr_instance *inst = instances + instance;
-            ray = traverse_instance_ray(inst, origin, direction);
-            level_nodes = nodes + inst->node_offset;
-            prototype_leaves = leaves + inst->leaf_offset;
+            ray = traverse_enter_instance(instances + instance, origin, direction, nodes, leaves,
+                                          &level_nodes, &prototype_leaves);
             instance_base = top;
             ref = 0;
             continue;
