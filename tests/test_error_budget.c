@@ -442,6 +442,22 @@ static void independent_check(const scene *original, const scene *reduced, const
             free(images[s][k]);
 }
 
+/* The independent check of the written scene (above) agrees that it is within E, allowing
+ * three of its own standard errors of noise. */
+static void assert_independent_check_within(const scene *original, const scene *reduced,
+                                            const cJSON *budget, double E)
+{
+    const cJSON *chosen = object(budget, "chosen");
+    image_paired_error check;
+    independent_check(original, reduced, object(budget, "check_render"), &check);
+    print_message("  chosen D %g: search %g ± %g, independent check %g ± %g, E %g\n",
+                  number(chosen, "target"), number(chosen, "error"),
+                  number(chosen, "standard_error"), check.rmse, check.rmse_standard_error, E);
+    if (!(check.rmse <= E + 3 * check.rmse_standard_error))
+        fail_msg("independent check: %g ± %g above E %g", check.rmse, check.rmse_standard_error,
+                 E);
+}
+
 /* Every file under meshes/ of two reductions, byte for byte. */
 static void assert_same_meshes(const char *a, const char *b, const scene *s)
 {
@@ -527,14 +543,7 @@ static void test_max_error_sphere(void **state)
     assert_int_equal(vertices, (uint64_t)number(chosen, "vertices"));
     /* an independent paired render (seeds 3 and 4, twice the iterations) agrees it is within E,
      * allowing its own noise */
-    image_paired_error check;
-    independent_check(s, r.out, object(budget, "check_render"), &check);
-    print_message("  chosen D %g: search %g ± %g, independent check %g ± %g, E %g\n",
-                  number(chosen, "target"), number(chosen, "error"),
-                  number(chosen, "standard_error"), check.rmse, check.rmse_standard_error, E);
-    if (!(check.rmse <= E + 3 * check.rmse_standard_error))
-        fail_msg("independent check: %g ± %g above E %g", check.rmse, check.rmse_standard_error,
-                 E);
+    assert_independent_check_within(s, r.out, budget, E);
     /* a plain reduce at that D, from the same importance, writes the same scene */
     reduce_options plain;
     small_options(&plain);
@@ -582,14 +591,7 @@ static void test_max_error_glass_caustic(void **state)
                     number(item, "target") < number(chosen, "target");
     }
     assert_int_equal((unsigned int)number(budget, "steps_failed_by_noise"), by_noise);
-    image_paired_error check;
-    independent_check(s, r.out, object(budget, "check_render"), &check);
-    print_message("  chosen D %g: search %g ± %g, independent check %g ± %g, E %g\n",
-                  number(chosen, "target"), number(chosen, "error"),
-                  number(chosen, "standard_error"), check.rmse, check.rmse_standard_error, E);
-    if (!(check.rmse <= E + 3 * check.rmse_standard_error))
-        fail_msg("independent check: %g ± %g above E %g", check.rmse, check.rmse_standard_error,
-                 E);
+    assert_independent_check_within(s, r.out, budget, E);
     reduction_free(&r);
     scene_free(s);
     remove_tree(dir);
