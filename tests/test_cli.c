@@ -631,7 +631,9 @@ static void test_reduced_scene_loads_with_reported_vertices(void **state)
 }
 
 /* A glTF scene (Debian's assimp-testmodels): reduced by the default method into scene.glb, which
- * loads with the vertices the report states and keeps every mesh instance. */
+ * loads with the vertices the report states (every node's copy: vertices_rendered_after) and
+ * keeps every mesh instance; its meshes that several nodes name are stored once
+ * (reduce/reduce_instances.c), so it stores fewer vertices than it renders. */
 static void test_reduce_gltf(void **state)
 {
     const char *engine = "/usr/share/assimp/models/glTF2/2CylinderEngine-glTF-Binary/"
@@ -650,7 +652,8 @@ static void test_reduce_gltf(void **state)
     snprintf(path, sizeof path, "%s/out/report.json", dir);
     cJSON *report = json_of_file(path);
     cJSON *info = json_of(run("bin/idmr info --json --no-bvh %s/out/scene.glb", dir));
-    assert_true(number(info, "vertices") == number(report, "vertices_after"));
+    assert_true(number(info, "vertices") == number(report, "vertices_rendered_after"));
+    assert_true(number(report, "vertices_after") < number(report, "vertices_rendered_after"));
     assert_true(number(report, "vertices_after") < 0.25 * number(report, "vertices_before"));
     cJSON *original = json_of(run("bin/idmr info --json --no-bvh %s", engine));
     assert_int_equal(cJSON_GetArraySize(item(info, "meshes")),

@@ -165,7 +165,7 @@ static scene *write_and_read(const scene *s, const mesh_data *meshes, char *dir,
     assert_non_null(mkdtemp(dir));
     gltf_replacement *replacements = calloc(s->mesh_count, sizeof *replacements);
     for (size_t i = 0; i < s->mesh_count; i++)
-        replacements[i] = (gltf_replacement){s->meshes[i].xml_line, &meshes[i]};
+        replacements[i] = (gltf_replacement){s->meshes[i].xml_line, &meshes[i], 0};
     if (gltf_write_reduced(s->file, dir, replacements, s->mesh_count, 0))
         fail_msg("%s", error_message());
     free(replacements);
@@ -851,17 +851,11 @@ static void assert_instance_is(const cJSON *instance, const mesh_data *mesh, dou
     }
 }
 
-/* One mesh of two primitives (grids of 400 and 144 vertices) used by three nodes: "left" and
- * "right" (mirrored, turned) under a scaled "group", and "kept" at the root. left has both
- * primitives reduced, right only the first (to other counts), kept none: each reduced node gets
- * a mesh of its own, kept keeps the original (mesh 0), and every instance is where the
- * loader put it, facing as it did. */
-static void test_shared_mesh_reduced_per_node(void **state)
+/* One mesh of two primitives (grids of 20² and 12² vertices with normals) that three nodes
+ * name: "left" and "right" (mirrored, turned) under a scaled "group", and "kept" at the root;
+ * a camera at "eye". Its bytes go to `bin`. */
+static cJSON *shared_mesh_document(test_bin *bin)
 {
-    (void)state;
-    char dir[64];
-    make_temp_dir(dir, "idmr-test-gltf");
-    test_bin bin = {NULL, 0};
     cJSON *doc = parse_or_fail(
         "{\"asset\": {\"version\": \"2.0\"}, \"scene\": 0,"
         " \"scenes\": [{\"nodes\": [0, 3, 4]}],"
@@ -883,13 +877,28 @@ static void test_shared_mesh_reduced_per_node(void **state)
                                             "primitives");
     const int sizes[2] = {20, 12};
     for (int p = 0; p < 2; p++) {
-        int grid = add_grid(doc, &bin, sizes[p]);
+        int grid = add_grid(doc, bin, sizes[p]);
         cJSON *primitive = cJSON_GetArrayItem(primitives, p);
         cJSON_AddNumberToObject(cJSON_GetObjectItem(primitive, "attributes"), "POSITION", grid);
         cJSON_AddNumberToObject(cJSON_GetObjectItem(primitive, "attributes"), "NORMAL",
                                 grid + 1);
         cJSON_AddNumberToObject(primitive, "indices", grid + 3);
     }
+    return doc;
+}
+
+/* One mesh of two primitives (grids of 400 and 144 vertices) used by three nodes: "left" and
+ * "right" (mirrored, turned) under a scaled "group", and "kept" at the root. left has both
+ * primitives reduced, right only the first (to other counts), kept none: each reduced node gets
+ * a mesh of its own, kept keeps the original (mesh 0), and every instance is where the
+ * loader put it, facing as it did. */
+static void test_shared_mesh_reduced_per_node(void **state)
+{
+    (void)state;
+    char dir[64];
+    make_temp_dir(dir, "idmr-test-gltf");
+    test_bin bin = {NULL, 0};
+    cJSON *doc = shared_mesh_document(&bin);
     const char *input = write_document(doc, &bin, dir, "shared.gltf");
     scene *s = load_or_fail(input);
     assert_int_equal(s->mesh_count, 6); /* left 0, 1; right 0, 1; kept 0, 1 */
@@ -901,7 +910,7 @@ static void test_shared_mesh_reduced_per_node(void **state)
     gltf_replacement replacements[3];
     for (int r = 0; r < 3; r++) {
         decimate_to(&s->meshes[r], shares[r], &outputs[r]);
-        replacements[r] = (gltf_replacement){s->meshes[r].xml_line, &outputs[r].mesh};
+        replacements[r] = (gltf_replacement){s->meshes[r].xml_line, &outputs[r].mesh, 0};
     }
     char out[96];
     snprintf(out, sizeof out, "%s/out", dir);
@@ -940,6 +949,68 @@ static void test_shared_mesh_reduced_per_node(void **state)
     for (int r = 0; r < 3; r++)
         decimate_output_free(&outputs[r]);
     scene_free(s);
+    cJSON_Delete(doc);
+    free(bin.data);
+    remove_tree(dir);
+}
+
+/* The share of mesh m's triangles whose geometric normal agrees with their corners' normals. */
+static double share_facing_their_normals(const scene_mesh *m)
+{
+    uint32_t agree = 0;
+    for (uint32_t t = 0; t < m->triangle_count; t++) {
+        const uint32_t *ix = &m->indices[3 * (size_t)t];
+        const float *p[3], *n[3];
+        for (int c = 0; c < 3; c++)
+            p[c] = &m->positions[3 * (size_t)ix[c]], n[c] = &m->normals[3 * (size_t)ix[c]];
+        double e1[3], e2[3], dot = 0;
+        for (int k = 0; k < 3; k++)
+            e1[k] = (double)p[1][k] - p[0][k], e2[k] = (double)p[2][k] - p[0][k];
+        double g[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                       e1[0] * e2[1] - e1[1] * e2[0]};
+        for (int k = 0; k < 3; k++)
+            dot += g[k] * ((double)n[0][k] + n[1][k] + n[2][k]);
+        agree += dot > 0;
+    }
+    return m->triangle_count ? (double)agree / m->triangle_count : 1.0;
+}
+
+/* `idmr reduce` keeps a mesh that several nodes name shared (reduce/reduce_instances.c): each
+ * primitive is reduced once, all three nodes still name the one mesh, the report counts its
+ * vertices once (and every copy in vertices_rendered_after), and each copy read back, the
+ * mirrored one included, faces as its input did. */
+static void test_reduce_keeps_shared_mesh_shared(void **state)
+{
+    (void)state;
+    char dir[64], out[96], path[128];
+    make_temp_dir(dir, "idmr-test-gltf");
+    test_bin bin = {NULL, 0};
+    cJSON *doc = shared_mesh_document(&bin);
+    const char *input = write_document(doc, &bin, dir, "shared.gltf");
+    snprintf(out, sizeof out, "%s/out", dir);
+    reduce_with_idmr(input, 0.3, out);
+    snprintf(path, sizeof path, "%s/scene.gltf", out);
+    cJSON *seen = inspect(path);
+    const cJSON *document = cJSON_GetObjectItem(seen, "json");
+    const cJSON *nodes = cJSON_GetObjectItem(document, "nodes");
+    for (int node = 1; node <= 3; node++)
+        assert_int_equal(cJSON_GetObjectItem(cJSON_GetArrayItem(nodes, node), "mesh")->valueint,
+                         0);
+    assert_int_equal(cJSON_GetArraySize(cJSON_GetObjectItem(document, "meshes")), 1);
+    scene *in = load_or_fail(input), *back = load_or_fail(path);
+    assert_int_equal(back->mesh_count, 6); /* left 0, 1; right 0, 1; kept 0, 1 */
+    for (int i = 0; i < 6; i++) {
+        assert_int_equal(back->meshes[i].vertex_count, back->meshes[i % 2].vertex_count);
+        assert_true(back->meshes[i].vertex_count < in->meshes[i].vertex_count);
+        assert_float_equal(share_facing_their_normals(&back->meshes[i]),
+                           share_facing_their_normals(&in->meshes[i]), 0.02);
+    }
+    assert_int_equal(report_number(out, "vertices_after"),
+                     back->meshes[0].vertex_count + back->meshes[1].vertex_count);
+    assert_int_equal(report_number(out, "vertices_rendered_after"), back->vertex_count);
+    scene_free(back);
+    scene_free(in);
+    cJSON_Delete(seen);
     cJSON_Delete(doc);
     free(bin.data);
     remove_tree(dir);
@@ -1000,7 +1071,7 @@ static void test_box_written_back(void **state)
         char dir[64];
         make_temp_dir(dir, "idmr-test-gltf");
         mesh_data mesh = shapes_scene_mesh_view(&s->meshes[0]);
-        gltf_replacement replacement = {s->meshes[0].xml_line, &mesh};
+        gltf_replacement replacement = {s->meshes[0].xml_line, &mesh, 0};
         if (gltf_write_reduced(BOX, dir, &replacement, 1, bundle))
             fail_msg("%s", error_message());
         char path[128];
@@ -1055,7 +1126,7 @@ static void test_real_models_written_back(void **state)
         gltf_replacement *replacements = calloc(s->mesh_count, sizeof *replacements);
         for (size_t i = 0; i < s->mesh_count; i++) {
             decimate_to(&s->meshes[i], 0.5, &outputs[i]);
-            replacements[i] = (gltf_replacement){s->meshes[i].xml_line, &outputs[i].mesh};
+            replacements[i] = (gltf_replacement){s->meshes[i].xml_line, &outputs[i].mesh, 0};
         }
         char dir[64];
         make_temp_dir(dir, "idmr-test-gltf");
@@ -1099,6 +1170,7 @@ int main(void)
         cmocka_unit_test(test_reduce_keeps_lights_camera_extras),
         cmocka_unit_test(test_reduce_glb_with_unknown_extension),
         cmocka_unit_test(test_shared_mesh_reduced_per_node),
+        cmocka_unit_test(test_reduce_keeps_shared_mesh_shared),
         cmocka_unit_test(test_reduce_trimesh_glb),
         cmocka_unit_test(test_reduce_trimesh_gltf),
         cmocka_unit_test(test_box_written_back),

@@ -1057,7 +1057,7 @@ static void test_include_fan_out_is_bounded(void **state)
 }
 
 /* ---------------------------------------------------------------------------------------- */
-/* Instancing: shapegroup and instance, flattened into world-space copies                    */
+/* Instancing: shapegroup and instance, simulated as world-space copies                     */
 
 /* A tetrahedron at the origin, wound outward (volume 1/6). */
 static const char *tet_obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
@@ -1156,7 +1156,15 @@ static void test_instances_flattened(void **state)
         assert_int_equal(s->meshes[i].xml_line, i % 2 ? 7 : 3);
         assert_int_equal(s->meshes[i].instance_xml_line, instance_lines[i]);
         assert_non_null(strstr(s->meshes[i].instance_xml_file, "scene.xml"));
+        /* The copies of each group shape are chained from its first (the tet's 0, 2, 4; the
+         * rectangle's 1, 3, 5), each with its instance's transform. */
+        assert_true(s->meshes[i].instanced);
+        assert_int_equal(s->meshes[i].instance_first, i % 2);
+        assert_int_equal(s->meshes[i].instance_next, i < 4 ? i + 2 : 0);
     }
+    assert_true(s->meshes[0].instance_to_world[3] == 10.0);  /* a: x + 10 */
+    assert_true(s->meshes[2].instance_to_world[0] == 2.0);   /* scaled by 2 */
+    assert_true(s->meshes[4].instance_to_world[10] == -1.0); /* m: mirrored in z */
     static const double moved[3] = {10, 0, 0}, lifted[3] = {0, 10, 0}, origin[3] = {0, 0, 0};
     check_tet_copy(&s->meshes[0], moved, 1, 1);
     check_rectangle_copy(&s->meshes[1], moved, 1, 1);

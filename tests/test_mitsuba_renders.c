@@ -21,9 +21,11 @@
  *     (measured: −0.3 %, −0.5 %). The light leaving the diffuse base through the coating,
  *     (1 - F(cos_o)) / (1 - F_dr), matters here: a base weighted by 1 - F(cos_i) alone rendered
  *     18 % brighter in the mean and 11 % in the bottom fifth.
- *   - A shapegroup placed three times (one instance mirroring), whose instances idmr flattens
- *     into world-space PLYs: rewritten, it renders as its input in the same paired test;
- *     reduced to half, its mean per channel stays within 5 %.
+ *   - A shapegroup placed three times (one instance mirroring), which idmr simulates as
+ *     world-space copies and writes back as a shapegroup and its instances (each group shape's
+ *     PLY once, in the group's space): rewritten, it renders as its input in the same paired
+ *     test; reduced to half, it keeps the group and its three instances, and its mean per
+ *     channel stays within 5 %.
  * Small films and sample counts keep it to about a minute on 2 cores; runs from the repository
  * root (as `make test` does), with ../shared/data beside it. */
 #include <math.h>
@@ -328,10 +330,25 @@ static void write_bump_obj(const char *path, int n)
     assert_int_equal(fclose(f), 0);
 }
 
-/* Instances are flattened into world-space PLYs: rewritten (--target 1), the scene renders as
- * the input (whose instances Mitsuba 3 places itself), the mirrored copy's sides included;
- * reduced to half, its mean per channel stays within 5 %. */
-static void test_instances_flattened_render_as_input(void **state)
+/* How often `needle` occurs in the file at path. */
+static int occurrences_in_file(const char *path, const char *needle)
+{
+    FILE *f = fopen(path, "r");
+    assert_non_null(f);
+    char *text = slurp(f);
+    fclose(f);
+    int count = 0;
+    for (const char *at = text; (at = strstr(at, needle)); at += strlen(needle))
+        count++;
+    free(text);
+    return count;
+}
+
+/* Instances are kept: rewritten (--target 1), the scene renders as the input, the mirrored
+ * copy's sides included; reduced to half, it still holds the shapegroup and its three
+ * instances, each group shape written once (no PLY named after an instance), and its mean per
+ * channel stays within 5 %. */
+static void test_instances_kept_render_as_input(void **state)
 {
     (void)state;
     char scene[128], obj[128], reduced[128], path[160];
@@ -353,6 +370,12 @@ static void test_instances_flattened_render_as_input(void **state)
     check_rewrite_renders_as_input(scene, "instances", 1, 32);
     reduce(scene, "instances-half", "--target 0.5 --iterations 4 --photons 100000");
     snprintf(reduced, sizeof reduced, "%s/instances-half/scene.xml", work);
+    assert_int_equal(occurrences_in_file(reduced, "type=\"shapegroup\""), 1);
+    assert_int_equal(occurrences_in_file(reduced, "type=\"instance\""), 3);
+    int plys = occurrences_in_file(reduced, "value=\"meshes/");
+    assert_true(plys >= 1 && plys <= 3);
+    assert_int_equal(occurrences_in_file(reduced, "meshes/left"), 0);
+    assert_int_equal(occurrences_in_file(reduced, "meshes/mirrored"), 0);
     free(mitsuba_render(reduced, "instances-half-out", "path", 1, 32, 1));
     double in[3], out[3];
     channel_means(exr_path(path, "instances-path-in-1"), in);
@@ -371,7 +394,7 @@ int main(void)
         cmocka_unit_test(test_living_room_rewritten_renders_as_input),
         cmocka_unit_test(test_living_room_reduced_renders_clean),
         cmocka_unit_test(test_plastic_floor_at_grazing_view_renders_as_in_mitsuba),
-        cmocka_unit_test(test_instances_flattened_render_as_input),
+        cmocka_unit_test(test_instances_kept_render_as_input),
     };
     return cmocka_run_group_tests(tests, make_work_dir, remove_work_dir);
 }

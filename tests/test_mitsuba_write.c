@@ -23,6 +23,8 @@
 #include "io/mesh_io.h"
 #include "io/mitsuba_paths.h"
 #include "io/mitsuba_write.h"
+#include "io/shapes.h"
+#include "io/xform.h"
 
 /* ---------------------------------------------------------------------------------------- */
 /* Helpers                                                                                  */
@@ -221,8 +223,6 @@ static void replace_mesh(const scene_mesh *m, mitsuba_replacement *r, char *ply,
     r->xml_line = m->xml_line;
     r->ply = ply;
     r->face_normals = m->flat_normals;
-    r->instance_file = m->instance_xml_file;
-    r->instance_line = m->instance_xml_line;
 }
 
 /* Output mesh b of input mesh a: the same geometry and light; a replaced one comes from its
@@ -846,7 +846,7 @@ static void test_v05_properties_and_paths(void **state)
 }
 
 /* ---------------------------------------------------------------------------------------- */
-/* Instances: flattened into world-space copies, the shapegroup gone                        */
+/* Instances: kept, a group's shape replaced in its own space                            */
 
 /* A shapegroup in a fragment (a tetrahedron OBJ with an inline bsdf that has an id, and a
  * rectangle) placed twice by the scene, moved and mirrored. */
@@ -894,51 +894,64 @@ static scene *write_instanced_scene(snapshot *inputs)
     return test_load_scene(path_in(in_dir, "scene.xml"));
 }
 
-/* As replace_mesh, for mesh m of s written as meshes/copy<m>.ply (a copy's name holds a '/'). */
-static void replace_copy(const scene *s, size_t m, mitsuba_replacement *r, char *ply,
-                         size_t size)
-{
-    const scene_mesh *mesh = &s->meshes[m];
-    mesh_data data = {mesh->vertex_count, mesh->triangle_count, mesh->positions, mesh->indices,
-                      NULL, NULL, 0};
-    snprintf(ply, size, "meshes/copy%zu.ply", m);
-    write_ply(path_in(out_dir, ply), &data);
-    *r = (mitsuba_replacement){mesh->xml_file,           mesh->xml_line, ply, mesh->flat_normals,
-                               mesh->instance_xml_file, mesh->instance_xml_line};
-}
-
-/* Every copy replaced by its PLY: the output has the same meshes in the same order, no
- * shapegroup or instance is left (in the scene or the fragment's copy), and the inline bsdf's
- * id is written once (Mitsuba 3 refuses a repeated id). */
-static void test_instances_flattened(void **state)
+/* Each group shape replaced by its first copy moved back into the group's space (as
+ * reduce_instances.c writes it), as meshes/group<m>.ply: the output places the same meshes in
+ * the same order (the mirrored instance's winding included, the points within the rounding of
+ * the move there and back), keeps the shapegroup (in the fragment's copy) and both instances,
+ * and the inline bsdf's id once. */
+static void test_instances_kept(void **state)
 {
     snapshot inputs = {0};
     scene *input = write_instanced_scene(&inputs);
-    mitsuba_replacement replacements[4];
-    char ply[4][64];
     assert_int_equal(input->mesh_count, 4);
-    for (size_t i = 0; i < 4; i++) {
-        replace_copy(input, i, &replacements[i], ply[i], sizeof ply[i]);
-        assert_non_null(replacements[i].instance_file);
+    mitsuba_replacement replacements[2];
+    char ply[2][64];
+    size_t n = 0;
+    for (size_t i = 0; i < input->mesh_count; i++) {
+        const scene_mesh *mesh = &input->meshes[i];
+        assert_true(mesh->instanced);
+        if (mesh->instance_first != i)
+            continue;
+        assert_true(n < 2);
+        xform to_world = xform_from_rows(mesh->instance_to_world), to_group;
+        assert_int_equal(xform_invert_affine(&to_world, &to_group), 0);
+        size_t points = 3 * (size_t)mesh->vertex_count, corners = 3 * (size_t)mesh->triangle_count;
+        mesh_data data = {mesh->vertex_count, mesh->triangle_count,
+                          malloc(points * sizeof(float)), malloc(corners * sizeof(uint32_t)),
+                          NULL, NULL, 0};
+        memcpy(data.positions, mesh->positions, points * sizeof(float));
+        memcpy(data.indices, mesh->indices, corners * sizeof(uint32_t));
+        shapes_transform_keeping_side(&data, &to_group);
+        snprintf(ply[n], sizeof ply[n], "meshes/group%zu.ply", i);
+        write_ply(path_in(out_dir, ply[n]), &data);
+        mesh_data_free(&data);
+        replacements[n] = (mitsuba_replacement){mesh->xml_file, mesh->xml_line, ply[n],
+                                                mesh->flat_normals};
+        n++;
     }
+    assert_int_equal(n, 2);
     error_clear();
-    if (mitsuba_write_reduced(path_in(in_dir, "scene.xml"), out_dir, replacements, 4, 0))
+    if (mitsuba_write_reduced(path_in(in_dir, "scene.xml"), out_dir, replacements, n, 0))
         fail_msg("mitsuba_write_reduced failed: %s", error_message());
     scene *output = test_load_scene(path_in(out_dir, "scene.xml"));
     assert_int_equal(output->mesh_count, 4);
     for (size_t i = 0; i < 4; i++) {
-        assert_same_mesh(&input->meshes[i], &output->meshes[i]);
-        assert_string_equal(output->meshes[i].shape_type, "ply");
-        assert_null(output->meshes[i].instance_xml_file);
+        const scene_mesh *a = &input->meshes[i], *b = &output->meshes[i];
+        assert_int_equal(a->vertex_count, b->vertex_count);
+        assert_int_equal(a->triangle_count, b->triangle_count);
+        assert_memory_equal(a->indices, b->indices, 3 * sizeof(uint32_t) * a->triangle_count);
+        for (size_t k = 0; k < 3 * (size_t)a->vertex_count; k++)
+            assert_true(fabsf(a->positions[k] - b->positions[k]) < 1e-5f);
+        assert_string_equal(b->shape_type, "ply");
+        assert_true(b->instanced);
     }
     assert_int_equal(output->material_count, input->material_count);
     char *text = read_output("scene.xml");
     char *fragment = read_output("includes/group.xml");
-    assert_lacks(text, "instance");
-    assert_lacks(fragment, "shapegroup");
-    assert_int_equal(count_substrings(text, "id=\"red\""), 1);
-    assert_int_equal(count_substrings(text, "id=\"tet\""), 1);
-    assert_int_equal(count_substrings(text, "meshes/copy"), 4);
+    assert_int_equal(count_substrings(text, "type=\"instance\""), 2);
+    assert_int_equal(count_substrings(fragment, "type=\"shapegroup\""), 1);
+    assert_int_equal(count_substrings(fragment, "meshes/group"), 2);
+    assert_int_equal(count_substrings(fragment, "id=\"red\""), 1);
     free(text);
     free(fragment);
     scene_free(output);
@@ -971,25 +984,9 @@ static void write_failing_replacement(const char *file, int line, const char *wh
     write_scene3();
     snapshot_files(&inputs, in_dir, scene3_files, ARRAY_COUNT(scene3_files));
     snprintf(path, sizeof path, "%s", file[0] == '/' ? file : path_in(in_dir, file));
-    mitsuba_replacement r = {path, line, "meshes/x.ply", 0, NULL, 0};
+    mitsuba_replacement r = {path, line, "meshes/x.ply", 0};
     snprintf(where, sizeof where, "%s:%d:", path, line);
     assert_write_fails(path_in(in_dir, "scene.xml"), &r, 1, where, what);
-    snapshot_check(&inputs);
-}
-
-/* A copy whose instance element is not at the line it names is an error naming that line. */
-static void test_error_instance_not_at_line(void **state)
-{
-    snapshot inputs = {0};
-    scene *input = write_instanced_scene(&inputs);
-    mitsuba_replacement r;
-    char ply[64], where[PATH_MAX + 16];
-    replace_copy(input, 0, &r, ply, sizeof ply);
-    r.instance_line = 2; /* the <include> */
-    snprintf(where, sizeof where, "%s:2:", r.instance_file);
-    assert_write_fails(path_in(in_dir, "scene.xml"), &r, 1, where,
-                       "no <shape type=\"instance\">");
-    scene_free(input);
     snapshot_check(&inputs);
 }
 
@@ -1019,8 +1016,8 @@ static void test_error_shape_replaced_twice(void **state)
     const char *scene_file = path_in(in_dir, "scene.xml");
     scene *s = test_load_scene(scene_file);
     const scene_mesh *quad = test_find_mesh(s, "quad");
-    mitsuba_replacement twice[2] = {{quad->xml_file, quad->xml_line, "meshes/a.ply", 0, NULL, 0},
-                                    {quad->xml_file, quad->xml_line, "meshes/b.ply", 0, NULL, 0}};
+    mitsuba_replacement twice[2] = {{quad->xml_file, quad->xml_line, "meshes/a.ply", 0},
+                                    {quad->xml_file, quad->xml_line, "meshes/b.ply", 0}};
     assert_write_fails(scene_file, twice, 2, "scene.xml:", "replaced twice");
     scene_free(s);
     snapshot_check(&inputs);
@@ -1147,8 +1144,7 @@ int main(void)
         WRITER_TEST(test_v05_scene_reloads),
         WRITER_TEST(test_v05_replaced_shapes_text),
         WRITER_TEST(test_v05_properties_and_paths),
-        WRITER_TEST(test_instances_flattened),
-        WRITER_TEST(test_error_instance_not_at_line),
+        WRITER_TEST(test_instances_kept),
         WRITER_TEST(test_error_no_shape_at_line),
         WRITER_TEST(test_error_no_shape_at_fragment_line),
         WRITER_TEST(test_error_file_not_in_scene),

@@ -612,6 +612,15 @@ static void test_instances_flattened(void **state)
     assert_vec3(&s->meshes[0].positions[3], 11, 0, 0, EPS);
     assert_vec3(&s->meshes[1].positions[3], 21, 0, 0, EPS);
     assert_int_equal(s->meshes[0].source_offset, s->meshes[1].source_offset);
+    /* Chained as copies of one shape (reduce/reduce_instances.c), each with its instance's
+     * transform. */
+    assert_true(s->meshes[0].instanced && s->meshes[1].instanced);
+    assert_int_equal(s->meshes[0].instance_first, 0);
+    assert_int_equal(s->meshes[1].instance_first, 0);
+    assert_int_equal(s->meshes[0].instance_next, 1);
+    assert_int_equal(s->meshes[1].instance_next, 0);
+    assert_true(s->meshes[0].instance_to_world[3] == 10.0);
+    assert_true(s->meshes[1].instance_to_world[3] == 20.0);
     scene_free(s);
 }
 

@@ -59,10 +59,23 @@ typedef struct scene_mesh {
     double object_to_world[16]; /* row-major: the transform the shape's points were given in */
     int source_flipped;         /* the loader reversed the winding the statement gives */
     /* A Mitsuba scene's copy of a shapegroup's shape placed by a <shape type="instance">
-     * (instances are flattened: io/mitsuba_shape.c): the file and line of the instance element
-     * (xml_file and xml_line name the group's <shape>); NULL and 0 for any other mesh. */
+     * (instances are flattened on load: io/mitsuba_shape.c): the file and line of the instance
+     * element (xml_file and xml_line name the group's <shape>); NULL and 0 for any other mesh. */
     char *instance_xml_file;
     int instance_xml_line;
+    /* A copy an instance placed (instanced set): of a Mitsuba shapegroup's shape (above), of a
+     * pbrt-v4 object's shape placed by ObjectInstance, of a glTF primitive whose mesh several
+     * nodes name. The shape is the scene's prototype, stored once in a reduced scene
+     * (reduce/reduce_instances.c). instance_first is the mesh index of the first copy of the
+     * same shape (its representative: itself for that copy), instance_next the next copy of
+     * it, or 0 after the last (a later copy is never mesh 0); instance_to_world (row-major 4x4)
+     * is the instance's transform: this copy's points are instance_to_world times the
+     * prototype's (the shape's own transform applied), its winding reversed where the
+     * transform mirrors, as the loaders place every copy. Every copy of a shape has the same
+     * vertices and triangles in the same order. All zero for any other mesh. */
+    int instanced;
+    size_t instance_first, instance_next;
+    double instance_to_world[16];
 } scene_mesh;
 
 /* How a loader reads a mesh's geometry again (the loader's own type), and the functions it

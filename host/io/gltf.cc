@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <string>
+#include <unordered_map>
 #include <strings.h>
 #include <vector>
 
@@ -345,6 +346,35 @@ int own_values(Loader &ld, int number, const char *name, uint32_t vertex_count,
     return gltf_accessor_read_floats(ld.doc, a, out.data()) ? -1 : 1;
 }
 
+// The instances (scene meshes 0 .. n - 1, in order) of a primitive that several nodes name
+// are chained as copies of one prototype (core/scene.h: instanced), each under its node's world
+// transform, so that `idmr reduce` reduces the primitive once and the nodes keep sharing it
+// (reduce/reduce_instances.c).
+void chain_shared_primitives(Loader &ld, const std::vector<Instance> &instances)
+{
+    std::unordered_map<const cJSON *, size_t> uses, last_copy;
+    for (size_t i = 0; i < instances.size(); i++)
+        uses[ld.primitive_of[i]]++;
+    for (size_t i = 0; i < instances.size(); i++) {
+        if (uses[ld.primitive_of[i]] < 2)
+            continue; // one node names it
+        scene_mesh *mesh = &ld.s->meshes[i];
+        mesh->instanced = 1;
+        const aiMatrix4x4 &w = instances[i].world;
+        const double rows[16] = {w.a1, w.a2, w.a3, w.a4, w.b1, w.b2, w.b3, w.b4,
+                                 w.c1, w.c2, w.c3, w.c4, w.d1, w.d2, w.d3, w.d4};
+        std::memcpy(mesh->instance_to_world, rows, sizeof rows);
+        auto earlier = last_copy.find(ld.primitive_of[i]);
+        if (earlier == last_copy.end()) {
+            mesh->instance_first = i;
+        } else {
+            ld.s->meshes[earlier->second].instance_next = i;
+            mesh->instance_first = ld.s->meshes[earlier->second].instance_first;
+        }
+        last_copy[ld.primitive_of[i]] = i;
+    }
+}
+
 int add_instance(Loader &ld, const Instance &instance, int number)
 {
     const aiMesh *mesh = ld.ai->mMeshes[instance.node->mMeshes[instance.slot]];
@@ -673,6 +703,8 @@ scene *build(const char *path, const aiScene *ai, Checked &file)
         status = add_instance(ld, instances[i], (int)i);
         progress_advance(&file.bar, 1, nullptr);
     }
+    if (!status)
+        chain_shared_primitives(ld, instances);
     if (!status)
         status = add_lights(ld);
     if (!status)

@@ -45,7 +45,8 @@
  * kept written (nothing welded); other vertex channels such as tangents and colours, and
  * morph targets, are dropped with a warning, since they no longer match. A mesh that nodes
  * share stays shared by the nodes left alone; a node whose instances were replaced writes into
- * a copy of its own unless every node naming the mesh was replaced. Data no longer referenced
+ * a copy of its own unless every node naming the mesh was replaced, and a node whose
+ * replacements are all shared names the mesh of the node that writes them. Data no longer referenced
  * is dropped and the rest written into outdir/scene.bin beside outdir/scene.gltf, or the BIN
  * chunk of outdir/scene.glb, as the input was (with an extension whose references are unknown,
  * nothing is renumbered: the input's buffers stay and the new data is added). Relative texture
@@ -74,6 +75,10 @@ scene *gltf_load(const char *path);
 typedef struct gltf_replacement {
     int instance;          /* scene_mesh.xml_line of the mesh */
     const mesh_data *mesh; /* its reduced triangles, world space */
+    /* 1: the instance is a copy of a primitive that another node's replacement reduces (its
+     * reduction moved: reduce/reduce_instances.c); its node names that node's mesh, and `mesh`
+     * is not read. */
+    int shared;
 } gltf_replacement;
 
 /* The reduced scene's name in outdir: "scene.glb" for a .glb input, else "scene.gltf". */

@@ -21,7 +21,9 @@
  * replaced instances writes into the mesh itself only when every node that names the mesh has
  * replaced instances (the first of them); the others get a copy of their own, so a node left
  * alone keeps the original and two nodes reduced differently do not overwrite each other (a
- * node the walk reaches twice, which glTF forbids, cannot be given two meshes: refused).
+ * node the walk reaches twice, which glTF forbids, cannot be given two meshes: refused). A node
+ * whose replacements are all shared (copies of one reduction) names the mesh of the node that
+ * writes that reduction, so the nodes keep sharing one mesh.
  *
  * Binary data. When every extension the document uses is one whose references the writer
  * knows (lights, materials, texture transforms and formats, mesh quantization, XMP, animation
@@ -593,15 +595,20 @@ static void unlist_extension(cJSON *root, const char *name)
 static int replace_instances(writer *w, const gltf_replacement *replacements, size_t count)
 {
     int *replaced = xcalloc((size_t)w->node_count + 1, sizeof *replaced);
+    int *shared = xcalloc((size_t)w->node_count + 1, sizeof *shared);
+    int *target_index = xcalloc((size_t)w->node_count + 1, sizeof *target_index);
+    int *named = xcalloc((size_t)w->node_count + 1, sizeof *named); /* its mesh in the input */
     int *users = xcalloc((size_t)w->mesh_count + 1, sizeof *users);
     int *replaced_users = xcalloc((size_t)w->mesh_count + 1, sizeof *replaced_users);
     char *claimed = xcalloc((size_t)w->mesh_count + 1, 1);
     cJSON **target = xcalloc((size_t)w->node_count + 1, sizeof *target);
     int status = 0;
-    for (size_t r = 0; r < count; r++)
+    for (size_t r = 0; r < count; r++) {
         replaced[w->instances[replacements[r].instance].node]++;
+        shared[w->instances[replacements[r].instance].node] += replacements[r].shared != 0;
+    }
     for (int node = 0; node < w->node_count; node++) {
-        int mesh = index_of(w->nodes[node], "mesh", w->mesh_count);
+        int mesh = named[node] = index_of(w->nodes[node], "mesh", w->mesh_count);
         if (mesh < 0)
             continue;
         users[mesh]++;
@@ -617,19 +624,40 @@ static int replace_instances(writer *w, const gltf_replacement *replacements, si
     cJSON *meshes = cJSON_GetObjectItemCaseSensitive(w->doc.json, "meshes");
     int mesh_count = w->mesh_count;
     for (int node = 0; node < w->node_count && !status; node++) {
-        if (!replaced[node])
+        if (!replaced[node] || shared[node] == replaced[node])
             continue;
         int mesh = index_of(w->nodes[node], "mesh", w->mesh_count);
         if (replaced_users[mesh] == users[mesh] && !claimed[mesh]) {
             claimed[mesh] = 1;
             target[node] = w->meshes[mesh];
+            target_index[node] = mesh;
         } else {
             target[node] = cJSON_Duplicate(w->meshes[mesh], 1);
             cJSON_AddItemToArray(meshes, target[node]);
+            target_index[node] = mesh_count;
             set_number(w->nodes[node], "mesh", mesh_count++);
         }
     }
+    /* nodes whose replacements are all shared: the mesh of the node naming the same mesh that
+     * writes the reduction */
+    for (int node = 0; node < w->node_count && !status; node++) {
+        if (!replaced[node] || shared[node] != replaced[node])
+            continue;
+        int mesh = named[node], writer_node = -1;
+        for (int other = 0; other < w->node_count && writer_node < 0; other++)
+            if (target[other] && shared[other] != replaced[other] && named[other] == mesh)
+                writer_node = other;
+        if (writer_node < 0)
+            status = error_set(IDMR_EXIT_FAILURE,
+                               "%s: nodes[%d]: its meshes[%d] is shared with a reduction no "
+                               "other node writes",
+                               w->scene_file, node, mesh);
+        else
+            set_number(w->nodes[node], "mesh", target_index[writer_node]);
+    }
     for (size_t r = 0; r < count && !status; r++) {
+        if (replacements[r].shared)
+            continue;
         const instance *in = &w->instances[replacements[r].instance];
         cJSON *primitive = cJSON_GetArrayItem(
             cJSON_GetObjectItemCaseSensitive(target[in->node], "primitives"), in->primitive);
@@ -648,6 +676,9 @@ static int replace_instances(writer *w, const gltf_replacement *replacements, si
         }
     }
     free(target);
+    free(target_index);
+    free(named);
+    free(shared);
     free(claimed);
     free(replaced_users);
     free(users);

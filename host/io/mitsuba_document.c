@@ -172,6 +172,7 @@ static void loader_free(loader *ld)
     free(ld->docs);
     mitsuba_params_free(&ld->params);
     mitsuba_ids_free(ld);
+    free(ld->group_shapes);
 }
 
 scene *mitsuba_load(const char *path) { return mitsuba_load_streaming(path, 0); }

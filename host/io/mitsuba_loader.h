@@ -65,7 +65,14 @@ typedef struct loader {
     size_t include_count; /* <include> elements read so far */
     uint32_t release_from; /* mesh files with at least this many vertices are released once
                               read (scene_mesh_release: streaming); 0: none */
-    int instance_warned;   /* the warning that instances are flattened was given */
+    int instance_warned;   /* the warning that instances are simulated as copies was given */
+    /* Per shapegroup shape an instance copied: its node and the mesh index of its last copy so
+     * far (scene_mesh.instance_first/next chain the copies of one shape). */
+    struct group_shape_copies {
+        xmlNodePtr shape;
+        size_t last_copy;
+    } *group_shapes;
+    size_t group_shape_count;
 } loader;
 
 /* What was not read (mitsuba_unread.c). Marks node (may be NULL) as read by some reader;

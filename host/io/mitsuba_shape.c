@@ -13,8 +13,10 @@
  * front from the world-space winding). Instances are flattened, as the pbrt-v4 reader
  * flattens ObjectInstance: each copy is a world-space mesh of its own, named "<instance id,
  * else group id>/<shape name>" (the scene numbers repeats: "G/leaf.2"), and remembers its
- * instance element for the writer (scene_mesh.instance_xml_file/line). As in Mitsuba 3, a
- * shapegroup may not hold a shapegroup or an instance, nor a shape with an area emitter. */
+ * instance element (scene_mesh.instance_xml_file/line), its instance's to_world and the other
+ * copies of its shape (scene_mesh.instanced: `idmr reduce` folds them back into one prototype,
+ * reduce/reduce_instances.c). As in Mitsuba 3, a shapegroup may not hold a shapegroup or an
+ * instance, nor a shape with an area emitter. */
 #include "io/mitsuba_loader.h"
 
 #include <errno.h>
@@ -51,18 +53,6 @@ static void source_free(scene_mesh_source *source)
     if (source)
         free(source->file);
     free(source);
-}
-
-/* Moves geometry by `to_world` as Mitsuba moves a built-in shape or an instance: points by it,
- * normals by its inverse transpose, and under a mirror the winding flipped (the surface keeps
- * its side). */
-static void transform_keeping_side(mesh_data *mesh, const xform *to_world)
-{
-    shapes_transform(mesh, to_world);
-    if (xform_determinant3(to_world) < 0.0) {
-        shapes_reverse_normals(mesh); /* the cofactor's normals → the inverse transpose's */
-        shapes_flip_winding(mesh);
-    }
 }
 
 /* The source of a mesh file shape from its properties (placed by instance_to_world, NULL when
@@ -123,7 +113,7 @@ static int source_geometry(const scene_mesh_source *source, mesh_data *mesh, int
     if (source->flip_normals)
         shapes_flip_winding(mesh);
     if (source->instanced)
-        transform_keeping_side(mesh, &source->instance_to_world);
+        shapes_transform_keeping_side(mesh, &source->instance_to_world);
     return 0;
 }
 
@@ -206,11 +196,11 @@ static int shape_geometry(loader *ld, xmlNodePtr node, const char *type,
         return -1;
     /* A built-in shape's normal is transformed as a normal (Mitsuba: the inverse transpose,
      * which keeps a sphere's outside out). */
-    transform_keeping_side(mesh, &to_world);
+    shapes_transform_keeping_side(mesh, &to_world);
     if (flip)
         shapes_flip_winding(mesh);
     if (instance_to_world)
-        transform_keeping_side(mesh, instance_to_world);
+        shapes_transform_keeping_side(mesh, instance_to_world);
     return 0;
 }
 
@@ -295,6 +285,29 @@ typedef struct shape_placement {
     const char *name_prefix; /* the instance's id, else the group's */
 } shape_placement;
 
+/* The scene's last mesh, a copy of the shapegroup shape `node` placed by `instance_to_world`:
+ * chained to the earlier copies of that shape (scene_mesh.instance_first/next). */
+static void chain_copy(loader *ld, xmlNodePtr node, const xform *instance_to_world)
+{
+    size_t copy = ld->s->mesh_count - 1;
+    scene_mesh *mesh = &ld->s->meshes[copy];
+    mesh->instanced = 1;
+    memcpy(mesh->instance_to_world, instance_to_world->m, sizeof mesh->instance_to_world);
+    for (size_t g = 0; g < ld->group_shape_count; g++) {
+        struct group_shape_copies *group = &ld->group_shapes[g];
+        if (group->shape == node) {
+            ld->s->meshes[group->last_copy].instance_next = copy;
+            mesh->instance_first = ld->s->meshes[group->last_copy].instance_first;
+            group->last_copy = copy;
+            return;
+        }
+    }
+    ld->group_shapes =
+        xrealloc(ld->group_shapes, (ld->group_shape_count + 1) * sizeof *ld->group_shapes);
+    ld->group_shapes[ld->group_shape_count++] = (struct group_shape_copies){node, copy};
+    mesh->instance_first = copy;
+}
+
 /* Reads the shape `node` into a world-space scene mesh (placement: NULL, or the instance that
  * puts a copy of it). */
 static int load_placed_shape(loader *ld, xmlNodePtr node, const shape_placement *placement)
@@ -346,6 +359,7 @@ static int load_placed_shape(loader *ld, xmlNodePtr node, const shape_placement 
     if (placement) {
         added->instance_xml_file = xstrdup(mitsuba_node_file(placement->instance));
         added->instance_xml_line = (int)xmlGetLineNo(placement->instance);
+        chain_copy(ld, node, &placement->instance_to_world);
     }
     added->light = parts.emitter ? scene_add_light(ld->s, &light) : -1;
     if (ld->release_from && added->vertex_count >= ld->release_from)
@@ -407,8 +421,8 @@ static int load_instance(loader *ld, xmlNodePtr node)
     const char *id = mitsuba_attr(node, "id");
     placement.name_prefix = id && id[0] ? id : entry->id;
     if (!ld->instance_warned)
-        mitsuba_warn_at(node, "instances are flattened (each one becomes world-space meshes of "
-                              "its own)");
+        mitsuba_warn_at(node, "instances are simulated as world-space copies (each one holds "
+                              "meshes of its own); a reduced scene keeps them as instances");
     ld->instance_warned = 1;
     MITSUBA_FOR_EACH_ELEMENT(child, entry->node)
     {

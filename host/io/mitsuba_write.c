@@ -6,10 +6,8 @@
  * include links (node → fragment) and the <shape> node of each replacement; it also notes
  * which fragments must be copied. The second edits the trees that are written (the scene and
  * the copies) and writes them, copies first and the scene last; a replaced <shape> is edited by
- * mitsuba_write_shape.c. Between the two, each copy an instance placed is made (a deep copy of
- * the group's shape, beside the instance element, with the path edits of the original), so
- * that the copies exist before any document is written and its shapegroups removed. All state
- * lives in one `writer`; every function that can fail returns -1 with the error set. */
+ * mitsuba_write_shape.c. All state lives in one `writer`; every function that can fail returns
+ * -1 with the error set. */
 #include "io/mitsuba_write.h"
 
 #include <errno.h>
@@ -76,13 +74,7 @@ typedef struct writer {
     const mitsuba_replacement *replacements;
     size_t replacement_count;
     char **replacement_real; /* realpath of each replacement's xml_file, or NULL */
-    char **instance_real;    /* realpath of each replacement's instance_file, or NULL */
     xmlNodePtr *shapes;      /* the <shape> node of each replacement, once found */
-    xmlNodePtr *instances;   /* an instance's copy: the <shape type="instance"> node */
-    xmlNodePtr *copies;      /* an instance's copy: the group's shape copied beside it */
-    xmlNodePtr *removed;     /* instances and shapegroups unlinked, freed with the writer (path
-                                edits and replacements point into them until then) */
-    size_t removed_count;
     write_asset *assets;
     size_t asset_count;
 } writer;
@@ -221,29 +213,11 @@ static int is_doc_file(const write_doc *d, const char *real, const char *path)
     return real ? strcmp(real, d->real) == 0 : strcmp(path, d->path) == 0;
 }
 
-/* Finds the copies that name this <shape type="instance">. */
-static void note_instance(writer *w, size_t doc, xmlNodePtr node)
-{
-    const char *type = mitsuba_attr(node, "type");
-    long line = xmlGetLineNo(node);
-    if (!type || strcmp(type, "instance") != 0)
-        return;
-    for (size_t i = 0; i < w->replacement_count; i++) {
-        const mitsuba_replacement *r = &w->replacements[i];
-        if (r->instance_file && r->instance_line == line &&
-            is_doc_file(&w->docs[doc], w->instance_real[i], r->instance_file)) {
-            w->instances[i] = node;
-            w->docs[doc].replaced = 1;
-        }
-    }
-}
-
 /* Finds the replacements that name this <shape>. */
 static int note_shape(writer *w, size_t doc, xmlNodePtr node)
 {
     const write_doc *d = &w->docs[doc];
     long line = xmlGetLineNo(node);
-    note_instance(w, doc, node);
     for (size_t i = 0; i < w->replacement_count; i++) {
         const mitsuba_replacement *r = &w->replacements[i];
         if (!is_doc_file(d, w->replacement_real[i], r->xml_file) || r->xml_line != line)
@@ -438,33 +412,6 @@ static int write_tree(const write_doc *d, const char *target)
     return status;
 }
 
-/* Unlinks `node` (an instance or a shapegroup) from document `doc` unless it is gone already;
- * it is freed with the writer. */
-static void remove_element(writer *w, xmlNodePtr node, xmlDocPtr doc)
-{
-    if (node->doc != doc || !node->parent)
-        return;
-    mitsuba_unlink_with_indent(node);
-    w->removed = xrealloc(w->removed, (w->removed_count + 1) * sizeof *w->removed);
-    w->removed[w->removed_count++] = node;
-}
-
-/* In document `doc` (its path edits made): the copies instances placed become world-space PLYs,
- * then the instances with copies and the shapegroups whose shapes were copied are removed. */
-static void flatten_instances(writer *w, xmlDocPtr doc)
-{
-    for (size_t i = 0; i < w->replacement_count; i++) {
-        const mitsuba_replacement *r = &w->replacements[i];
-        if (w->copies[i] && w->copies[i]->doc == doc)
-            mitsuba_shape_to_ply(w->copies[i], r->ply, r->face_normals);
-    }
-    for (size_t i = 0; i < w->replacement_count; i++)
-        if (w->instances[i]) {
-            remove_element(w, w->instances[i], doc);
-            remove_element(w, w->shapes[i]->parent, doc);
-        }
-}
-
 /* Sets `attribute` of `node` to what outdir/target says for the input file `absolute`. */
 static int set_path(writer *w, const char *target, xmlNodePtr node, const char *attribute,
                     const char *absolute)
@@ -497,10 +444,9 @@ static int write_doc_out(writer *w, size_t index, const char *target)
             return -1;
     }
     for (size_t i = 0; i < w->replacement_count; i++)
-        if (!w->instances[i] && w->shapes[i]->doc == d->doc)
+        if (w->shapes[i]->doc == d->doc)
             mitsuba_shape_to_ply(w->shapes[i], w->replacements[i].ply,
                                  w->replacements[i].face_normals);
-    flatten_instances(w, d->doc);
     char *path = mitsuba_path_join(w->outdir, target);
     int status = write_tree(d, path);
     free(path);
@@ -512,9 +458,6 @@ static int write_doc_out(writer *w, size_t index, const char *target)
 
 static void writer_free(writer *w)
 {
-    for (size_t i = 0; i < w->removed_count; i++) /* before their documents (and dictionaries) */
-        xmlFreeNode(w->removed[i]);
-    free(w->removed);
     for (size_t i = 0; i < w->doc_count; i++) {
         free(w->docs[i].path);
         free(w->docs[i].real);
@@ -527,15 +470,10 @@ static void writer_free(writer *w)
         free(w->edits[i].value);
     free(w->edits);
     free(w->includes);
-    for (size_t i = 0; i < w->replacement_count; i++) {
+    for (size_t i = 0; i < w->replacement_count; i++)
         free(w->replacement_real[i]);
-        free(w->instance_real[i]);
-    }
     free(w->replacement_real);
-    free(w->instance_real);
     free(w->shapes);
-    free(w->instances);
-    free(w->copies);
     for (size_t i = 0; i < w->asset_count; i++) {
         free(w->assets[i].real);
         free(w->assets[i].name);
@@ -545,8 +483,7 @@ static void writer_free(writer *w)
     free(w->outdir_real);
 }
 
-/* Checks that each replacement found its shape (and an instance's copy its instance) and that
- * no shape is replaced twice (by one instance). */
+/* Checks that each replacement found its shape and that no shape is replaced twice. */
 static int check_replacements(const writer *w)
 {
     for (size_t i = 0; i < w->replacement_count; i++) {
@@ -556,70 +493,10 @@ static int check_replacements(const writer *w)
                              "%s:%d: no <shape> element at this line of the scene (replacement "
                              "by '%s')",
                              r->xml_file, r->xml_line, r->ply);
-        if (r->instance_file && !w->instances[i])
-            return error_set(IDMR_EXIT_INPUT,
-                             "%s:%d: no <shape type=\"instance\"> element at this line of the "
-                             "scene (copy of the shape at %s:%d, replacement by '%s')",
-                             r->instance_file, r->instance_line, r->xml_file, r->xml_line,
-                             r->ply);
-        if (r->instance_file &&
-            (!w->shapes[i]->parent || !mitsuba_is_tag(w->shapes[i]->parent, "shape")))
-            return error_set(IDMR_EXIT_INPUT,
-                             "%s:%d: the <shape> an instance copies is not in a shapegroup",
-                             r->xml_file, r->xml_line);
         for (size_t j = 0; j < i; j++)
-            if (w->shapes[j] == w->shapes[i] && w->instances[j] == w->instances[i])
+            if (w->shapes[j] == w->shapes[i])
                 return error_set(IDMR_EXIT_INPUT, "%s:%d: <shape> replaced twice ('%s', '%s')",
                                  r->xml_file, r->xml_line, w->replacements[j].ply, r->ply);
-    }
-    return 0;
-}
-
-/* Gives `to`, a deep copy of `from`, the path edits of `from` and of its descendants. */
-static void copy_path_edits(writer *w, xmlNodePtr from, xmlNodePtr to)
-{
-    size_t count = w->edit_count;
-    for (size_t e = 0; e < count; e++)
-        if (w->edits[e].node == from) {
-            w->edits = xrealloc(w->edits, (w->edit_count + 1) * sizeof *w->edits);
-            w->edits[w->edit_count++] =
-                (write_path_edit){to, w->edits[e].attribute, xstrdup(w->edits[e].value)};
-        }
-    for (xmlNodePtr a = from->children, b = to->children; a && b; a = a->next, b = b->next)
-        copy_path_edits(w, a, b);
-}
-
-/* Removes every id attribute in `node` and below (a <ref>'s id names what it refers to and
- * stays). */
-static void strip_ids(xmlNodePtr node)
-{
-    if (node->type != XML_ELEMENT_NODE || mitsuba_is_tag(node, "ref"))
-        return;
-    xmlUnsetProp(node, (const xmlChar *)"id");
-    for (xmlNodePtr child = node->children; child; child = child->next)
-        strip_ids(child);
-}
-
-/* Puts a deep copy of the group's shape beside its instance for every instance's copy (in
- * replacement order, so before the instance element in the loader's order). */
-static int make_instance_copies(writer *w)
-{
-    for (size_t i = 0; i < w->replacement_count; i++) {
-        if (!w->instances[i])
-            continue;
-        xmlNodePtr copy = xmlDocCopyNode(w->shapes[i], w->instances[i]->doc, 1);
-        if (!copy)
-            return error_set(IDMR_EXIT_FAILURE, "%s:%d: out of memory copying the shape at %s:%d",
-                             w->replacements[i].instance_file, w->replacements[i].instance_line,
-                             w->replacements[i].xml_file, w->replacements[i].xml_line);
-        for (size_t j = 0; j < i; j++)
-            if (w->shapes[j] == w->shapes[i]) { /* a repeat: Mitsuba 3 refuses duplicate ids */
-                strip_ids(copy);
-                break;
-            }
-        mitsuba_insert_before(w->instances[i], copy, w->shapes[i]);
-        copy_path_edits(w, w->shapes[i], copy);
-        w->copies[i] = copy;
     }
     return 0;
 }
@@ -654,15 +531,10 @@ int mitsuba_write_reduced(const char *scene_file, const char *outdir,
     w.replacements = replacements;
     w.replacement_count = count;
     w.replacement_real = xcalloc(count ? count : 1, sizeof *w.replacement_real);
-    w.instance_real = xcalloc(count ? count : 1, sizeof *w.instance_real);
     w.shapes = xcalloc(count ? count : 1, sizeof *w.shapes);
-    w.instances = xcalloc(count ? count : 1, sizeof *w.instances);
-    w.copies = xcalloc(count ? count : 1, sizeof *w.copies);
     for (size_t i = 0; i < count; i++) {
         const char *xml_file = replacements[i].xml_file;
-        const char *instance_file = replacements[i].instance_file;
         w.replacement_real[i] = xml_file ? mitsuba_path_real(xml_file) : NULL;
-        w.instance_real[i] = instance_file ? mitsuba_path_real(instance_file) : NULL;
     }
     for (size_t i = 0; i < count; i++)
         if (!replacements[i].xml_file || !replacements[i].ply) {
@@ -674,8 +546,6 @@ int mitsuba_write_reduced(const char *scene_file, const char *outdir,
     int status = doc_open(&w, scene_file, 0, &scene_index);
     if (status == 0)
         status = check_replacements(&w);
-    if (status == 0)
-        status = make_instance_copies(&w);
     if (status == 0)
         status = write_copies(&w);
     if (status == 0)

@@ -14,17 +14,10 @@
  *                   for a sphere its center and radius; for an obj its flip_tex_coords,
  *                   shape_index and collapse (obj-only properties, which Mitsuba 3 would reject
  *                   on a ply). Everything else (bsdf, emitter, refs, id, comments) is kept.
- *   instances       (a replacement with instance_file set: a copy of a shapegroup's shape that
- *                   a <shape type="instance"> placed; instances are flattened) each copy is a
- *                   deep copy of the group's <shape>, put where the instance element was (in
- *                   the instance's document, in replacement order), and made a world-space PLY
- *                   as a replaced shape is (a copy the reduction left whole has its PLY too: a
- *                   mesh file under a mirroring instance is not what the same file under the
- *                   composed to_world would be, io/mitsuba_shape.c). Repeat
- *                   copies of one shape lose the id attributes in them (Mitsuba 3 refuses
- *                   duplicate ids). The instance elements with copies and the shapegroups
- *                   whose shapes were copied are then removed, so no reference to a shapegroup
- *                   is left. The caller gives a replacement for every copy the loader made.
+ *   instances       shapegroups and instances stay as written. A replaced shape inside a
+ *                   shapegroup is edited as any replaced shape; its PLY holds the group's own
+ *                   space (the caller moves the reduced geometry there: reduce_instances.c),
+ *                   and every instance places it.
  *   paths           every other relative path — a property named filename (<string
  *                   name="filename" value=...>, for meshes, bitmaps, envmaps, ...) and every
  *                   filename="..." attribute (<spectrum filename>, <include filename>) — is
@@ -71,9 +64,6 @@ typedef struct mitsuba_replacement {
     int xml_line;         /* scene_mesh.xml_line */
     const char *ply;      /* the new mesh, relative to outdir, e.g. "meshes/knot.ply" */
     int face_normals;     /* the mesh is shaded flat: the shape says face_normals */
-    /* A copy an instance placed (scene_mesh.instance_xml_file/line; NULL and 0 otherwise). */
-    const char *instance_file;
-    int instance_line;
 } mitsuba_replacement;
 
 /* Writes outdir/scene.xml (and outdir/includes/ copies where needed, outdir/assets/ with
@@ -81,9 +71,8 @@ typedef struct mitsuba_replacement {
  * must exist; the input files are never written; every file goes through a temporary name and
  * rename(), the scene last. Returns 0, or -1 with the error set naming the file (and line):
  * unreadable or malformed XML, an unresolvable include, a replacement whose file:line matches
- * no <shape> element (or more than one), or whose instance file:line no <shape
- * type="instance">, two replacements of one shape (of one shape by one instance), a failed
- * write or copy. */
+ * no <shape> element (or more than one), two replacements of one shape, a failed write or
+ * copy. */
 int mitsuba_write_reduced(const char *scene_file, const char *outdir,
                           const mitsuba_replacement *replacements, size_t count, int bundle);
 

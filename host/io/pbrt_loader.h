@@ -187,6 +187,8 @@ typedef struct pbrt_object_shape {
     int flipped;
     int file_normals, flat_normals;
     int material; /* loader material index, or -1 */
+    int copied;       /* an ObjectInstance has placed it */
+    size_t last_copy; /* then the scene mesh of its last copy (scene_mesh.instance_next) */
 } pbrt_object_shape;
 
 typedef struct pbrt_object {

@@ -461,6 +461,24 @@ int pbrt_read_shape(pbrt_loader *ld, const char *file, int line, long offset, co
     return status;
 }
 
+/* The scene's last mesh, a copy of the object's shape `shape` that an ObjectInstance placed by
+ * `instance_to_world`: chained to the shape's earlier copies (scene_mesh.instanced), so that
+ * `idmr reduce` reduces and writes the shape once (reduce/reduce_instances.c). */
+static void chain_copy(scene *s, pbrt_object_shape *shape, const xform *instance_to_world)
+{
+    size_t copy = s->mesh_count - 1;
+    scene_mesh *mesh = &s->meshes[copy];
+    mesh->instanced = 1;
+    memcpy(mesh->instance_to_world, instance_to_world->m, sizeof mesh->instance_to_world);
+    mesh->instance_first = copy;
+    if (shape->copied) {
+        s->meshes[shape->last_copy].instance_next = copy;
+        mesh->instance_first = s->meshes[shape->last_copy].instance_first;
+    }
+    shape->copied = 1;
+    shape->last_copy = copy;
+}
+
 int pbrt_instance_object(pbrt_loader *ld, const char *file, int line, const char *name,
                          const xform *instance_to_world)
 {
@@ -471,10 +489,10 @@ int pbrt_instance_object(pbrt_loader *ld, const char *file, int line, const char
     if (!o)
         return pbrt_fail(file, line, "ObjectInstance: no object named '%s'", name);
     pbrt_warn(file, line,
-              "ObjectInstance: instances are flattened (each one becomes world-space meshes of "
-              "its own)");
+              "ObjectInstance: instances are simulated as world-space copies (each one holds "
+              "meshes of its own); a reduced scene keeps them as instances");
     for (size_t i = 0; i < o->shape_count; i++) {
-        const pbrt_object_shape *shape = &o->shapes[i];
+        pbrt_object_shape *shape = &o->shapes[i];
         mesh_data copy;
         mesh_copy(&shape->mesh, &copy);
         xform to_world = xform_multiply(instance_to_world, &shape->object_to_world);
@@ -483,6 +501,7 @@ int pbrt_instance_object(pbrt_loader *ld, const char *file, int line, const char
                             shape->flipped, shape->file_normals, shape->material};
         if (place_mesh(ld, &rec, &copy, &to_world, 0))
             return -1;
+        chain_copy(ld->s, shape, instance_to_world);
     }
     return 0;
 }

@@ -138,6 +138,15 @@ void shapes_transform(mesh_data *mesh, const xform *to_world)
         xform_apply_normals(to_world, mesh->normals, mesh->vertex_count);
 }
 
+void shapes_transform_keeping_side(mesh_data *mesh, const xform *to_world)
+{
+    shapes_transform(mesh, to_world);
+    if (xform_determinant3(to_world) < 0.0) {
+        shapes_reverse_normals(mesh); /* the cofactor's normals → the inverse transpose's */
+        shapes_flip_winding(mesh);
+    }
+}
+
 /* The angle at corner a of triangle (a, b, c), in double. */
 static double corner_angle(const float *a, const float *b, const float *c)
 {

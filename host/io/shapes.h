@@ -44,6 +44,11 @@ void shapes_reverse_normals(mesh_data *mesh);
  * mesh files Mitsuba's geometric normal follows the winding, so they are left alone.) */
 void shapes_transform(mesh_data *mesh, const xform *to_world);
 
+/* Moves geometry by `to_world` as Mitsuba moves a built-in shape or an instance: points by it,
+ * normals by its inverse transpose, and under a mirror the winding flipped (the surface keeps
+ * its side). Its inverse moves the geometry back exactly so (up to rounding). */
+void shapes_transform_keeping_side(mesh_data *mesh, const xform *to_world);
+
 /* Replaces the mesh's normals by smooth vertex normals, as Mitsuba computes them for a mesh
  * file without normals that is not marked face_normals: at each vertex the unit normals of the
  * triangles around it, weighted by the triangle's angle at that vertex (Thürmer and Wüthrich

@@ -22,10 +22,17 @@ budget_mesh reduce_budget_entry(const reduce_state *st, const importance_result 
     importance_weights weights = importance_weights_of(&o->importance);
     budget_mesh entry = {.name = s->meshes[m].name,
                          .vertices = s->meshes[m].vertex_count,
-                         .pinned = reduce_mesh_pinned(o, &s->meshes[m]),
+                         .pinned = reduce_instance_pinned(st, m),
                          .importance = 1.0};
-    if (reduce_method_uses_importance(o->method))
-        entry.importance = importance_mesh_sums(r, st->simulated, m, &weights).amount;
+    /* An instance's copy after its shape's first is planned through the first, with its
+     * importance (reduce_instances.c): the written scene stores the prototype once. */
+    if (reduce_instance_follower(st, m)) {
+        entry.vertices = 0;
+        entry.pinned = 0;
+        entry.importance = 0.0;
+    } else if (reduce_method_uses_importance(o->method)) {
+        entry.importance = reduce_instance_importance(st, r, m, &weights);
+    }
     return entry;
 }
 
@@ -39,7 +46,8 @@ int reduce_plan_budget(reduce_state *st)
         st->input[m] = reduce_decimation_input(st, m);
         budget[m] = reduce_budget_entry(st, &st->importance, m);
     }
-    int status = budget_distribute(budget, st->count, st->target, o->min_vertices, &st->plan);
+    int status = reduce_instances_sum_vertex_importance(st) ||
+                 budget_distribute(budget, st->count, st->target, o->min_vertices, &st->plan);
     /* Nothing to remove (D = 1): every mesh that could be decimated is still rewritten, as its
      * PLY without a collapse, so the output is the scene converted (and a check of the writer:
      * another renderer must show it as the input). */
@@ -53,6 +61,7 @@ int reduce_plan_budget(reduce_state *st)
 
 void reduce_budget_forget(reduce_state *st)
 {
+    reduce_instances_forget(st);
     free(st->input);
     free(st->budget);
     st->input = NULL;

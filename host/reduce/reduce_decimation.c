@@ -206,9 +206,12 @@ int reduce_decimate_meshes(reduce_state *st, const decimate_input *inputs,
     return status;
 }
 
-/* Vertices mesh m kept (its input's count when it is not decimated). */
+/* Vertices mesh m kept (its input's count when it is not decimated; none for an instance's
+ * copy after its shape's first, whose vertices are the first's: reduce_instances.c). */
 static uint64_t kept_by(const reduce_state *st, size_t m)
 {
+    if (reduce_instance_follower(st, m))
+        return 0;
     return st->plan.decimate[m] ? st->output[m].mesh.vertex_count
                                 : st->scene->meshes[m].vertex_count;
 }
@@ -393,16 +396,18 @@ static void warn_missed(const reduce_state *st)
     size_t used = 0;
     for (size_t m = 0; m < st->count; m++) {
         const scene_mesh *mesh = &st->scene->meshes[m];
+        if (reduce_instance_follower(st, m))
+            continue; /* its vertices are its shape's first copy's */
         if (st->plan.decimate[m] || (st->not_reduced && st->not_reduced[m])) {
             stuck += st->budget[m].floor > 0 || (st->not_reduced && st->not_reduced[m]);
             continue;
         }
         if (reduce_decimatable(st, m))
             continue; /* planned whole by the budget */
-        int reason = mesh->light >= 0                       ? BY_LIGHT
-                     : reduce_mesh_named_by_keep(o, mesh) ? BY_KEEP
-                     : reduce_mesh_pinned(o, mesh)        ? BY_NO_AREA
-                                                          : BY_SIZE;
+        int reason = mesh->light >= 0                          ? BY_LIGHT
+                     : reduce_instance_named_by_keep(st, m) ? BY_KEEP
+                     : reduce_mesh_pinned(o, mesh)          ? BY_NO_AREA
+                                                            : BY_SIZE;
         kept[reason] += mesh->vertex_count;
         if (reason == BY_KEEP && used < sizeof names)
             used += (size_t)snprintf(names + used, sizeof names - used, "%s'%s'",
@@ -588,6 +593,8 @@ int reduce_decimation(reduce_state *st)
     }
     if (!status)
         keep_unreduced(st, first_target);
+    if (!status)
+        status = reduce_instances_derive(st);
     free(first_target);
     free(redo);
     if (!status)

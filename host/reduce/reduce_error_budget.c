@@ -166,6 +166,8 @@ static double search_floor(const reduce_state *st)
 {
     double total = 0, least = 0;
     for (size_t m = 0; m < st->count; m++) {
+        if (reduce_instance_follower(st, m))
+            continue; /* the plan counts a prototype once (reduce_instances.c) */
         double v = (double)st->scene->meshes[m].vertex_count;
         total += v;
         least += reduce_decimatable(st, m) ? fmin(v, (double)st->options->min_vertices) : v;

@@ -34,7 +34,7 @@ int reduce_mesh_pinned(const reduce_options *o, const scene_mesh *mesh)
 int reduce_decimatable(const reduce_state *st, size_t m)
 {
     const scene_mesh *mesh = &st->scene->meshes[m];
-    return !reduce_mesh_pinned(st->options, mesh) &&
+    return !reduce_instance_follower(st, m) && !reduce_instance_pinned(st, m) &&
            mesh->vertex_count > st->options->min_vertices;
 }
 

@@ -106,7 +106,8 @@ static int line_of(const reduce_state *st, memory_pass pass, memory_line *line)
     scene *bare = scene_view(st->scene);
     line->fixed_triangles = line->free_triangles = 0;
     for (size_t m = 0; m < st->count; m++) {
-        if (reduce_decimatable(st, m)) {
+        /* An instance's copy is reduced as its shape's first copy is (reduce_instances.c). */
+        if (reduce_decimatable(st, reduce_instance_representative(st, m))) {
             line->free_triangles += st->scene->meshes[m].triangle_count;
             bare->meshes[m].vertex_count = bare->meshes[m].triangle_count = 0;
         } else {

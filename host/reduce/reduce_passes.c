@@ -33,10 +33,12 @@ static int build_view(reduce_state *st)
     return st->view ? 0 : -1;
 }
 
-/* Whether the initial reduction decimates mesh m: decimatable and not below the floor. */
+/* Whether the initial reduction decimates mesh m: decimatable (an instance's copy: as its
+ * shape's first copy is; each copy is reduced on its own here) and not below the floor. */
 static int initially_reduced(const reduce_state *st, size_t m)
 {
-    return reduce_decimatable(st, m) && st->scene->meshes[m].vertex_count >= REDUCE_INITIAL_FLOOR;
+    return reduce_decimatable(st, reduce_instance_representative(st, m)) &&
+           st->scene->meshes[m].vertex_count >= REDUCE_INITIAL_FLOOR;
 }
 
 int reduce_initial(reduce_state *st)

@@ -40,6 +40,9 @@ static void add_totals(cJSON *root, const reduce_state *st)
     cJSON_AddNumberToObject(root, "vertices_requested", (double)st->plan.total_requested);
     cJSON_AddNumberToObject(root, "vertices_planned", (double)st->plan.total_planned);
     cJSON_AddNumberToObject(root, "vertices_after", (double)st->vertices_after);
+    /* With instances kept, vertices_after counts a prototype once (reduce_instances.c). */
+    cJSON_AddNumberToObject(root, "vertices_rendered_after",
+                            (double)reduce_instances_rendered_vertices(st));
     cJSON_AddNumberToObject(root, "vertices_missed",
                             (double)st->vertices_after - (double)st->plan.total_requested);
     cJSON_AddBoolToObject(root, "uniform_fallback", st->plan.uniform_fallback);
@@ -89,10 +92,12 @@ static void add_mesh(cJSON *meshes, const reduce_state *st, size_t m)
     cJSON_AddBoolToObject(mesh, "decimated", decimated);
     cJSON_AddNumberToObject(mesh, "vertices_before", in->vertex_count);
     cJSON_AddNumberToObject(mesh, "vertices_target", (double)st->plan.target[m]);
+    /* An instance's copy after its shape's first holds the first's decimation, moved. */
+    int holds = out->mesh.positions != NULL;
     cJSON_AddNumberToObject(mesh, "vertices_after",
-                            decimated ? out->mesh.vertex_count : in->vertex_count);
+                            holds ? out->mesh.vertex_count : in->vertex_count);
     cJSON_AddNumberToObject(mesh, "triangles_after",
-                            decimated ? out->mesh.triangle_count : in->triangle_count);
+                            holds ? out->mesh.triangle_count : in->triangle_count);
     int not_reduced = st->not_reduced && st->not_reduced[m];
     if ((decimated || not_reduced) && st->budget[m].floor > 0)
         cJSON_AddNumberToObject(mesh, "vertices_floor", (double)st->budget[m].floor);
@@ -125,7 +130,10 @@ static void add_mesh(cJSON *meshes, const reduce_state *st, size_t m)
         else /* a glTF scene: the mesh is in the written file, by its instance number */
             cJSON_AddNumberToObject(mesh, "gltf_instance", in->xml_line);
     }
-    cJSON_AddBoolToObject(mesh, "pinned", reduce_mesh_pinned(st->options, in));
+    cJSON_AddBoolToObject(mesh, "pinned", reduce_instance_pinned(st, m));
+    if (reduce_instance_follower(st, m)) /* reduced as that copy is, moved to its place */
+        cJSON_AddStringToObject(mesh, "instance_of",
+                                st->scene->meshes[reduce_instance_representative(st, m)].name);
     if (not_reduced)
         cJSON_AddStringToObject(mesh, "not_reduced", st->not_reduced[m]);
     if (in->triangles_dropped)

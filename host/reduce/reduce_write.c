@@ -1,8 +1,8 @@
 /* reduce_write.c — the write stage of `idmr reduce` (see reduce.h, reduce_stages.h): the
  * reduced scene in the staging directory. A Mitsuba scene: meshes/NAME.ply for every mesh the
- * plan decimated and every copy an instance placed (each read back and checked:
- * io/ply_check.h) and scene.xml, the input's XML with those shapes pointing to them and its
- * instances flattened (io/mitsuba_write.h); a glTF scene: scene.gltf (.glb) with the decimated
+ * plan decimated, a shapegroup's shape once, in the group's space (each read back and checked:
+ * io/ply_check.h), and scene.xml, the input's XML with those shapes pointing to them and its
+ * shapegroups and instances kept (io/mitsuba_write.h, reduce_instances.c); a glTF scene: scene.gltf (.glb) with the decimated
  * meshes in it (io/gltf.h); a pbrt-v4 scene: meshes/NAME.ply in each shape's own
  * space and scene.pbrt, the input's text with those Shape statements naming them (io/pbrt.h). */
 #include <limits.h>
@@ -32,11 +32,14 @@ static int ply_name_taken(const reduce_state *st, size_t m)
 }
 
 /* st->ply[m] = "meshes/NAME.ply"; two mesh names can make the same file name ("a/b", "a_b"):
- * the later ones are numbered ("meshes/NAME.2.ply"). */
+ * the later ones are numbered ("meshes/NAME.2.ply"). A shapegroup's shape is named as in its
+ * group: without the "INSTANCE/" its first copy's name begins with (io/mitsuba_shape.c). */
 static void name_ply(reduce_state *st, size_t m)
 {
     char name[256];
-    importance_file_name(st->scene->meshes[m].name, name, sizeof name);
+    const scene_mesh *mesh = &st->scene->meshes[m];
+    const char *in_group = mesh->instanced ? strchr(mesh->name, '/') : NULL;
+    importance_file_name(in_group ? in_group + 1 : mesh->name, name, sizeof name);
     size_t length = strlen(name) + 32;
     st->ply[m] = xmalloc(length);
     snprintf(st->ply[m], length, "meshes/%s.ply", name);
@@ -44,32 +47,24 @@ static void name_ply(reduce_state *st, size_t m)
         snprintf(st->ply[m], length, "meshes/%s.%u.ply", name, suffix);
 }
 
-/* Mesh m as loaded (read again if it was released: streaming) into the PLY at path. */
-static int write_whole_mesh(scene *s, size_t m, const char *path)
-{
-    int released = s->meshes[m].released;
-    if (scene_mesh_restore(s, m))
-        return -1;
-    const scene_mesh *mesh = &s->meshes[m];
-    mesh_data data = {mesh->vertex_count, mesh->triangle_count, mesh->positions, mesh->indices,
-                      mesh->texcoords,    mesh->normals,        0};
-    int status = mesh_io_write_ply(path, &data, NULL, NULL, NULL);
-    if (released)
-        scene_mesh_release(s, m);
-    return status;
-}
-
 /* A glTF scene: OUTDIR/scene.gltf or scene.glb with the decimated meshes in it (io/gltf.h). */
 static int write_reduced_gltf(reduce_state *st)
 {
     const scene *s = st->scene;
     gltf_replacement *replacements = xcalloc(st->count + 1, sizeof *replacements);
-    for (size_t m = 0; m < st->count; m++)
-        if (st->plan.decimate[m])
-            replacements[st->meshes_written++] =
-                (gltf_replacement){s->meshes[m].xml_line, &st->output[m].mesh};
-    int status = gltf_write_reduced(s->file, st->staging, replacements, st->meshes_written,
-                                    st->options->bundle);
+    size_t replaced = 0;
+    for (size_t m = 0; m < st->count; m++) {
+        /* A copy of a primitive that several nodes name shares its first copy's reduction
+         * (reduce_instances.c): its node keeps naming the same mesh. */
+        int shared = reduce_instance_follower(st, m);
+        if (!st->plan.decimate[m] && !(shared && st->output[m].mesh.positions))
+            continue;
+        replacements[replaced++] =
+            (gltf_replacement){s->meshes[m].xml_line, &st->output[m].mesh, shared};
+        st->meshes_written += !shared;
+    }
+    int status =
+        gltf_write_reduced(s->file, st->staging, replacements, replaced, st->options->bundle);
     free(replacements);
     return status;
 }
@@ -130,21 +125,25 @@ int reduce_write(reduce_state *st)
     size_t replaced = 0;
     for (size_t m = 0; m < st->count && !status; m++) {
         const scene_mesh *mesh = &s->meshes[m];
-        /* An instance's copy is written whole where the plan left it so: the writer flattens
-         * every instance (io/mitsuba_write.h). */
-        if (!st->plan.decimate[m] && !mesh->instance_xml_file)
+        /* Instances stay: a shapegroup's shape is written once, from its first copy, in the
+         * group's own space (reduce_instances.c), and the group and its instances as they are. */
+        if (!st->plan.decimate[m] || reduce_instance_follower(st, m))
             continue;
         char path[PATH_MAX];
         name_ply(st, m);
         snprintf(path, sizeof path, "%s/%s", st->staging, st->ply[m]);
-        status = (st->plan.decimate[m] ? mesh_io_write_ply(path, &st->output[m].mesh, NULL, NULL,
-                                                           NULL)
-                                       : write_whole_mesh(st->scene, m, path)) ||
-                 ply_check_written(path);
-        st->meshes_written += st->plan.decimate[m] != 0;
-        replacements[replaced++] = (mitsuba_replacement){
-            mesh->xml_file,     mesh->xml_line,          st->ply[m],
-            mesh->flat_normals, mesh->instance_xml_file, mesh->instance_xml_line};
+        if (mesh->instanced) {
+            mesh_data prototype;
+            status = reduce_instance_prototype_mesh(st, m, &prototype) ||
+                     mesh_io_write_ply(path, &prototype, NULL, NULL, NULL);
+            mesh_data_free(&prototype);
+        } else {
+            status = mesh_io_write_ply(path, &st->output[m].mesh, NULL, NULL, NULL);
+        }
+        status = status || ply_check_written(path);
+        st->meshes_written++;
+        replacements[replaced++] =
+            (mitsuba_replacement){mesh->xml_file, mesh->xml_line, st->ply[m], mesh->flat_normals};
     }
     if (!status)
         status = mitsuba_write_reduced(s->file, st->staging, replacements, replaced,
