@@ -15,7 +15,8 @@
  *                without it, where counting copies in the plan, averaging their importance or
  *                planning them apart would not
  *   kept whole   --keep naming a copy keeps the prototype whole, in every instance
- *   two passes   the second pass simulates every copy reduced (each moved from the first)
+ *   two passes   after an initial reduction (each prototype reduced once, the other copies
+ *                moved from it), the second pass simulates every copy reduced
  *   pbrt-v4      an object placed by three ObjectInstances (one mirrored) is written once, in
  *                its ObjectBegin, its instances kept; the copies read back keep the input's
  *                orientation relative to one another (signed volumes) */
@@ -266,9 +267,14 @@ static void test_instances_two_passes(void **state)
     scene *s = test_load_scene(scene_path);
     reduce_options o;
     small_options(&o);
+    o.initial = 0.25;
     o.passes = 2;
     reduction r;
     reduction_run(&r, s, &o);
+    uint64_t knot_vertices = test_find_mesh(s, "seen/knot")->vertex_count;
+    const cJSON *initial = cJSON_GetObjectItemCaseSensitive(r.report, "initial");
+    assert_true(number(initial, "vertices_after") ==
+                (double)(s->vertex_count - 3 * knot_vertices + 3 * (knot_vertices / 4)));
     const cJSON *passes = cJSON_GetObjectItemCaseSensitive(r.report, "passes");
     const cJSON *first = cJSON_GetArrayItem(passes, 0), *second = cJSON_GetArrayItem(passes, 1);
     /* The first pass's output, flattened: the stored vertices plus two more copies of the

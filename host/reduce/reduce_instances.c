@@ -18,7 +18,8 @@
  *   followers     each follower's reduced mesh is the representative's moved by
  *                 T_f T_r^-1 (T: an instance's to_world, the winding kept on its side as the
  *                 loader keeps it), so every later stage (the next pass's view, the memory
- *                 fit, the error budget's check renders) sees the reduced scene flattened
+ *                 fit, the error budget's check renders) sees the reduced scene flattened; the
+ *                 initial reduction (--initial) reduces each prototype once so too
  *   write         Mitsuba: the shapegroup's shape points to the reduced prototype in the
  *                 group's own space (T_r^-1 of the representative's), the shapegroup and its
  *                 instances as written; pbrt-v4: the object's Shape, in its own space, once;
@@ -184,23 +185,23 @@ int reduce_instance_prototype_mesh(const reduce_state *st, size_t m, mesh_data *
     return 0;
 }
 
-int reduce_instances_derive(reduce_state *st)
+int reduce_instances_derive(reduce_state *st, decimate_output *outputs)
 {
     for (size_t f = 0; f < st->count; f++) {
         if (!reduce_instance_follower(st, f))
             continue;
         size_t r = reduce_instance_representative(st, f);
-        decimate_output_free(&st->output[f]);
-        if (!st->plan.decimate[r])
+        decimate_output_free(&outputs[f]);
+        if (!outputs[r].mesh.positions)
             continue;
         xform representative_world, representative_object, follower_world, follower_object;
         if (check_copy(st, r, f) ||
             instance_transforms(st, r, &representative_world, &representative_object) ||
             instance_transforms(st, f, &follower_world, &follower_object))
             return -1;
-        copy_output(&st->output[r], st->scene->meshes[r].vertex_count, &st->output[f]);
-        shapes_transform_keeping_side(&st->output[f].mesh, &representative_object);
-        shapes_transform_keeping_side(&st->output[f].mesh, &follower_world);
+        copy_output(&outputs[r], st->scene->meshes[r].vertex_count, &outputs[f]);
+        shapes_transform_keeping_side(&outputs[f].mesh, &representative_object);
+        shapes_transform_keeping_side(&outputs[f].mesh, &follower_world);
     }
     return 0;
 }

@@ -33,12 +33,11 @@ static int build_view(reduce_state *st)
     return st->view ? 0 : -1;
 }
 
-/* Whether the initial reduction decimates mesh m: decimatable (an instance's copy: as its
- * shape's first copy is; each copy is reduced on its own here) and not below the floor. */
+/* Whether the initial reduction decimates mesh m: decimatable and not below the floor (an
+ * instance's later copies get their first copy's reduction, moved: reduce_instances.c). */
 static int initially_reduced(const reduce_state *st, size_t m)
 {
-    return reduce_decimatable(st, reduce_instance_representative(st, m)) &&
-           st->scene->meshes[m].vertex_count >= REDUCE_INITIAL_FLOOR;
+    return reduce_decimatable(st, m) && st->scene->meshes[m].vertex_count >= REDUCE_INITIAL_FLOOR;
 }
 
 int reduce_initial(reduce_state *st)
@@ -64,6 +63,8 @@ int reduce_initial(reduce_state *st)
     st->history = xcalloc(st->count + 1, sizeof *st->history);
     int status = reduce_decimate_meshes(st, inputs, targets, selected, DECIMATE_QUADRIC,
                                         "initial reduction", 1, st->history);
+    if (!status)
+        status = reduce_instances_derive(st, st->history);
     free(inputs);
     free(targets);
     free(selected);

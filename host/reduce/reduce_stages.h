@@ -238,9 +238,10 @@ double reduce_instance_importance(const reduce_state *st, const importance_resul
 int reduce_instances_sum_vertex_importance(reduce_state *st);
 /* Frees st->instance_importance. */
 void reduce_instances_forget(reduce_state *st);
-/* The decimation stage, last: each follower's output, its representative's decimation moved to
- * its place (none where the representative is not decimated). 0, or -1 with the error set. */
-int reduce_instances_derive(reduce_state *st);
+/* After a decimation into `outputs` (the initial reduction's, the decimation stage's): each
+ * follower's output, its representative's decimation moved to its place (none where the
+ * representative holds none). 0, or -1 with the error set. */
+int reduce_instances_derive(reduce_state *st, decimate_output *outputs);
 /* The decimated representative m in its Mitsuba shapegroup's own space, for the writer (*out
  * malloc'd). 0, or -1 with the error set (a singular instance transform). */
 int reduce_instance_prototype_mesh(const reduce_state *st, size_t m, mesh_data *out);
