@@ -14,6 +14,10 @@
  *                for the budget by importance, the knot is planned to the same target with and
  *                without it, where counting copies in the plan, averaging their importance or
  *                planning them apart would not
+ *   flattened    the same copies written as shapes of their own (the group's and the
+ *                instance's transforms in one to_world) get the same importance, copy by copy
+ *                (camera and light sums within 1 %: the passes see the same triangles; this
+ *                holds the instanced passes to come to the flattened ones)
  *   kept whole   --keep naming a copy keeps the prototype whole, in every instance
  *   two passes   after an initial reduction (each prototype reduced once, the other copies
  *                moved from it), the second pass simulates every copy reduced
@@ -236,6 +240,61 @@ static void test_instances_importance_summed(void **state)
     remove_tree(in_dir);
 }
 
+/* The knot's copies "seen" and "turned" of three_instances, as two shapes of their own. */
+static const char two_flattened[] =
+    "    <shape type=\"ply\" id=\"seen_knot\">\n"
+    "        <string name=\"filename\" value=\"%s\"/>\n"
+    "        <transform name=\"to_world\"><rotate x=\"1\" angle=\"-70\"/>"
+    "<translate x=\"0.35\" y=\"-0.5\" z=\"0.25\"/></transform>\n"
+    "        <ref id=\"orange\"/>\n"
+    "    </shape>\n"
+    "    <shape type=\"ply\" id=\"turned_knot\">\n"
+    "        <string name=\"filename\" value=\"%s\"/>\n"
+    "        <transform name=\"to_world\"><rotate x=\"1\" angle=\"-70\"/>"
+    "<translate x=\"0.35\" y=\"-0.5\" z=\"0.25\"/><scale value=\"0.5\"/>"
+    "<rotate y=\"1\" angle=\"40\"/><translate x=\"-0.3\" y=\"0.6\" z=\"0.1\"/></transform>\n"
+    "        <ref id=\"orange\"/>\n"
+    "    </shape>\n";
+
+static void test_instances_importance_as_flattened(void **state)
+{
+    char in_dir[64], instanced_path[4200], flat_path[4200], knot[4096], extra[9000];
+    temp_dir(in_dir, sizeof in_dir);
+    assert_non_null(realpath(KNOT, knot));
+    write_instanced_cornell(in_dir,
+                            "    <shape type=\"instance\" id=\"seen\"><ref id=\"knots\"/></shape>\n"
+                            "    <shape type=\"instance\" id=\"turned\"><ref id=\"knots\"/>\n"
+                            "        <transform name=\"to_world\"><scale value=\"0.5\"/>"
+                            "<rotate y=\"1\" angle=\"40\"/>"
+                            "<translate x=\"-0.3\" y=\"0.6\" z=\"0.1\"/></transform></shape>\n",
+                            instanced_path, sizeof instanced_path);
+    char flat_dir[64];
+    temp_dir(flat_dir, sizeof flat_dir);
+    snprintf(extra, sizeof extra, two_flattened, knot, knot);
+    write_instanced_cornell(flat_dir, extra, flat_path, sizeof flat_path);
+    scene *a = test_load_scene(instanced_path), *b = test_load_scene(flat_path);
+    reduce_options o;
+    small_options(&o);
+    reduction ra, rb;
+    reduction_run(&ra, a, &o);
+    reduction_run(&rb, b, &o);
+    const char *instanced[] = {"seen/knot", "turned/knot"}, *flat[] = {"seen_knot", "turned_knot"};
+    const char *sums[] = {"camera_sum", "light_sum"};
+    for (int k = 0; k < 2; k++)
+        for (int q = 0; q < 2; q++) {
+            double x = number(mesh_entry(ra.report, instanced[k]), sums[q]);
+            double y = number(mesh_entry(rb.report, flat[k]), sums[q]);
+            print_message("  %s %s: instanced %.6g, flattened %.6g\n", instanced[k], sums[q], x, y);
+            assert_true(x > 0 && fabs(x - y) <= 0.01 * fmax(x, y));
+        }
+    reduction_free(&ra);
+    reduction_free(&rb);
+    scene_free(a);
+    scene_free(b);
+    remove_tree(in_dir);
+    remove_tree(flat_dir);
+}
+
 static void test_instances_keep_names_a_copy(void **state)
 {
     char in_dir[64], scene_path[4200];
@@ -359,6 +418,7 @@ int main(void)
         cmocka_unit_test(test_instances_kept),
         cmocka_unit_test(test_instances_rewritten_in_place),
         cmocka_unit_test(test_instances_importance_summed),
+        cmocka_unit_test(test_instances_importance_as_flattened),
         cmocka_unit_test(test_instances_keep_names_a_copy),
         cmocka_unit_test(test_instances_two_passes),
         cmocka_unit_test(test_pbrt_object_instances_kept),
