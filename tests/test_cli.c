@@ -244,22 +244,27 @@ static void test_info_living_room_environment_map(void **state)
     run_free(&r);
 }
 
-/* The text form says what the JSON says: mesh, material and light counts, the vertex and
- * triangle totals, and one table row per mesh whose vertex column sums to the total. */
+/* The text form says what the JSON says: mesh, material and light counts, the vertex (and,
+ * with instances, stored vertex) and triangle totals, and one table row per mesh whose vertex
+ * column sums to the total. */
 static void assert_info_text_agrees_with_json(const char *scene)
 {
     cJSON *json = json_of(run("bin/idmr info --json --no-bvh %s", scene));
     run_result r = run("bin/idmr info --no-bvh %s", scene);
     assert_succeeded(&r);
     int meshes, materials, lights;
-    unsigned long long vertices, triangles;
+    unsigned long long vertices, stored, triangles;
     const char *at = strstr(r.out, "\nmeshes (");
     assert_non_null(at);
-    assert_int_equal(
-        sscanf(at, "\nmeshes (%d): %llu vertices, %llu triangles", &meshes, &vertices, &triangles),
-        3);
+    assert_int_equal(sscanf(at, "\nmeshes (%d): %llu vertices", &meshes, &vertices), 2);
+    const char *stored_at = strstr(at, " vertices (");
+    stored = vertices;
+    if (stored_at && stored_at < strchr(at + 1, '\n'))
+        assert_int_equal(sscanf(stored_at, " vertices (%llu stored", &stored), 1);
+    assert_int_equal(sscanf(strstr(at, ", "), ", %llu triangles", &triangles), 1);
     assert_int_equal(meshes, cJSON_GetArraySize(item(json, "meshes")));
     assert_true(vertices == number(json, "vertices"));
+    assert_true(stored == number(json, "vertices_stored"));
     assert_true(triangles == number(json, "triangles"));
     /* The rows after the table's header: "  name(24) shape(10) vertices(10) ...". */
     const size_t vertices_column = 2 + 24 + 1 + 10 + 1;
@@ -291,6 +296,35 @@ static void test_info_text_agrees_with_json_cornell(void **state)
 static void test_info_text_agrees_with_json_living_room(void **state)
 {
     assert_info_text_agrees_with_json("../shared/data/scenes/living-room/scene.xml");
+}
+
+/* A rectangle placed by two instances of a shapegroup beside one of its own: 12 vertices, 8
+ * stored (the group's once); the second copy names the first; the text agrees. */
+static void test_info_instances_stored_once(void **state)
+{
+    char dir[] = "/tmp/idmr-cli-instances-XXXXXX", path[64];
+    assert_non_null(mkdtemp(dir));
+    snprintf(path, sizeof path, "%s/scene.xml", dir);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs("<scene version=\"3.0.0\">\n"
+          "  <shape type=\"rectangle\" id=\"floor\"/>\n"
+          "  <shape type=\"shapegroup\" id=\"G\"><shape type=\"rectangle\" id=\"leaf\"/></shape>\n"
+          "  <shape type=\"instance\" id=\"a\"><ref id=\"G\"/></shape>\n"
+          "  <shape type=\"instance\" id=\"b\"><ref id=\"G\"/>\n"
+          "    <transform name=\"to_world\"><translate x=\"3\"/></transform></shape>\n"
+          "</scene>\n",
+          f);
+    assert_int_equal(fclose(f), 0);
+    cJSON *json = json_of(run("bin/idmr info --json --no-bvh %s", path));
+    assert_true(number(json, "vertices") == 12);
+    assert_true(number(json, "vertices_stored") == 8);
+    const cJSON *meshes = item(json, "meshes");
+    assert_null(cJSON_GetObjectItemCaseSensitive(cJSON_GetArrayItem(meshes, 1), "instance_of"));
+    assert_string_equal(string(cJSON_GetArrayItem(meshes, 2), "instance_of"), "a/leaf");
+    assert_info_text_agrees_with_json(path);
+    cJSON_Delete(json);
+    remove_tree(dir);
 }
 
 static void test_missing_mesh_is_named(void **state)
@@ -1139,6 +1173,7 @@ int main(void)
         cmocka_unit_test(test_info_living_room_environment_map),
         cmocka_unit_test(test_info_text_agrees_with_json_cornell),
         cmocka_unit_test(test_info_text_agrees_with_json_living_room),
+        cmocka_unit_test(test_info_instances_stored_once),
         cmocka_unit_test(test_missing_mesh_is_named),
         cmocka_unit_test(test_malformed_xml),
         cmocka_unit_test(test_each_bsdf_warns_once),

@@ -38,6 +38,8 @@ static cJSON *meshes_json(const scene *s)
         cJSON_AddStringToObject(o, "material_kind",
                                 scene_material_kind_name(s->materials[m->material].kind));
         cJSON_AddBoolToObject(o, "emitter", m->light >= 0);
+        if (m->instanced && m->instance_first != i) /* a later copy of an instanced shape */
+            cJSON_AddStringToObject(o, "instance_of", s->meshes[m->instance_first].name);
         cJSON_AddItemToArray(meshes, o);
     }
     return meshes;
@@ -135,6 +137,13 @@ static cJSON *info_json(const scene *s, const bvh *b)
     json_add_vec3(bbox, "max", s->bbox_max);
     cJSON_AddItemToObject(root, "features", features_json(s->features));
     cJSON_AddNumberToObject(root, "vertices", (double)s->vertex_count);
+    /* What a scene stores: an instanced shape once, however many instances place it (the
+     * vertices `idmr reduce` plans and counts: reduce/reduce_instances.c). */
+    uint64_t stored = 0;
+    for (size_t m = 0; m < s->mesh_count; m++)
+        if (!s->meshes[m].instanced || s->meshes[m].instance_first == m)
+            stored += s->meshes[m].vertex_count;
+    cJSON_AddNumberToObject(root, "vertices_stored", (double)stored);
     cJSON_AddNumberToObject(root, "triangles", (double)s->triangle_count);
     uint64_t dropped = 0;
     for (size_t m = 0; m < s->mesh_count; m++)

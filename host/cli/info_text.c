@@ -32,9 +32,12 @@ static double component(const cJSON *object, const char *key, int k)
 static void print_meshes(const cJSON *info)
 {
     const cJSON *meshes = item(info, "meshes"), *m;
-    printf("meshes (%d): %llu vertices, %llu triangles", cJSON_GetArraySize(meshes),
-           (unsigned long long)number(info, "vertices"),
-           (unsigned long long)number(info, "triangles"));
+    printf("meshes (%d): %llu vertices", cJSON_GetArraySize(meshes),
+           (unsigned long long)number(info, "vertices"));
+    if (number(info, "vertices_stored") != number(info, "vertices"))
+        printf(" (%llu stored: an instanced shape once)",
+               (unsigned long long)number(info, "vertices_stored"));
+    printf(", %llu triangles", (unsigned long long)number(info, "triangles"));
     unsigned long long dropped_in_all = (unsigned long long)number(info, "triangles_dropped");
     if (dropped_in_all)
         printf(" (%llu more in the files repeat a vertex: dropped)", dropped_in_all);
@@ -50,6 +53,8 @@ static void print_meshes(const cJSON *info)
         unsigned int dropped = (unsigned int)number(m, "triangles_dropped");
         if (dropped)
             printf("; %u triangle%s dropped (a repeated vertex)", dropped, dropped == 1 ? "" : "s");
+        if (cJSON_IsString(item(m, "instance_of")))
+            printf("; a copy of %s", string(m, "instance_of"));
         printf("\n");
     }
 }
