@@ -98,12 +98,31 @@ static int occurrences(const char *dir, const char *name, const char *needle)
     return count;
 }
 
+/* The instanced Cornell box of `instances`, written into a fresh directory and loaded. */
+typedef struct instanced_case {
+    char dir[64];
+    scene *s;
+} instanced_case;
+
+static void instanced_case_open(instanced_case *c, const char *instances)
+{
+    char scene_path[4200];
+    temp_dir(c->dir, sizeof c->dir);
+    write_instanced_cornell(c->dir, instances, scene_path, sizeof scene_path);
+    c->s = test_load_scene(scene_path);
+}
+
+static void instanced_case_close(instanced_case *c)
+{
+    scene_free(c->s);
+    remove_tree(c->dir);
+}
+
 static void test_instances_kept(void **state)
 {
-    char in_dir[64], scene_path[4200];
-    temp_dir(in_dir, sizeof in_dir);
-    write_instanced_cornell(in_dir, three_instances, scene_path, sizeof scene_path);
-    scene *s = test_load_scene(scene_path);
+    instanced_case c;
+    instanced_case_open(&c, three_instances);
+    scene *s = c.s;
     const scene_mesh *seen = test_find_mesh(s, "seen/knot");
     reduce_options o;
     small_options(&o);
@@ -131,8 +150,7 @@ static void test_instances_kept(void **state)
         assert_int_equal(test_find_mesh(r.out, copies[k])->vertex_count, reduced->vertex_count);
     }
     reduction_free(&r);
-    scene_free(s);
-    remove_tree(in_dir);
+    instanced_case_close(&c);
 }
 
 /* A mesh's bounding box, area and signed volume (the divergence theorem's sum over its
@@ -167,10 +185,9 @@ static mesh_measure measure(const scene_mesh *m)
 
 static void test_instances_rewritten_in_place(void **state)
 {
-    char in_dir[64], scene_path[4200];
-    temp_dir(in_dir, sizeof in_dir);
-    write_instanced_cornell(in_dir, three_instances, scene_path, sizeof scene_path);
-    scene *s = test_load_scene(scene_path);
+    instanced_case c;
+    instanced_case_open(&c, three_instances);
+    scene *s = c.s;
     reduce_options o;
     small_options(&o);
     o.target = 1;
@@ -193,8 +210,7 @@ static void test_instances_rewritten_in_place(void **state)
         assert_true(fabs(a.volume - b.volume) < 1e-5 * fabs(a.volume));
     }
     reduction_free(&r);
-    scene_free(s);
-    remove_tree(in_dir);
+    instanced_case_close(&c);
 }
 
 /* The knot's planned target in the reduction of the scene at `path` (its mesh `name`). */
@@ -297,10 +313,9 @@ static void test_instances_importance_as_flattened(void **state)
 
 static void test_instances_keep_names_a_copy(void **state)
 {
-    char in_dir[64], scene_path[4200];
-    temp_dir(in_dir, sizeof in_dir);
-    write_instanced_cornell(in_dir, three_instances, scene_path, sizeof scene_path);
-    scene *s = test_load_scene(scene_path);
+    instanced_case c;
+    instanced_case_open(&c, three_instances);
+    scene *s = c.s;
     reduce_options o;
     small_options(&o);
     o.method = REDUCE_QUADRIC;
@@ -314,16 +329,14 @@ static void test_instances_keep_names_a_copy(void **state)
     for (size_t m = 0; m < s->mesh_count; m++)
         assert_same_mesh(&s->meshes[m], test_find_mesh(r.out, s->meshes[m].name));
     reduction_free(&r);
-    scene_free(s);
-    remove_tree(in_dir);
+    instanced_case_close(&c);
 }
 
 static void test_instances_two_passes(void **state)
 {
-    char in_dir[64], scene_path[4200];
-    temp_dir(in_dir, sizeof in_dir);
-    write_instanced_cornell(in_dir, three_instances, scene_path, sizeof scene_path);
-    scene *s = test_load_scene(scene_path);
+    instanced_case c;
+    instanced_case_open(&c, three_instances);
+    scene *s = c.s;
     reduce_options o;
     small_options(&o);
     o.initial = 0.25;
@@ -347,8 +360,7 @@ static void test_instances_two_passes(void **state)
     assert_true(number(second, "vertices_simulated") == stored + 2 * knot);
     assert_true(number(r.report, "vertices_rendered_after") == (double)r.out->vertex_count);
     reduction_free(&r);
-    scene_free(s);
-    remove_tree(in_dir);
+    instanced_case_close(&c);
 }
 
 static void test_pbrt_object_instances_kept(void **state)
