@@ -53,6 +53,9 @@
 /* Meshes with fewer vertices are left whole by the initial reduction (paper 5: the Cornell
  * box's walls), whatever D0: it would only take their shape, and they are small. */
 #define REDUCE_INITIAL_FLOOR 1024u
+/* The most rounds --refine may ask for. */
+#define REDUCE_MAX_REFINE 16u
+
 /* The most importance passes --passes may ask for. */
 #define REDUCE_MAX_PASSES 16u
 /* The share of a --memory-budget the plan aims at (reduce_memory.c): room for its estimates. */
@@ -113,6 +116,8 @@ typedef struct reduce_options {
                                 importance pass then runs on the scene quadric-reduced to D0
                                 (meshes of fewer than REDUCE_INITIAL_FLOOR vertices left whole)
                                 and its importance is remapped to the originals (remap.h) */
+    unsigned int refine;     /* --refine N: rounds of error-driven refinement after the
+                                reduction (reduce_refine.c), at most REDUCE_MAX_REFINE; 0: none */
     unsigned int passes;     /* importance passes, default 1: each further one runs on the
                                 previous pass's result and is remapped to the originals again */
     uint64_t memory_budget;  /* device bytes the reduced scene may take when rendered (its
