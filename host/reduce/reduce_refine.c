@@ -15,8 +15,9 @@
  *     A'(T) = A(T) + λ (Σ A / Σ E) E(T)       (sums over the meshes that may be decimated)
  * so that at λ = 1 the error importance carries as much as the importance did; the budget of
  * Eq. 3 and the per-vertex importance move with it. The scene is decimated again at the same D
- * and measured. A round whose error is below the best so far is kept, and the next round takes
- * its weights from its change; a round that is not kept halves λ and tries again from the best
+ * and measured. A round whose error is below the best so far by more than its standard error
+ * (error + standard error < the best's error: the check renders' noise alone does not choose)
+ * is kept, and the next round takes its weights from its change; a round that is not kept halves λ and tries again from the best
  * (its error importance reused). After N rounds (or once no pixel's change stands above the
  * noise) the best round is left decimated, so the result's measured error is never above round
  * 0's. The error importance goes into the light importance sums (report.json's importance
@@ -233,7 +234,7 @@ int reduce_refine(reduce_state *st)
         decimated = k;
         rf->round_count = k + 1;
         round->seconds = monotonic_seconds() - round_start;
-        if (!status && round->error < best_error) {
+        if (!status && round->error + round->standard_error < best_error) {
             round->kept = 1;
             best_error = round->error;
             rf->chosen = k;

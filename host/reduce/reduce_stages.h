@@ -117,8 +117,8 @@ typedef struct reduce_refine_round {
     uint64_t weighted_pixels; /* pixels with a weight above 0 behind this round's error
                                  importance (0 for round 0) */
     double seconds;        /* error importance pass (when run), decimation and check renders */
-    int kept;              /* its error fell below the best so far: the reduction goes on from
-                              it */
+    int kept;              /* its error + standard error fell below the best error so far: the
+                              reduction goes on from it */
 } reduce_refine_round;
 
 /* What --refine did (reduce_refine.c; report.json: refine). */
