@@ -760,9 +760,10 @@ static void test_refine_weights_by_hand(void **state)
         assert_int_equal(weights[i], 0);
 }
 
-/* --refine 2 on the sphere at D = 0.05: round 0 is the importance-only reduction; the round
- * written has the smallest error of the rounds measured (never above round 0's), it is a kept
- * one, and the written scene is the one measured: rendered again with the check renders' seeds,
+/* --refine 2 on the sphere at D = 0.05: round 0 is the importance-only reduction; each later
+ * round is kept exactly when its error + standard error is below the best error before it, the
+ * round written is the last kept (its error never above round 0's), and the written scene is
+ * the one measured: rendered again with the check renders' seeds,
  * radius and film it gives that round's error (to the written files' rounding), and its
  * vertices. Every round decimates
  * to the same D: vertices within 2 % of round 0's. */
@@ -787,19 +788,29 @@ static void test_refine_keeps_the_better(void **state)
     unsigned int chosen = (unsigned int)number(refine, "chosen");
     double first = number(cJSON_GetArrayItem(rounds, 0), "error");
     double first_vertices = number(cJSON_GetArrayItem(rounds, 0), "vertices");
-    double least = first;
+    /* the rule: a round is kept when its error + standard error is below the best error so far;
+     * the last kept is chosen */
+    double best_error = first;
+    int expected = 0;
     for (int k = 0; k < count; k++) {
         const cJSON *round = cJSON_GetArrayItem(rounds, k);
+        double e = number(round, "error"), se = number(round, "standard_error");
+        int kept = cJSON_IsTrue(object(round, "kept"));
         print_message("  round %d: mix %g, error %g ± %g, %g vertices, %s\n", k,
-                      number(round, "mix"), number(round, "error"),
-                      number(round, "standard_error"), number(round, "vertices"),
-                      cJSON_IsTrue(object(round, "kept")) ? "kept" : "not kept");
-        least = fmin(least, number(round, "error"));
+                      number(round, "mix"), e, se, number(round, "vertices"),
+                      kept ? "kept" : "not kept");
+        if (k > 0) {
+            assert_int_equal(kept, e + se < best_error);
+            if (kept) {
+                best_error = e;
+                expected = k;
+            }
+        }
         assert_true(fabs(number(round, "vertices") - first_vertices) <= 0.02 * first_vertices);
     }
+    assert_int_equal(chosen, expected);
     const cJSON *best = cJSON_GetArrayItem(rounds, (int)chosen);
-    assert_true(cJSON_IsTrue(object(best, "kept")));
-    assert_true(number(best, "error") == least);
+    assert_true(number(best, "error") == best_error);
     assert_true(number(refine, "error") <= first);
     assert_int_equal(check_report_against_output(r.report, s, r.out),
                      (uint64_t)number(best, "vertices"));
