@@ -12,6 +12,7 @@
  *                     the hash grid over the hit points by counting sort (lib/hit_point_grid.h)
  * importance pass (paper 3.2, 3.3, 4.1; host/passes/importance.c):
  *   gather_count      per photon vertex of the dense list: the hit points that gather it
+ *                     (each counting its pixel's weight where the pass is pixel-weighted)
  *   path_importance   per path, from its last vertex back: running sum s of gather counts;
  *                     vertex j adds weight_j × s to its triangle's light importance
  *   shadow_rays       per hit point, one shadow ray: its occluder gets shadow importance
@@ -33,14 +34,17 @@
 #endif
 
 #if PASS_IMPORTANCE
-#define SEEN_LIGHT_ARGUMENT , seen_light
+#define CAMERA_PASS_PARAMETERS                                                                  \
+    , volatile global fixed_word *seen_light, global const uint *pixel_weights
+#define SEEN_LIGHT_ARGUMENT , seen_light, pixel_weight(&params, pixel_weights, pixel)
 #else
+#define CAMERA_PASS_PARAMETERS
 #define SEEN_LIGHT_ARGUMENT
 #endif
 
 kernel void camera_paths(idmr_sppm_params params, idmr_camera camera, SCENE_BUFFERS,
                          global idmr_hit_point *hit_points,
-                         camera_records records SEEN_LIGHT_PARAMETER)
+                         camera_records records CAMERA_PASS_PARAMETERS)
 {
     uint pixel = get_global_id(0);
     if (pixel >= params.width * params.height)
@@ -122,10 +126,12 @@ kernel void grid_scatter(idmr_sppm_params params, global const idmr_hit_point *h
 
 #if PASS_IMPORTANCE
 
-/* gathered[v] for each record v of the list. */
+/* gathered[v] for each record v of the list: each hit point that gathers it counts its pixel's
+ * weight (1 unless the pass is pixel-weighted). */
 kernel void gather_count(idmr_sppm_params params, global const idmr_photon_vertex *vertices,
                          global const uint *stored_count, global const uint *cell_start,
-                         global const idmr_hit_point *grid_hits, global uint *gathered)
+                         global const idmr_hit_point *grid_hits, global uint *gathered,
+                         global const uint *pixel_weights)
 {
     uint v = get_global_id(0), count = 0;
     if (v >= *stored_count)
@@ -136,7 +142,8 @@ kernel void gather_count(idmr_sppm_params params, global const idmr_photon_verte
     uint bucket_count = grid_buckets_near(p, &params, buckets);
     for (uint b = 0; b < bucket_count; b++)
         for (uint i = cell_start[buckets[b]]; i < cell_start[buckets[b] + 1]; i++)
-            count += hit_point_gathers(grid_hits + i, p, side, r2);
+            count += (uint)hit_point_gathers(grid_hits + i, p, side, r2) *
+                     pixel_weight(&params, pixel_weights, grid_hits[i].pixel);
     gathered[v] = count;
 }
 
@@ -162,7 +169,8 @@ kernel void path_importance(idmr_sppm_params params, global const idmr_photon_ve
 #if IDMR_SHADOW_IMPORTANCE
 kernel void shadow_rays(idmr_sppm_params params, idmr_camera camera, SCENE_BUFFERS,
                         global const idmr_hit_point *hit_points,
-                        volatile global fixed_word *shadow_importance)
+                        volatile global fixed_word *shadow_importance,
+                        global const uint *pixel_weights)
 {
     uint pixel = get_global_id(0);
     if (pixel >= params.width * params.height || !(hit_points[pixel].offset > 0.0f))
@@ -175,7 +183,8 @@ kernel void shadow_rays(idmr_sppm_params params, idmr_camera camera, SCENE_BUFFE
     float weight =
         shadow_occluder_weight(&scene, &params, &camera, hit_points + pixel, &rng, &occluder);
     if (weight > 0.0f)
-        fixed_add(shadow_importance, occluder, weight_units(weight));
+        fixed_add(shadow_importance, occluder,
+                  weight_units(weight) * pixel_weight(&params, pixel_weights, pixel));
 }
 #endif
 

@@ -567,6 +567,13 @@ static const refusal REFUSALS[] = {
      "are for --max-error"},
     {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x --max-error 0.01 --max-error-step 0",
      "--max-error-step"},
+    {"bin/idmr reduce data/cornell/scene.xml -o /tmp/x --target 0.5 --refine 17", "--refine"},
+    {"bin/idmr reduce data/cornell/scene.xml -o /tmp/idmr-refused --target 0.5 --refine 2 "
+     "--method quadric",
+     "--refine moves importance"},
+    {"bin/idmr reduce data/cornell/scene.xml -o /tmp/idmr-refused --target 0.5 --refine 2 "
+     "--passes 2",
+     "--refine mixes"},
     {"bin/idmr reduce data/cornell/scene.xml -o /tmp/idmr-refused --max-error 0.01 "
      "--memory-budget 1G",
      "cannot be combined with --memory-budget"},

@@ -34,6 +34,7 @@
 #include "device_test.h"
 #include "io/image_compare.h"
 #include "reduce/error_search.h"
+#include "reduce/refine_weights.h"
 #include "reduce_common.h"
 
 /* |a - b| <= tolerance (this cmocka has no assert_double_equal). */
@@ -716,6 +717,164 @@ static void test_correlated_real_pair(void **state)
     remove_tree(dir);
 }
 
+/* ---- reduce --refine ---- */
+
+/* Pixel weights by hand (refine_weights.h): an 8 x 4 film in two 4 x 4 tiles. Left tile: A = 1,
+ * B = 0 in every channel, a change of 3 per pixel, no spread: the largest, weight 64. Right
+ * tile: A1 - B1 = 1, A2 - B2 = -1 (a negative product: noise, not change): 0. Then the right
+ * tile's odd rows changed by 3 per pixel, its even rows not: mean m = 1.5, sample variance
+ * 16/15 · 2.25, standard error s = sqrt(2.4 / 16); its value m - 2 s, of the left's 3, gives
+ * weight round(64 (1.5 - 2 s) / 3) = 15. */
+static void test_refine_weights_by_hand(void **state)
+{
+    enum { W = 8, H = 4 };
+    float a1[3 * W * H], a2[3 * W * H], b1[3 * W * H], b2[3 * W * H];
+    uint32_t weights[W * H];
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++)
+            for (int k = 0; k < 3; k++) {
+                int i = 3 * (y * W + x) + k;
+                a1[i] = a2[i] = 1.0f;
+                b1[i] = 0.0f;
+                b2[i] = x < 4 ? 0.0f : 2.0f; /* right: (1 - 0)(1 - 2) = -1 */
+            }
+    assert_int_equal(refine_pixel_weights(a1, a2, b1, b2, W, H, 4, 64, weights), 16);
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++)
+            assert_int_equal(weights[y * W + x], x < 4 ? 64 : 0);
+    /* right tile: every other row changed by 1 per channel (3 per pixel), the rest unchanged */
+    for (int y = 0; y < H; y++)
+        for (int x = 4; x < W; x++)
+            for (int k = 0; k < 3; k++) {
+                int i = 3 * (y * W + x) + k;
+                b1[i] = b2[i] = y % 2 ? 0.0f : 1.0f;
+            }
+    assert_int_equal(refine_pixel_weights(a1, a2, b1, b2, W, H, 4, 64, weights), 32);
+    double s = sqrt(16.0 / 15.0 * 2.25 / 16.0), expected = 64 * (1.5 - 2 * s) / 3;
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++)
+            assert_int_equal(weights[y * W + x], x < 4 ? 64 : (uint32_t)lround(expected));
+    /* nothing changed: no weight anywhere */
+    assert_int_equal(refine_pixel_weights(a1, a2, a1, a2, W, H, 4, 64, weights), 0);
+    for (int i = 0; i < W * H; i++)
+        assert_int_equal(weights[i], 0);
+}
+
+/* --refine 2 on the sphere at D = 0.05: round 0 is the importance-only reduction; each later
+ * round is kept exactly when its error + standard error is below the best error before it, the
+ * round written is the last kept (its error never above round 0's), and the written scene is
+ * the one measured: rendered again with the check renders' seeds,
+ * radius and film it gives that round's error (to the written files' rounding), and its
+ * vertices. Every round decimates
+ * to the same D: vertices within 2 % of round 0's. */
+static void test_refine_keeps_the_better(void **state)
+{
+    char dir[64], path[128];
+    write_sphere_scene(dir, sizeof dir, path, sizeof path);
+    scene *s = test_load_scene(path);
+    reduce_options o;
+    small_options(&o);
+    o.target = 0.05;
+    o.refine = 2;
+    o.error.iterations = 4;
+    o.error.photons = 20000;
+    o.error.resolution = 0.25;
+    reduction r;
+    reduction_run(&r, s, &o);
+    const cJSON *refine = object(r.report, "refine");
+    const cJSON *rounds = object(refine, "rounds");
+    int count = cJSON_GetArraySize(rounds);
+    assert_true(count >= 2);
+    unsigned int chosen = (unsigned int)number(refine, "chosen");
+    double first = number(cJSON_GetArrayItem(rounds, 0), "error");
+    double first_vertices = number(cJSON_GetArrayItem(rounds, 0), "vertices");
+    /* the rule: a round is kept when its error + standard error is below the best error so far;
+     * the last kept is chosen */
+    double best_error = first;
+    int expected = 0;
+    for (int k = 0; k < count; k++) {
+        const cJSON *round = cJSON_GetArrayItem(rounds, k);
+        double e = number(round, "error"), se = number(round, "standard_error");
+        int kept = cJSON_IsTrue(object(round, "kept"));
+        print_message("  round %d: mix %g, error %g ± %g, %g vertices, %s\n", k,
+                      number(round, "mix"), e, se, number(round, "vertices"),
+                      kept ? "kept" : "not kept");
+        if (k > 0) {
+            assert_int_equal(kept, e + se < best_error);
+            if (kept) {
+                best_error = e;
+                expected = k;
+            }
+        }
+        assert_true(fabs(number(round, "vertices") - first_vertices) <= 0.02 * first_vertices);
+    }
+    assert_int_equal(chosen, expected);
+    const cJSON *best = cJSON_GetArrayItem(rounds, (int)chosen);
+    assert_true(number(best, "error") == best_error);
+    assert_true(number(refine, "error") <= first);
+    assert_int_equal(check_report_against_output(r.report, s, r.out),
+                     (uint64_t)number(best, "vertices"));
+    /* the written scene, rendered as the rounds were measured */
+    const cJSON *check = object(refine, "check_render");
+    float *images[2][2];
+    const scene *scenes[2] = {s, r.out};
+    unsigned int width = 0, height = 0;
+    for (int i = 0; i < 2; i++)
+        for (int k = 0; k < 2; k++) {
+            render_options ro;
+            render_options_default(&ro);
+            ro.sppm.iterations = (unsigned int)number(check, "iterations");
+            ro.sppm.photons = (unsigned int)number(check, "photons");
+            ro.sppm.resolution = (float)number(check, "resolution");
+            ro.sppm.radius = number(check, "first_radius");
+            ro.sppm.seed = 1 + (unsigned int)k;
+            ro.sppm.progress = 0;
+            render_result rr;
+            test_run_render(scenes[i], NULL, &ro, &rr);
+            images[i][k] = rr.image;
+            width = rr.sppm.width;
+            height = rr.sppm.height;
+            rr.image = NULL;
+            render_result_free(&rr);
+        }
+    image_paired_error e;
+    image_paired_error_of(images[0][0], images[0][1], images[1][0], images[1][1], (int)width,
+                          (int)height, 0, &e);
+    print_message("  written scene: %g (round %u: %g)\n", e.rmse, chosen, number(best, "error"));
+    /* the same up to the written files' rounding (the PLY's floats): 2e-10 of 0.02 seen */
+    assert_near(e.rmse, number(best, "error"), 1e-4 * number(best, "error"));
+    for (int i = 0; i < 2; i++)
+        for (int k = 0; k < 2; k++)
+            free(images[i][k]);
+    reduction_free(&r);
+    scene_free(s);
+    remove_tree(dir);
+}
+
+static void test_refine_refused(void **state)
+{
+    scene *s = test_load_scene(CORNELL);
+    char dir[64];
+    temp_dir(dir, sizeof dir);
+    char out[128];
+    snprintf(out, sizeof out, "%s/out", dir);
+    reduce_options o;
+    small_options(&o);
+    o.refine = 1;
+    o.method = REDUCE_QUADRIC;
+    expect_input_error(s, out, &o, "--refine moves importance");
+    small_options(&o);
+    o.refine = 1;
+    o.passes = 2;
+    expect_input_error(s, out, &o, "--refine mixes");
+    small_options(&o);
+    o.refine = REDUCE_MAX_REFINE + 1;
+    expect_input_error(s, out, &o, "--refine must be");
+    assert_false(file_exists(dir, "out"));
+    remove_tree(dir);
+    scene_free(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest host_tests[] = {
@@ -727,6 +886,7 @@ int main(void)
         cmocka_unit_test(test_search_refusals),
         cmocka_unit_test(test_paired_exact),
         cmocka_unit_test(test_paired_correlated_unbiased),
+        cmocka_unit_test(test_refine_weights_by_hand),
     };
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_max_error_sphere),
@@ -734,6 +894,8 @@ int main(void)
         cmocka_unit_test(test_max_error_ends),
         cmocka_unit_test(test_max_error_refused),
         cmocka_unit_test(test_correlated_real_pair),
+        cmocka_unit_test(test_refine_keeps_the_better),
+        cmocka_unit_test(test_refine_refused),
     };
     return DEVICE_TEST_MAIN("error_budget", host_tests, tests, NULL, NULL);
 }

@@ -198,7 +198,17 @@ static scene *cornell;
 static bvh cornell_bvh;
 static importance_result cornell_base; /* seed 1, the runtime's work-group size */
 
+/* With weights (NULL: none), one per pixel of the 64 x 64 film. */
+static void cornell_run_weighted(unsigned int seed, size_t local, const uint32_t *pixel_weights,
+                                 importance_result *r);
+
 static void cornell_run(unsigned int seed, size_t local, importance_result *r)
+{
+    cornell_run_weighted(seed, local, NULL, r);
+}
+
+static void cornell_run_weighted(unsigned int seed, size_t local,
+                                 const uint32_t *pixel_weights, importance_result *r)
 {
     if (!cornell) {
         cornell = test_load_scene(CORNELL_SCENE);
@@ -209,6 +219,8 @@ static void cornell_run(unsigned int seed, size_t local, importance_result *r)
     o.sppm.resolution = 0.25f;
     o.sppm.seed = seed;
     o.sppm.local_size = local;
+    o.pixel_weights = pixel_weights;
+    o.pixel_weights_width = o.pixel_weights_height = 64;
     test_run_importance(cornell, &cornell_bvh, &o, r);
 }
 
@@ -437,6 +449,110 @@ static int group_teardown(void **state)
     return imp_teardown(state);
 }
 
+/* ---- pixel weights (the error importance of reduce --refine) ---- */
+
+/* Weights of 1 in every pixel are today's pass bit for bit: camera, light and shadow sums. */
+static void test_pixel_weights_of_one_change_nothing(void **state)
+{
+    const importance_result *base = cornell_reference();
+    assert_int_equal(base->sppm.width, 64);
+    assert_int_equal(base->sppm.height, 64);
+    uint32_t *ones = malloc(64 * 64 * sizeof *ones);
+    for (size_t i = 0; i < 64 * 64; i++)
+        ones[i] = 1;
+    importance_result r;
+    cornell_run_weighted(1, 0, ones, &r);
+    free(ones);
+    double shadow = 0;
+    for (size_t t = 0; t < base->triangle_count; t++)
+        shadow += base->shadow[t];
+    int same = same_result(base, &r) &&
+               memcmp(base->shadow, r.shadow, r.triangle_count * sizeof *r.shadow) == 0;
+    importance_result_free(&r);
+    assert_true(shadow > 0); /* the shadow sums compared are not all 0 */
+    assert_true(same);
+}
+
+/* Weights of 2 everywhere double every sum (the weights are read, not only tested for 0). */
+static void test_pixel_weights_of_two_double_the_sums(void **state)
+{
+    const importance_result *base = cornell_reference();
+    uint32_t *twos = malloc(64 * 64 * sizeof *twos);
+    for (size_t i = 0; i < 64 * 64; i++)
+        twos[i] = 2;
+    importance_result r;
+    cornell_run_weighted(1, 0, twos, &r);
+    free(twos);
+    for (size_t t = 0; t < r.triangle_count; t++) {
+        assert_true(r.camera[t] == 2 * base->camera[t]);
+        assert_true(r.light[t] == 2 * base->light[t]);
+        assert_true(r.shadow[t] == 2 * base->shadow[t]);
+    }
+    importance_result_free(&r);
+}
+
+/* Two white floor quads, left (x in [-2, -0.5]) and right (x in [0.5, 2]), a point light over
+ * the gap, the camera over the gap looking down the z axis at them: the left half of the film
+ * sees only the left quad (or nothing), the right half only the right one. Coplanar, they
+ * cannot light each other; 1 apart, no photon on one is gathered by a hit point on the other. */
+static scene *two_floors_scene(void)
+{
+    scene *s = scene_create("two-floors.xml");
+    uint32_t white = imp_diffuse(s, "white", 0.8f, 0);
+    imp_add_quad(s, "left", white, V3(-1.25f, 0, 0), V3(0, 0, 2), V3(0.75f, 0, 0));
+    imp_add_quad(s, "right", white, V3(1.25f, 0, 0), V3(0, 0, 2), V3(0.75f, 0, 0));
+    imp_point_light(s, V3(0, 2, 0), 1.0f);
+    imp_look_at(s, V3(0, 3, 4), V3(0, 0, 0), V3(0, 1, 0), 64, 48, 0.6f);
+    return test_finalize_scene(s);
+}
+
+/* Weight 1 on the left half of the film, 0 on the right: the left quad, seen and lit there,
+ * keeps camera, light and shadow importance; the right quad, seen only by weight-0 pixels,
+ * gets exactly 0 of each, though it gets all three without weights. */
+static void test_pixel_weights_zero_outside_a_region(void **state)
+{
+    scene *s = two_floors_scene();
+    importance_options o;
+    imp_small_options(&o, 2, 50000);
+    importance_result plain, weighted;
+    test_run_importance(s, NULL, &o, &plain);
+    unsigned int w = plain.sppm.width, h = plain.sppm.height;
+    uint32_t *left = calloc((size_t)w * h, sizeof *left);
+    for (unsigned int y = 0; y < h; y++)
+        for (unsigned int x = 0; x < w / 2; x++)
+            left[(size_t)y * w + x] = 1;
+    o.pixel_weights = left;
+    o.pixel_weights_width = w;
+    o.pixel_weights_height = h;
+    test_run_importance(s, NULL, &o, &weighted);
+    free(left);
+    int l = imp_mesh_index(s, "left"), r = imp_mesh_index(s, "right");
+    assert_true(l >= 0 && r >= 0);
+    double sums[2][2][3]; /* [plain, weighted][left, right][camera, light, shadow] */
+    for (int k = 0; k < 2; k++) {
+        const importance_result *run = k ? &weighted : &plain;
+        for (int side = 0; side < 2; side++) {
+            size_t m = (size_t)(side ? r : l);
+            sums[k][side][0] = imp_mesh_total(s, m, run->camera);
+            sums[k][side][1] = imp_mesh_total(s, m, run->light);
+            sums[k][side][2] = imp_mesh_total(s, m, run->shadow);
+            print_message("  %s, %s quad: camera %.4g light %.4g shadow %.4g\n",
+                          k ? "left half weighted" : "unweighted", side ? "right" : "left",
+                          sums[k][side][0], sums[k][side][1], sums[k][side][2]);
+        }
+    }
+    importance_result_free(&plain);
+    importance_result_free(&weighted);
+    scene_free(s);
+    for (int side = 0; side < 2; side++)
+        for (int kind = 0; kind < 2; kind++) /* seen and lit; shadow: nothing casts one */
+            assert_true(sums[0][side][kind] > 0);
+    assert_true(sums[1][0][0] > 0 && sums[1][0][1] > 0);
+    assert_true(sums[1][0][0] == sums[0][0][0]); /* every pixel that sees it has weight 1 */
+    for (int kind = 0; kind < 3; kind++)
+        assert_true(sums[1][1][kind] == 0.0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -458,6 +574,9 @@ int main(void)
         cmocka_unit_test(test_tiny_scale_keeps_importance_shares),
         cmocka_unit_test(test_huge_scale_keeps_importance_shares),
         cmocka_unit_test(test_far_geometry_keeps_importance_shares),
+        cmocka_unit_test(test_pixel_weights_of_one_change_nothing),
+        cmocka_unit_test(test_pixel_weights_of_two_double_the_sums),
+        cmocka_unit_test(test_pixel_weights_zero_outside_a_region),
     };
     return DEVICE_TEST_RUN("importance invariants", tests, NULL, group_teardown) != 0;
 }

@@ -1,7 +1,8 @@
 /* command_reduce.c — `idmr reduce SCENE --target D -o OUTDIR [options]`: the reduced scene
  * (reduce/reduce.h: importance pass, budget, decimation, writing OUTDIR); `--max-error E` (or
  * `--max-error-relative F`) instead of --target searches the smallest D within that image
- * error (reduce_error_budget.c). Options: the importance pass's (options.h) and the
+ * error (reduce_error_budget.c); `--refine N` refines the reduction by its measured change
+ * (reduce_refine.c). Options: the importance pass's (options.h) and the
  * reduction's own. */
 #include <malloc.h>
 #include <stdlib.h>
@@ -20,7 +21,8 @@ typedef struct reduce_cli_request {
     reduce_options options;
     int have_target;
     int error_bounds; /* --max-error and --max-error-relative given: at most one may be */
-    int search_options; /* --max-error-step and --check-* given: only with one of them */
+    int search_options; /* --max-error-step given: only with --max-error(-relative) */
+    int check_options;  /* --check-* given: only with it or --refine */
 } reduce_cli_request;
 
 /* --max-error E or --max-error-relative F (reduce.h, reduce_error_options). */
@@ -90,11 +92,15 @@ static enum option_parse parse_option(int c, void *context, pass_arguments *argu
     case OPT_MAX_ERROR_RELATIVE:
         return parse_error_bound(request, "--max-error-relative", REDUCE_ERROR_RELATIVE);
     case OPT_MAX_ERROR_STEP:
+        request->search_options++;
+        break;
     case OPT_CHECK_ITERATIONS:
     case OPT_CHECK_RESOLUTION:
     case OPT_CHECK_PHOTONS:
-        request->search_options++;
+        request->check_options++;
         break;
+    case OPT_REFINE:
+        return option_result(parse_unsigned("--refine", optarg, 0, REDUCE_MAX_REFINE, &o->refine));
     default:
         break;
     }
@@ -167,8 +173,9 @@ int command_reduce(int argc, char **argv)
         {"check-iterations", required_argument, NULL, OPT_CHECK_ITERATIONS},
         {"check-resolution", required_argument, NULL, OPT_CHECK_RESOLUTION},
         {"check-photons", required_argument, NULL, OPT_CHECK_PHOTONS},
+        {"refine", required_argument, NULL, OPT_REFINE},
         {0, 0, 0, 0}};
-    reduce_cli_request request = {.have_target = 0, .error_bounds = 0, .search_options = 0};
+    reduce_cli_request request = {0};
     reduce_options_default(&request.options);
     request.options.importance.sppm.progress = 1;
     request.options.keep = xcalloc((size_t)argc + 1, sizeof *request.options.keep);
@@ -182,8 +189,11 @@ int command_reduce(int argc, char **argv)
         code = usage_error("reduce: --target D and --max-error are exclusive: --max-error "
                            "searches for the target");
     if (!code && !searched && request.search_options)
-        code = usage_error("reduce: --max-error-step and --check-* are for --max-error or "
+        code = usage_error("reduce: --max-error-step is for --max-error or "
                            "--max-error-relative");
+    if (!code && !searched && !request.options.refine && request.check_options)
+        code = usage_error("reduce: --check-* are for --max-error, --max-error-relative or "
+                           "--refine");
     if (!code && (!arguments.output ||
                   (!request.have_target && !request.options.memory_budget && !searched)))
         code = usage_error("reduce: -o OUTDIR and --target D or --memory-budget BYTES (or "

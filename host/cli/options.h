@@ -54,6 +54,7 @@ enum option_id {
     OPT_CHECK_ITERATIONS,
     OPT_CHECK_RESOLUTION,
     OPT_CHECK_PHOTONS,
+    OPT_REFINE,
 };
 
 /* Options of the SPPM core, shared by `importance`, `reduce` and `render` (-o among them). */

@@ -53,6 +53,7 @@ static const char *const KIND_NAMES[KINDS] = {"camera importance", "light import
 typedef struct importance_device {
     cl_kernel gather, path, shadow, centre_hits;
     cl_mem gathered, accumulators[KINDS];
+    cl_mem pixel_weights; /* options' pixel weights (unweighted: not read) */
     double path_seconds;   /* its path walks, summed */
     double shadow_seconds; /* its shadow rays, summed */
 } importance_device;
@@ -100,7 +101,7 @@ static double brightest_visible_luminance(const scene *s)
  * place for prepare(), finish() and pass_bytes(). */
 typedef struct pass_sizes {
     size_t words; /* accumulator words per kind */
-    size_t gathered, accumulator, pixel_triangles; /* bytes */
+    size_t gathered, accumulator, pixel_triangles, pixel_weights; /* bytes */
 } pass_sizes;
 
 static pass_sizes sizes_of(const scene *s, unsigned int pixels, size_t slots)
@@ -110,13 +111,15 @@ static pass_sizes sizes_of(const scene *s, unsigned int pixels, size_t slots)
     z.gathered = slots * sizeof(cl_uint);
     z.accumulator = z.words * sizeof(cl_ulong);
     z.pixel_triangles = (size_t)pixels * sizeof(cl_uint);
+    z.pixel_weights = (size_t)pixels * sizeof(cl_uint);
     return z;
 }
 
 static uint64_t pass_bytes(const scene *s, unsigned int pixels, size_t slots)
 {
     pass_sizes z = sizes_of(s, pixels, slots);
-    return (uint64_t)z.gathered + KINDS * (uint64_t)z.accumulator + z.pixel_triangles;
+    return (uint64_t)z.gathered + KINDS * (uint64_t)z.accumulator + z.pixel_triangles +
+           z.pixel_weights;
 }
 
 static int prepare(sppm *core, void *state)
@@ -138,6 +141,20 @@ static int prepare(sppm *core, void *state)
     };
     if (!p->previous)
         p->previous = xcalloc(p->words, sizeof *p->previous);
+    const importance_options *o = p->options;
+    if (o->pixel_weights && (o->pixel_weights_width != core->params.width ||
+                             o->pixel_weights_height != core->params.height))
+        return error_set(IDMR_EXIT_FAILURE,
+                         "importance: pixel weights are %ux%u, the pass's film %ux%u",
+                         o->pixel_weights_width, o->pixel_weights_height, core->params.width,
+                         core->params.height);
+    /* Unweighted, the buffer is allocated (so that the memory is the same either way) but
+     * neither written nor read. */
+    core->params.pixel_weighted = o->pixel_weights != NULL;
+    if (device_buffer(core->dev, CL_MEM_READ_ONLY, z.pixel_weights, o->pixel_weights,
+                      "pixel weights", &d->pixel_weights))
+        return -1;
+    core->buffer_bytes += z.pixel_weights;
     if (device_create_kernel(core->program, "gather_count", &d->gather) ||
         device_create_kernel(core->program, "path_importance", &d->path) ||
         device_create_kernel(core->program, "pixel_centre_hits", &d->centre_hits) ||
@@ -151,7 +168,8 @@ static int prepare(sppm *core, void *state)
             return -1;
     return DEVICE_SET_ARGS_FROM(core->camera_paths, "camera_paths", core->camera_pass_argument,
                                 DEVICE_ARG(d->accumulators[CAMERA]),
-                                DEVICE_ARG(d->accumulators[SEEN_LIGHT]));
+                                DEVICE_ARG(d->accumulators[SEEN_LIGHT]),
+                                DEVICE_ARG(d->pixel_weights));
 }
 
 /* One shadow ray per hit point (kernels/lib/shadows.h). */
@@ -164,7 +182,8 @@ static int cast_shadow_rays(sppm *core, importance_device *p)
                    device_scene_set_args(&core->uploaded, p->shadow, "shadow_rays", 2) ||
                    DEVICE_SET_ARGS_FROM(p->shadow, "shadow_rays", after_scene,
                                         DEVICE_ARG(core->hit_points),
-                                        DEVICE_ARG(p->accumulators[SHADOW])) ||
+                                        DEVICE_ARG(p->accumulators[SHADOW]),
+                                        DEVICE_ARG(p->pixel_weights)) ||
                    device_run(core->dev, p->shadow, "shadow_rays", core->pixels,
                               core->options->local_size)
                ? -1
@@ -186,7 +205,7 @@ static int gather(sppm *core, void *state)
     if (DEVICE_SET_ARGS(d->gather, "gather_count", DEVICE_ARG(core->params),
                         DEVICE_ARG(core->photon_records), DEVICE_ARG(core->stored_count),
                         DEVICE_ARG(core->grid.cell_start), DEVICE_ARG(core->grid.grid_hits),
-                        DEVICE_ARG(d->gathered)) ||
+                        DEVICE_ARG(d->gathered), DEVICE_ARG(d->pixel_weights)) ||
         (core->stored &&
          device_run(core->dev, d->gather, "gather_count", core->stored, local)))
         return -1;
@@ -469,6 +488,7 @@ static void release(void *state)
         device_release_kernels(kernels, sizeof kernels / sizeof *kernels);
         device_release_buffers(&d->gathered, 1);
         device_release_buffers(d->accumulators, KINDS);
+        device_release_buffers(&d->pixel_weights, 1);
     }
     for (unsigned int j = 0; j < SPPM_MAX_DEVICES; j++)
         free(p->read_back[j]);

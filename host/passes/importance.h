@@ -55,6 +55,9 @@
  * vertices the outline needs, it costs (seed 1: 0.0321 to 0.0487; README, "Evaluation"). */
 #define IMPORTANCE_SEEN_LIGHT_WEIGHT 10.0
 
+/* The largest pixel weight (importance_options.pixel_weights). */
+#define IMPORTANCE_PIXEL_WEIGHT_MAX 255u
+
 #include <stddef.h>
 #include <stdint.h>
 
@@ -86,6 +89,16 @@ typedef struct importance_options {
     double tolerance;        /* stop once Δ stays below it; 0: run all iterations */
     int accumulate_importance; /* 1; 0 compiles the importance accumulation out (benchmark) */
     importance_snapshot *snapshot; /* when not NULL, receives the last iteration's buffers */
+    /* Pixel weights (the error importance of `idmr reduce --refine`): when not NULL, one per
+     * pixel of the hit-point image (pixel_weights_width × pixel_weights_height, which must be
+     * the pass's film), row by row; each hit point's camera importance, seen light and shadow
+     * ray are multiplied by its pixel's weight, and it counts for that weight, not 1, in the
+     * gather count of every photon vertex it gathers, so that light importance too comes from
+     * the weighted pixels alone (through the paths that light them). All ones is today's pass,
+     * bit for bit; NULL is all ones. Keep Σ weights × gathers within 32 bits: weights of at most
+     * IMPORTANCE_PIXEL_WEIGHT_MAX. */
+    const uint32_t *pixel_weights;
+    unsigned int pixel_weights_width, pixel_weights_height;
     /* When set, called after every iteration with the sums so far (r->sppm.iterations is the
      * count run): it may set *stop to end the pass there, and put a few words for the progress
      * line into detail. Returns 0, or -1 with the error set (the pass then fails). */

@@ -28,6 +28,7 @@ static void state_free(reduce_state *st)
     forget_reduction(st);
     reduce_passes_free(st);
     reduce_error_budget_free(st);
+    reduce_refine_free(st);
     free(st->passes);
 }
 
@@ -78,6 +79,8 @@ static int run_pass(reduce_state *st, unsigned int pass)
     int status = st->options->error.bound != REDUCE_ERROR_NONE
                      ? reduce_error_budget(st)
                      : reduce_plan_budget(st) || reduce_decimation(st);
+    /* --refine (one pass only, reduce_options.c): the reduction refined at its D */
+    status = status || reduce_refine(st);
     return status || record_pass(st, importance_before, reduction_before);
 }
 
@@ -97,6 +100,11 @@ int reduce_run_devices(device *devices, unsigned int count, scene *s, const char
     if (ranks_count() > 1 && o->memory_budget)
         return error_set(IDMR_EXIT_INPUT,
                          "reduce: --memory-budget plans the scene for one device: run it "
+                         "without mpirun (%d ranks were started)",
+                         ranks_count());
+    if (ranks_count() > 1 && o->refine)
+        return error_set(IDMR_EXIT_INPUT,
+                         "reduce: --refine renders its checks in one process: run it "
                          "without mpirun (%d ranks were started)",
                          ranks_count());
     if (ranks_count() > 1 && o->error.bound != REDUCE_ERROR_NONE)

@@ -6,7 +6,8 @@
  *   (a glTF scene instead: OUTDIR/scene.gltf + scene.bin, or scene.glb, io/gltf.h)
  *   OUTDIR/report.json       the importance report's keys, plus target, method, per mesh
  *                            factor / vertices_before / vertices_after, per-stage seconds;
- *                            with --max-error, error_budget: the curve the search walked
+ *                            with --max-error, error_budget: the curve the search walked;
+ *                            with --refine, refine: the rounds of error-driven refinement
  *   OUTDIR/importance.png, importance/, convergence.csv   (method importance)
  *
  * Methods (reduce_method): "importance" (the paper's: importance sets each mesh's budget, Eq. 3,
@@ -40,7 +41,8 @@
  * reduce_importance.c (the importance pass, with factor_stop.c saying when it has learnt
  * enough), reduce_budget.c (the plan of Eq. 3), reduce_decimation.c (with the compensation
  * rounds), reduce_error_budget.c (--max-error: the target searched for by rendering each
- * reduction, error_search.h), reduce_write.c and reduce_report.c; and reduce_inputs.c (what the stages ask of each
+ * reduction, error_search.h), reduce_refine.c (--refine: the reduction refined by where its
+ * check renders changed, refine_weights.h), reduce_write.c and reduce_report.c; and reduce_inputs.c (what the stages ask of each
  * mesh). The stages share the reduce_state of reduce_stages.h. */
 #ifndef IDMR_REDUCE_H
 #define IDMR_REDUCE_H
@@ -53,6 +55,9 @@
 /* Meshes with fewer vertices are left whole by the initial reduction (paper 5: the Cornell
  * box's walls), whatever D0: it would only take their shape, and they are small. */
 #define REDUCE_INITIAL_FLOOR 1024u
+/* The most rounds --refine may ask for. */
+#define REDUCE_MAX_REFINE 16u
+
 /* The most importance passes --passes may ask for. */
 #define REDUCE_MAX_PASSES 16u
 /* The share of a --memory-budget the plan aims at (reduce_memory.c): room for its estimates. */
@@ -113,6 +118,8 @@ typedef struct reduce_options {
                                 importance pass then runs on the scene quadric-reduced to D0
                                 (meshes of fewer than REDUCE_INITIAL_FLOOR vertices left whole)
                                 and its importance is remapped to the originals (remap.h) */
+    unsigned int refine;     /* --refine N: rounds of error-driven refinement after the
+                                reduction (reduce_refine.c), at most REDUCE_MAX_REFINE; 0: none */
     unsigned int passes;     /* importance passes, default 1: each further one runs on the
                                 previous pass's result and is remapped to the originals again */
     uint64_t memory_budget;  /* device bytes the reduced scene may take when rendered (its

@@ -61,11 +61,8 @@ static render_options check_options(const reduce_state *st, unsigned int k)
     return r;
 }
 
-/* Renders scene s with both seeds into images[0..1] (malloc'd), with its BVH `built` (NULL:
- * built here), adding the seconds of the BVH and the renders' stages to *stages; the first
- * render of the original sets the shared radius. 0, or -1 with the error set. */
-static int render_pair(reduce_state *st, const scene *s, const bvh *built, float *images[2],
-                       error_search_seconds *stages)
+int reduce_check_render_pair(reduce_state *st, const scene *s, const bvh *built,
+                             float *images[2], error_search_seconds *stages)
 {
     bvh own = {0};
     double start = monotonic_seconds();
@@ -132,7 +129,7 @@ static int measure(double target, error_search_step *step, void *context)
     if (!reduced)
         return -1;
     float *images[2] = {NULL, NULL};
-    int status = render_pair(st, reduced, NULL, images, &step->stages);
+    int status = reduce_check_render_pair(st, reduced, NULL, images, &step->stages);
     scene_view_free(reduced);
     if (!status) {
         double compare_start = monotonic_seconds();
@@ -216,7 +213,7 @@ int reduce_error_budget(reduce_state *st)
         fprintf(stderr, "idmr: max-error: rendering the original (seeds 1 and 2, %u iterations "
                         "of %u photon paths, film scale %g)\n",
                 o->error.iterations, o->error.photons, o->error.resolution);
-    int status = render_pair(st, st->scene, e->has_original_bvh ? &e->original_bvh : NULL,
+    int status = reduce_check_render_pair(st, st->scene, e->has_original_bvh ? &e->original_bvh : NULL,
                              c.original, &e->originals_stages);
     forget_original_bvh(st);
     e->seconds_originals = monotonic_seconds() - start;

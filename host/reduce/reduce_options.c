@@ -125,6 +125,22 @@ int reduce_options_check(const reduce_state *st)
                                           "--memory-budget");
     if (reduce_error_options_check(o))
         return -1;
+    if (o->refine > REDUCE_MAX_REFINE)
+        return error_set(IDMR_EXIT_INPUT, "--refine must be 0 to %u, not %u", REDUCE_MAX_REFINE,
+                         o->refine);
+    if (o->refine && !reduce_method_uses_importance(o->method))
+        return error_set(IDMR_EXIT_INPUT, "--refine moves importance: it is for the methods "
+                                          "with an importance pass, not '%s'",
+                         reduce_method_name(o->method));
+    if (o->refine && (o->memory_budget || staged))
+        return error_set(IDMR_EXIT_INPUT, "--refine mixes an importance pass of the whole "
+                                          "original scene into the importance: it cannot be "
+                                          "combined with --memory-budget, --initial or "
+                                          "--passes");
+    if (o->refine && (!(o->error.resolution > 0 && o->error.resolution <= 4) ||
+                      o->error.iterations < 1))
+        return error_set(IDMR_EXIT_INPUT, "--check-resolution must be in (0, 4] and "
+                                          "--check-iterations at least 1");
     for (size_t k = 0; k < o->keep_count; k++) {
         size_t m = 0;
         while (m < s->mesh_count && strcmp(s->meshes[m].name, o->keep[k]))

@@ -208,6 +208,53 @@ static void add_search_seconds(cJSON *parent, const char *name, const error_sear
     cJSON_AddNumberToObject(stages, "compare", t->compare);
 }
 
+/* The refinement (null without --refine): each round's mix λ, pixels weighted, paired error
+ * and standard error of the check renders, vertices, seconds and whether it was kept; the round
+ * written, and its error over round 0's (the importance-only reduction at the same D). */
+static void add_refine(cJSON *root, const reduce_state *st)
+{
+    const reduce_refine_state *rf = &st->refine;
+    if (!st->options->refine || !rf->round_count) {
+        cJSON_AddNullToObject(root, "refine");
+        return;
+    }
+    cJSON *refine = cJSON_AddObjectToObject(root, "refine");
+    cJSON_AddNumberToObject(refine, "rounds_asked", st->options->refine);
+    cJSON_AddNumberToObject(refine, "target", st->target);
+    cJSON_AddNumberToObject(refine, "error_importance_passes", rf->error_passes);
+    const reduce_error_options *o = &st->options->error;
+    cJSON *check = cJSON_AddObjectToObject(refine, "check_render");
+    cJSON_AddNumberToObject(check, "iterations", o->iterations);
+    cJSON_AddNumberToObject(check, "photons", o->photons);
+    cJSON_AddNumberToObject(check, "resolution", o->resolution);
+    cJSON_AddNumberToObject(check, "width", st->error_search.width);
+    cJSON_AddNumberToObject(check, "height", st->error_search.height);
+    cJSON_AddNumberToObject(check, "first_radius", st->error_search.radius);
+    cJSON *rounds = cJSON_AddArrayToObject(refine, "rounds");
+    for (unsigned int k = 0; k < rf->round_count; k++) {
+        const reduce_refine_round *r = &rf->rounds[k];
+        cJSON *item = cJSON_CreateObject();
+        cJSON_AddNumberToObject(item, "round", k);
+        cJSON_AddNumberToObject(item, "mix", r->mix);
+        cJSON_AddNumberToObject(item, "weighted_pixels", (double)r->weighted_pixels);
+        cJSON_AddNumberToObject(item, "error", r->error);
+        cJSON_AddNumberToObject(item, "standard_error", r->standard_error);
+        cJSON_AddNumberToObject(item, "vertices", (double)r->vertices);
+        cJSON_AddBoolToObject(item, "kept", r->kept);
+        cJSON_AddNumberToObject(item, "seconds", r->seconds);
+        cJSON_AddItemToArray(rounds, item);
+    }
+    const reduce_refine_round *chosen = &rf->rounds[rf->chosen], *first = &rf->rounds[0];
+    cJSON_AddNumberToObject(refine, "chosen", rf->chosen);
+    cJSON_AddNumberToObject(refine, "error", chosen->error);
+    cJSON_AddNumberToObject(refine, "importance_only_error", first->error);
+    if (first->error > 0)
+        cJSON_AddNumberToObject(refine, "refined_over_importance", chosen->error / first->error);
+    else
+        cJSON_AddNullToObject(refine, "refined_over_importance");
+    cJSON_AddNumberToObject(refine, "seconds", rf->seconds);
+}
+
 /* The error budget's search (null without --max-error): the bound, the check renders, the curve
  * walked (each step's D, vertices, paired error and standard error, seconds), the D chosen, and
  * the seconds of the search against those of the plain reduce at that D. */
@@ -347,6 +394,7 @@ static cJSON *report_json(const reduce_state *st)
         add_passes(root, st);
     add_memory(root, st);
     add_error_budget(root, st);
+    add_refine(root, st);
     add_peaks(root, st);
     add_seconds(cJSON_GetObjectItem(root, "seconds"), st);
     cJSON *meshes = cJSON_GetObjectItem(root, "meshes");

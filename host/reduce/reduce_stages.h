@@ -44,6 +44,10 @@
  *                with two seeds, then budget and decimation again at each D the search
  *                (error_search.h) measures, the reduced scene rendered in memory; left
  *                decimated at the D found: error_search (reduce_error_budget.c)
+ *   refine       with --refine N, after the reduction at D: the per-pixel change of the check
+ *                renders, as pixel weights, drives an importance pass on the original (the
+ *                error importance), mixed into the importance; decimated again at the same D
+ *                and measured, kept while the error falls: refine (reduce_refine.c)
  *   write        meshes/NAME.ply and scene.xml: ply, meshes_written (reduce_write.c)
  *   report       report.json (with the importance outputs) and the closing line
  *                (reduce_report.c)
@@ -103,6 +107,28 @@ typedef struct reduce_error_state {
     double seconds_search;     /* the whole stage: originals, steps and the final decimation */
     double seconds_final_decimation; /* the decimation at the D chosen (budget included) */
 } reduce_error_state;
+
+/* One round of --refine (reduce_refine.c; report.json: refine.rounds). Round 0 is the reduction
+ * refinement starts from. */
+typedef struct reduce_refine_round {
+    double mix;            /* λ: the error importance's weight against the importance (0: none) */
+    double error, standard_error; /* paired reduction error of the check renders */
+    uint64_t vertices;     /* of the reduced scene */
+    uint64_t weighted_pixels; /* pixels with a weight above 0 behind this round's error
+                                 importance (0 for round 0) */
+    double seconds;        /* error importance pass (when run), decimation and check renders */
+    int kept;              /* its error + standard error fell below the best error so far: the
+                              reduction goes on from it */
+} reduce_refine_round;
+
+/* What --refine did (reduce_refine.c; report.json: refine). */
+typedef struct reduce_refine_state {
+    reduce_refine_round *rounds; /* round_count of them, round 0 first */
+    unsigned int round_count;
+    unsigned int chosen;   /* the round whose reduction is written */
+    unsigned int error_passes; /* error importance passes run */
+    double seconds;        /* the whole stage */
+} reduce_refine_state;
 
 /* What one importance pass and the reduction after it did (report.json: passes). */
 typedef struct reduce_pass_record {
@@ -180,6 +206,9 @@ typedef struct reduce_state {
 
     /* error budget (with --max-error; reduce_error_budget.c): */
     reduce_error_state error_search;
+
+    /* refine (with --refine; reduce_refine.c): */
+    reduce_refine_state refine;
 
     /* write: */
     char **ply;                    /* per decimated mesh, its file relative to outdir */
@@ -384,6 +413,23 @@ void reduce_decimation_forget(reduce_state *st);
 int reduce_error_budget(reduce_state *st);
 /* Frees what the error-budget stage left. */
 void reduce_error_budget_free(reduce_state *st);
+/* The check renders (--check-*): scene s rendered with seeds 1 and 2 into images[0..1]
+ * (malloc'd, st->error_search.width × height × RGB), with its BVH `built` (NULL: built here),
+ * adding the seconds of the BVH and the renders' stages to *stages; the first render (the
+ * original's, seed 1) sets the gather radius every later one shares. 0, or -1 with the error
+ * set. */
+int reduce_check_render_pair(reduce_state *st, const scene *s, const bvh *built,
+                             float *images[2], error_search_seconds *stages);
+
+/* ---- refine (reduce_refine.c) ---- */
+
+/* With --refine N, after the reduction (budget and decimation, or the error budget): the
+ * error-driven refinement at the same target D (reduce_refine.c). Leaves the budget and
+ * decimation stages' results at the round with the smallest measured error (round 0, the
+ * reduction it was given, when none was smaller). 0, or -1 with the error set. */
+int reduce_refine(reduce_state *st);
+/* Frees what the refine stage left. */
+void reduce_refine_free(reduce_state *st);
 
 /* ---- write (reduce_write.c) ---- */
 

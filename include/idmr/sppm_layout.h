@@ -72,7 +72,8 @@ typedef struct idmr_sppm_params {
     unsigned int device_paths;
     unsigned int camera_sums; /* 1: camera paths add what the pass records (the first device);
                                  0: they leave only hit points (the others: counted once) */
-    unsigned int pad;
+    unsigned int pixel_weighted; /* importance: 1: each hit point counts its pixel's weight
+                                    (pixel_weights, passes/importance.h); 0: 1 each */
 } idmr_sppm_params;
 
 IDMR_STATIC_ASSERT(sizeof(idmr_sppm_params) == 80, "idmr_sppm_params is 80 bytes");

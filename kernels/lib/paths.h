@@ -14,7 +14,8 @@
  *                 triangle on the way, the first IDMR_SEEN_LIGHT_CHAIN of them: the light a
  *                 camera sees in a glint or through glass, which no photon gather records
  *                 (importance.h turns it into gathers); both only where params->camera_sums
- *                 (the first device of a run: the others' camera paths leave hit points only)
+ *                 (the first device of a run: the others' camera paths leave hit points only);
+ *                 each times the pixel's weight (pixel_weight: 1 unless the pass is weighted)
  *     render      carries the specular throughput (a mirror's colour), adds the emission it
  *                 sees (an area light's front, the environment once it leaves the scene) and
  *                 ends at the back of a one-sided surface (black, no hit point); from
@@ -104,9 +105,11 @@ typedef struct specular_chain {
 } specular_chain;
 
 /* Adds weight × the luminance of `emitted` (× the chain's colour) to the seen-light sum of every
- * triangle of the chain, in params->fixed_scale units per unit of luminance. */
+ * triangle of the chain, in params->fixed_scale units per unit of luminance, times the pixel's
+ * weight (1 unless the pass is pixel-weighted). */
 inline void credit_seen_light(const idmr_sppm_params *params, const specular_chain *chain,
-                              float3 emitted, volatile global fixed_word *seen_light)
+                              float3 emitted, volatile global fixed_word *seen_light,
+                              uint pixel_weight)
 {
     if (!params->camera_sums)
         return; /* another device counts them */
@@ -115,9 +118,19 @@ inline void credit_seen_light(const idmr_sppm_params *params, const specular_cha
     if (!(units > 0.0f))
         return;
     for (uint k = 0; k < chain->length; k++)
-        fixed_add(seen_light, chain->triangles[k], (ulong)(chain->weights[k] * units + 0.5f));
+        fixed_add(seen_light, chain->triangles[k],
+                  (ulong)(chain->weights[k] * units + 0.5f) * pixel_weight);
 }
-#define SEEN_LIGHT_PARAMETER , volatile global fixed_word *seen_light
+
+/* The weight of pixel `pixel`'s hit point (passes/importance.h: pixel weights): what its camera
+ * importance, seen light and shadow ray are multiplied by, and what it counts for in a photon
+ * vertex's gather count. 1 unless params->pixel_weighted (then bit for bit today's pass). */
+inline uint pixel_weight(const idmr_sppm_params *params, global const uint *pixel_weights,
+                         uint pixel)
+{
+    return params->pixel_weighted ? pixel_weights[pixel] : 1u;
+}
+#define SEEN_LIGHT_PARAMETER , volatile global fixed_word *seen_light, uint pixel_weight
 #else
 #define SEEN_LIGHT_PARAMETER
 #endif
@@ -148,7 +161,8 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
             radiance += throughput * environment_radiance(scene, d);
 #elif IDMR_ACCUMULATE_IMPORTANCE
             if (chain.length > 0)
-                credit_seen_light(params, &chain, environment_radiance(scene, d), seen_light);
+                credit_seen_light(params, &chain, environment_radiance(scene, d), seen_light,
+                                  pixel_weight);
 #endif
             break;
         }
@@ -160,7 +174,8 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
 #if PASS_IMPORTANCE && IDMR_ACCUMULATE_IMPORTANCE && IDMR_CAMERA_IMPORTANCE
         if (params->camera_sums)
             fixed_add(records, hit.triangle,
-                      weight_units(idmr_eq2_weight(n.x, n.y, n.z, d.x, d.y, d.z)));
+                      weight_units(idmr_eq2_weight(n.x, n.y, n.z, d.x, d.y, d.z)) *
+                          pixel_weight);
 #endif
 #if PASS_RENDER
         radiance += throughput * surface_emission(scene, params->light_count, hit.triangle, d, n);
@@ -170,7 +185,7 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
         if (chain.length > 0)
             credit_seen_light(params, &chain,
                               surface_emission(scene, params->light_count, hit.triangle, d, n),
-                              seen_light);
+                              seen_light, pixel_weight);
 #endif
         float3 n_side = dot(d, n) < 0.0f ? n : -n;
         if (!material_is_specular(m)) {
