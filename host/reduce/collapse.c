@@ -162,8 +162,8 @@ typedef struct engine {
     uint32_t *ring_size;
     int rings_current; /* the adjacency and rings are the mesh's as it is (after engine_init) */
     double *quadric;
-    double *self_error; /* per vertex: its quadric at its own position (the quadric methods) */
-    int quadrics_built; /* the quadrics are built (engine_init: the first rings step) */
+    double *self_error; /* per vertex: its quadric at its own position (the quadric methods; set
+                           where the quadric is built or receives a donor's) */
     double *importance;
     uint32_t *donor;
     /* the scoring's results, per vertex */
@@ -408,8 +408,6 @@ static ring view_of(ring_store r, uint32_t size)
 /* Builds v's one-ring from its pass-start triangles into the pass's ring arrays. */
 static void build_ring(engine *e, uint32_t v)
 {
-    if (e->quadrics_built) /* as the last pass left them: v's own error with them */
-        e->self_error[v] = quadric_error(&e->quadric[10 * (size_t)v], position(e, v));
     uint32_t degree = e->adjacency_start[v + 1] - e->adjacency_start[v];
     e->ring_size[v] = fill_ring(e, v, pass_fan(e, v),
                                 ring_store_at(&e->rings, (size_t)e->adjacency_start[v] + v),
@@ -1559,9 +1557,12 @@ static void apply_collapse(engine *e, fan f0, uint32_t v0, uint32_t v1, uint32_t
             e->m->corner_ids[3 * (size_t)t + k] =
                 mapped_id(&map, e->m->corner_ids[3 * (size_t)t + k]);
     }
-    if (e->quadric)
+    if (e->quadric) {
+        double *q1 = &e->quadric[10 * (size_t)v1];
         for (int k = 0; k < 10; k++)
-            e->quadric[10 * (size_t)v1 + k] += e->quadric[10 * (size_t)v0 + k];
+            q1[k] += e->quadric[10 * (size_t)v0 + k];
+        e->self_error[v1] = quadric_error(q1, position(e, v1));
+    }
     if (e->o->method == DECIMATE_IMPORTANCE)
         e->importance[v1] += e->importance[v0];
     flag(e, v0, FLAG_REMOVED | FLAG_TAKEN);
@@ -1856,7 +1857,6 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
         e->importance_floor = importance_floor(e);
     }
     for_each_vertex(e, STEP_FIRST_RINGS); /* and the quadrics */
-    e->quadrics_built = e->quadric != NULL;
     scratch s;
     memset(&s, 0, sizeof s);
     for (uint32_t v = 0; v < e->n; v++)
