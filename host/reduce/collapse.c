@@ -68,22 +68,22 @@ typedef enum vertex_step {
     STEP_APPLY
 } vertex_step;
 
-/* A vertex's one-ring: each neighbour, how many live triangles hold the edge to it (at most 255
- * counted), and the third corners of those triangles: left[i] of the triangle (v, vertex[i],
- * left[i]), right[i] of (v, right[i], vertex[i]), counter-clockwise (COLLAPSE_NONE: none). For
- * the collapse v -> vertex[i], left[i] and right[i] are vl and vr, and the pairs (vertex[i],
- * left[i]) are v's triangles. A view into ring arrays (the pass's or a scratch's). */
+/* One neighbour w of a vertex v in v's one-ring: how many live triangles hold the edge to it (at
+ * most 255 counted), and the third corners of those triangles: left of the triangle (v, vertex,
+ * left), right of (v, right, vertex), counter-clockwise (COLLAPSE_NONE: none). For the collapse
+ * v -> vertex, left and right are vl and vr, and the pairs (vertex, left) are v's triangles.
+ * One record of 16 bytes per neighbour: a ring's records share one or two cache lines, which
+ * the rules read at random vertices. */
+typedef struct ring_entry {
+    uint32_t vertex, left, right;
+    uint32_t count;
+} ring_entry;
+
+/* A vertex's one-ring: a view into ring records (the pass's or a scratch's). */
 typedef struct ring {
-    const uint32_t *vertex, *left, *right;
-    const uint8_t *count;
+    const ring_entry *entry;
     uint32_t size;
 } ring;
-
-/* Where a ring is written. */
-typedef struct ring_store {
-    uint32_t *vertex, *left, *right;
-    uint8_t *held;
-} ring_store;
 
 /* The live triangles at a vertex: its slice of the pass's adjacency while it is untouched, or
  * a list gathered from its current triangles (current_fan). */
@@ -98,7 +98,7 @@ enum { SLOT_V0, SLOT_V1, SLOTS };
 /* What a thread needs while it judges collapses. */
 typedef struct scratch {
     uint32_t *fan_triangle[SLOTS];
-    ring_store rings[SLOTS];
+    ring_entry *rings[SLOTS];
     size_t fan_capacity[SLOTS], ring_capacity[SLOTS];
     uint32_t *ids, *mapped; /* the removed vertex's distinct corner ids and their images */
     size_t ids_capacity;
@@ -158,7 +158,7 @@ typedef struct engine {
     uint32_t *live, live_count; /* the triangles live at the last adjacency, in order */
     /* the rings of this pass: v's from slot adjacency_start[v] + v on (room for one neighbour
      * more than its triangles, as many as a vertex of one fan has), ring_size[v] long */
-    ring_store rings;
+    ring_entry *rings;
     uint32_t *ring_size;
     int rings_current; /* the adjacency and rings are the mesh's as it is (after engine_init) */
     double *quadric;
@@ -200,7 +200,7 @@ typedef struct engine {
 static uint32_t ring_find(const ring *r, uint32_t w)
 {
     uint32_t i = 0;
-    while (i < r->size && r->vertex[i] != w)
+    while (i < r->size && r->entry[i].vertex != w)
         i++;
     return i;
 }
@@ -209,17 +209,14 @@ static uint32_t ring_find(const ring *r, uint32_t w)
 static uint32_t ring_count(const ring *r, uint32_t w)
 {
     uint32_t i = ring_find(r, w);
-    return i < r->size ? r->count[i] : 0;
+    return i < r->size ? r->entry[i].count : 0;
 }
 
 static void scratch_free(scratch *s)
 {
     for (int k = 0; k < SLOTS; k++) {
         free(s->fan_triangle[k]);
-        free(s->rings[k].vertex);
-        free(s->rings[k].left);
-        free(s->rings[k].right);
-        free(s->rings[k].held);
+        free(s->rings[k]);
     }
     free(s->ids);
     free(s->mapped);
@@ -356,30 +353,28 @@ static fan current_fan(const engine *e, uint32_t v, scratch *s, int slot)
 /* Adds neighbour w to the ring being written (size so far *size, room for `capacity`); its
  * slot. A ring that would outgrow its room is marked complex (an edge counted 255 times):
  * only a vertex of more than one fan has more neighbours than triangles plus one. */
-static uint32_t ring_add(ring_store *r, uint32_t *size, uint32_t capacity, uint32_t w)
+static uint32_t ring_add(ring_entry *r, uint32_t *size, uint32_t capacity, uint32_t w)
 {
     uint32_t j = 0;
-    while (j < *size && r->vertex[j] != w)
+    while (j < *size && r[j].vertex != w)
         j++;
     if (j < *size) {
-        if (r->held[j] < 255)
-            r->held[j]++;
+        if (r[j].count < 255)
+            r[j].count++;
         return j;
     }
     if (*size == capacity) {
-        r->held[0] = 255;
+        r[0].count = 255;
         return 0;
     }
-    r->vertex[j] = w;
-    r->held[j] = 1;
-    r->left[j] = r->right[j] = COLLAPSE_NONE;
+    r[j] = (ring_entry){w, COLLAPSE_NONE, COLLAPSE_NONE, 1};
     (*size)++;
     return j;
 }
 
 /* Writes v's one-ring from the triangles of fan f (room for `capacity` neighbours); returns its
  * size. */
-static uint32_t fill_ring(const engine *e, uint32_t v, fan f, ring_store r, uint32_t capacity)
+static uint32_t fill_ring(const engine *e, uint32_t v, fan f, ring_entry *r, uint32_t capacity)
 {
     uint32_t size = 0;
     for (uint32_t i = 0; i < f.count; i++) {
@@ -387,22 +382,16 @@ static uint32_t fill_ring(const engine *e, uint32_t v, fan f, ring_store r, uint
         const uint32_t *c = corners(e, t);
         int k = corner_at(e, t, v);
         uint32_t next = c[(k + 1) % 3], previous = c[(k + 2) % 3];
-        r.left[ring_add(&r, &size, capacity, next)] = previous;
-        r.right[ring_add(&r, &size, capacity, previous)] = next;
+        r[ring_add(r, &size, capacity, next)].left = previous;
+        r[ring_add(r, &size, capacity, previous)].right = next;
     }
     return size;
 }
 
-static ring_store ring_store_at(const ring_store *r, size_t base)
+/* v's records in the pass's rings. */
+static ring_entry *pass_ring_entries(const engine *e, uint32_t v)
 {
-    ring_store at = {r->vertex + base, r->left + base, r->right + base, r->held + base};
-    return at;
-}
-
-static ring view_of(ring_store r, uint32_t size)
-{
-    ring view = {r.vertex, r.left, r.right, r.held, size};
-    return view;
+    return &e->rings[(size_t)e->adjacency_start[v] + v];
 }
 
 /* Builds v's one-ring from its pass-start triangles into the pass's ring arrays. */
@@ -410,7 +399,7 @@ static void build_ring(engine *e, uint32_t v)
 {
     uint32_t degree = e->adjacency_start[v + 1] - e->adjacency_start[v];
     e->ring_size[v] = fill_ring(e, v, pass_fan(e, v),
-                                ring_store_at(&e->rings, (size_t)e->adjacency_start[v] + v),
+                                pass_ring_entries(e, v),
                                 degree + 1);
 }
 
@@ -421,19 +410,17 @@ static ring current_ring(const engine *e, uint32_t v, scratch *s, int slot, fan 
     size_t capacity = 2 * (size_t)f->count + 1;
     if (s->ring_capacity[slot] < capacity) {
         s->ring_capacity[slot] = 2 * capacity;
-        ring_store *r = &s->rings[slot];
-        r->vertex = xrealloc(r->vertex, sizeof(uint32_t) * s->ring_capacity[slot]);
-        r->left = xrealloc(r->left, sizeof(uint32_t) * s->ring_capacity[slot]);
-        r->right = xrealloc(r->right, sizeof(uint32_t) * s->ring_capacity[slot]);
-        r->held = xrealloc(r->held, s->ring_capacity[slot]);
+        s->rings[slot] = xrealloc(s->rings[slot], sizeof(ring_entry) * s->ring_capacity[slot]);
     }
-    return view_of(s->rings[slot], fill_ring(e, v, *f, s->rings[slot], (uint32_t)capacity));
+    ring r = {s->rings[slot], fill_ring(e, v, *f, s->rings[slot], (uint32_t)capacity)};
+    return r;
 }
 
 /* The one-ring of v in this pass (built by build_ring). */
 static ring ring_of(const engine *e, uint32_t v)
 {
-    return view_of(ring_store_at(&e->rings, (size_t)e->adjacency_start[v] + v), e->ring_size[v]);
+    ring r = {pass_ring_entries(e, v), e->ring_size[v]};
+    return r;
 }
 
 /* Whether the ring can be one fan of manifold edges: every edge in at most two triangles and at
@@ -444,9 +431,9 @@ static int ring_simple(const ring *r, int *boundary)
 {
     int open = 0;
     for (uint32_t i = 0; i < r->size; i++) {
-        if (r->count[i] > 2)
+        if (r->entry[i].count > 2)
             return 0;
-        open += r->count[i] == 1;
+        open += r->entry[i].count == 1;
     }
     *boundary = open > 0;
     return open <= 2;
@@ -793,7 +780,7 @@ static int normals_kept(const engine *e, const ring *r0, uint32_t v0, uint32_t v
 {
     const float *p1 = position(e, v1);
     for (uint32_t i = 0; i < r0->size; i++) { /* v0's triangles: (v0, vertex[i], left[i]) */
-        uint32_t a = r0->vertex[i], b = r0->left[i];
+        uint32_t a = r0->entry[i].vertex, b = r0->entry[i].left;
         if (b == COLLAPSE_NONE || a == v1 || b == v1)
             continue;
         const float *before[3] = {position(e, v0), position(e, a), position(e, b)};
@@ -820,8 +807,8 @@ static int outline_kept(const engine *e, uint32_t v0, uint32_t v1, const ring *r
 {
     uint32_t open[2], count = 0;
     for (uint32_t i = 0; i < r0->size; i++)
-        if (r0->count[i] == 1 && count < 2)
-            open[count++] = r0->vertex[i];
+        if (r0->entry[i].count == 1 && count < 2)
+            open[count++] = r0->entry[i].vertex;
     if (count != 2 || (open[0] != v1 && open[1] != v1))
         return 0;
     uint32_t u = open[0] == v1 ? open[1] : open[0];
@@ -946,14 +933,14 @@ static int collapse_legal(const engine *e, uint32_t v0, uint32_t v1, fan f0, con
     uint32_t slot = ring_find(r0, v1);
     if (slot == r0->size)
         return *rule = "not an edge", 0;
-    uint32_t held = r0->count[slot];
+    uint32_t held = r0->entry[slot].count;
     if (e->m->locked && e->m->locked[v1]) /* the caller's (flags[v1] may be being rewritten) */
         return *rule = "locked", 0;
     ring ring1 = ring_for(e, v1, current, s, SLOT_V1), *r1 = &ring1;
     int boundary1;
     if (!ring_simple(r1, &boundary1))
         return *rule = "complex vertex", 0;
-    uint32_t vl = r0->left[slot], vr = r0->right[slot];
+    uint32_t vl = r0->entry[slot].left, vr = r0->entry[slot].right;
     /* A triangle of the edge whose other two edges are open would leave a dangling edge. */
     if (vl != COLLAPSE_NONE && ring_count(r1, vl) == 1 && ring_count(r0, vl) == 1)
         return *rule = "dangling edge", 0;
@@ -967,7 +954,7 @@ static int collapse_legal(const engine *e, uint32_t v0, uint32_t v1, fan f0, con
     if (boundary0 && (!boundary1 || both_sides))
         return *rule = "boundary vertex off the boundary", 0;
     for (uint32_t i = 0; i < r0->size; i++) {
-        uint32_t w = r0->vertex[i];
+        uint32_t w = r0->entry[i].vertex;
         if (w != v1 && w != vl && w != vr && ring_count(r1, w))
             return *rule = "link condition", 0;
     }
@@ -1039,7 +1026,7 @@ static size_t target_keys(const engine *e, uint32_t v, fan f0, const ring *r0, s
     }
     int by_importance = e->o->method == DECIMATE_IMPORTANCE;
     for (uint32_t i = 0; i < r0->size; i++) {
-        uint32_t u = r0->vertex[i];
+        uint32_t u = r0->entry[i].vertex;
         s->targets[i].vertex = u;
         s->targets[i].distance = distance_of(e, u);
         s->targets[i].key = by_importance ? e->importance[u] : collapse_cost(e, f0, v, u, s);
@@ -1056,7 +1043,7 @@ static void set_best(engine *e, uint32_t v, const ring *r0, const target_key *t)
     if (by_importance) {
         priority = e->importance[v];
         for (uint32_t k = 0; k < r0->size; k++)
-            priority += e->importance[r0->vertex[k]];
+            priority += e->importance[r0->entry[k].vertex];
         CHECK_FINITE(priority, "ring importance");
     }
     e->best_target[v] = t->vertex;
@@ -1599,7 +1586,7 @@ static void judge(const engine *e, uint32_t v0, uint32_t v1, scratch *s, judgeme
     j->verdict = VERDICT_ILLEGAL;
     if (slot == r0.size)
         return; /* no longer neighbours */
-    j->vl = r0.left[slot], j->vr = r0.right[slot];
+    j->vl = r0.entry[slot].left, j->vr = r0.entry[slot].right;
     if (neighbourhood_touched(e, j)) {
         const char *rule;
         int boundary0;
@@ -1612,7 +1599,7 @@ static void judge(const engine *e, uint32_t v0, uint32_t v1, scratch *s, judgeme
     j->writes[0] = v0;
     j->write_count = r0.size + 1 <= WRITES_MAX ? (uint8_t)(r0.size + 1) : WRITES_MAX + 1;
     for (uint32_t i = 0; i < r0.size && i + 1 < WRITES_MAX; i++)
-        j->writes[i + 1] = r0.vertex[i];
+        j->writes[i + 1] = r0.entry[i].vertex;
 }
 
 /* Takes a judged collapse (no collapse taken since touched v0's triangles): apply_collapse on
@@ -1653,7 +1640,7 @@ static void stamp_writes(engine *e, const judgement *j, scratch *s)
     ring r0 = current_ring(e, j->v0, s, SLOT_V0, &f0);
     e->stamp[j->v0] = e->chunk_stamp;
     for (uint32_t i = 0; i < r0.size; i++)
-        e->stamp[r0.vertex[i]] = e->chunk_stamp;
+        e->stamp[r0.entry[i].vertex] = e->chunk_stamp;
 }
 
 /* Takes the ranked candidates list[0 .. count) in order, greedily, in chunks of CHUNK
@@ -1741,10 +1728,7 @@ static void engine_free(engine *e)
     free(e->adjacency_start);
     free(e->adjacency);
     free(e->live);
-    free(e->rings.vertex);
-    free(e->rings.left);
-    free(e->rings.right);
-    free(e->rings.held);
+    free(e->rings);
     free(e->ring_size);
     free(e->quadric);
     free(e->self_error);
@@ -1823,10 +1807,7 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
         e->live[t] = t;
     e->live_count = e->t;
     size_t ring_slots = 3 * (size_t)e->t + n;
-    e->rings.vertex = xmalloc(sizeof(uint32_t) * ring_slots);
-    e->rings.left = xmalloc(sizeof(uint32_t) * ring_slots);
-    e->rings.right = xmalloc(sizeof(uint32_t) * ring_slots);
-    e->rings.held = xmalloc(ring_slots);
+    e->rings = xmalloc(sizeof(ring_entry) * ring_slots);
     e->ring_size = xcalloc(n, sizeof(uint32_t));
     e->donor = xmalloc(sizeof(uint32_t) * n);
     e->best_target = xmalloc(sizeof(uint32_t) * n);
@@ -1871,11 +1852,11 @@ size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_
 {
     /* flags, adjacency_start, ring_size, donor, best_target, stamp, best, importance, the
      * ranking's keys (and their spare) and list, the quadric and its own error; a ring slot
-     * (vertex, left, right, held); per triangle its place in the live list */
+     * (its ring_entry); per triangle its place in the live list */
     size_t per_vertex = 1 + 4 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
                         2 * sizeof(rank_key) + sizeof(candidate) +
                         (method != DECIMATE_IMPORTANCE ? 11 * sizeof(double) : 0);
-    size_t ring_slot = 3 * sizeof(uint32_t) + 1;
+    size_t ring_slot = sizeof(ring_entry);
     /* per corner: the adjacency and a ring slot */
     size_t per_corner = sizeof(uint32_t) + ring_slot;
     return (per_vertex + ring_slot) * ((size_t)vertex_count + 1) +
@@ -1953,7 +1934,7 @@ int collapse_evaluate(const collapse_mesh *mesh, const collapse_options *options
         if (options->method == DECIMATE_IMPORTANCE) {
             *cost = e.importance[v0];
             for (uint32_t k = 0; k < r0.size; k++)
-                *cost += e.importance[r0.vertex[k]];
+                *cost += e.importance[r0.entry[k].vertex];
         } else {
             *cost = collapse_cost(&e, f0, v0, v1, &s);
         }
