@@ -165,7 +165,7 @@ typedef struct engine {
     double *self_error; /* per vertex: its quadric at its own position (the quadric methods; set
                            where the quadric is built or receives a donor's) */
     double *importance;
-    uint32_t *donor;
+    uint32_t *donor; /* valid where the vertex kept a collapse taken in this pass (donor_of) */
     /* the scoring's results, per vertex */
     uint32_t *best_target;
     candidate *best;
@@ -329,11 +329,19 @@ static void reserve(void **buffer, size_t *capacity, size_t count, size_t size)
     *buffer = xrealloc(*buffer, size * *capacity);
 }
 
+/* The vertex that went into v in this pass, or COLLAPSE_NONE: only the kept end of a collapse
+ * taken receives, so the flags (read already where this is asked, and smaller) answer for the
+ * rest without a read of donor[]. */
+static uint32_t donor_of(const engine *e, uint32_t v)
+{
+    return (e->flags[v] & (FLAG_TAKEN | FLAG_REMOVED)) == FLAG_TAKEN ? e->donor[v] : COLLAPSE_NONE;
+}
+
 /* v's live triangles now, into slot `slot` of the scratch: those of its pass-start adjacency
  * and its donor's that still hold it (a vertex receives at most once in a pass). */
 static fan current_fan(const engine *e, uint32_t v, scratch *s, int slot)
 {
-    uint32_t sources[2] = {v, e->donor[v]}, count = 0;
+    uint32_t sources[2] = {v, donor_of(e, v)}, count = 0;
     for (int k = 0; k < 2; k++) {
         if (sources[k] == COLLAPSE_NONE)
             continue;
@@ -896,7 +904,7 @@ static int valence_three(const engine *e, uint32_t v, int current, uint32_t hold
         ring r = ring_of(e, v);
         return holding == COLLAPSE_NONE || ring_count(&r, holding);
     }
-    uint32_t seen[3], count = 0, sources[2] = {v, e->donor[v]};
+    uint32_t seen[3], count = 0, sources[2] = {v, donor_of(e, v)};
     for (int k = 0; k < 2; k++) {
         if (sources[k] == COLLAPSE_NONE)
             continue;
@@ -1106,7 +1114,6 @@ static void settle_vertex(engine *e, uint32_t v, scratch *s)
     else if (flags & FLAG_STALE)
         score_vertex(e, v, s);
     e->flags[v] = flags & (uint8_t) ~(FLAG_STALE | FLAG_TOUCHED | FLAG_TAKEN);
-    e->donor[v] = COLLAPSE_NONE;
 }
 
 /* ---- the per-vertex steps, in parallel ---- */
@@ -1452,7 +1459,7 @@ static size_t add_id(scratch *s, size_t count, uint32_t id)
 static size_t current_ids(const engine *e, uint32_t v, uint32_t without_a, uint32_t without_b,
                           scratch *s, size_t count)
 {
-    uint32_t sources[2] = {v, e->donor[v]};
+    uint32_t sources[2] = {v, donor_of(e, v)};
     for (int k = 0; k < 2; k++) {
         if (sources[k] == COLLAPSE_NONE)
             continue;
