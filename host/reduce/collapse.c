@@ -38,6 +38,7 @@ enum {
     FLAG_TOUCHED = 4, /* a collapse taken in this pass changed its triangles */
     FLAG_STALE = 8,   /* its score must be computed again (it or a neighbour was touched) */
     FLAG_TAKEN = 16,  /* an end of a collapse taken in this pass */
+    FLAG_WRITTEN = 32, /* taking a collapse accepted in this chunk writes it (take_in_chunks) */
 };
 
 #define BOUNDARY_WEIGHT 10.0 /* COMBINED: an open edge's plane, per length² (decimate_modules) */
@@ -190,7 +191,8 @@ typedef struct engine {
     struct judgement *judgements;   /* per item of the chunk */
     uint32_t *accepted;             /* the chunk's items taken */
     uint32_t *deferred;             /* positions deferred to the next chunk */
-    uint32_t *stamp, chunk_stamp;   /* per vertex: the last chunk that wrote it */
+    uint32_t *written;              /* the vertices marked FLAG_WRITTEN in this chunk */
+    size_t written_count, written_capacity;
     uint32_t *history;
 } engine;
 
@@ -1629,25 +1631,36 @@ static void apply_item(engine *e, uint32_t item, scratch *s)
     take(e, &e->judgements[e->accepted[item]], s);
 }
 
-/* Whether a collapse accepted earlier in this chunk wrote vertex v. */
-static int stamped(const engine *e, uint32_t v)
+/* Whether a collapse accepted earlier in this chunk writes vertex v. */
+static int written(const engine *e, uint32_t v)
 {
-    return v != COLLAPSE_NONE && e->stamp[v] == e->chunk_stamp;
+    return v != COLLAPSE_NONE && (e->flags[v] & FLAG_WRITTEN);
+}
+
+/* Marks v written in this chunk (a bit of its flags, which the chunk's judging has just read,
+ * and a list to clear them by). No step runs on the pool meanwhile. */
+static void mark_written(engine *e, uint32_t v)
+{
+    if (e->flags[v] & FLAG_WRITTEN)
+        return;
+    e->flags[v] |= FLAG_WRITTEN;
+    reserve((void **)&e->written, &e->written_capacity, e->written_count + 1, sizeof(uint32_t));
+    e->written[e->written_count++] = v;
 }
 
 /* Marks what taking the judged collapse writes: v0 and its ring. */
-static void stamp_writes(engine *e, const judgement *j, scratch *s)
+static void mark_writes(engine *e, const judgement *j, scratch *s)
 {
     if (j->write_count <= WRITES_MAX) {
         for (uint32_t i = 0; i < j->write_count; i++)
-            e->stamp[j->writes[i]] = e->chunk_stamp;
+            mark_written(e, j->writes[i]);
         return;
     }
     fan f0;
     ring r0 = current_ring(e, j->v0, s, SLOT_V0, &f0);
-    e->stamp[j->v0] = e->chunk_stamp;
+    mark_written(e, j->v0);
     for (uint32_t i = 0; i < r0.size; i++)
-        e->stamp[r0.entry[i].vertex] = e->chunk_stamp;
+        mark_written(e, r0.entry[i].vertex);
 }
 
 /* Takes the ranked candidates list[0 .. count) in order, greedily, in chunks of CHUNK
@@ -1673,7 +1686,6 @@ static uint32_t take_in_chunks(engine *e, const candidate *list, size_t count, f
         while (n < CHUNK && next < count)
             items[n++] = (uint32_t)next++;
         run_on_pool(e, STEP_JUDGE, n, JUDGE_BLOCK);
-        e->chunk_stamp++;
         uint32_t accepted = 0;
         deferred = 0;
         for (uint32_t i = 0; i < n; i++) {
@@ -1682,15 +1694,15 @@ static uint32_t take_in_chunks(engine *e, const candidate *list, size_t count, f
                 stop = 1;
                 break;
             }
-            if (stamped(e, j->v0) || stamped(e, j->v1) || stamped(e, j->vl) ||
-                stamped(e, j->vr)) {
+            if (written(e, j->v0) || written(e, j->v1) || written(e, j->vl) ||
+                written(e, j->vr)) {
                 e->deferred[deferred++] = items[i];
                 continue;
             }
             if (j->verdict != VERDICT_LEGAL)
                 continue;
             e->accepted[accepted++] = i;
-            stamp_writes(e, j, s);
+            mark_writes(e, j, s);
             e->alive = e->alive > j->removes ? e->alive - j->removes : 0;
             taken++;
             if (e->alive <= e->o->target_vertices) {
@@ -1700,6 +1712,9 @@ static uint32_t take_in_chunks(engine *e, const candidate *list, size_t count, f
         }
         if (accepted)
             run_on_pool(e, STEP_APPLY, accepted, APPLY_BLOCK);
+        for (size_t k = 0; k < e->written_count; k++)
+            e->flags[e->written[k]] &= (uint8_t)~FLAG_WRITTEN;
+        e->written_count = 0;
         memcpy(items, e->deferred, sizeof(uint32_t) * deferred);
     }
     return taken;
@@ -1751,7 +1766,7 @@ static void engine_free(engine *e)
     free(e->chunk_items);
     free(e->accepted);
     free(e->deferred);
-    free(e->stamp);
+    free(e->written);
     memset(e, 0, sizeof *e);
 }
 
@@ -1857,10 +1872,10 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
 
 size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_method method)
 {
-    /* flags, adjacency_start, ring_size, donor, best_target, stamp, best, importance, the
+    /* flags, adjacency_start, ring_size, donor, best_target, best, importance, the
      * ranking's keys (and their spare) and list, the quadric and its own error; a ring slot
      * (its ring_entry); per triangle its place in the live list */
-    size_t per_vertex = 1 + 4 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
+    size_t per_vertex = 1 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
                         2 * sizeof(rank_key) + sizeof(candidate) +
                         (method != DECIMATE_IMPORTANCE ? 11 * sizeof(double) : 0);
     size_t ring_slot = sizeof(ring_entry);
@@ -1888,7 +1903,6 @@ int collapse_run(collapse_mesh *m, const collapse_options *o, collapse_result *r
     e.chunk_items = xmalloc(sizeof(uint32_t) * CHUNK);
     e.accepted = xmalloc(sizeof(uint32_t) * CHUNK);
     e.deferred = xmalloc(sizeof(uint32_t) * CHUNK);
-    e.stamp = xcalloc((size_t)e.n + 1, sizeof(uint32_t));
     scratch s;
     memset(&s, 0, sizeof s);
     while (e.alive > o->target_vertices) {
