@@ -661,15 +661,22 @@ static void attribute_merge(engine *e, uint32_t from, uint32_t into)
         t[k] += f[k];
 }
 
+/* A triangle's corner positions into p. */
+static void triangle_positions(const engine *e, uint32_t t, const float *p[3])
+{
+    const uint32_t *c = corners(e, t);
+    for (int k = 0; k < 3; k++)
+        p[k] = position(e, c[k]);
+}
+
 /* The mean of a triangle's vertex importance, and its corner positions into p. */
 static double triangle_points(const engine *e, uint32_t t, const float *p[3])
 {
     const uint32_t *c = corners(e, t);
+    triangle_positions(e, t, p);
     double sum = 0;
-    for (int k = 0; k < 3; k++) {
-        p[k] = position(e, c[k]);
+    for (int k = 0; k < 3; k++)
         sum += e->importance[c[k]];
-    }
     return sum / 3.0;
 }
 
@@ -739,9 +746,11 @@ static void build_quadric(engine *e, uint32_t v)
         uint32_t t = f.triangle[i];
         const uint32_t *c = corners(e, t);
         const float *p[3];
-        double face_importance = triangle_points(e, t, p) + e->importance_floor, n[3];
-        if (!combined)
-            face_importance = 1.0;
+        double face_importance = 1.0, n[3]; /* QUADRIC: the planes unweighted by importance */
+        if (combined)
+            face_importance = triangle_points(e, t, p) + e->importance_floor;
+        else
+            triangle_positions(e, t, p);
         normal_of(p, n);
         double twice_area = sqrt(dot(n, n));
         if (!(twice_area > 0))
