@@ -2,13 +2,14 @@
  * application over flat arrays.
  *
  * State, per vertex: flags (locked by the caller, removed, touched or an end of a collapse taken
- * in this pass, to be scored again), the plane quadric (10 doubles: the upper triangle of A,
- * then b, then c, for p'Ap + 2b'p + c) and its error at the vertex itself, the importance, the
- * best collapse the scoring found (target, cost, tie keys) and the donor (the vertex that went
- * into it in this pass). Per triangle: its three vertices and corner ids (the
- * caller's arrays, rewritten). Per attribute id (COMBINED with attributes): its attribute
- * quadric (see "Attribute quadrics" below). At the start of each pass the adjacency (adjacency[
- * adjacency_start[v] ..]: the live triangles at v) and the rings (ring_of) are built again.
+ * in this pass, to be scored again, written by a collapse accepted in this chunk), the plane
+ * quadric (10 doubles: the upper triangle of A, then b, then c, for p'Ap + 2b'p + c) and its
+ * error at the vertex itself, the importance, the best collapse the scoring found (target, cost,
+ * tie keys) and the donor (the vertex that went into it in this pass). Per triangle: its three
+ * vertices and corner ids (the caller's arrays, rewritten). Per attribute id (COMBINED with
+ * attributes): its attribute quadric (see "Attribute quadrics" below). At the start of each pass
+ * the adjacency (adjacency[adjacency_start[v] ..]: the live triangles at v) and the rings
+ * (ring_of: a 16-byte record per neighbour) are built again.
  *
  * Why a vertex's pass-start triangles stay exact until it is touched: a triangle changes only
  * when one of its vertices is removed (it then moves to the kept vertex, or dies with the edge),
