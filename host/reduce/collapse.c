@@ -30,6 +30,7 @@
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 
 #include "core/error.h"
 
@@ -198,6 +199,27 @@ typedef struct engine {
 } engine;
 
 /* ---- small helpers ---- */
+
+#define HUGE_PAGE ((size_t)2 << 20)
+
+/* An array of the engine's that the steps read at random places (rings, quadrics, adjacency,
+ * scores): from `bytes` of 8 MiB on, aligned to 2 MiB, rounded up to whole 2 MiB (at most 2 MiB
+ * more) and marked for the kernel's transparent huge pages, so that random reads over a large
+ * mesh's arrays miss the TLB far less than with 4 KiB pages (where the kernel has them only on
+ * request). Only speed depends on it. Released with free(). */
+static void *large_array(size_t bytes)
+{
+    if (bytes < 4 * HUGE_PAGE)
+        return xmalloc(bytes);
+    size_t rounded = (bytes + HUGE_PAGE - 1) / HUGE_PAGE * HUGE_PAGE;
+    void *array = aligned_alloc(HUGE_PAGE, rounded);
+    if (!array)
+        return xmalloc(bytes);
+#ifdef MADV_HUGEPAGE
+    madvise(array, rounded, MADV_HUGEPAGE);
+#endif
+    return array;
+}
 
 /* The slot of neighbour w in the ring, or r->size. */
 static uint32_t ring_find(const ring *r, uint32_t w)
@@ -1833,17 +1855,17 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     size_t n = (size_t)e->n + 1;
     e->flags = xcalloc(n, 1);
     e->adjacency_start = xmalloc(sizeof(uint32_t) * (n + 1));
-    e->adjacency = xmalloc(sizeof(uint32_t) * (3 * (size_t)e->t + 1));
+    e->adjacency = large_array(sizeof(uint32_t) * (3 * (size_t)e->t + 1));
     e->live = xmalloc(sizeof(uint32_t) * ((size_t)e->t + 1));
     for (uint32_t t = 0; t < e->t; t++)
         e->live[t] = t;
     e->live_count = e->t;
     size_t ring_slots = 3 * (size_t)e->t + n;
-    e->rings = xmalloc(sizeof(ring_entry) * ring_slots);
+    e->rings = large_array(sizeof(ring_entry) * ring_slots);
     e->ring_size = xcalloc(n, sizeof(uint32_t));
     e->donor = xmalloc(sizeof(uint32_t) * n);
     e->best_target = xmalloc(sizeof(uint32_t) * n);
-    e->best = xmalloc(sizeof(candidate) * n);
+    e->best = large_array(sizeof(candidate) * n);
     e->importance = xcalloc(n, sizeof(double));
     if (m->importance)
         memcpy(e->importance, m->importance, sizeof(double) * e->n);
@@ -1851,7 +1873,7 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
         /* Written, not summed into, by the first rings step (build_quadric): summed into
          * calloc's fresh pages, read before they were written, that step took 0.12 s on the
          * dragon with two threads, 0.04 s once the pages were in. */
-        e->quadric = xmalloc(sizeof(double) * 10 * n);
+        e->quadric = large_array(sizeof(double) * 10 * n);
         e->self_error = xmalloc(sizeof(double) * n);
     }
     for (uint32_t v = 0; v < e->n; v++) {
@@ -1905,7 +1927,7 @@ int collapse_run(collapse_mesh *m, const collapse_options *o, collapse_result *r
     result->vertices_before = e.alive;
     result->collapses = 0;
     result->passes = 0;
-    e.list = xmalloc(sizeof(candidate) * ((size_t)e.n + 1));
+    e.list = large_array(sizeof(candidate) * ((size_t)e.n + 1));
     e.keys = xmalloc(sizeof(rank_key) * ((size_t)e.n + 1));
     e.spare_keys = xmalloc(sizeof(rank_key) * ((size_t)e.n + 1));
     e.history = result->collapsed_into;
