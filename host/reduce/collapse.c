@@ -2,13 +2,14 @@
  * application over flat arrays.
  *
  * State, per vertex: flags (locked by the caller, removed, touched or an end of a collapse taken
- * in this pass, to be scored again), the plane quadric (10 doubles: the upper triangle of A,
- * then b, then c, for p'Ap + 2b'p + c) and its error at the vertex itself, the importance, the
- * best collapse the scoring found (target, cost, tie keys) and the donor (the vertex that went
- * into it in this pass). Per triangle: its three vertices and corner ids (the
- * caller's arrays, rewritten). Per attribute id (COMBINED with attributes): its attribute
- * quadric (see "Attribute quadrics" below). At the start of each pass the adjacency (adjacency[
- * adjacency_start[v] ..]: the live triangles at v) and the rings (ring_of) are built again.
+ * in this pass, to be scored again, written by a collapse accepted in this chunk), the plane
+ * quadric (10 doubles: the upper triangle of A, then b, then c, for p'Ap + 2b'p + c) and its
+ * error at the vertex itself, the importance, the best collapse the scoring found (target, cost,
+ * tie keys) and the donor (the vertex that went into it in this pass). Per triangle: its three
+ * vertices and corner ids (the caller's arrays, rewritten). Per attribute id (COMBINED with
+ * attributes): its attribute quadric (see "Attribute quadrics" below). At the start of each pass
+ * the adjacency (adjacency[adjacency_start[v] ..]: the live triangles at v) and the rings
+ * (ring_of: a 16-byte record per neighbour) are built again.
  *
  * Why a vertex's pass-start triangles stay exact until it is touched: a triangle changes only
  * when one of its vertices is removed (it then moves to the kept vertex, or dies with the edge),
@@ -29,6 +30,7 @@
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 
 #include "core/error.h"
 
@@ -38,6 +40,7 @@ enum {
     FLAG_TOUCHED = 4, /* a collapse taken in this pass changed its triangles */
     FLAG_STALE = 8,   /* its score must be computed again (it or a neighbour was touched) */
     FLAG_TAKEN = 16,  /* an end of a collapse taken in this pass */
+    FLAG_WRITTEN = 32, /* taking a collapse accepted in this chunk writes it (take_in_chunks) */
 };
 
 #define BOUNDARY_WEIGHT 10.0 /* COMBINED: an open edge's plane, per length² (decimate_modules) */
@@ -68,22 +71,22 @@ typedef enum vertex_step {
     STEP_APPLY
 } vertex_step;
 
-/* A vertex's one-ring: each neighbour, how many live triangles hold the edge to it (at most 255
- * counted), and the third corners of those triangles: left[i] of the triangle (v, vertex[i],
- * left[i]), right[i] of (v, right[i], vertex[i]), counter-clockwise (COLLAPSE_NONE: none). For
- * the collapse v -> vertex[i], left[i] and right[i] are vl and vr, and the pairs (vertex[i],
- * left[i]) are v's triangles. A view into ring arrays (the pass's or a scratch's). */
+/* One neighbour w of a vertex v in v's one-ring: how many live triangles hold the edge to it (at
+ * most 255 counted), and the third corners of those triangles: left of the triangle (v, vertex,
+ * left), right of (v, right, vertex), counter-clockwise (COLLAPSE_NONE: none). For the collapse
+ * v -> vertex, left and right are vl and vr, and the pairs (vertex, left) are v's triangles.
+ * One record of 16 bytes per neighbour: a ring's records share one or two cache lines, which
+ * the rules read at random vertices. */
+typedef struct ring_entry {
+    uint32_t vertex, left, right;
+    uint32_t count;
+} ring_entry;
+
+/* A vertex's one-ring: a view into ring records (the pass's or a scratch's). */
 typedef struct ring {
-    const uint32_t *vertex, *left, *right;
-    const uint8_t *count;
+    const ring_entry *entry;
     uint32_t size;
 } ring;
-
-/* Where a ring is written. */
-typedef struct ring_store {
-    uint32_t *vertex, *left, *right;
-    uint8_t *held;
-} ring_store;
 
 /* The live triangles at a vertex: its slice of the pass's adjacency while it is untouched, or
  * a list gathered from its current triangles (current_fan). */
@@ -98,7 +101,7 @@ enum { SLOT_V0, SLOT_V1, SLOTS };
 /* What a thread needs while it judges collapses. */
 typedef struct scratch {
     uint32_t *fan_triangle[SLOTS];
-    ring_store rings[SLOTS];
+    ring_entry *rings[SLOTS];
     size_t fan_capacity[SLOTS], ring_capacity[SLOTS];
     uint32_t *ids, *mapped; /* the removed vertex's distinct corner ids and their images */
     size_t ids_capacity;
@@ -158,14 +161,14 @@ typedef struct engine {
     uint32_t *live, live_count; /* the triangles live at the last adjacency, in order */
     /* the rings of this pass: v's from slot adjacency_start[v] + v on (room for one neighbour
      * more than its triangles, as many as a vertex of one fan has), ring_size[v] long */
-    ring_store rings;
+    ring_entry *rings;
     uint32_t *ring_size;
     int rings_current; /* the adjacency and rings are the mesh's as it is (after engine_init) */
     double *quadric;
-    double *self_error; /* per vertex: its quadric at its own position (the quadric methods) */
-    int quadrics_built; /* the quadrics are built (engine_init: the first rings step) */
+    double *self_error; /* per vertex: its quadric at its own position (the quadric methods; set
+                           where the quadric is built or receives a donor's) */
     double *importance;
-    uint32_t *donor;
+    uint32_t *donor; /* valid where the vertex kept a collapse taken in this pass (donor_of) */
     /* the scoring's results, per vertex */
     uint32_t *best_target;
     candidate *best;
@@ -190,17 +193,39 @@ typedef struct engine {
     struct judgement *judgements;   /* per item of the chunk */
     uint32_t *accepted;             /* the chunk's items taken */
     uint32_t *deferred;             /* positions deferred to the next chunk */
-    uint32_t *stamp, chunk_stamp;   /* per vertex: the last chunk that wrote it */
+    uint32_t *written;              /* the vertices marked FLAG_WRITTEN in this chunk */
+    size_t written_count, written_capacity;
     uint32_t *history;
 } engine;
 
 /* ---- small helpers ---- */
 
+#define HUGE_PAGE ((size_t)2 << 20)
+
+/* An array of the engine's that the steps read at random places (rings, quadrics, adjacency,
+ * scores): from `bytes` of 8 MiB on, aligned to 2 MiB, rounded up to whole 2 MiB (at most 2 MiB
+ * more) and marked for the kernel's transparent huge pages, so that random reads over a large
+ * mesh's arrays miss the TLB far less than with 4 KiB pages (where the kernel has them only on
+ * request). Only speed depends on it. Released with free(). */
+static void *large_array(size_t bytes)
+{
+    if (bytes < 4 * HUGE_PAGE)
+        return xmalloc(bytes);
+    size_t rounded = (bytes + HUGE_PAGE - 1) / HUGE_PAGE * HUGE_PAGE;
+    void *array = aligned_alloc(HUGE_PAGE, rounded);
+    if (!array)
+        return xmalloc(bytes);
+#ifdef MADV_HUGEPAGE
+    madvise(array, rounded, MADV_HUGEPAGE);
+#endif
+    return array;
+}
+
 /* The slot of neighbour w in the ring, or r->size. */
 static uint32_t ring_find(const ring *r, uint32_t w)
 {
     uint32_t i = 0;
-    while (i < r->size && r->vertex[i] != w)
+    while (i < r->size && r->entry[i].vertex != w)
         i++;
     return i;
 }
@@ -209,17 +234,14 @@ static uint32_t ring_find(const ring *r, uint32_t w)
 static uint32_t ring_count(const ring *r, uint32_t w)
 {
     uint32_t i = ring_find(r, w);
-    return i < r->size ? r->count[i] : 0;
+    return i < r->size ? r->entry[i].count : 0;
 }
 
 static void scratch_free(scratch *s)
 {
     for (int k = 0; k < SLOTS; k++) {
         free(s->fan_triangle[k]);
-        free(s->rings[k].vertex);
-        free(s->rings[k].left);
-        free(s->rings[k].right);
-        free(s->rings[k].held);
+        free(s->rings[k]);
     }
     free(s->ids);
     free(s->mapped);
@@ -332,11 +354,19 @@ static void reserve(void **buffer, size_t *capacity, size_t count, size_t size)
     *buffer = xrealloc(*buffer, size * *capacity);
 }
 
+/* The vertex that went into v in this pass, or COLLAPSE_NONE: only the kept end of a collapse
+ * taken receives, so the flags (read already where this is asked, and smaller) answer for the
+ * rest without a read of donor[]. */
+static uint32_t donor_of(const engine *e, uint32_t v)
+{
+    return (e->flags[v] & (FLAG_TAKEN | FLAG_REMOVED)) == FLAG_TAKEN ? e->donor[v] : COLLAPSE_NONE;
+}
+
 /* v's live triangles now, into slot `slot` of the scratch: those of its pass-start adjacency
  * and its donor's that still hold it (a vertex receives at most once in a pass). */
 static fan current_fan(const engine *e, uint32_t v, scratch *s, int slot)
 {
-    uint32_t sources[2] = {v, e->donor[v]}, count = 0;
+    uint32_t sources[2] = {v, donor_of(e, v)}, count = 0;
     for (int k = 0; k < 2; k++) {
         if (sources[k] == COLLAPSE_NONE)
             continue;
@@ -356,30 +386,28 @@ static fan current_fan(const engine *e, uint32_t v, scratch *s, int slot)
 /* Adds neighbour w to the ring being written (size so far *size, room for `capacity`); its
  * slot. A ring that would outgrow its room is marked complex (an edge counted 255 times):
  * only a vertex of more than one fan has more neighbours than triangles plus one. */
-static uint32_t ring_add(ring_store *r, uint32_t *size, uint32_t capacity, uint32_t w)
+static uint32_t ring_add(ring_entry *r, uint32_t *size, uint32_t capacity, uint32_t w)
 {
     uint32_t j = 0;
-    while (j < *size && r->vertex[j] != w)
+    while (j < *size && r[j].vertex != w)
         j++;
     if (j < *size) {
-        if (r->held[j] < 255)
-            r->held[j]++;
+        if (r[j].count < 255)
+            r[j].count++;
         return j;
     }
     if (*size == capacity) {
-        r->held[0] = 255;
+        r[0].count = 255;
         return 0;
     }
-    r->vertex[j] = w;
-    r->held[j] = 1;
-    r->left[j] = r->right[j] = COLLAPSE_NONE;
+    r[j] = (ring_entry){w, COLLAPSE_NONE, COLLAPSE_NONE, 1};
     (*size)++;
     return j;
 }
 
 /* Writes v's one-ring from the triangles of fan f (room for `capacity` neighbours); returns its
  * size. */
-static uint32_t fill_ring(const engine *e, uint32_t v, fan f, ring_store r, uint32_t capacity)
+static uint32_t fill_ring(const engine *e, uint32_t v, fan f, ring_entry *r, uint32_t capacity)
 {
     uint32_t size = 0;
     for (uint32_t i = 0; i < f.count; i++) {
@@ -387,32 +415,24 @@ static uint32_t fill_ring(const engine *e, uint32_t v, fan f, ring_store r, uint
         const uint32_t *c = corners(e, t);
         int k = corner_at(e, t, v);
         uint32_t next = c[(k + 1) % 3], previous = c[(k + 2) % 3];
-        r.left[ring_add(&r, &size, capacity, next)] = previous;
-        r.right[ring_add(&r, &size, capacity, previous)] = next;
+        r[ring_add(r, &size, capacity, next)].left = previous;
+        r[ring_add(r, &size, capacity, previous)].right = next;
     }
     return size;
 }
 
-static ring_store ring_store_at(const ring_store *r, size_t base)
+/* v's records in the pass's rings. */
+static ring_entry *pass_ring_entries(const engine *e, uint32_t v)
 {
-    ring_store at = {r->vertex + base, r->left + base, r->right + base, r->held + base};
-    return at;
-}
-
-static ring view_of(ring_store r, uint32_t size)
-{
-    ring view = {r.vertex, r.left, r.right, r.held, size};
-    return view;
+    return &e->rings[(size_t)e->adjacency_start[v] + v];
 }
 
 /* Builds v's one-ring from its pass-start triangles into the pass's ring arrays. */
 static void build_ring(engine *e, uint32_t v)
 {
-    if (e->quadrics_built) /* as the last pass left them: v's own error with them */
-        e->self_error[v] = quadric_error(&e->quadric[10 * (size_t)v], position(e, v));
     uint32_t degree = e->adjacency_start[v + 1] - e->adjacency_start[v];
     e->ring_size[v] = fill_ring(e, v, pass_fan(e, v),
-                                ring_store_at(&e->rings, (size_t)e->adjacency_start[v] + v),
+                                pass_ring_entries(e, v),
                                 degree + 1);
 }
 
@@ -423,19 +443,17 @@ static ring current_ring(const engine *e, uint32_t v, scratch *s, int slot, fan 
     size_t capacity = 2 * (size_t)f->count + 1;
     if (s->ring_capacity[slot] < capacity) {
         s->ring_capacity[slot] = 2 * capacity;
-        ring_store *r = &s->rings[slot];
-        r->vertex = xrealloc(r->vertex, sizeof(uint32_t) * s->ring_capacity[slot]);
-        r->left = xrealloc(r->left, sizeof(uint32_t) * s->ring_capacity[slot]);
-        r->right = xrealloc(r->right, sizeof(uint32_t) * s->ring_capacity[slot]);
-        r->held = xrealloc(r->held, s->ring_capacity[slot]);
+        s->rings[slot] = xrealloc(s->rings[slot], sizeof(ring_entry) * s->ring_capacity[slot]);
     }
-    return view_of(s->rings[slot], fill_ring(e, v, *f, s->rings[slot], (uint32_t)capacity));
+    ring r = {s->rings[slot], fill_ring(e, v, *f, s->rings[slot], (uint32_t)capacity)};
+    return r;
 }
 
 /* The one-ring of v in this pass (built by build_ring). */
 static ring ring_of(const engine *e, uint32_t v)
 {
-    return view_of(ring_store_at(&e->rings, (size_t)e->adjacency_start[v] + v), e->ring_size[v]);
+    ring r = {pass_ring_entries(e, v), e->ring_size[v]};
+    return r;
 }
 
 /* Whether the ring can be one fan of manifold edges: every edge in at most two triangles and at
@@ -446,9 +464,9 @@ static int ring_simple(const ring *r, int *boundary)
 {
     int open = 0;
     for (uint32_t i = 0; i < r->size; i++) {
-        if (r->count[i] > 2)
+        if (r->entry[i].count > 2)
             return 0;
-        open += r->count[i] == 1;
+        open += r->entry[i].count == 1;
     }
     *boundary = open > 0;
     return open <= 2;
@@ -666,15 +684,22 @@ static void attribute_merge(engine *e, uint32_t from, uint32_t into)
         t[k] += f[k];
 }
 
+/* A triangle's corner positions into p. */
+static void triangle_positions(const engine *e, uint32_t t, const float *p[3])
+{
+    const uint32_t *c = corners(e, t);
+    for (int k = 0; k < 3; k++)
+        p[k] = position(e, c[k]);
+}
+
 /* The mean of a triangle's vertex importance, and its corner positions into p. */
 static double triangle_points(const engine *e, uint32_t t, const float *p[3])
 {
     const uint32_t *c = corners(e, t);
+    triangle_positions(e, t, p);
     double sum = 0;
-    for (int k = 0; k < 3; k++) {
-        p[k] = position(e, c[k]);
+    for (int k = 0; k < 3; k++)
         sum += e->importance[c[k]];
-    }
     return sum / 3.0;
 }
 
@@ -744,9 +769,11 @@ static void build_quadric(engine *e, uint32_t v)
         uint32_t t = f.triangle[i];
         const uint32_t *c = corners(e, t);
         const float *p[3];
-        double face_importance = triangle_points(e, t, p) + e->importance_floor, n[3];
-        if (!combined)
-            face_importance = 1.0;
+        double face_importance = 1.0, n[3]; /* QUADRIC: the planes unweighted by importance */
+        if (combined)
+            face_importance = triangle_points(e, t, p) + e->importance_floor;
+        else
+            triangle_positions(e, t, p);
         normal_of(p, n);
         double twice_area = sqrt(dot(n, n));
         if (!(twice_area > 0))
@@ -795,7 +822,7 @@ static int normals_kept(const engine *e, const ring *r0, uint32_t v0, uint32_t v
 {
     const float *p1 = position(e, v1);
     for (uint32_t i = 0; i < r0->size; i++) { /* v0's triangles: (v0, vertex[i], left[i]) */
-        uint32_t a = r0->vertex[i], b = r0->left[i];
+        uint32_t a = r0->entry[i].vertex, b = r0->entry[i].left;
         if (b == COLLAPSE_NONE || a == v1 || b == v1)
             continue;
         const float *before[3] = {position(e, v0), position(e, a), position(e, b)};
@@ -822,8 +849,8 @@ static int outline_kept(const engine *e, uint32_t v0, uint32_t v1, const ring *r
 {
     uint32_t open[2], count = 0;
     for (uint32_t i = 0; i < r0->size; i++)
-        if (r0->count[i] == 1 && count < 2)
-            open[count++] = r0->vertex[i];
+        if (r0->entry[i].count == 1 && count < 2)
+            open[count++] = r0->entry[i].vertex;
     if (count != 2 || (open[0] != v1 && open[1] != v1))
         return 0;
     uint32_t u = open[0] == v1 ? open[1] : open[0];
@@ -911,7 +938,7 @@ static int valence_three(const engine *e, uint32_t v, int current, uint32_t hold
         ring r = ring_of(e, v);
         return holding == COLLAPSE_NONE || ring_count(&r, holding);
     }
-    uint32_t seen[3], count = 0, sources[2] = {v, e->donor[v]};
+    uint32_t seen[3], count = 0, sources[2] = {v, donor_of(e, v)};
     for (int k = 0; k < 2; k++) {
         if (sources[k] == COLLAPSE_NONE)
             continue;
@@ -948,14 +975,14 @@ static int collapse_legal(const engine *e, uint32_t v0, uint32_t v1, fan f0, con
     uint32_t slot = ring_find(r0, v1);
     if (slot == r0->size)
         return *rule = "not an edge", 0;
-    uint32_t held = r0->count[slot];
+    uint32_t held = r0->entry[slot].count;
     if (e->m->locked && e->m->locked[v1]) /* the caller's (flags[v1] may be being rewritten) */
         return *rule = "locked", 0;
     ring ring1 = ring_for(e, v1, current, s, SLOT_V1), *r1 = &ring1;
     int boundary1;
     if (!ring_simple(r1, &boundary1))
         return *rule = "complex vertex", 0;
-    uint32_t vl = r0->left[slot], vr = r0->right[slot];
+    uint32_t vl = r0->entry[slot].left, vr = r0->entry[slot].right;
     /* A triangle of the edge whose other two edges are open would leave a dangling edge. */
     if (vl != COLLAPSE_NONE && ring_count(r1, vl) == 1 && ring_count(r0, vl) == 1)
         return *rule = "dangling edge", 0;
@@ -969,7 +996,7 @@ static int collapse_legal(const engine *e, uint32_t v0, uint32_t v1, fan f0, con
     if (boundary0 && (!boundary1 || both_sides))
         return *rule = "boundary vertex off the boundary", 0;
     for (uint32_t i = 0; i < r0->size; i++) {
-        uint32_t w = r0->vertex[i];
+        uint32_t w = r0->entry[i].vertex;
         if (w != v1 && w != vl && w != vr && ring_count(r1, w))
             return *rule = "link condition", 0;
     }
@@ -1041,7 +1068,7 @@ static size_t target_keys(const engine *e, uint32_t v, fan f0, const ring *r0, s
     }
     int by_importance = e->o->method == DECIMATE_IMPORTANCE;
     for (uint32_t i = 0; i < r0->size; i++) {
-        uint32_t u = r0->vertex[i];
+        uint32_t u = r0->entry[i].vertex;
         s->targets[i].vertex = u;
         s->targets[i].distance = distance_of(e, u);
         s->targets[i].key = by_importance ? e->importance[u] : collapse_cost(e, f0, v, u, s);
@@ -1058,7 +1085,7 @@ static void set_best(engine *e, uint32_t v, const ring *r0, const target_key *t)
     if (by_importance) {
         priority = e->importance[v];
         for (uint32_t k = 0; k < r0->size; k++)
-            priority += e->importance[r0->vertex[k]];
+            priority += e->importance[r0->entry[k].vertex];
         CHECK_FINITE(priority, "ring importance");
     }
     e->best_target[v] = t->vertex;
@@ -1121,7 +1148,6 @@ static void settle_vertex(engine *e, uint32_t v, scratch *s)
     else if (flags & FLAG_STALE)
         score_vertex(e, v, s);
     e->flags[v] = flags & (uint8_t) ~(FLAG_STALE | FLAG_TOUCHED | FLAG_TAKEN);
-    e->donor[v] = COLLAPSE_NONE;
 }
 
 /* ---- the per-vertex steps, in parallel ---- */
@@ -1467,7 +1493,7 @@ static size_t add_id(scratch *s, size_t count, uint32_t id)
 static size_t current_ids(const engine *e, uint32_t v, uint32_t without_a, uint32_t without_b,
                           scratch *s, size_t count)
 {
-    uint32_t sources[2] = {v, e->donor[v]};
+    uint32_t sources[2] = {v, donor_of(e, v)};
     for (int k = 0; k < 2; k++) {
         if (sources[k] == COLLAPSE_NONE)
             continue;
@@ -1559,9 +1585,12 @@ static void apply_collapse(engine *e, fan f0, uint32_t v0, uint32_t v1, uint32_t
             e->m->corner_ids[3 * (size_t)t + k] =
                 mapped_id(&map, e->m->corner_ids[3 * (size_t)t + k]);
     }
-    if (e->quadric)
+    if (e->quadric) {
+        double *q1 = &e->quadric[10 * (size_t)v1];
         for (int k = 0; k < 10; k++)
-            e->quadric[10 * (size_t)v1 + k] += e->quadric[10 * (size_t)v0 + k];
+            q1[k] += e->quadric[10 * (size_t)v0 + k];
+        e->self_error[v1] = quadric_error(q1, position(e, v1));
+    }
     if (e->o->method == DECIMATE_IMPORTANCE)
         e->importance[v1] += e->importance[v0];
     flag(e, v0, FLAG_REMOVED | FLAG_TAKEN);
@@ -1598,7 +1627,7 @@ static void judge(const engine *e, uint32_t v0, uint32_t v1, scratch *s, judgeme
     j->verdict = VERDICT_ILLEGAL;
     if (slot == r0.size)
         return; /* no longer neighbours */
-    j->vl = r0.left[slot], j->vr = r0.right[slot];
+    j->vl = r0.entry[slot].left, j->vr = r0.entry[slot].right;
     if (neighbourhood_touched(e, j)) {
         const char *rule;
         int boundary0;
@@ -1611,7 +1640,7 @@ static void judge(const engine *e, uint32_t v0, uint32_t v1, scratch *s, judgeme
     j->writes[0] = v0;
     j->write_count = r0.size + 1 <= WRITES_MAX ? (uint8_t)(r0.size + 1) : WRITES_MAX + 1;
     for (uint32_t i = 0; i < r0.size && i + 1 < WRITES_MAX; i++)
-        j->writes[i + 1] = r0.vertex[i];
+        j->writes[i + 1] = r0.entry[i].vertex;
 }
 
 /* Takes a judged collapse (no collapse taken since touched v0's triangles): apply_collapse on
@@ -1634,25 +1663,36 @@ static void apply_item(engine *e, uint32_t item, scratch *s)
     take(e, &e->judgements[e->accepted[item]], s);
 }
 
-/* Whether a collapse accepted earlier in this chunk wrote vertex v. */
-static int stamped(const engine *e, uint32_t v)
+/* Whether a collapse accepted earlier in this chunk writes vertex v. */
+static int written(const engine *e, uint32_t v)
 {
-    return v != COLLAPSE_NONE && e->stamp[v] == e->chunk_stamp;
+    return v != COLLAPSE_NONE && (e->flags[v] & FLAG_WRITTEN);
+}
+
+/* Marks v written in this chunk (a bit of its flags, which the chunk's judging has just read,
+ * and a list to clear them by). No step runs on the pool meanwhile. */
+static void mark_written(engine *e, uint32_t v)
+{
+    if (e->flags[v] & FLAG_WRITTEN)
+        return;
+    e->flags[v] |= FLAG_WRITTEN;
+    reserve((void **)&e->written, &e->written_capacity, e->written_count + 1, sizeof(uint32_t));
+    e->written[e->written_count++] = v;
 }
 
 /* Marks what taking the judged collapse writes: v0 and its ring. */
-static void stamp_writes(engine *e, const judgement *j, scratch *s)
+static void mark_writes(engine *e, const judgement *j, scratch *s)
 {
     if (j->write_count <= WRITES_MAX) {
         for (uint32_t i = 0; i < j->write_count; i++)
-            e->stamp[j->writes[i]] = e->chunk_stamp;
+            mark_written(e, j->writes[i]);
         return;
     }
     fan f0;
     ring r0 = current_ring(e, j->v0, s, SLOT_V0, &f0);
-    e->stamp[j->v0] = e->chunk_stamp;
+    mark_written(e, j->v0);
     for (uint32_t i = 0; i < r0.size; i++)
-        e->stamp[r0.vertex[i]] = e->chunk_stamp;
+        mark_written(e, r0.entry[i].vertex);
 }
 
 /* Takes the ranked candidates list[0 .. count) in order, greedily, in chunks of CHUNK
@@ -1678,7 +1718,6 @@ static uint32_t take_in_chunks(engine *e, const candidate *list, size_t count, f
         while (n < CHUNK && next < count)
             items[n++] = (uint32_t)next++;
         run_on_pool(e, STEP_JUDGE, n, JUDGE_BLOCK);
-        e->chunk_stamp++;
         uint32_t accepted = 0;
         deferred = 0;
         for (uint32_t i = 0; i < n; i++) {
@@ -1687,15 +1726,15 @@ static uint32_t take_in_chunks(engine *e, const candidate *list, size_t count, f
                 stop = 1;
                 break;
             }
-            if (stamped(e, j->v0) || stamped(e, j->v1) || stamped(e, j->vl) ||
-                stamped(e, j->vr)) {
+            if (written(e, j->v0) || written(e, j->v1) || written(e, j->vl) ||
+                written(e, j->vr)) {
                 e->deferred[deferred++] = items[i];
                 continue;
             }
             if (j->verdict != VERDICT_LEGAL)
                 continue;
             e->accepted[accepted++] = i;
-            stamp_writes(e, j, s);
+            mark_writes(e, j, s);
             e->alive = e->alive > j->removes ? e->alive - j->removes : 0;
             taken++;
             if (e->alive <= e->o->target_vertices) {
@@ -1705,6 +1744,9 @@ static uint32_t take_in_chunks(engine *e, const candidate *list, size_t count, f
         }
         if (accepted)
             run_on_pool(e, STEP_APPLY, accepted, APPLY_BLOCK);
+        for (size_t k = 0; k < e->written_count; k++)
+            e->flags[e->written[k]] &= (uint8_t)~FLAG_WRITTEN;
+        e->written_count = 0;
         memcpy(items, e->deferred, sizeof(uint32_t) * deferred);
     }
     return taken;
@@ -1740,10 +1782,7 @@ static void engine_free(engine *e)
     free(e->adjacency_start);
     free(e->adjacency);
     free(e->live);
-    free(e->rings.vertex);
-    free(e->rings.left);
-    free(e->rings.right);
-    free(e->rings.held);
+    free(e->rings);
     free(e->ring_size);
     free(e->quadric);
     free(e->self_error);
@@ -1759,7 +1798,7 @@ static void engine_free(engine *e)
     free(e->chunk_items);
     free(e->accepted);
     free(e->deferred);
-    free(e->stamp);
+    free(e->written);
     memset(e, 0, sizeof *e);
 }
 
@@ -1816,20 +1855,17 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     size_t n = (size_t)e->n + 1;
     e->flags = xcalloc(n, 1);
     e->adjacency_start = xmalloc(sizeof(uint32_t) * (n + 1));
-    e->adjacency = xmalloc(sizeof(uint32_t) * (3 * (size_t)e->t + 1));
+    e->adjacency = large_array(sizeof(uint32_t) * (3 * (size_t)e->t + 1));
     e->live = xmalloc(sizeof(uint32_t) * ((size_t)e->t + 1));
     for (uint32_t t = 0; t < e->t; t++)
         e->live[t] = t;
     e->live_count = e->t;
     size_t ring_slots = 3 * (size_t)e->t + n;
-    e->rings.vertex = xmalloc(sizeof(uint32_t) * ring_slots);
-    e->rings.left = xmalloc(sizeof(uint32_t) * ring_slots);
-    e->rings.right = xmalloc(sizeof(uint32_t) * ring_slots);
-    e->rings.held = xmalloc(ring_slots);
+    e->rings = large_array(sizeof(ring_entry) * ring_slots);
     e->ring_size = xcalloc(n, sizeof(uint32_t));
     e->donor = xmalloc(sizeof(uint32_t) * n);
     e->best_target = xmalloc(sizeof(uint32_t) * n);
-    e->best = xmalloc(sizeof(candidate) * n);
+    e->best = large_array(sizeof(candidate) * n);
     e->importance = xcalloc(n, sizeof(double));
     if (m->importance)
         memcpy(e->importance, m->importance, sizeof(double) * e->n);
@@ -1837,7 +1873,7 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
         /* Written, not summed into, by the first rings step (build_quadric): summed into
          * calloc's fresh pages, read before they were written, that step took 0.12 s on the
          * dragon with two threads, 0.04 s once the pages were in. */
-        e->quadric = xmalloc(sizeof(double) * 10 * n);
+        e->quadric = large_array(sizeof(double) * 10 * n);
         e->self_error = xmalloc(sizeof(double) * n);
     }
     for (uint32_t v = 0; v < e->n; v++) {
@@ -1856,7 +1892,6 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
         e->importance_floor = importance_floor(e);
     }
     for_each_vertex(e, STEP_FIRST_RINGS); /* and the quadrics */
-    e->quadrics_built = e->quadric != NULL;
     scratch s;
     memset(&s, 0, sizeof s);
     for (uint32_t v = 0; v < e->n; v++)
@@ -1869,13 +1904,13 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
 
 size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_method method)
 {
-    /* flags, adjacency_start, ring_size, donor, best_target, stamp, best, importance, the
+    /* flags, adjacency_start, ring_size, donor, best_target, best, importance, the
      * ranking's keys (and their spare) and list, the quadric and its own error; a ring slot
-     * (vertex, left, right, held); per triangle its place in the live list */
-    size_t per_vertex = 1 + 4 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
+     * (its ring_entry); per triangle its place in the live list */
+    size_t per_vertex = 1 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
                         2 * sizeof(rank_key) + sizeof(candidate) +
                         (method != DECIMATE_IMPORTANCE ? 11 * sizeof(double) : 0);
-    size_t ring_slot = 3 * sizeof(uint32_t) + 1;
+    size_t ring_slot = sizeof(ring_entry);
     /* per corner: the adjacency and a ring slot */
     size_t per_corner = sizeof(uint32_t) + ring_slot;
     return (per_vertex + ring_slot) * ((size_t)vertex_count + 1) +
@@ -1892,7 +1927,7 @@ int collapse_run(collapse_mesh *m, const collapse_options *o, collapse_result *r
     result->vertices_before = e.alive;
     result->collapses = 0;
     result->passes = 0;
-    e.list = xmalloc(sizeof(candidate) * ((size_t)e.n + 1));
+    e.list = large_array(sizeof(candidate) * ((size_t)e.n + 1));
     e.keys = xmalloc(sizeof(rank_key) * ((size_t)e.n + 1));
     e.spare_keys = xmalloc(sizeof(rank_key) * ((size_t)e.n + 1));
     e.history = result->collapsed_into;
@@ -1900,7 +1935,6 @@ int collapse_run(collapse_mesh *m, const collapse_options *o, collapse_result *r
     e.chunk_items = xmalloc(sizeof(uint32_t) * CHUNK);
     e.accepted = xmalloc(sizeof(uint32_t) * CHUNK);
     e.deferred = xmalloc(sizeof(uint32_t) * CHUNK);
-    e.stamp = xcalloc((size_t)e.n + 1, sizeof(uint32_t));
     scratch s;
     memset(&s, 0, sizeof s);
     while (e.alive > o->target_vertices) {
@@ -1953,7 +1987,7 @@ int collapse_evaluate(const collapse_mesh *mesh, const collapse_options *options
         if (options->method == DECIMATE_IMPORTANCE) {
             *cost = e.importance[v0];
             for (uint32_t k = 0; k < r0.size; k++)
-                *cost += e.importance[r0.vertex[k]];
+                *cost += e.importance[r0.entry[k].vertex];
         } else {
             *cost = collapse_cost(&e, f0, v0, v1, &s);
         }

@@ -48,9 +48,9 @@
  * the least important neighbour. After a collapse v1 holds v0's quadric (or importance).
  *
  * Memory: collapse_memory() says it (per vertex: flags, the quadric and its own error, the
- * importance, the scores, the ranking's keys and list, the donor and stamps; per triangle
- * corner: the adjacency and a ring slot; per triangle: its place in the live list), 304 bytes
- * per vertex of the dragon with the quadric methods, 216 with IMPORTANCE; COMBINED adds its
+ * importance, the scores, the ranking's keys and list, the donor; per triangle corner: the
+ * adjacency and a ring slot of 16 bytes; per triangle: its place in the live list), 320 bytes
+ * per vertex of the dragon with the quadric methods, 232 with IMPORTANCE; COMBINED adds its
  * attribute quadrics per attribute set. The caller's arrays are used in place: the triangles and
  * corner ids are rewritten, nothing else. */
 #ifndef IDMR_COLLAPSE_H
