@@ -17,10 +17,10 @@
  * Eq. 3 and the per-vertex importance move with it. The scene is decimated again at the same D
  * and measured. A round whose error is below the best so far by more than its standard error
  * (error + standard error < the best's error: the check renders' noise alone does not choose)
- * is kept, and the next round takes its weights from its change; a round that is not kept halves λ and tries again from the best
- * (its error importance reused). After N rounds (or once no pixel's change stands above the
- * noise) the best round is left decimated, so the result's measured error is never above round
- * 0's. The error importance goes into the light importance sums (report.json's importance
+ * is kept, and the next round takes its weights from its change; a round that is not kept
+ * halves λ and tries again from the best (its error importance reused). After N rounds (or once
+ * no pixel's change stands above the noise) the best round is left decimated, so the result's
+ * measured error is never above round 0's. The error importance goes into the light importance sums (report.json's importance
  * outputs show the mixed importance). */
 #include <math.h>
 #include <stdio.h>

@@ -2,9 +2,10 @@
  * reduced scene in the staging directory. A Mitsuba scene: meshes/NAME.ply for every mesh the
  * plan decimated, a shapegroup's shape once, in the group's space (each read back and checked:
  * io/ply_check.h), and scene.xml, the input's XML with those shapes pointing to them and its
- * shapegroups and instances kept (io/mitsuba_write.h, reduce_instances.c); a glTF scene: scene.gltf (.glb) with the decimated
- * meshes in it (io/gltf.h); a pbrt-v4 scene: meshes/NAME.ply in each shape's own
- * space and scene.pbrt, the input's text with those Shape statements naming them (io/pbrt.h). */
+ * shapegroups and instances kept (io/mitsuba_write.h, reduce_instances.c); a glTF scene:
+ * scene.gltf (.glb) with the decimated meshes in it, a mesh that nodes share still shared
+ * (io/gltf.h); a pbrt-v4 scene: meshes/NAME.ply in each shape's own space and scene.pbrt, the
+ * input's text with those Shape statements naming them, an object's shape once (io/pbrt.h). */
 #include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
