@@ -208,6 +208,23 @@ static void add_search_seconds(cJSON *parent, const char *name, const error_sear
     cJSON_AddNumberToObject(stages, "compare", t->compare);
 }
 
+/* The check renders (reduce_error_budget.c) as `check_render` of parent: iterations, photons,
+ * film scale and size, the first gather radius every render shares, the seeds. */
+static void add_check_render(cJSON *parent, const reduce_state *st)
+{
+    const reduce_error_options *o = &st->options->error;
+    cJSON *check = cJSON_AddObjectToObject(parent, "check_render");
+    cJSON_AddNumberToObject(check, "iterations", o->iterations);
+    cJSON_AddNumberToObject(check, "photons", o->photons);
+    cJSON_AddNumberToObject(check, "resolution", o->resolution);
+    cJSON_AddNumberToObject(check, "width", st->error_search.width);
+    cJSON_AddNumberToObject(check, "height", st->error_search.height);
+    cJSON_AddNumberToObject(check, "first_radius", st->error_search.radius);
+    cJSON *seeds = cJSON_AddArrayToObject(check, "seeds");
+    cJSON_AddItemToArray(seeds, cJSON_CreateNumber(1));
+    cJSON_AddItemToArray(seeds, cJSON_CreateNumber(2));
+}
+
 /* The refinement (null without --refine): each round's mix λ, pixels weighted, paired error
  * and standard error of the check renders, vertices, seconds and whether it was kept; the round
  * written, and its error over round 0's (the importance-only reduction at the same D). */
@@ -222,14 +239,7 @@ static void add_refine(cJSON *root, const reduce_state *st)
     cJSON_AddNumberToObject(refine, "rounds_asked", st->options->refine);
     cJSON_AddNumberToObject(refine, "target", st->target);
     cJSON_AddNumberToObject(refine, "error_importance_passes", rf->error_passes);
-    const reduce_error_options *o = &st->options->error;
-    cJSON *check = cJSON_AddObjectToObject(refine, "check_render");
-    cJSON_AddNumberToObject(check, "iterations", o->iterations);
-    cJSON_AddNumberToObject(check, "photons", o->photons);
-    cJSON_AddNumberToObject(check, "resolution", o->resolution);
-    cJSON_AddNumberToObject(check, "width", st->error_search.width);
-    cJSON_AddNumberToObject(check, "height", st->error_search.height);
-    cJSON_AddNumberToObject(check, "first_radius", st->error_search.radius);
+    add_check_render(refine, st);
     cJSON *rounds = cJSON_AddArrayToObject(refine, "rounds");
     for (unsigned int k = 0; k < rf->round_count; k++) {
         const reduce_refine_round *r = &rf->rounds[k];
@@ -277,16 +287,7 @@ static void add_error_budget(cJSON *root, const reduce_state *st)
     cJSON_AddNumberToObject(budget, "step", o->step);
     cJSON_AddNumberToObject(budget, "floor", e->floor);
     cJSON_AddNumberToObject(budget, "steps_failed_by_noise", e->noise_decided);
-    cJSON *check = cJSON_AddObjectToObject(budget, "check_render");
-    cJSON_AddNumberToObject(check, "iterations", o->iterations);
-    cJSON_AddNumberToObject(check, "photons", o->photons);
-    cJSON_AddNumberToObject(check, "resolution", o->resolution);
-    cJSON_AddNumberToObject(check, "width", e->width);
-    cJSON_AddNumberToObject(check, "height", e->height);
-    cJSON_AddNumberToObject(check, "first_radius", e->radius);
-    cJSON *seeds = cJSON_AddArrayToObject(check, "seeds");
-    cJSON_AddItemToArray(seeds, cJSON_CreateNumber(1));
-    cJSON_AddItemToArray(seeds, cJSON_CreateNumber(2));
+    add_check_render(budget, st);
     cJSON *curve = cJSON_AddArrayToObject(budget, "curve");
     error_search_seconds steps_total = {0};
     for (size_t k = 0; k < e->result.count; k++) {
