@@ -23,7 +23,7 @@
 #include "io/mitsuba_xml.h"
 #include "io/shapes.h"
 #include "io/spectrum.h"
-#include "io/xform.h"
+#include "core/xform.h"
 
 #define EPS 1e-4f
 

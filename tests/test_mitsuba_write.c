@@ -24,7 +24,7 @@
 #include "io/mitsuba_paths.h"
 #include "io/mitsuba_write.h"
 #include "io/shapes.h"
-#include "io/xform.h"
+#include "core/xform.h"
 
 /* ---------------------------------------------------------------------------------------- */
 /* Helpers                                                                                  */

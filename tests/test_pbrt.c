@@ -21,7 +21,7 @@
 #include "io/pbrt.h"
 #include "io/pbrt_loader.h"
 #include "io/scene_export.h"
-#include "io/xform.h"
+#include "core/xform.h"
 #include <zlib.h>
 #include "reduce/reduce.h"
 

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "core/error.h"
+#include "core/xform.h"
 
 scene *scene_create(const char *file)
 {
@@ -48,6 +49,7 @@ void scene_free(scene *s)
         free(s->textures[i].rgb);
     }
     free(s->meshes);
+    free(s->numbered_meshes);
     free(s->mesh_names);
     free(s->mesh_name_next);
     free(s->materials);
@@ -167,6 +169,112 @@ scene_mesh *scene_add_mesh(scene *s, const char *name, const char *shape_type, c
     m->light = -1;
     index_mesh_name(s, s->mesh_count - 1);
     return m;
+}
+
+/* The placement carrying geometry placed by `first_to_world` to where `copy_to_world` places
+ * it: copy_to_world × first_to_world^-1 (row-major 4x4). 0, or -1 when the first is singular. */
+static int placement_between(const double first_to_world[16], const double copy_to_world[16],
+                             xform *placement)
+{
+    xform first_world = xform_from_rows(first_to_world), first_object;
+    if (xform_invert_affine(&first_world, &first_object))
+        return -1;
+    xform copy_world = xform_from_rows(copy_to_world);
+    *placement = xform_multiply(&copy_world, &first_object);
+    return 0;
+}
+
+int scene_instance_placement(const scene *s, size_t m, double object_to_world[16])
+{
+    xform placement = xform_identity();
+    if (scene_mesh_is_later_copy(s, m)) {
+        const scene_mesh *first = &s->meshes[s->meshes[m].instance_first];
+        if (placement_between(first->instance_to_world, s->meshes[m].instance_to_world,
+                              &placement))
+            return error_set(IDMR_EXIT_INPUT,
+                             "mesh '%s': the transform of its shape's first instance is "
+                             "singular, so its copy '%s' cannot be placed from it",
+                             first->name, s->meshes[m].name);
+    }
+    memcpy(object_to_world, placement.m, sizeof placement.m);
+    return 0;
+}
+
+/* Mesh m's box (a later copy's): the representative's vertices carried by the placement when
+ * they are in memory, else the eight corners of the representative's box carried so (a
+ * bound, not the exact box). */
+static void later_copy_box(scene *s, size_t m, const xform *placement)
+{
+    scene_mesh *mesh = &s->meshes[m];
+    const scene_mesh *first = &s->meshes[mesh->instance_first];
+    for (int k = 0; k < 3; k++) {
+        mesh->box_min[k] = FLT_MAX;
+        mesh->box_max[k] = -FLT_MAX;
+    }
+    uint32_t points = first->released ? (first->vertex_count ? 8 : 0) : first->vertex_count;
+    for (uint32_t v = 0; v < points; v++) {
+        double p[3], world[3];
+        for (int k = 0; k < 3; k++)
+            p[k] = first->released ? ((v >> k) & 1 ? first->box_max[k] : first->box_min[k])
+                                   : first->positions[3 * (size_t)v + k];
+        xform_apply_point(placement, p, world);
+        for (int k = 0; k < 3; k++) {
+            mesh->box_min[k] = fminf(mesh->box_min[k], (float)world[k]);
+            mesh->box_max[k] = fmaxf(mesh->box_max[k], (float)world[k]);
+        }
+    }
+}
+
+/* Whether every triangle of mesh m (in memory, or released with no_area noted) has no area. */
+static int mesh_has_no_area(const scene_mesh *m)
+{
+    if (m->released)
+        return m->no_area;
+    for (uint32_t t = 0; t < m->triangle_count; t++)
+        if (scene_mesh_triangle_area(m, t) != 0.0)
+            return 0;
+    return 1;
+}
+
+scene_mesh *scene_add_instance_copy(scene *s, size_t representative, const char *name,
+                                    const double to_world[16])
+{
+    xform placement;
+    if (placement_between(s->meshes[representative].instance_to_world, to_world, &placement)) {
+        error_set(IDMR_EXIT_INPUT, "mesh '%s': the transform of its shape's first instance is "
+                                   "singular, so its copy '%s' cannot be placed from it",
+                  s->meshes[representative].name, name);
+        return NULL;
+    }
+    char *unique = unique_mesh_name(s, name && *name ? name : s->meshes[representative].name);
+    s->meshes = grown(s->meshes, s->mesh_count, sizeof *s->meshes);
+    size_t c = s->mesh_count++;
+    scene_mesh *first = &s->meshes[representative], *copy = &s->meshes[c];
+    memset(copy, 0, sizeof *copy);
+    copy->name = unique;
+    copy->shape_type = xstrdup(first->shape_type);
+    copy->file = first->file ? xstrdup(first->file) : NULL;
+    copy->xml_file = first->xml_file ? xstrdup(first->xml_file) : NULL;
+    copy->xml_line = first->xml_line;
+    copy->vertex_count = first->vertex_count;
+    copy->triangle_count = first->triangle_count;
+    copy->triangles_dropped = first->triangles_dropped;
+    copy->file_normals = first->file_normals;
+    copy->flat_normals = first->flat_normals;
+    copy->material = first->material;
+    copy->light = -1;
+    copy->released = 1;
+    copy->had_texcoords = first->released ? first->had_texcoords : first->texcoords != NULL;
+    copy->had_normals = first->released ? first->had_normals : first->normals != NULL;
+    copy->no_area = mesh_has_no_area(first);
+    copy->instanced = 1;
+    copy->instance_first = representative;
+    memcpy(copy->instance_to_world, to_world, sizeof copy->instance_to_world);
+    s->meshes[first->instance_last ? first->instance_last : representative].instance_next = c;
+    first->instance_last = c;
+    later_copy_box(s, c, &placement);
+    index_mesh_name(s, c);
+    return copy;
 }
 
 uint32_t scene_add_material(scene *s, const char *name, const char *bsdf_type,
@@ -431,9 +539,25 @@ static void finalize_lights(scene *s)
     }
 }
 
+/* Frees mesh's geometry arrays. */
+static void free_geometry(scene_mesh *mesh)
+{
+    free(mesh->positions);
+    free(mesh->indices);
+    free(mesh->texcoords);
+    free(mesh->normals);
+    mesh->positions = mesh->texcoords = mesh->normals = NULL;
+    mesh->indices = NULL;
+}
+
 void scene_mesh_release(scene *s, size_t m)
 {
     scene_mesh *mesh = &s->meshes[m];
+    if (scene_mesh_is_later_copy(s, m)) {
+        free_geometry(mesh); /* its box and flags were set when it was added */
+        mesh->released = 1;
+        return;
+    }
     if (!mesh->source || !s->restore_mesh || mesh->light >= 0 || mesh->released)
         return;
     mesh->had_texcoords = mesh->texcoords != NULL;
@@ -450,12 +574,7 @@ void scene_mesh_release(scene *s, size_t m)
             mesh->box_min[k] = fminf(mesh->box_min[k], mesh->positions[3 * (size_t)v + k]);
             mesh->box_max[k] = fmaxf(mesh->box_max[k], mesh->positions[3 * (size_t)v + k]);
         }
-    free(mesh->positions);
-    free(mesh->indices);
-    free(mesh->texcoords);
-    free(mesh->normals);
-    mesh->positions = mesh->texcoords = mesh->normals = NULL;
-    mesh->indices = NULL;
+    free_geometry(mesh);
     mesh->released = 1;
 }
 
@@ -472,11 +591,48 @@ void scene_mesh_set_geometry(scene_mesh *mesh, uint32_t vertex_count, float *pos
     mesh->released = 0;
 }
 
+/* A malloc'd copy of `bytes` at `from`, or NULL for NULL. */
+static void *duplicate(const void *from, size_t bytes)
+{
+    if (!from)
+        return NULL;
+    void *to = xmalloc(bytes ? bytes : 1);
+    memcpy(to, from, bytes);
+    return to;
+}
+
+/* Makes later copy m's world-space geometry from its representative's (read again for the
+ * while if it is released). 0, or -1 with the error set. */
+static int restore_later_copy(scene *s, size_t m)
+{
+    size_t r = s->meshes[m].instance_first;
+    int first_was_released = s->meshes[r].released;
+    double rows[16];
+    if (scene_instance_placement(s, m, rows) || scene_mesh_restore(s, r))
+        return -1;
+    const scene_mesh *first = &s->meshes[r];
+    scene_mesh *copy = &s->meshes[m];
+    size_t v = first->vertex_count, t = first->triangle_count;
+    scene_mesh_set_geometry(copy, first->vertex_count,
+                            duplicate(first->positions, 3 * v * sizeof *first->positions),
+                            first->triangle_count,
+                            duplicate(first->indices, 3 * t * sizeof *first->indices),
+                            duplicate(first->texcoords, 2 * v * sizeof *first->texcoords),
+                            duplicate(first->normals, 3 * v * sizeof *first->normals));
+    xform placement = xform_from_rows(rows);
+    xform_apply_keeping_side(&placement, copy->positions, copy->normals, v, copy->indices, t);
+    if (first_was_released)
+        scene_mesh_release(s, r);
+    return 0;
+}
+
 int scene_mesh_restore(scene *s, size_t m)
 {
     scene_mesh *mesh = &s->meshes[m];
     if (!mesh->released)
         return 0;
+    if (scene_mesh_is_later_copy(s, m))
+        return restore_later_copy(s, m);
     uint32_t vertices = mesh->vertex_count, triangles = mesh->triangle_count;
     if (s->restore_mesh(mesh->source, mesh))
         return -1;
@@ -499,6 +655,8 @@ scene *scene_view(const scene *s)
     view->lights = xmalloc((s->light_count + 1) * sizeof *view->lights);
     if (s->light_count)
         memcpy(view->lights, s->lights, s->light_count * sizeof *view->lights);
+    view->numbered_meshes = NULL; /* its own, from its scene_finalize() */
+    view->numbered_mesh_count = 0;
     return view;
 }
 
@@ -508,14 +666,37 @@ void scene_view_free(scene *view)
         return;
     free(view->meshes);
     free(view->lights);
+    free(view->numbered_meshes);
     free(view);
 }
 
 int scene_finalize(scene *s)
 {
-    uint64_t triangles = 0, vertices = 0;
+    uint64_t triangles = 0, vertices = 0, rendered_triangles = 0, rendered_vertices = 0;
+    int later_copies = 0;
+    free(s->numbered_meshes);
+    s->numbered_meshes = xmalloc((s->mesh_count + 1) * sizeof *s->numbered_meshes);
+    s->numbered_mesh_count = 0;
     for (size_t i = 0; i < s->mesh_count; i++) {
         scene_mesh *m = &s->meshes[i];
+        if (scene_mesh_is_later_copy(s, i)) {
+            /* its triangles are its representative's (numbered before it: the first copy comes
+             * first), its box follows the representative's geometry */
+            const scene_mesh *first = &s->meshes[m->instance_first];
+            m->vertex_count = first->vertex_count;
+            m->triangle_count = first->triangle_count;
+            m->first_triangle = first->first_triangle;
+            double rows[16];
+            if (scene_instance_placement(s, i, rows))
+                return -1;
+            xform placement = xform_from_rows(rows);
+            later_copy_box(s, i, &placement);
+            rendered_triangles += m->triangle_count;
+            rendered_vertices += m->vertex_count;
+            later_copies = 1;
+            continue;
+        }
+        s->numbered_meshes[s->numbered_mesh_count++] = i;
         if (triangles + m->triangle_count > UINT32_MAX - 1)
             return error_set(IDMR_EXIT_INPUT,
                              "%s: more than %u triangles in the scene (at mesh '%s'): the "
@@ -524,6 +705,8 @@ int scene_finalize(scene *s)
         m->first_triangle = (uint32_t)triangles;
         triangles += m->triangle_count;
         vertices += m->vertex_count;
+        rendered_triangles += m->triangle_count;
+        rendered_vertices += m->vertex_count;
         for (uint64_t t = 0; !m->released && t < 3 * (uint64_t)m->triangle_count; t++)
             if (m->indices[t] >= m->vertex_count)
                 return error_set(IDMR_EXIT_INPUT, "%s: mesh '%s': triangle %llu uses vertex %u of %u",
@@ -532,6 +715,8 @@ int scene_finalize(scene *s)
     }
     s->triangle_count = triangles;
     s->vertex_count = vertices;
+    s->rendered_triangle_count = rendered_triangles;
+    s->rendered_vertex_count = rendered_vertices;
 
     for (int k = 0; k < 3; k++) {
         s->bbox_min[k] = FLT_MAX;
@@ -583,23 +768,27 @@ int scene_finalize(scene *s)
         IDMR_FEATURE_ENVIRONMENT};
     for (size_t i = 0; i < s->light_count; i++)
         features |= light_feature[s->lights[i].kind];
+    if (later_copies)
+        features |= IDMR_FEATURE_INSTANCES;
     s->features = features;
     return 0;
 }
 
 size_t scene_mesh_of_triangle(const scene *s, uint64_t triangle)
 {
-    size_t lo = 0, hi = s->mesh_count;
+    if (s->numbered_mesh_count == 0)
+        return 0;
+    size_t lo = 0, hi = s->numbered_mesh_count;
     while (hi - lo > 1) {
         size_t mid = lo + (hi - lo) / 2;
-        if (s->meshes[mid].first_triangle <= triangle)
+        if (s->meshes[s->numbered_meshes[mid]].first_triangle <= triangle)
             lo = mid;
         else
             hi = mid;
     }
     /* The last mesh starting at or before `triangle`: an empty mesh shares its first_triangle
      * with the next one, so it is never the last such mesh unless no mesh follows it. */
-    return lo;
+    return s->numbered_meshes[lo];
 }
 
 double scene_triangle_area(const scene *s, uint64_t triangle)

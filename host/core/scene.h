@@ -65,16 +65,22 @@ typedef struct scene_mesh {
     int instance_xml_line;
     /* A copy an instance placed (instanced set): of a Mitsuba shapegroup's shape (above), of a
      * pbrt-v4 object's shape placed by ObjectInstance, of a glTF primitive whose mesh several
-     * nodes name. The shape is the scene's prototype, stored once in a reduced scene
-     * (reduce/reduce_instances.c). instance_first is the mesh index of the first copy of the
-     * same shape (its representative: itself for that copy), instance_next the next copy of
-     * it, or 0 after the last (a later copy is never mesh 0); instance_to_world (row-major 4x4)
-     * is the instance's transform: this copy's points are instance_to_world times the
-     * prototype's (the shape's own transform applied), its winding reversed where the
-     * transform mirrors, as the loaders place every copy. Every copy of a shape has the same
-     * vertices and triangles in the same order. All zero for any other mesh. */
+     * nodes name. The shape is the scene's prototype, held once:
+     *   - instance_first is the mesh index of the first copy of the same shape, its
+     *     representative (itself for that copy), instance_next the next copy, or 0 after the
+     *     last (a later copy is never mesh 0), instance_last (of the representative) the last;
+     *   - instance_to_world (row-major 4x4) is the instance's transform: a copy's points are
+     *     instance_to_world times the prototype's (the shape's own transform applied), its
+     *     winding reversed where the transform mirrors;
+     *   - the representative holds the geometry, in its own world space; a later copy
+     *     (scene_mesh_is_later_copy) holds none: it is released (`released`, its box set) and
+     *     without a source, its counts are the representative's, its triangles are the
+     *     representative's (first_triangle: every per-triangle buffer, the importance
+     *     included, is per prototype and sums over the copies), and scene_mesh_restore() makes
+     *     its world-space geometry from the representative's (scene_instance_placement).
+     * All zero for any other mesh. */
     int instanced;
-    size_t instance_first, instance_next;
+    size_t instance_first, instance_next, instance_last;
     double instance_to_world[16];
 } scene_mesh;
 
@@ -145,8 +151,13 @@ typedef struct scene {
     /* Set by scene_finalize(). */
     scene_mesh_restore_fn restore_mesh;        /* set by a loader that gives meshes sources */
     scene_mesh_source_free_fn free_mesh_source;
-    uint64_t vertex_count;
-    uint64_t triangle_count;
+    uint64_t vertex_count;   /* stored: a prototype's vertices counted once */
+    uint64_t triangle_count; /* numbered: a prototype's triangles counted once */
+    uint64_t rendered_vertex_count; /* every copy counted: what a flattened scene would hold */
+    uint64_t rendered_triangle_count;
+    size_t *numbered_meshes;    /* the meshes that are not later copies, in order: their
+                                   first_triangle increases (scene_mesh_of_triangle) */
+    size_t numbered_mesh_count;
     float bbox_min[3];
     float bbox_max[3];
     unsigned int features; /* IDMR_FEATURE_* bits */
@@ -163,6 +174,27 @@ void scene_free(scene *s);
 scene_mesh *scene_add_mesh(scene *s, const char *name, const char *shape_type, const char *file,
                            int xml_line, uint32_t vertex_count, float *positions,
                            uint32_t triangle_count, uint32_t *indices, float *texcoords);
+
+/* Adds a later copy of the instanced shape whose representative is mesh `representative`
+ * (which the loader marked: instanced, instance_first itself, instance_to_world its own
+ * placement), placed by `to_world` (row-major 4x4, as instance_to_world): no geometry of its
+ * own (see scene_mesh), its box the representative's geometry carried by the placement (the
+ * representative's box's corners when that is released), chained after the last copy. The name
+ * is copied and made unique; file, shape type, XML place, material and flags are the
+ * representative's. Returns the new mesh. */
+scene_mesh *scene_add_instance_copy(scene *s, size_t representative, const char *name,
+                                    const double to_world[16]);
+
+/* Whether mesh m is an instanced shape's copy other than its first (no geometry of its own). */
+static inline int scene_mesh_is_later_copy(const scene *s, size_t m)
+{
+    return s->meshes[m].instanced && s->meshes[m].instance_first != m;
+}
+
+/* The row-major 4x4 that carries mesh m's representative's world-space geometry to mesh m's:
+ * T_m T_first^-1 of their instance_to_world (the identity for a mesh that is not a later copy).
+ * Returns 0, or -1 with the error set when the representative's transform is singular. */
+int scene_instance_placement(const scene *s, size_t m, double object_to_world[16]);
 
 /* Removes from the `*triangle_count` triangles of `indices` those that name one vertex twice
  * (no area; no half-edge mesh, OpenMesh's included, can hold one), keeping the others in
@@ -215,7 +247,9 @@ int scene_check_output_file(const scene *s, const char *path);
  * without a source, an emitter, and one already released are left as they are.
  * scene_mesh_restore() reads a released mesh's geometry again through the loader (0 when it is
  * in memory already); the counts must be those it had, or it fails naming the mesh. 0, or -1
- * with the error set. */
+ * with the error set. A later copy of an instanced shape is released from its creation; restoring
+ * it makes its world-space geometry from its representative's (restored first if need be),
+ * and releasing it frees that again. */
 void scene_mesh_release(scene *s, size_t m);
 int scene_mesh_restore(scene *s, size_t m);
 
@@ -233,7 +267,9 @@ void scene_mesh_set_geometry(scene_mesh *mesh, uint32_t vertex_count, float *pos
 scene *scene_view(const scene *s);
 void scene_view_free(scene *view);
 
-/* Numbers triangles, completes area lights, computes bbox and feature bits. Returns 0, or -1
+/* Numbers triangles (a later copy's are its representative's, its counts set to the
+ * representative's), completes area lights, computes bbox and feature bits
+ * (IDMR_FEATURE_INSTANCES when a later copy exists). Returns 0, or -1
  * with the error set (for example a scene with more than 2^32 - 1 triangles, or a coordinate
  * beyond SCENE_COORDINATE_LIMIT). */
 int scene_finalize(scene *s);
@@ -251,7 +287,8 @@ double scene_triangle_area(const scene *s, uint64_t triangle);
 /* Length of the bounding box's diagonal (0 for an empty scene). */
 double scene_diagonal(const scene *s);
 
-/* Which mesh holds scene triangle `triangle` (binary search over first_triangle). */
+/* Which mesh holds scene triangle `triangle` (binary search over first_triangle); never a later
+ * copy of an instanced shape (its triangles are its representative's). */
 size_t scene_mesh_of_triangle(const scene *s, uint64_t triangle);
 
 /* Names, for reports. */

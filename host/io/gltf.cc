@@ -23,7 +23,7 @@ extern "C" {
 #include "io/image.h"
 #include "io/mitsuba_paths.h"
 #include "io/shapes.h"
-#include "io/xform.h"
+#include "core/xform.h"
 }
 
 namespace {
@@ -346,33 +346,40 @@ int own_values(Loader &ld, int number, const char *name, uint32_t vertex_count,
     return gltf_accessor_read_floats(ld.doc, a, out.data()) ? -1 : 1;
 }
 
-// The instances (scene meshes 0 .. n - 1, in order) of a primitive that several nodes name
-// are chained as copies of one prototype (core/scene.h: instanced), each under its node's world
-// transform, so that `idmr reduce` reduces the primitive once and the nodes keep sharing it
-// (reduce/reduce_instances.c).
-void chain_shared_primitives(Loader &ld, const std::vector<Instance> &instances)
+// A node's world transform as row-major 4x4 doubles (core/scene.h: instance_to_world).
+void world_rows(const Instance &instance, double rows[16])
 {
-    std::unordered_map<const cJSON *, size_t> uses, last_copy;
-    for (size_t i = 0; i < instances.size(); i++)
-        uses[ld.primitive_of[i]]++;
-    for (size_t i = 0; i < instances.size(); i++) {
-        if (uses[ld.primitive_of[i]] < 2)
-            continue; // one node names it
-        scene_mesh *mesh = &ld.s->meshes[i];
-        mesh->instanced = 1;
-        const aiMatrix4x4 &w = instances[i].world;
-        const double rows[16] = {w.a1, w.a2, w.a3, w.a4, w.b1, w.b2, w.b3, w.b4,
-                                 w.c1, w.c2, w.c3, w.c4, w.d1, w.d2, w.d3, w.d4};
-        std::memcpy(mesh->instance_to_world, rows, sizeof rows);
-        auto earlier = last_copy.find(ld.primitive_of[i]);
-        if (earlier == last_copy.end()) {
-            mesh->instance_first = i;
-        } else {
-            ld.s->meshes[earlier->second].instance_next = i;
-            mesh->instance_first = ld.s->meshes[earlier->second].instance_first;
-        }
-        last_copy[ld.primitive_of[i]] = i;
-    }
+    const aiMatrix4x4 &w = instance.world;
+    const double values[16] = {w.a1, w.a2, w.a3, w.a4, w.b1, w.b2, w.b3, w.b4,
+                               w.c1, w.c2, w.c3, w.c4, w.d1, w.d2, w.d3, w.d4};
+    std::memcpy(rows, values, sizeof values);
+}
+
+// A primitive that several nodes name is one prototype (core/scene.h: instanced): the first
+// node's instance (scene mesh `number`, just added) holds its geometry, in that node's world
+// space, and is marked as its representative here, so that `idmr reduce` reduces the
+// primitive once and the nodes keep sharing it (reduce/reduce_instances.c).
+void mark_first_copy(Loader &ld, const Instance &instance, size_t number)
+{
+    scene_mesh *mesh = &ld.s->meshes[number];
+    mesh->instanced = 1;
+    mesh->instance_first = number;
+    world_rows(instance, mesh->instance_to_world);
+}
+
+// A later node's instance of such a primitive (scene mesh `number`): no geometry of its own,
+// placed by its node's world transform from the first one's (scene_add_instance_copy).
+int add_later_copy(Loader &ld, const Instance &instance, int number, size_t first)
+{
+    const aiMesh *mesh = ld.ai->mMeshes[instance.node->mMeshes[instance.slot]];
+    std::string name = std::string(instance.node->mName.C_Str()) + "/" + mesh->mName.C_Str();
+    double rows[16];
+    world_rows(instance, rows);
+    scene_mesh *copy = scene_add_instance_copy(ld.s, first, name.c_str(), rows);
+    if (!copy)
+        return fail(ld.path, error_message());
+    copy->xml_line = number;
+    return 0;
 }
 
 int add_instance(Loader &ld, const Instance &instance, int number)
@@ -699,12 +706,25 @@ scene *build(const char *path, const aiScene *ai, Checked &file)
                                 " triangle mesh instances, the file has " +
                                 std::to_string(ld.primitive_of.size()));
     progress_set_total(&file.bar, file.bar.done + (unsigned)instances.size());
+    // A primitive several nodes name is held once (mark_first_copy), unless it emits: an area
+    // light is never instanced, so each node's emitting copy is a mesh of its own.
+    std::unordered_map<const cJSON *, size_t> uses, first_copy;
+    for (size_t i = 0; i < instances.size(); i++)
+        uses[ld.primitive_of[i]]++;
     for (size_t i = 0; i < instances.size() && !status; i++) {
-        status = add_instance(ld, instances[i], (int)i);
+        const cJSON *primitive = ld.primitive_of[i];
+        auto first = first_copy.find(primitive);
+        if (first != first_copy.end()) {
+            status = add_later_copy(ld, instances[i], (int)i, first->second);
+        } else {
+            status = add_instance(ld, instances[i], (int)i);
+            if (!status && uses[primitive] > 1 && ld.s->meshes[i].light < 0) {
+                mark_first_copy(ld, instances[i], i);
+                first_copy[primitive] = i;
+            }
+        }
         progress_advance(&file.bar, 1, nullptr);
     }
-    if (!status)
-        chain_shared_primitives(ld, instances);
     if (!status)
         status = add_lights(ld);
     if (!status)

@@ -16,7 +16,7 @@
 
 #include <cjson/cJSON.h>
 
-#include "io/xform.h"
+#include "core/xform.h"
 
 typedef struct gltf_bytes {
     unsigned char *data;

@@ -52,7 +52,7 @@
 #include "io/gltf_accessor.h"
 #include "io/gltf_document.h"
 #include "io/mitsuba_paths.h"
-#include "io/xform.h"
+#include "core/xform.h"
 
 enum {
     TARGET_ARRAY_BUFFER = 34962,

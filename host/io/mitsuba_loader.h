@@ -33,7 +33,7 @@
 #include "io/mitsuba_params.h"
 #include "io/mitsuba_paths.h"
 #include "io/mitsuba_xml.h"
-#include "io/xform.h"
+#include "core/xform.h"
 
 /* Attribute that keeps a normalised property name's original spelling, for messages. */
 #define MITSUBA_WRITTEN_NAME "idmr_written_name"
@@ -65,12 +65,11 @@ typedef struct loader {
     size_t include_count; /* <include> elements read so far */
     uint32_t release_from; /* mesh files with at least this many vertices are released once
                               read (scene_mesh_release: streaming); 0: none */
-    int instance_warned;   /* the warning that instances are simulated as copies was given */
-    /* Per shapegroup shape an instance copied: its node and the mesh index of its last copy so
-     * far (scene_mesh.instance_first/next chain the copies of one shape). */
+    /* Per shapegroup shape an instance placed: its node and the mesh index of its first copy,
+     * the representative that holds its geometry (core/scene.h: instanced). */
     struct group_shape_copies {
         xmlNodePtr shape;
-        size_t last_copy;
+        size_t first_copy;
     } *group_shapes;
     size_t group_shape_count;
 } loader;

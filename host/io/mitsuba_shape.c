@@ -285,27 +285,46 @@ typedef struct shape_placement {
     const char *name_prefix; /* the instance's id, else the group's */
 } shape_placement;
 
-/* The scene's last mesh, a copy of the shapegroup shape `node` placed by `instance_to_world`:
- * chained to the earlier copies of that shape (scene_mesh.instance_first/next). */
-static void chain_copy(loader *ld, xmlNodePtr node, const xform *instance_to_world)
+/* The mesh index of the first copy of shapegroup shape `node`, or -1 when none was made yet. */
+static long first_copy_of(const loader *ld, xmlNodePtr node)
+{
+    for (size_t g = 0; g < ld->group_shape_count; g++)
+        if (ld->group_shapes[g].shape == node)
+            return (long)ld->group_shapes[g].first_copy;
+    return -1;
+}
+
+/* The scene's last mesh, the first copy of the shapegroup shape `node`, placed by
+ * `instance_to_world`: made the representative of that shape's copies (core/scene.h). */
+static void mark_first_copy(loader *ld, xmlNodePtr node, const xform *instance_to_world)
 {
     size_t copy = ld->s->mesh_count - 1;
     scene_mesh *mesh = &ld->s->meshes[copy];
     mesh->instanced = 1;
+    mesh->instance_first = copy;
     memcpy(mesh->instance_to_world, instance_to_world->m, sizeof mesh->instance_to_world);
-    for (size_t g = 0; g < ld->group_shape_count; g++) {
-        struct group_shape_copies *group = &ld->group_shapes[g];
-        if (group->shape == node) {
-            ld->s->meshes[group->last_copy].instance_next = copy;
-            mesh->instance_first = ld->s->meshes[group->last_copy].instance_first;
-            group->last_copy = copy;
-            return;
-        }
-    }
     ld->group_shapes =
         xrealloc(ld->group_shapes, (ld->group_shape_count + 1) * sizeof *ld->group_shapes);
     ld->group_shapes[ld->group_shape_count++] = (struct group_shape_copies){node, copy};
-    mesh->instance_first = copy;
+}
+
+/* A later copy of the shapegroup shape `node`, whose first copy is mesh `first`: no geometry
+ * of its own (core/scene.h: scene_add_instance_copy), named and placed by `placement`. */
+static int add_later_copy(loader *ld, xmlNodePtr node, size_t first,
+                          const shape_placement *placement)
+{
+    const char *type = mitsuba_attr(node, "type"), *written = NULL;
+    char name[520], shape_own_name[256];
+    if (ld->s->meshes[first].file)
+        written = ld->s->meshes[first].file;
+    shape_name(node, type, written, shape_own_name, sizeof shape_own_name);
+    snprintf(name, sizeof name, "%s/%s", placement->name_prefix, shape_own_name);
+    scene_mesh *copy = scene_add_instance_copy(ld->s, first, name, placement->instance_to_world.m);
+    if (!copy)
+        return mitsuba_fail(placement->instance, "%s", error_message());
+    copy->instance_xml_file = xstrdup(mitsuba_node_file(placement->instance));
+    copy->instance_xml_line = (int)xmlGetLineNo(placement->instance);
+    return 0;
 }
 
 /* Reads the shape `node` into a world-space scene mesh (placement: NULL, or the instance that
@@ -320,6 +339,9 @@ static int load_placed_shape(loader *ld, xmlNodePtr node, const shape_placement 
     scene_mesh_source *source = NULL;
     char name[520], shape_own_name[256];
     memset(&light, 0, sizeof light);
+    long first = placement ? first_copy_of(ld, node) : -1;
+    if (first >= 0)
+        return add_later_copy(ld, node, (size_t)first, placement);
     if (mitsuba_require_attr(node, "type", &type) || shape_find_parts(ld, node, &parts))
         return -1;
     /* Parse an inline bsdf (a referenced one was parsed at its declaration) and the emitter
@@ -359,7 +381,7 @@ static int load_placed_shape(loader *ld, xmlNodePtr node, const shape_placement 
     if (placement) {
         added->instance_xml_file = xstrdup(mitsuba_node_file(placement->instance));
         added->instance_xml_line = (int)xmlGetLineNo(placement->instance);
-        chain_copy(ld, node, &placement->instance_to_world);
+        mark_first_copy(ld, node, &placement->instance_to_world);
     }
     added->light = parts.emitter ? scene_add_light(ld->s, &light) : -1;
     if (ld->release_from && added->vertex_count >= ld->release_from)
@@ -420,10 +442,6 @@ static int load_instance(loader *ld, xmlNodePtr node)
         return -1;
     const char *id = mitsuba_attr(node, "id");
     placement.name_prefix = id && id[0] ? id : entry->id;
-    if (!ld->instance_warned)
-        mitsuba_warn_at(node, "instances are simulated as world-space copies (each one holds "
-                              "meshes of its own); a reduced scene keeps them as instances");
-    ld->instance_warned = 1;
     MITSUBA_FOR_EACH_ELEMENT(child, entry->node)
     {
         if (!mitsuba_is_tag(child, "shape"))

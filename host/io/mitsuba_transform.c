@@ -1,6 +1,6 @@
 /* mitsuba_transform.c — <transform name="to_world"> properties: lookat, matrix (4x4 or 3x3),
  * translate, rotate and scale steps, each left-multiplying the product of the steps before it
- * (host/io/xform.h does the maths). */
+ * (host/core/xform.h does the maths). */
 #include "io/mitsuba_loader.h"
 
 #include <math.h>

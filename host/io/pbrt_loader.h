@@ -29,7 +29,7 @@
 #include "core/scene.h"
 #include "io/pbrt.h"
 #include "io/spectrum.h"
-#include "io/xform.h"
+#include "core/xform.h"
 
 /* ---- tokens (pbrt_lexer.c) ---- */
 
@@ -187,8 +187,9 @@ typedef struct pbrt_object_shape {
     int flipped;
     int file_normals, flat_normals;
     int material; /* loader material index, or -1 */
-    int copied;       /* an ObjectInstance has placed it */
-    size_t last_copy; /* then the scene mesh of its last copy (scene_mesh.instance_next) */
+    int copied;        /* an ObjectInstance has placed it */
+    size_t first_copy; /* then the scene mesh of its first copy, the representative that holds
+                          its geometry (core/scene.h: instanced) */
 } pbrt_object_shape;
 
 typedef struct pbrt_object {

@@ -461,22 +461,34 @@ int pbrt_read_shape(pbrt_loader *ld, const char *file, int line, long offset, co
     return status;
 }
 
-/* The scene's last mesh, a copy of the object's shape `shape` that an ObjectInstance placed by
- * `instance_to_world`: chained to the shape's earlier copies (scene_mesh.instanced), so that
- * `idmr reduce` reduces and writes the shape once (reduce/reduce_instances.c). */
-static void chain_copy(scene *s, pbrt_object_shape *shape, const xform *instance_to_world)
+/* The scene's last mesh, the first copy of object shape `shape`, placed by
+ * `instance_to_world`: made the representative of that shape's copies (core/scene.h). */
+static void mark_first_copy(scene *s, pbrt_object_shape *shape, const xform *instance_to_world)
 {
     size_t copy = s->mesh_count - 1;
     scene_mesh *mesh = &s->meshes[copy];
     mesh->instanced = 1;
-    memcpy(mesh->instance_to_world, instance_to_world->m, sizeof mesh->instance_to_world);
     mesh->instance_first = copy;
-    if (shape->copied) {
-        s->meshes[shape->last_copy].instance_next = copy;
-        mesh->instance_first = s->meshes[shape->last_copy].instance_first;
-    }
+    memcpy(mesh->instance_to_world, instance_to_world->m, sizeof mesh->instance_to_world);
     shape->copied = 1;
-    shape->last_copy = copy;
+    shape->first_copy = copy;
+}
+
+/* A later copy of object shape `shape` (placed once already), placed by `instance_to_world`:
+ * no geometry of its own (core/scene.h: scene_add_instance_copy). 0, or -1 with the error set. */
+static int add_later_copy(pbrt_loader *ld, const char *file, int line, pbrt_object_shape *shape,
+                          const xform *instance_to_world)
+{
+    size_t first = shape->first_copy;
+    scene_mesh *copy = scene_add_instance_copy(ld->s, first, shape->name, instance_to_world->m);
+    if (!copy)
+        return pbrt_fail(file, line, "ObjectInstance: %s", error_message());
+    const scene_mesh *representative = &ld->s->meshes[first];
+    copy->source_offset = representative->source_offset;
+    copy->source_flipped = representative->source_flipped;
+    xform to_world = xform_multiply(instance_to_world, &shape->object_to_world);
+    memcpy(copy->object_to_world, to_world.m, sizeof copy->object_to_world);
+    return 0;
 }
 
 int pbrt_instance_object(pbrt_loader *ld, const char *file, int line, const char *name,
@@ -488,11 +500,13 @@ int pbrt_instance_object(pbrt_loader *ld, const char *file, int line, const char
             o = &ld->objects[i];
     if (!o)
         return pbrt_fail(file, line, "ObjectInstance: no object named '%s'", name);
-    pbrt_warn(file, line,
-              "ObjectInstance: instances are simulated as world-space copies (each one holds "
-              "meshes of its own); a reduced scene keeps them as instances");
     for (size_t i = 0; i < o->shape_count; i++) {
         pbrt_object_shape *shape = &o->shapes[i];
+        if (shape->copied) {
+            if (add_later_copy(ld, file, line, shape, instance_to_world))
+                return -1;
+            continue;
+        }
         mesh_data copy;
         mesh_copy(&shape->mesh, &copy);
         xform to_world = xform_multiply(instance_to_world, &shape->object_to_world);
@@ -501,7 +515,7 @@ int pbrt_instance_object(pbrt_loader *ld, const char *file, int line, const char
                             shape->flipped, shape->file_normals, shape->material};
         if (place_mesh(ld, &rec, &copy, &to_world, 0))
             return -1;
-        chain_copy(ld->s, shape, instance_to_world);
+        mark_first_copy(ld->s, shape, instance_to_world);
     }
     return 0;
 }

@@ -140,11 +140,8 @@ void shapes_transform(mesh_data *mesh, const xform *to_world)
 
 void shapes_transform_keeping_side(mesh_data *mesh, const xform *to_world)
 {
-    shapes_transform(mesh, to_world);
-    if (xform_determinant3(to_world) < 0.0) {
-        shapes_reverse_normals(mesh); /* the cofactor's normals → the inverse transpose's */
-        shapes_flip_winding(mesh);
-    }
+    xform_apply_keeping_side(to_world, mesh->positions, mesh->normals, mesh->vertex_count,
+                             mesh->indices, mesh->triangle_count);
 }
 
 /* The angle at corner a of triangle (a, b, c), in double. */

@@ -16,7 +16,7 @@
 
 #include "core/scene.h"
 #include "io/mesh_io.h"
-#include "io/xform.h"
+#include "core/xform.h"
 
 #define SHAPES_DISK_SEGMENTS 64
 #define SHAPES_SPHERE_RINGS 32

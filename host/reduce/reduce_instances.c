@@ -33,7 +33,7 @@
 
 #include "core/error.h"
 #include "io/shapes.h"
-#include "io/xform.h"
+#include "core/xform.h"
 #include "reduce/reduce_stages.h"
 
 size_t reduce_instance_representative(const reduce_state *st, size_t m)

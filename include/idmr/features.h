@@ -23,6 +23,12 @@
     (IDMR_FEATURE_AREA | IDMR_FEATURE_POINT | IDMR_FEATURE_SPOT | IDMR_FEATURE_DIRECTIONAL |    \
      IDMR_FEATURE_ENVIRONMENT)
 
+/* Not a material or light but the scene's structure: instanced shapes held once, traced
+ * through the two-level BVH (idmr/instance_bvh_layout.h). Outside IDMR_FEATURE_COUNT and
+ * IDMR_FEATURES_ALL: whether a program traces instances is decided apart from what it
+ * shades. */
+#define IDMR_FEATURE_INSTANCES (1u << 10)
+
 /* Surfaces that continue a camera path instead of ending it in a hit point. */
 #define IDMR_FEATURES_SPECULAR (IDMR_FEATURE_MIRROR | IDMR_FEATURE_DIELECTRIC)
 

@@ -1,5 +1,5 @@
 /* xform.c — 4x4 affine transform maths (see xform.h). Row-major doubles, column vectors. */
-#include "io/xform.h"
+#include "core/xform.h"
 
 #include <math.h>
 #include <string.h>
@@ -207,4 +207,23 @@ double xform_normalize(double v[3])
         for (int i = 0; i < 3; i++)
             v[i] /= length;
     return length;
+}
+
+void xform_apply_keeping_side(const xform *t, float *positions, float *normals,
+                              unsigned long count, unsigned int *indices,
+                              unsigned long triangle_count)
+{
+    xform_apply_points(t, positions, count);
+    if (normals)
+        xform_apply_normals(t, normals, count);
+    if (!(xform_determinant3(t) < 0.0))
+        return;
+    /* the cofactor's normals point to det × the inverse transpose's: turn them back */
+    for (unsigned long i = 0; normals && i < 3 * count; i++)
+        normals[i] = -normals[i];
+    for (unsigned long k = 0; k < triangle_count; k++) {
+        unsigned int swap = indices[3 * k + 1];
+        indices[3 * k + 1] = indices[3 * k + 2];
+        indices[3 * k + 2] = swap;
+    }
 }

@@ -1,4 +1,5 @@
-/* xform.h — 4x4 affine transforms for the scene loader (Mitsuba <transform> elements).
+/* xform.h — 4x4 affine transforms: the scene loaders' (Mitsuba <transform> elements, pbrt-v4
+ * statements, glTF nodes) and the instances' placements (core/scene.h).
  *
  * An xform holds a row-major 4x4 matrix in double precision: m[4*row + col]. Points are
  * column vectors, p' = M p, so the translation sits in m[3], m[7], m[11]. Composition follows
@@ -45,6 +46,14 @@ void xform_apply_normals(const xform *t, float *xyz, unsigned long count);
 
 /* Determinant of the linear 3x3 part (negative: the transform mirrors). */
 double xform_determinant3(const xform *t);
+
+/* Moves a triangle mesh by `t` as Mitsuba moves a built-in shape or an instance: `count`
+ * points by t, their normals (NULL: none) by its inverse transpose, and under a mirror
+ * (det < 0) the winding of the `triangle_count` triangles of `indices` reversed, so that the
+ * surface keeps its side. */
+void xform_apply_keeping_side(const xform *t, float *positions, float *normals,
+                              unsigned long count, unsigned int *indices,
+                              unsigned long triangle_count);
 
 /* The inverse of an affine transform (the last row taken as 0 0 0 1) into *out: 0, or -1 when
  * its linear part is singular (or not finite). */
