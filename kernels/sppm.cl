@@ -199,9 +199,9 @@ kernel void pixel_centre_hits(idmr_sppm_params params, idmr_camera camera, SCENE
     float d[3];
     idmr_camera_direction(&camera, (float)(pixel % params.width) + 0.5f,
                           (float)(pixel / params.width) + 0.5f, d);
+    scene_view scene = SCENE_VIEW();
     triangles[pixel] =
-        traverse_closest(nodes, leaves, vload3(0, camera.origin), vload3(0, d), 0.0f, INFINITY)
-            .triangle;
+        trace_surface(&scene, vload3(0, camera.origin), vload3(0, d), INFINITY).hit.triangle;
 }
 
 #else

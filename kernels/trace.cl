@@ -1,8 +1,8 @@
 /* trace.cl — ray batches through the BVH: closest hit and any hit (occlusion), through the
  * flat BVH and through the two-level BVH of an instanced scene.
  * Used by the traversal tests (against Embree), the shading tests and the traversal
- * benchmark; the light transport kernels call traverse_closest()/traverse_any() from
- * traverse.h directly (they do not use the instanced traversal yet). */
+ * benchmark; the light transport kernels trace through lib/surface.h, which calls the same
+ * traverse_closest() or, for an instanced scene, traverse_instanced_closest(). */
 #include "lib/shading.h"
 #include "lib/traverse.h"
 #include "lib/traverse_instanced.h"

@@ -262,7 +262,8 @@ static inline idmr_instance_hit instance_embree_closest(RTCScene es, const idmr_
 /* A prototype holding a mesh file's triangles (the mesh_data stays the caller's to free). */
 static inline instance_prototype instance_prototype_of_mesh(const mesh_data *m)
 {
-    return (instance_prototype){m->positions, m->vertex_count, m->indices, m->triangle_count};
+    return (instance_prototype){.positions = m->positions, .vertex_count = m->vertex_count,
+                                .indices = m->indices, .triangle_count = m->triangle_count};
 }
 
 #endif

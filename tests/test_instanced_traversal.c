@@ -75,7 +75,7 @@ typedef struct test_scene {
 static void test_scene_init(test_scene *t, size_t count)
 {
     t->prototypes[0] = instance_prototype_of_mesh(&dragon);
-    t->prototypes[1] = (instance_prototype){NULL, 0, NULL, 0};
+    t->prototypes[1] = (instance_prototype){.positions = NULL};
     t->placements = calloc(count, sizeof *t->placements);
     t->s = (instanced_scene){t->prototypes, 2, t->placements, count};
 }
@@ -490,9 +490,15 @@ static void test_same_hits_for_any_local_size(void **state)
 static const float quad_positions[] = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
 static const uint32_t quad_indices[] = {0, 1, 2, 0, 2, 3};
 
+static instance_prototype quad_prototype(void)
+{
+    return (instance_prototype){.positions = quad_positions, .vertex_count = 4,
+                                .indices = quad_indices, .triangle_count = 2};
+}
+
 static instance_geometry quad_geometry(const instance_placement *placements, size_t count)
 {
-    instance_prototype quad = {quad_positions, 4, quad_indices, 2};
+    instance_prototype quad = quad_prototype();
     instanced_scene s = {&quad, 1, placements, count};
     instance_geometry g;
     if (instance_geometry_upload(&tdev, &s, &g))
@@ -547,7 +553,7 @@ static void test_on_paper(void **state)
 static void test_empty_scenes_are_never_hit(void **state)
 {
     const idmr_ray ray = {{0, 0, 0}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY};
-    instance_prototype empty = {NULL, 0, NULL, 0};
+    instance_prototype empty = {.positions = NULL};
     instance_placement identity = {0, {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0}};
     instanced_scene scenes[2] = {{&empty, 1, NULL, 0}, {&empty, 1, &identity, 1}};
     for (int k = 0; k < 2; k++)
@@ -570,7 +576,7 @@ static void test_empty_scenes_are_never_hit(void **state)
  * one accepted. */
 static void test_singular_transform_is_refused(void **state)
 {
-    instance_prototype quad = {quad_positions, 4, quad_indices, 2};
+    instance_prototype quad = quad_prototype();
     instance_placement placements[2] = {
         {0, {1e-6f, 0, 0, 0, 0, 1e-6f, 0, 0, 0, 0, 1e-6f, 0}},  /* tiny: fine */
         {0, {1, 0, 0, 0, 0, 1, 0, 0, 1, 1, 0, 5}},              /* rows 0, 1, 2: rank 2 */
@@ -587,7 +593,7 @@ static void test_singular_transform_is_refused(void **state)
 
 static void test_missing_prototype_is_refused(void **state)
 {
-    instance_prototype quad = {quad_positions, 4, quad_indices, 2};
+    instance_prototype quad = quad_prototype();
     instance_placement placement = {1, {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0}};
     instanced_scene s = {&quad, 1, &placement, 1};
     instance_bvh b;

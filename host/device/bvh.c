@@ -19,6 +19,7 @@
 
 #include "core/error.h"
 #include "core/progress.h"
+#include "device/instance_bvh.h"
 
 enum { BUILD_NODE, BUILD_LEAF };
 
@@ -499,12 +500,92 @@ int bvh_build_boxes(const bvh_box *boxes, size_t count, bvh *out)
     return build_flat(&in, &b, out, start);
 }
 
+/* Mesh m's triangles as the builder's input, numbered scene-globally. */
+static bvh_mesh scene_part(const scene *s, size_t m)
+{
+    const scene_mesh *mesh = &s->meshes[m];
+    return (bvh_mesh){mesh->positions, mesh->indices, mesh->triangle_count, mesh->first_triangle};
+}
+
+/* Placement of mesh m (scene_instance_placement: the identity for any mesh but a later copy)
+ * as the instance of prototype p. Returns 0, or -1 with the error set. */
+static int scene_placement(const scene *s, size_t m, uint32_t p, instance_placement *out)
+{
+    double object_to_world[16];
+    if (scene_instance_placement(s, m, object_to_world))
+        return error_prefix("mesh '%s'", s->meshes[m].name);
+    out->prototype = p;
+    for (int k = 0; k < 12; k++)
+        out->object_to_world[k] = (float)object_to_world[k];
+    return 0;
+}
+
+/* The two-level BVH of a scene with later copies (bvh.h): prototype 0 the meshes that are not
+ * instanced, placed by the identity (when there are any), then one prototype per representative,
+ * placed by each copy of its chain (itself first). Returns 0, or -1 with the error set. */
+static int build_instanced(const scene *s, bvh *out)
+{
+    bvh_mesh *parts = xmalloc(s->mesh_count * sizeof *parts + 1);
+    instance_prototype *prototypes = xcalloc(s->mesh_count + 1, sizeof *prototypes);
+    instance_placement *placements = xcalloc(s->mesh_count + 1, sizeof *placements);
+    size_t part_count = 0, prototype_count = 1, placement_count = 0;
+    for (size_t m = 0; m < s->mesh_count; m++)
+        if (!s->meshes[m].instanced)
+            parts[part_count++] = scene_part(s, m);
+    prototypes[0] = (instance_prototype){.parts = parts, .part_count = part_count};
+    int status = part_count ? scene_placement(s, 0, 0, &placements[placement_count++]) : 0;
+    for (size_t m = 0; m < s->mesh_count && status == 0; m++) {
+        if (!s->meshes[m].instanced || s->meshes[m].instance_first != m)
+            continue;
+        uint32_t p = (uint32_t)prototype_count++;
+        parts[part_count] = scene_part(s, m);
+        prototypes[p] = (instance_prototype){.parts = &parts[part_count++], .part_count = 1};
+        for (size_t copy = m; status == 0; copy = s->meshes[copy].instance_next) {
+            status = scene_placement(s, copy, p, &placements[placement_count++]);
+            if (s->meshes[copy].instance_next == 0)
+                break;
+        }
+    }
+    instanced_scene input = {prototypes, prototype_count, placements, placement_count};
+    instance_bvh two_level;
+    if (status == 0 && instance_bvh_build(&input, &two_level) == 0) {
+        *out = (bvh){.nodes = two_level.nodes,
+                     .node_count = two_level.node_count,
+                     .leaves = two_level.leaves,
+                     .leaf_count = two_level.leaf_count,
+                     .reference_count = two_level.reference_count,
+                     .degenerate_count = two_level.degenerate_count,
+                     .depth = two_level.prototype_depth,
+                     .build_seconds = two_level.build_seconds,
+                     .top_nodes = two_level.top_nodes,
+                     .top_node_count = two_level.top_node_count,
+                     .instances = two_level.instances,
+                     .instance_count = two_level.instance_count,
+                     .top_depth = two_level.top_depth};
+    } else {
+        status = error_prefix("the scene's two-level BVH");
+    }
+    free(parts);
+    free(prototypes);
+    free(placements);
+    if (status)
+        return -1;
+    log_verbose("BVH: two-level, %zu prototypes placed %zu times: %zu top nodes (depth %d), "
+                "%zu nodes, %zu leaves, %zu triangle references (%zu degenerate triangles left "
+                "out), depth %d, %.2f s",
+                prototype_count, out->instance_count, out->top_node_count, out->top_depth,
+                out->node_count, out->leaf_count, out->reference_count, out->degenerate_count,
+                out->depth, out->build_seconds);
+    return 0;
+}
+
 int bvh_build(const scene *s, bvh *out)
 {
+    if (s->features & IDMR_FEATURE_INSTANCES)
+        return build_instanced(s, out);
     bvh_mesh *meshes = xmalloc(s->mesh_count * sizeof *meshes + 1);
     for (size_t m = 0; m < s->mesh_count; m++)
-        meshes[m] = (bvh_mesh){s->meshes[m].positions, s->meshes[m].indices,
-                               s->meshes[m].triangle_count, s->meshes[m].first_triangle};
+        meshes[m] = scene_part(s, m);
     int status = bvh_build_meshes(meshes, s->mesh_count, out);
     free(meshes);
     if (status)
@@ -520,11 +601,15 @@ void bvh_free(bvh *b)
 {
     free(b->nodes);
     free(b->leaves);
+    free(b->top_nodes);
+    free(b->instances);
     memset(b, 0, sizeof *b);
 }
 
 uint64_t bvh_device_bytes(const bvh *b)
 {
     return (uint64_t)b->node_count * sizeof(idmr_bvh_node) +
-           (uint64_t)b->leaf_count * sizeof(idmr_triangle4);
+           (uint64_t)b->leaf_count * sizeof(idmr_triangle4) +
+           (uint64_t)b->top_node_count * sizeof(idmr_bvh_node) +
+           (uint64_t)b->instance_count * sizeof(idmr_instance);
 }

@@ -6,6 +6,16 @@
  * that to (mesh, triangle in mesh). Degenerate (zero-area) triangles are left out: no ray can
  * hit them.
  *
+ * A scene with later copies of instanced shapes (IDMR_FEATURE_INSTANCES, core/scene.h) gets the
+ * two-level BVH instead (include/idmr/instance_bvh_layout.h, host/device/instance_bvh.h), each
+ * prototype held once: prototype 0 is every mesh that is not instanced, together, placed once
+ * by the identity; each instanced shape's representative (its world-space geometry) is a
+ * prototype of its own, placed by the identity for itself and by scene_instance_placement()
+ * for each later copy. Leaf lanes carry scene-global triangle numbers at both kinds of
+ * prototype (a later copy's triangles are its representative's), so the kernels index every
+ * per-triangle buffer with them as in a flat scene. `nodes` and `leaves` then hold every
+ * prototype's, one after the other, and `top_nodes` and `instances` the top level.
+ *
  * The same builder works on plain triangle arrays (bvh_build_meshes: a scene's meshes, or one
  * prototype of an instanced scene, host/device/instance_bvh.h) and on plain boxes
  * (bvh_build_boxes: the top level of an instanced scene, one box per leaf). */
@@ -16,6 +26,7 @@
 #include <stdint.h>
 
 #include "idmr/bvh_layout.h"
+#include "idmr/instance_bvh_layout.h"
 #include "core/scene.h"
 
 typedef struct bvh {
@@ -25,12 +36,19 @@ typedef struct bvh {
     size_t leaf_count;
     size_t reference_count;  /* triangles in all leaves: may repeat one (spatial splits) */
     size_t degenerate_count; /* scene triangles left out (bvh_build_boxes: empty boxes) */
-    int depth;               /* levels of nodes, root = 1 */
+    int depth;               /* levels of nodes, root = 1 (two-level: the deepest prototype's) */
     double build_seconds;
+    /* The top level of a two-level BVH (above); NULL and 0 for a flat one. */
+    idmr_bvh_node *top_nodes; /* child < 0: instances[~child] */
+    size_t top_node_count;
+    idmr_instance *instances;
+    size_t instance_count;
+    int top_depth;
 } bvh;
 
-/* Builds the BVH of a finalised scene. Returns 0, or -1 with the error set (an Embree error,
- * or a tree deeper than the kernels' traversal stack allows). */
+/* Builds the BVH of a finalised scene: flat, or two-level where the scene has later copies
+ * (above). Returns 0, or -1 with the error set (an Embree error, a tree deeper than the
+ * kernels' traversal stack allows, a placement that cannot be inverted). */
 int bvh_build(const scene *s, bvh *out);
 
 /* One triangle mesh for bvh_build_meshes(): leaf lanes number its triangle t as
@@ -60,7 +78,8 @@ int bvh_build_boxes(const bvh_box *boxes, size_t count, bvh *out);
 
 void bvh_free(bvh *b);
 
-/* Bytes the node and leaf arrays take on the device. */
+/* Bytes the node and leaf arrays (and a two-level BVH's top nodes and instance records) take on
+ * the device: each prototype counted once. */
 uint64_t bvh_device_bytes(const bvh *b);
 
 /* The process-wide Embree device (created on first use, with the error callback that feeds

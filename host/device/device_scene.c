@@ -36,12 +36,15 @@ static void shading_corners(const scene_mesh *mesh, uint32_t t, uint32_t out[4])
     out[3] = 1u;
 }
 
-/* Per-triangle unit normals (w = area), shading normals and material indices. A degenerate
- * triangle gets a zero normal (the traversal never returns it). */
+/* Per-triangle unit normals (w = the ray offset), shading normals and material indices. A
+ * degenerate triangle gets a zero normal (the traversal never returns it). A later copy of an
+ * instanced shape is skipped: its triangles are its representative's. */
 static void triangle_data(const scene *s, float *normals, uint32_t *shading,
                           uint32_t *material_of)
 {
     for (size_t m = 0; m < s->mesh_count; m++) {
+        if (scene_mesh_is_later_copy(s, m))
+            continue;
         const scene_mesh *mesh = &s->meshes[m];
         for (uint32_t t = 0; t < mesh->triangle_count; t++) {
             const uint32_t *ix = &mesh->indices[3 * (size_t)t];
@@ -66,17 +69,23 @@ static void triangle_data(const scene *s, float *normals, uint32_t *shading,
     }
 }
 
-/* The BVH's nodes and leaf triangles (an empty scene still binds a leaf buffer). */
-static int upload_bvh(device *d, const bvh *b, cl_mem *nodes, cl_mem *leaves)
+/* The BVH's nodes and leaf triangles (an empty scene still binds a leaf buffer), and a
+ * two-level BVH's top nodes and instances (a flat one binds device_buffer's 16-byte placeholder
+ * for each: its program never reads them). */
+static int upload_bvh(device *d, const bvh *b, device_scene *out)
 {
     idmr_triangle4 empty_leaf;
     memset(&empty_leaf, 0, sizeof empty_leaf);
     return device_buffer(d, CL_MEM_READ_ONLY, b->node_count * sizeof(idmr_bvh_node), b->nodes,
-                         "BVH nodes", nodes) ||
+                         "BVH nodes", &out->nodes) ||
                    device_buffer(d, CL_MEM_READ_ONLY,
                                  (b->leaf_count ? b->leaf_count : 1) * sizeof(idmr_triangle4),
                                  b->leaf_count ? (void *)b->leaves : &empty_leaf, "BVH leaves",
-                                 leaves)
+                                 &out->leaves) ||
+                   device_buffer(d, CL_MEM_READ_ONLY, b->top_node_count * sizeof(idmr_bvh_node),
+                                 b->top_nodes, "BVH top nodes", &out->top_nodes) ||
+                   device_buffer(d, CL_MEM_READ_ONLY, b->instance_count * sizeof(idmr_instance),
+                                 b->instances, "BVH instances", &out->instances)
                ? -1
                : 0;
 }
@@ -283,11 +292,17 @@ int device_scene_upload(device *d, const scene *s, const bvh *b, device_scene *o
         out->center[k] = 0.5f * (s->bbox_min[k] + s->bbox_max[k]);
     out->radius = (float)(0.5 * scene_diagonal(s));
     out->light_count = (unsigned int)s->light_count;
+    out->instanced = b->top_nodes != NULL;
+    if (out->instanced != ((s->features & IDMR_FEATURE_INSTANCES) != 0))
+        return error_set(IDMR_EXIT_FAILURE, "device_scene_upload: a %s BVH for a scene %s "
+                                            "instanced shapes' later copies",
+                         out->instanced ? "two-level" : "flat",
+                         out->instanced ? "without" : "with");
     out->bvh_bytes = bvh_device_bytes(b);
     out->bytes = out->bvh_bytes + device_scene_geometry_bytes(s);
     upload_arrays arrays;
     arrays_build(s, &arrays);
-    int status = upload_bvh(d, b, &out->nodes, &out->leaves) || arrays_upload(d, s, &arrays, out);
+    int status = upload_bvh(d, b, out) || arrays_upload(d, s, &arrays, out);
     arrays_free(&arrays);
     if (status)
         device_scene_release(out);
@@ -296,8 +311,9 @@ int device_scene_upload(device *d, const scene *s, const bvh *b, device_scene *o
 
 /* The buffers in SCENE_BUFFERS order (kernels/lib/scene.h). */
 #define SCENE_BUFFER_LIST(ds)                                                                \
-    {&(ds)->nodes,           &(ds)->leaves,          &(ds)->triangle_normals,                  \
-     &(ds)->triangle_shading, &(ds)->triangle_materials, &(ds)->materials, &(ds)->lights,      \
+    {&(ds)->nodes,           &(ds)->leaves,          &(ds)->top_nodes,                         \
+     &(ds)->instances,       &(ds)->triangle_normals, &(ds)->triangle_shading,                 \
+     &(ds)->triangle_materials, &(ds)->materials,    &(ds)->lights,                            \
      &(ds)->light_cdf,       &(ds)->emitter_cdf,     &(ds)->emitter_triangles,                 \
      &(ds)->environment}
 

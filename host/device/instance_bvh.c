@@ -1,6 +1,7 @@
 /* instance_bvh.c — the two-level BVH of an instanced scene (see instance_bvh.h).
  *
- * Steps: check every placement (a prototype that exists, a finite, invertible transform);
+ * Steps: check every placement (a prototype that exists, a finite, invertible transform; its
+ * largest stretch, offset_scale);
  * build each prototype's flat BVH and append its nodes and packets to the shared arrays
  * (append_prototypes); write each instance's record, its inverse transform computed in double
  * (set_instance), and its world box, the eight corners of its prototype's box carried to the
@@ -82,8 +83,11 @@ static int append_prototypes(const instanced_scene *s, instance_bvh *out, size_t
         const instance_prototype *proto = &s->prototypes[p];
         bvh_mesh mesh = {proto->positions, proto->indices, proto->triangle_count, 0};
         bvh b;
-        if (bvh_build_meshes(&mesh, 1, &b))
+        if (proto->part_count ? bvh_build_meshes(proto->parts, proto->part_count, &b)
+                              : bvh_build_meshes(&mesh, 1, &b))
             return error_prefix("prototype %zu", p);
+        out->reference_count += b.reference_count;
+        out->degenerate_count += b.degenerate_count;
         node_offset[p] = out->node_count;
         leaf_offset[p] = out->leaf_count;
         out->nodes = xrealloc(out->nodes, (out->node_count + b.node_count) * sizeof *out->nodes);
@@ -114,6 +118,19 @@ static int append_prototypes(const instanced_scene *s, instance_bvh *out, size_t
                                           "kernels address %d", out->node_count, out->leaf_count,
                          INT32_MAX);
     return 0;
+}
+
+/* The most placement p stretches a coordinate's magnitude: max_r sum_c |M[r][c]| (so that
+ * |world|_max <= this × |object|_max + |m|_max); the kernels scale a prototype triangle's ray
+ * offset by it (kernels/lib/surface.h). */
+static float placement_offset_scale(const instance_placement *p)
+{
+    double largest = 0.0;
+    for (int r = 0; r < 3; r++)
+        largest = fmax(largest, fabs((double)p->object_to_world[4 * r]) +
+                                    fabs((double)p->object_to_world[4 * r + 1]) +
+                                    fabs((double)p->object_to_world[4 * r + 2]));
+    return (float)largest;
 }
 
 /* The world box of placement p of a prototype whose object box is `object`: its eight corners
@@ -169,6 +186,7 @@ int instance_bvh_build(const instanced_scene *s, instance_bvh *out)
         record->node_offset = (int)node_offset[p->prototype];
         record->leaf_offset = (int)leaf_offset[p->prototype];
         record->prototype = p->prototype;
+        record->offset_scale = placement_offset_scale(p);
         world_box[i] = instance_world_box(p, &object_box[p->prototype]);
         for (int a = 0; a < 3; a++) {
             out->bounds_min[a] = fminf(out->bounds_min[a], world_box[i].min[a]);

@@ -3,8 +3,9 @@
  * level over the instances' world boxes (bvh_build_boxes), for the instanced traversal of
  * kernels/lib/traverse_instanced.h.
  *
- * A self-contained component: the passes and the scene loaders still flatten instances into
- * world-space triangles (core/scene.h) and do not use it yet.
+ * bvh_build() (device/bvh.h) builds a scene with later copies of instanced shapes this way, each
+ * prototype given as `parts` (a scene's meshes numbering their triangles scene-globally); the
+ * traversal tests and benchmark build their own instanced_scene from a mesh file.
  *
  *     instance_prototype bunny = {positions, vertex_count, indices, triangle_count};
  *     instance_placement placed[2] = {{0, {1,0,0,0, 0,1,0,0, 0,0,1,0}},   // identity
@@ -23,12 +24,17 @@
 #include "device/bvh.h"
 #include "idmr/instance_bvh_layout.h"
 
-/* A triangle mesh in its own object space; the caller owns the arrays. */
+/* A triangle mesh in its own object space, its leaf lanes numbering triangle t as t; or, where
+ * part_count > 0, the meshes `parts` together (positions, indices and counts unused), each
+ * numbering its triangles from its bvh_mesh.first_triangle (bvh_build: scene-global numbers).
+ * The caller owns the arrays. */
 typedef struct instance_prototype {
     const float *positions; /* xyz per vertex */
     uint32_t vertex_count;
     const uint32_t *indices; /* three vertex indices per triangle */
     uint32_t triangle_count;
+    const bvh_mesh *parts;
+    size_t part_count;
 } instance_prototype;
 
 /* One placement of a prototype: world = M object + m, as 3x4 row-major
@@ -56,6 +62,8 @@ typedef struct instance_bvh {
     size_t node_count;
     idmr_triangle4 *leaves; /* every prototype's packets, one after the other */
     size_t leaf_count;
+    size_t reference_count;  /* triangles in all prototypes' leaves (bvh.h) */
+    size_t degenerate_count; /* prototypes' triangles left out (bvh.h) */
     float bounds_min[3], bounds_max[3]; /* the world box of all instances (min > max: none) */
     int top_depth;       /* levels of top nodes */
     int prototype_depth; /* the deepest prototype's levels */

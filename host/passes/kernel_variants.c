@@ -52,9 +52,12 @@ size_t kernel_variants_list(const device *d, kernel_variant **variants)
     unsigned int sets[IDMR_FEATURE_COUNT + 2];
     size_t set_count = feature_sets(sets);
     const int passes[2] = {IDMR_SPPM_IMPORTANCE, IDMR_SPPM_RENDER};
-    for (int p = 0; p < 2; p++)
+    for (int p = 0; p < 2; p++) {
         for (size_t k = 0; k < set_count; k++)
             add_sppm(d, passes[p], sets[k], 1, 1, 1, list, &count);
+        /* traced through the two-level BVH (lib/surface.h) */
+        add_sppm(d, passes[p], IDMR_FEATURES_ALL | IDMR_FEATURE_INSTANCES, 1, 1, 1, list, &count);
+    }
     add_sppm(d, IDMR_SPPM_IMPORTANCE, IDMR_FEATURES_ALL, 0, 1, 1, list, &count);
     add_sppm(d, IDMR_SPPM_IMPORTANCE, IDMR_FEATURES_ALL, 1, 0, 1, list, &count);
     add_sppm(d, IDMR_SPPM_IMPORTANCE, IDMR_FEATURES_ALL, 1, 1, 0, list, &count);

@@ -4,7 +4,8 @@
  *
  * The variants cover every branch of the #if's in kernels/: for each pass of kernels/sppm.cl,
  * every feature on (the generic program), every feature but one (each bit's #else side), and a
- * minimal scene (diffuse surfaces, an area light); the importance pass also without accumulating,
+ * minimal scene (diffuse surfaces, an area light), every feature with IDMR_FEATURE_INSTANCES (the
+ * two-level BVH's tracing); the importance pass also without accumulating,
  * without camera importance and without shadow rays; both passes with 32-bit atomics in place
  * of 64-bit ones; and
  * kernels/trace.cl. */

@@ -145,11 +145,15 @@ char *sppm_build_options(const device *d, unsigned int features, int pass,
 }
 
 /* The program and the core's kernels on the core's device; the first device's build options
- * are the summary's, and the build seconds of all of them are added up. */
+ * are the summary's, and the build seconds of all of them are added up. --generic builds every
+ * material and light kind in, but IDMR_FEATURE_INSTANCES is the scene's either way: it says
+ * which BVH the scene was uploaded with (device/bvh.h), not what the program can shade. */
 static int build_program(sppm *core, const sppm_pass *pass)
 {
     double start = monotonic_seconds();
-    unsigned int features = core->options->generic ? IDMR_FEATURES_ALL : core->scene->features;
+    unsigned int features =
+        (core->options->generic ? IDMR_FEATURES_ALL : core->scene->features & IDMR_FEATURES_ALL) |
+        (core->scene->features & IDMR_FEATURE_INSTANCES);
     char *options = sppm_build_options(core->dev, features, pass->pass, pass->defines);
     int status =
         device_build_program(core->dev, "sppm.cl", options, &core->program) ||

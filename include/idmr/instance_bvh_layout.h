@@ -16,7 +16,9 @@
  * A prototype's own references are local: its root is node 0 and its leaf ~ref is packet
  * ~ref, counted from its instance's node_offset and leaf_offset, so a kernel passes
  * nodes + node_offset and leaves + leaf_offset to the flat traversal's node and leaf tests.
- * Leaf lanes carry the prototype's own triangle index (0 .. its triangle count - 1).
+ * Leaf lanes carry the triangle numbers the prototype was built with: its own index (0 .. its
+ * triangle count - 1), or, for a scene's BVH (host/device/bvh.h), the scene-global number of
+ * the triangle (its representative's: every placement of a prototype shares its triangles).
  *
  * An instance record holds the inverse of its object-to-world transform: the kernel moves the
  * ray into object space, origin' = W origin + w, direction' = W direction, without normalising
@@ -42,11 +44,15 @@ typedef struct idmr_instance {
     int node_offset;       /* the prototype's root in nodes[] */
     int leaf_offset;       /* the prototype's first packet in leaves[] */
     unsigned int prototype;
-    unsigned int reserved;
+    /* The most the object-to-world transform stretches a coordinate's magnitude (the largest
+     * row sum of |M|'s 3x3 part): a prototype triangle's ray offset times this bounds the
+     * world offset (kernels/lib/surface.h). */
+    float offset_scale;
 } idmr_instance;
 
 IDMR_STATIC_ASSERT(sizeof(idmr_instance) == 64, "idmr_instance must be 64 bytes");
 IDMR_OFFSET_ASSERT(idmr_instance, node_offset, 48);
+IDMR_OFFSET_ASSERT(idmr_instance, offset_scale, 60);
 
 /* A closest hit of the instanced traversal: t along the world ray, barycentrics (u, v) of
  * v1 and v2, the prototype's triangle and the instance, or triangle == instance ==

@@ -45,7 +45,7 @@
 #include "lib/materials.h"
 #include "lib/scene.h"
 #include "lib/shading.h"
-#include "lib/traverse.h"
+#include "lib/surface.h"
 
 #ifndef IDMR_SPPM_PASS
 #error "paths.h is for the SPPM kernels: IDMR_SPPM_PASS must be defined"
@@ -155,7 +155,8 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
                           {0.0f, 0.0f, 0.0f}, 0.0f}; /* zero where there is no hit point */
 #endif
     for (uint depth = 0; depth < params->camera_depth; depth++) {
-        idmr_hit hit = traverse_closest(scene->nodes, scene->leaves, origin, d, 0.0f, INFINITY);
+        surface found = trace_surface(scene, origin, d, INFINITY);
+        idmr_hit hit = found.hit;
         if (hit.triangle == IDMR_NO_HIT) {
 #if PASS_RENDER
             radiance += throughput * environment_radiance(scene, d);
@@ -166,10 +167,8 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
 #endif
             break;
         }
-        float3 n = scene->triangle_normals[hit.triangle].xyz;
-        float3 ns = shading_normal(scene->triangle_shading, hit, n);
-        float3 p = origin + hit.t * d;
-        float offset = surface_offset(scene, hit.triangle, origin);
+        float3 n = found.normal, ns = found.shading, p = found.position;
+        float offset = found.offset;
         global const idmr_material *m = triangle_material(scene, hit.triangle);
 #if PASS_IMPORTANCE && IDMR_ACCUMULATE_IMPORTANCE && IDMR_CAMERA_IMPORTANCE
         if (params->camera_sums)
@@ -261,13 +260,12 @@ inline uint photon_path(const scene_view *scene, const idmr_sppm_params *params,
 #endif
     uint stored = 0;
     for (int bounce = 0; bounce < IDMR_PHOTON_BOUNCES && stored < IDMR_PATH_VERTICES; bounce++) {
-        idmr_hit hit = traverse_closest(scene->nodes, scene->leaves, origin, d, 0.0f, INFINITY);
+        surface found = trace_surface(scene, origin, d, INFINITY);
+        idmr_hit hit = found.hit;
         if (hit.triangle == IDMR_NO_HIT)
             break;
-        float3 n = scene->triangle_normals[hit.triangle].xyz;
-        float3 ns = shading_normal(scene->triangle_shading, hit, n);
-        float3 p = origin + hit.t * d;
-        float offset = surface_offset(scene, hit.triangle, origin);
+        float3 n = found.normal, ns = found.shading, p = found.position;
+        float offset = found.offset;
         float3 n_side = dot(d, n) < 0.0f ? n : -n;
         global const idmr_material *m = triangle_material(scene, hit.triangle);
 #if PASS_IMPORTANCE

@@ -3,7 +3,10 @@
  * parameter list SCENE_BUFFERS in this order and bundled in a scene_view for the device
  * functions:
  *
- *   nodes, leaves          the BVH (idmr/bvh_layout.h)
+ *   nodes, leaves          the BVH (idmr/bvh_layout.h); of an instanced scene, every
+ *                          prototype's (idmr/instance_bvh_layout.h)
+ *   top_nodes, instances   an instanced scene's top level and instance records; a flat
+ *                          scene binds placeholders that its program never reads
  *   triangle_normals       float4 per scene triangle: unit winding normal, w = the offset
  *                          of rays leaving it (idmr/ray.h)
  *   triangle_shading       uint4 per scene triangle: corner shading normals (lib/shading.h)
@@ -14,17 +17,22 @@
  *   emitter_triangles      3 float4 per emitter_cdf entry: v0 (w = the offset of rays
  *                          leaving it), v1 - v0, v2 - v0
  *   environment            the environment map and its CDFs (idmr/environment.h)
- * Triangles are numbered scene-globally (the traversal returns that index). */
+ * Triangles are numbered scene-globally (the traversal returns that index); a later copy of an
+ * instanced shape shares its representative's triangles, so every per-triangle buffer is per
+ * prototype and holds the representative's world-space data (lib/surface.h carries it to the
+ * copy hit). */
 #ifndef IDMR_KERNEL_SCENE_H
 #define IDMR_KERNEL_SCENE_H
 
 #include "idmr/bvh_layout.h"
+#include "idmr/instance_bvh_layout.h"
 #include "idmr/light.h"
 #include "idmr/material.h"
 #include "idmr/ray.h"
 
 #define SCENE_BUFFERS                                                                        \
     global const idmr_bvh_node *nodes, global const idmr_triangle4 *leaves,                  \
+        global const idmr_bvh_node *top_nodes, global const idmr_instance *instances,        \
         global const float4 *triangle_normals, global const uint4 *triangle_shading,         \
         global const uint *triangle_materials,                                               \
         global const idmr_material *materials, global const idmr_light *lights,              \
@@ -34,6 +42,8 @@
 typedef struct scene_view {
     global const idmr_bvh_node *nodes;
     global const idmr_triangle4 *leaves;
+    global const idmr_bvh_node *top_nodes;
+    global const idmr_instance *instances;
     global const float4 *triangle_normals;
     global const uint4 *triangle_shading;
     global const uint *triangle_materials;
@@ -47,8 +57,9 @@ typedef struct scene_view {
 
 /* The scene_view of a kernel that takes SCENE_BUFFERS. */
 #define SCENE_VIEW()                                                                         \
-    ((scene_view){nodes, leaves, triangle_normals, triangle_shading, triangle_materials,     \
-                  materials, lights, light_cdf, emitter_cdf, emitter_triangles, environment})
+    ((scene_view){nodes, leaves, top_nodes, instances, triangle_normals, triangle_shading,  \
+                  triangle_materials, materials, lights, light_cdf, emitter_cdf,             \
+                  emitter_triangles, environment})
 
 /* The material of scene triangle t. */
 inline global const idmr_material *triangle_material(const scene_view *scene, uint t)

@@ -18,22 +18,28 @@ inline float3 unpack_normal(uint packed)
     return normalize((float3)(xyz[0], xyz[1], xyz[2]));
 }
 
-/* The shading normal at `hit` on a triangle with unit winding normal n: the corners' normals
- * interpolated with the hit's barycentrics and normalised, turned into n's hemisphere (so
- * that the side a path is on stays the geometric one); n itself where the triangle is shaded
- * flat or the interpolation vanishes. */
-inline float3 shading_normal(global const uint4 *triangle_shading, idmr_hit hit, float3 n)
+/* The corners' unit normals c0, c1, c2 interpolated at `hit`'s barycentrics and normalised,
+ * turned into the hemisphere of the unit winding normal n (so that the side a path is on stays
+ * the geometric one); n itself where the interpolation vanishes. */
+inline float3 shading_interpolate(float3 c0, float3 c1, float3 c2, idmr_hit hit, float3 n)
 {
-    uint4 packed = triangle_shading[hit.triangle];
-    if (packed.w == 0u)
-        return n;
-    float3 s = (1.0f - hit.u - hit.v) * unpack_normal(packed.x) + hit.u * unpack_normal(packed.y) +
-               hit.v * unpack_normal(packed.z);
+    float3 s = (1.0f - hit.u - hit.v) * c0 + hit.u * c1 + hit.v * c2;
     float length2 = dot(s, s);
     if (!(length2 > 1e-12f))
         return n;
     s *= rsqrt(length2);
     return dot(s, n) < 0.0f ? -s : s;
+}
+
+/* The shading normal at `hit` on a triangle with unit winding normal n: its corners' normals
+ * interpolated (shading_interpolate); n itself where the triangle is shaded flat. */
+inline float3 shading_normal(global const uint4 *triangle_shading, idmr_hit hit, float3 n)
+{
+    uint4 packed = triangle_shading[hit.triangle];
+    if (packed.w == 0u)
+        return n;
+    return shading_interpolate(unpack_normal(packed.x), unpack_normal(packed.y),
+                               unpack_normal(packed.z), hit, n);
 }
 
 /* Photons arrive with a density in proportion to |incoming·n| (the geometric normal); the

@@ -24,7 +24,7 @@
 #include "idmr/weight.h"
 #include "lib/lights.h"
 #include "lib/scene.h"
-#include "lib/traverse.h"
+#include "lib/surface.h"
 
 /* The shadow weight of hit point hp's shadow ray (above), its occluder into *occluder; 0 when the
  * ray reaches the light or no light reaches hp. */
@@ -42,11 +42,12 @@ inline float shadow_occluder_weight(const scene_view *scene, const idmr_sppm_par
         return 0.0f; /* the light is on the other side of the receiving surface */
     float3 origin = offset_origin(p, n, hp->offset);
     float tmax = isinf(distance) ? INFINITY : distance * (1.0f - 1e-4f); /* short of the light */
-    idmr_hit hit = traverse_closest(scene->nodes, scene->leaves, origin, d, 0.0f, tmax);
+    surface found = trace_surface(scene, origin, d, tmax);
+    idmr_hit hit = found.hit;
     if (hit.triangle == IDMR_NO_HIT)
         return 0.0f;
     *occluder = hit.triangle;
-    float3 m = scene->triangle_normals[hit.triangle].xyz;
+    float3 m = found.normal;
     float grazing = idmr_eq2_weight(m.x, m.y, m.z, d.x, d.y, d.z); /* 1 - |c| */
     float silhouette = grazing / fmax(1.0f - grazing, 0.1f);
     float footprint = length(p - vload3(0, camera->origin)) * 2.0f * camera->tan_half_x /
