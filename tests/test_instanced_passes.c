@@ -1,15 +1,7 @@
 /* test_instanced_passes.c — the passes on the two-level BVH (host/device/bvh.h,
  * kernels/lib/surface.h): an instanced scene is simulated as the same scene written flat is,
- * while the device holds each prototype once.
- *
- * The scene: the shipped Cornell box with its knot made the shape of a shapegroup and placed
- * three times, as test_reduce_instances places it — where the box has it ("seen"), half size,
- * turned and moved up left ("turned"), and mirrored in x with a non-uniform scale ("mirrored":
- * -0.6, 0.45, 0.75, so that normals need the inverse transpose, not the placement itself, and
- * the winding its reversal). The flat scene writes the three copies as shapes of their own,
- * each with the group's and the instance's transforms in one to_world; the mirrored one with
- * flip_normals, since a loader keeps an instance's side where the placement mirrors but a
- * plain shape's winding as its file has it (core/scene.h, instances).
+ * while the device holds each prototype once. The scenes: instanced_cornell.h (the Cornell box's
+ * knot placed three times, one copy turned, one mirrored with a non-uniform scale).
  *
  *   two-level BVH   bvh_build() gives the instanced scene a top level over four instances (the
  *                   meshes that are not instanced, and the knot's three copies of one
@@ -36,55 +28,8 @@
 #include <cmocka.h>
 
 #include "device/device_scene.h"
+#include "instanced_cornell.h"
 #include "test_support.h"
-
-#ifndef IDMR_ROOT
-#define IDMR_ROOT "."
-#endif
-#define CORNELL_XML IDMR_ROOT "/data/cornell/scene.xml"
-#define KNOT_PLY IDMR_ROOT "/data/cornell/meshes/knot.ply"
-
-/* The knot's own transform in the Cornell box, then each copy's placement. */
-#define KNOT_TO_WORLD "<rotate x=\"1\" angle=\"-70\"/><translate x=\"0.35\" y=\"-0.5\" z=\"0.25\"/>"
-static const char *const copy_names[3] = {"seen", "turned", "mirrored"};
-static const char *const copy_placements[3] = {
-    "",
-    "<scale value=\"0.5\"/><rotate y=\"1\" angle=\"40\"/><translate x=\"-0.3\" y=\"0.6\" z=\"0.1\"/>",
-    "<scale x=\"-0.6\" y=\"0.45\" z=\"0.75\"/><translate y=\"0.2\"/>"};
-
-static char *read_text(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        fail_msg("cannot read %s", path);
-    fseek(f, 0, SEEK_END);
-    long size = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *text = malloc((size_t)size + 1);
-    assert_int_equal(fread(text, 1, (size_t)size, f), (size_t)size);
-    text[size] = 0;
-    fclose(f);
-    return text;
-}
-
-/* DIR/NAME: the Cornell box with its knot shape replaced by `knots` (XML text). */
-static void write_cornell_with(const char *dir, const char *name, const char *knots, char *path,
-                               size_t size)
-{
-    char *xml = read_text(CORNELL_XML);
-    char *knot = strstr(xml, "    <shape type=\"ply\" id=\"knot\">");
-    assert_non_null(knot);
-    char *after = strstr(knot, "</shape>");
-    assert_non_null(after);
-    after += strlen("</shape>");
-    *knot = 0;
-    snprintf(path, size, "%s/%s", dir, name);
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fprintf(f, "%s%s%s", xml, knots, after);
-    assert_int_equal(fclose(f), 0);
-    free(xml);
-}
 
 /* The two scenes, loaded and finalised (scene_load finalises), in a fresh directory. */
 typedef struct scene_pair {
@@ -96,38 +41,14 @@ static scene_pair pair;
 
 static int group_setup(void **state)
 {
-    char knot[4096], text[16384], path[4200];
-    if (!realpath(KNOT_PLY, knot))
-        return -1;
+    char path[4200];
     snprintf(pair.dir, sizeof pair.dir, "/tmp/idmr-instanced-XXXXXX");
     test_make_directory(pair.dir);
-    int at = snprintf(text, sizeof text,
-                      "    <shape type=\"shapegroup\" id=\"knots\">\n"
-                      "        <shape type=\"ply\" id=\"knot\">\n"
-                      "            <string name=\"filename\" value=\"%s\"/>\n"
-                      "            <transform name=\"to_world\">" KNOT_TO_WORLD "</transform>\n"
-                      "            <ref id=\"orange\"/>\n"
-                      "        </shape>\n"
-                      "    </shape>\n",
-                      knot);
-    for (int k = 0; k < 3; k++)
-        at += snprintf(text + at, sizeof text - (size_t)at,
-                       "    <shape type=\"instance\" id=\"%s\"><ref id=\"knots\"/>"
-                       "<transform name=\"to_world\">%s</transform></shape>\n",
-                       copy_names[k], copy_placements[k]);
-    write_cornell_with(pair.dir, "instanced.xml", text, path, sizeof path);
+    if (instanced_cornell_write(pair.dir, 0, path, sizeof path))
+        return -1;
     pair.instanced = test_load_scene(path);
-    at = 0;
-    for (int k = 0; k < 3; k++)
-        at += snprintf(text + at, sizeof text - (size_t)at,
-                       "    <shape type=\"ply\" id=\"%s_knot\">\n"
-                       "        <string name=\"filename\" value=\"%s\"/>\n"
-                       "        <boolean name=\"flip_normals\" value=\"%s\"/>\n"
-                       "        <transform name=\"to_world\">" KNOT_TO_WORLD "%s</transform>\n"
-                       "        <ref id=\"orange\"/>\n"
-                       "    </shape>\n",
-                       copy_names[k], knot, k == 2 ? "true" : "false", copy_placements[k]);
-    write_cornell_with(pair.dir, "flat.xml", text, path, sizeof path);
+    if (instanced_cornell_write(pair.dir, 1, path, sizeof path))
+        return -1;
     pair.flat = test_load_scene(path);
     return 0;
 }
@@ -146,7 +67,7 @@ static const scene_mesh *instanced_knot(void) { return test_find_mesh(pair.insta
 static const scene_mesh *flat_knot(int k)
 {
     char name[64];
-    snprintf(name, sizeof name, "%s_knot", copy_names[k]);
+    snprintf(name, sizeof name, "%s_knot", instanced_cornell_copies[k]);
     return test_find_mesh(pair.flat, name);
 }
 
@@ -275,7 +196,7 @@ static double mesh_sum(const scene_mesh *m, const double *per_triangle)
 static double flat_knot_triangle(const double *per_triangle, uint32_t t)
 {
     double sum = 0;
-    for (int k = 0; k < 3; k++)
+    for (int k = 0; k < INSTANCED_CORNELL_COPIES; k++)
         sum += per_triangle[flat_knot(k)->first_triangle + t];
     return sum;
 }
@@ -305,7 +226,7 @@ static void test_importance_as_flattened(void **state)
             assert_true(fabs(x - y) <= 0.01 * fmax(x, y) + 1e-9);
         }
         double x = mesh_sum(knot, a[k]), y = 0;
-        for (int copy = 0; copy < 3; copy++)
+        for (int copy = 0; copy < INSTANCED_CORNELL_COPIES; copy++)
             y += mesh_sum(flat_knot(copy), b[k]);
         double l1 = 0, l1_seeds = 0;
         for (uint32_t t = 0; t < knot->triangle_count; t++) {
