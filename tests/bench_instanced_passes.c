@@ -68,7 +68,7 @@ int main(void)
     if (device_open(&d, -1))
         fail("device_open");
     for (int flat = 0; flat < 2; flat++) {
-        if (instanced_cornell_write(dir, flat, path, sizeof path))
+        if (instanced_cornell_write(dir, flat, 1.0, path, sizeof path))
             fail("writing the scenes");
         warn_silence(1);
         scenes[flat].s = mitsuba_load(path);

@@ -8,7 +8,9 @@
  * The flat scene writes the three copies as shapes of their own, each with the group's and the
  * instance's transforms in one to_world; the mirrored one with flip_normals, since a loader
  * keeps an instance's side where its placement mirrors but a plain shape's winding as its file
- * has it (core/scene.h, instances). */
+ * has it (core/scene.h, instances). Either may be written with the whole scene scaled (every
+ * top-level transform, the sensor's included, followed by a uniform scale), to try the passes'
+ * numbers far from the unit scale: the image stays the same. */
 #ifndef IDMR_TESTS_INSTANCED_CORNELL_H
 #define IDMR_TESTS_INSTANCED_CORNELL_H
 
@@ -34,9 +36,29 @@ static const int instanced_cornell_mirrored[INSTANCED_CORNELL_COPIES] = {0, 0, 1
 #define INSTANCED_CORNELL_KNOT_TO_WORLD                                                         \
     "<rotate x=\"1\" angle=\"-70\"/><translate x=\"0.35\" y=\"-0.5\" z=\"0.25\"/>"
 
-/* DIR/NAME: data/cornell/scene.xml with its knot shape replaced by `knots` (XML text); 0 or -1. */
+/* Writes text to f with `<scale value="scale"/>` before every "</transform>" (none for 1). */
+static inline void instanced_cornell_put_scaled(FILE *f, const char *text, size_t length,
+                                                double scale)
+{
+    const char *end = text + length;
+    for (const char *at; text < end; text = at + strlen("</transform>")) {
+        at = strstr(text, "</transform>");
+        if (!at || at >= end) {
+            fprintf(f, "%.*s", (int)(end - text), text);
+            return;
+        }
+        fprintf(f, "%.*s", (int)(at - text), text);
+        if (scale != 1.0)
+            fprintf(f, "<scale value=\"%.17g\"/>", scale);
+        fputs("</transform>", f);
+    }
+}
+
+/* DIR/NAME: data/cornell/scene.xml with its knot shape replaced by `group` and `knots` (XML
+ * text), every transform but the group's scaled by `scale`; 0 or -1. */
 static inline int instanced_cornell_write_with(const char *dir, const char *name,
-                                               const char *knots, char *path, size_t size)
+                                               const char *group, const char *knots,
+                                               double scale, char *path, size_t size)
 {
     FILE *f = fopen(IDMR_ROOT "/data/cornell/scene.xml", "rb");
     if (!f)
@@ -54,29 +76,35 @@ static inline int instanced_cornell_write_with(const char *dir, const char *name
     f = fopen(path, "w");
     if (!f)
         return -1;
-    fprintf(f, "%.*s%s%s", (int)(knot - xml), xml, knots, after);
+    instanced_cornell_put_scaled(f, xml, (size_t)(knot - xml), scale);
+    fputs(group, f);
+    instanced_cornell_put_scaled(f, knots, strlen(knots), scale);
+    instanced_cornell_put_scaled(f, after, strlen(after), scale);
     return fclose(f) == 0 ? 0 : -1;
 }
 
-/* DIR/instanced.xml (flat = 0) or DIR/flat.xml (flat = 1) into path; 0 or -1. */
-static inline int instanced_cornell_write(const char *dir, int flat, char *path, size_t size)
+/* DIR/instanced-SCALE.xml (flat = 0) or DIR/flat-SCALE.xml (flat = 1), the whole scene scaled
+ * by `scale` (1: as the box is), into path; 0 or -1. */
+static inline int instanced_cornell_write(const char *dir, int flat, double scale, char *path,
+                                          size_t size)
 {
-    char knot[PATH_MAX];
-    static char text[16384];
+    char knot[PATH_MAX], file[64];
+    static char group[PATH_MAX + 512], text[16384];
     if (!realpath(IDMR_ROOT "/data/cornell/meshes/knot.ply", knot))
         return -1;
     int at = 0;
+    group[0] = 0;
     if (!flat)
-        at += snprintf(text, sizeof text,
-                       "    <shape type=\"shapegroup\" id=\"knots\">\n"
-                       "        <shape type=\"ply\" id=\"knot\">\n"
-                       "            <string name=\"filename\" value=\"%s\"/>\n"
-                       "            <transform name=\"to_world\">" INSTANCED_CORNELL_KNOT_TO_WORLD
-                       "</transform>\n"
-                       "            <ref id=\"orange\"/>\n"
-                       "        </shape>\n"
-                       "    </shape>\n",
-                       knot);
+        snprintf(group, sizeof group,
+                 "    <shape type=\"shapegroup\" id=\"knots\">\n"
+                 "        <shape type=\"ply\" id=\"knot\">\n"
+                 "            <string name=\"filename\" value=\"%s\"/>\n"
+                 "            <transform name=\"to_world\">" INSTANCED_CORNELL_KNOT_TO_WORLD
+                 "</transform>\n"
+                 "            <ref id=\"orange\"/>\n"
+                 "        </shape>\n"
+                 "    </shape>\n",
+                 knot);
     for (int k = 0; k < INSTANCED_CORNELL_COPIES; k++) {
         const char *name = instanced_cornell_copies[k], *placement = instanced_cornell_placements[k];
         if (!flat)
@@ -95,8 +123,8 @@ static inline int instanced_cornell_write(const char *dir, int flat, char *path,
                            "    </shape>\n",
                            name, knot, instanced_cornell_mirrored[k] ? "true" : "false", placement);
     }
-    return instanced_cornell_write_with(dir, flat ? "flat.xml" : "instanced.xml", text, path,
-                                        size);
+    snprintf(file, sizeof file, "%s-%g.xml", flat ? "flat" : "instanced", scale);
+    return instanced_cornell_write_with(dir, file, group, text, scale, path, size);
 }
 
 #endif

@@ -12,7 +12,9 @@
  *                   triangles fewer), its BVH once
  *   render          the same seed renders the same image: the RMSE between the two is below a
  *                   tenth of the RMSE between two seeds of the flat scene (the Monte Carlo
- *                   error), and every channel's mean agrees within 0.5 %
+ *                   error), and every channel's mean agrees within 0.5 %; so do the two with
+ *                   the whole scene scaled by 1e4 and by 1e-3, and the instanced one with its
+ *                   unscaled image
  *   importance      camera, light and shadow importance per mesh (the knot's prototype against
  *                   the sum of its three flat copies) agree within 1 %, and per knot triangle
  *                   the summed L1 difference is below half the one between two seeds */
@@ -44,10 +46,10 @@ static int group_setup(void **state)
     char path[4200];
     snprintf(pair.dir, sizeof pair.dir, "/tmp/idmr-instanced-XXXXXX");
     test_make_directory(pair.dir);
-    if (instanced_cornell_write(pair.dir, 0, path, sizeof path))
+    if (instanced_cornell_write(pair.dir, 0, 1.0, path, sizeof path))
         return -1;
     pair.instanced = test_load_scene(path);
-    if (instanced_cornell_write(pair.dir, 1, path, sizeof path))
+    if (instanced_cornell_write(pair.dir, 1, 1.0, path, sizeof path))
         return -1;
     pair.flat = test_load_scene(path);
     return 0;
@@ -160,6 +162,16 @@ static double channel_mean(const render_result *r, int c)
     return sum / (double)pixels;
 }
 
+/* The scenes scaled by `scale` as a whole, loaded (the caller frees them). */
+static void load_scaled(double scale, scene **instanced, scene **flat)
+{
+    char path[4200];
+    assert_int_equal(instanced_cornell_write(pair.dir, 0, scale, path, sizeof path), 0);
+    *instanced = test_load_scene(path);
+    assert_int_equal(instanced_cornell_write(pair.dir, 1, scale, path, sizeof path), 0);
+    *flat = test_load_scene(path);
+}
+
 static void test_render_as_flattened(void **state)
 {
     render_options o;
@@ -177,6 +189,25 @@ static void test_render_as_flattened(void **state)
         double x = channel_mean(&instanced, c), y = channel_mean(&flat, c);
         print_message("  channel %d mean: instanced %.6g, flat %.6g\n", c, x, y);
         assert_true(fabs(x - y) <= 0.005 * y);
+    }
+    /* Far from the unit scale (ray offsets, the normals' transform, the move into object
+     * space): the same agreement, against the same noise (the image does not change). */
+    const double scales[2] = {1e4, 1e-3};
+    o.sppm.seed = 1;
+    for (int k = 0; k < 2; k++) {
+        scene *a, *b;
+        load_scaled(scales[k], &a, &b);
+        render_result ra, rb;
+        test_run_render(a, NULL, &o, &ra);
+        test_run_render(b, NULL, &o, &rb);
+        double scaled = image_rmse(&ra, &rb), moved = image_rmse(&ra, &instanced);
+        print_message("  scale %g: RMSE instanced/flat %.3g, instanced/unscaled %.3g\n",
+                      scales[k], scaled, moved);
+        assert_true(scaled < 0.1 * noise && moved < 0.1 * noise);
+        render_result_free(&ra);
+        render_result_free(&rb);
+        scene_free(a);
+        scene_free(b);
     }
     render_result_free(&instanced);
     render_result_free(&flat);
