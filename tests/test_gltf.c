@@ -70,6 +70,11 @@ static scene *load_or_fail(const char *path)
     scene *s = gltf_load(path);
     if (!s)
         fail_msg("%s", error_message());
+    /* these tests read every node's mesh, shared ones too: a later copy of a shared primitive
+     * holds its geometry only once restored (core/scene.h) */
+    for (size_t m = 0; m < s->mesh_count; m++)
+        if (scene_mesh_restore(s, m))
+            fail_msg("%s", error_message());
     return s;
 }
 

@@ -1057,7 +1057,7 @@ static void test_include_fan_out_is_bounded(void **state)
 }
 
 /* ---------------------------------------------------------------------------------------- */
-/* Instancing: shapegroup and instance, simulated as world-space copies                     */
+/* Instancing: shapegroup and instance, each group shape held once                          */
 
 /* A tetrahedron at the origin, wound outward (volume 1/6). */
 static const char *tet_obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
@@ -1142,7 +1142,9 @@ static void check_rectangle_copy(const scene_mesh *m, const double offset[3], do
         assert_true(m->normals[3 * v + 2] * z_sign > 0.99);
 }
 
-static void test_instances_flattened(void **state)
+/* Each group shape's first copy holds its geometry; the later copies hold none, share its
+ * triangles, and are made where they stand when restored (core/scene.h). */
+static void test_instances_held_once(void **state)
 {
     write_file("tet.obj", tet_obj);
     scene *s = load_scene("3.0.0", instanced_body);
@@ -1150,7 +1152,19 @@ static void test_instances_flattened(void **state)
                                         "G/rectangle", "m/tet", "m/rectangle"};
     static const int instance_lines[] = {11, 11, 15, 15, 19, 19};
     assert_int_equal(s->mesh_count, 6);
-    assert_int_equal(s->triangle_count, 18);
+    assert_int_equal(s->triangle_count, 6); /* the tet's 4 and the rectangle's 2, once */
+    assert_int_equal(s->vertex_count, 8);
+    assert_int_equal(s->rendered_triangle_count, 18);
+    assert_int_equal(s->rendered_vertex_count, 24);
+    assert_true(s->features & IDMR_FEATURE_INSTANCES);
+    for (size_t i = 2; i < 6; i++) {
+        assert_true(scene_mesh_is_later_copy(s, i));
+        assert_true(s->meshes[i].released);
+        assert_null(s->meshes[i].positions);
+        assert_int_equal(s->meshes[i].first_triangle, s->meshes[i % 2].first_triangle);
+        assert_int_equal(scene_mesh_of_triangle(s, s->meshes[i].first_triangle), i % 2);
+        assert_int_equal(scene_mesh_restore(s, i), 0);
+    }
     for (size_t i = 0; i < 6; i++) {
         assert_string_equal(s->meshes[i].name, names[i]);
         assert_int_equal(s->meshes[i].xml_line, i % 2 ? 7 : 3);
@@ -1586,7 +1600,7 @@ int main(void)
         cmocka_unit_test(test_shape_rectangle),
         cmocka_unit_test(test_shape_mirrored_builtin),
         cmocka_unit_test(test_shape_mirrored_sphere_normals),
-        cmocka_unit_test(test_instances_flattened),
+        cmocka_unit_test(test_instances_held_once),
         cmocka_unit_test(test_instances_old_dialect_and_restored),
         cmocka_unit_test(test_obj_oriented_by_its_normals),
         cmocka_unit_test(test_obj_face_normals_keep_winding),

@@ -602,14 +602,22 @@ static void run_orientation_case(void **state)
     scene_free(s);
 }
 
-static void test_instances_flattened(void **state)
+/* The object's shape is held once: the first instance's copy holds it, the second none until
+ * restored (core/scene.h), both sharing its triangle. */
+static void test_instances_held_once(void **state)
 {
     scene *s = load_text("WorldBegin\nObjectBegin \"tri\"\n" ONE_TRIANGLE "ObjectEnd\n"
                          "AttributeBegin\nTranslate 10 0 0\nObjectInstance \"tri\"\nAttributeEnd\n"
                          "AttributeBegin\nTranslate 20 0 0\nObjectInstance \"tri\"\nAttributeEnd\n");
     assert_int_equal(s->mesh_count, 2);
+    assert_int_equal(s->triangle_count, 1);
+    assert_int_equal(s->rendered_triangle_count, 2);
     assert_string_not_equal(s->meshes[0].name, s->meshes[1].name);
     assert_vec3(&s->meshes[0].positions[3], 11, 0, 0, EPS);
+    assert_null(s->meshes[1].positions);
+    assert_int_equal(s->meshes[1].first_triangle, s->meshes[0].first_triangle);
+    assert_vec3(s->bbox_max, 21, 1, 0, EPS);
+    assert_int_equal(scene_mesh_restore(s, 1), 0);
     assert_vec3(&s->meshes[1].positions[3], 21, 0, 0, EPS);
     assert_int_equal(s->meshes[0].source_offset, s->meshes[1].source_offset);
     /* Chained as copies of one shape (reduce/reduce_instances.c), each with its instance's
@@ -1003,7 +1011,7 @@ int main(void)
         cmocka_unit_test(test_infinite_image),
         cmocka_unit_test(test_gzipped_plymesh),
         cmocka_unit_test(test_shapes_tessellated),
-        cmocka_unit_test(test_instances_flattened),
+        cmocka_unit_test(test_instances_held_once),
         cmocka_unit_test(test_include),
         cmocka_unit_test(test_writer_round_trip),
         cmocka_unit_test(test_writer_unknown_offset),

@@ -47,7 +47,7 @@ int command_convert(int argc, char **argv)
     }
     printf("%s: %s scene, %zu meshes (%llu triangles), %zu materials, %zu lights\n", output,
            format == SCENE_EXPORT_MITSUBA ? "Mitsuba 3" : "pbrt-v4", s->mesh_count,
-           (unsigned long long)s->triangle_count, s->material_count, s->light_count);
+           (unsigned long long)s->rendered_triangle_count, s->material_count, s->light_count);
     scene_free(s);
     return 0;
 }

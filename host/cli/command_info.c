@@ -136,15 +136,13 @@ static cJSON *info_json(const scene *s, const bvh *b)
     json_add_vec3(bbox, "min", s->bbox_min);
     json_add_vec3(bbox, "max", s->bbox_max);
     cJSON_AddItemToObject(root, "features", features_json(s->features));
-    cJSON_AddNumberToObject(root, "vertices", (double)s->vertex_count);
-    /* What a scene stores: an instanced shape once, however many instances place it (the
-     * vertices `idmr reduce` plans and counts: reduce/reduce_instances.c). */
-    uint64_t stored = 0;
-    for (size_t m = 0; m < s->mesh_count; m++)
-        if (!s->meshes[m].instanced || s->meshes[m].instance_first == m)
-            stored += s->meshes[m].vertex_count;
-    cJSON_AddNumberToObject(root, "vertices_stored", (double)stored);
-    cJSON_AddNumberToObject(root, "triangles", (double)s->triangle_count);
+    /* Every copy counted (what a renderer holds flattened), and what the scene stores: an
+     * instanced shape once, however many instances place it (the vertices `idmr reduce` plans
+     * and counts: reduce/reduce_instances.c; the passes hold each prototype once too). */
+    cJSON_AddNumberToObject(root, "vertices", (double)s->rendered_vertex_count);
+    cJSON_AddNumberToObject(root, "vertices_stored", (double)s->vertex_count);
+    cJSON_AddNumberToObject(root, "triangles", (double)s->rendered_triangle_count);
+    cJSON_AddNumberToObject(root, "triangles_stored", (double)s->triangle_count);
     uint64_t dropped = 0;
     for (size_t m = 0; m < s->mesh_count; m++)
         dropped += s->meshes[m].triangles_dropped;

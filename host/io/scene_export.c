@@ -317,6 +317,8 @@ static int write_meshes(export_job *job)
         snprintf(path, sizeof path, "%s/%s.ply", job->staging, job->mesh_names[m]);
         if (mesh_io_write_ply(path, &data, NULL, NULL, NULL) || ply_check_written(path))
             return -1;
+        if (scene_mesh_is_later_copy(s, m))
+            scene_mesh_release(s, m); /* made from its representative's for this file only */
     }
     return 0;
 }

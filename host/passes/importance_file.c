@@ -36,6 +36,10 @@ int importance_file_fingerprint(const scene *s, uint64_t *fingerprint)
     uint64_t hash = HASH_FNV1A_START;
     for (size_t m = 0; m < s->mesh_count; m++) {
         const scene_mesh *mesh = &s->meshes[m];
+        if (scene_mesh_is_later_copy(s, m)) { /* no geometry of its own: where it is placed */
+            hash = hash_fnv1a(hash, mesh->instance_to_world, sizeof mesh->instance_to_world);
+            continue;
+        }
         hash = hash_fnv1a(hash, mesh->positions, 3 * sizeof(float) * mesh->vertex_count);
         hash = hash_fnv1a(hash, mesh->indices, 3 * sizeof(uint32_t) * mesh->triangle_count);
     }
@@ -335,9 +339,7 @@ static int check_values(const char *path, const importance_result *r, const scen
             double sum = kinds[k].sums[t];
             if (sum >= 0 && isfinite(sum))
                 continue;
-            size_t m = 0, first = 0;
-            while (m + 1 < s->mesh_count && t >= first + s->meshes[m].triangle_count)
-                first += s->meshes[m++].triangle_count;
+            size_t m = scene_mesh_of_triangle(s, t), first = s->meshes[m].first_triangle;
             return error_set(IDMR_EXIT_INPUT,
                              "--simulation: '%s': the %s importance sum of triangle %zu (mesh "
                              "'%s', its triangle %zu) is %g; it must be finite and >= 0 "

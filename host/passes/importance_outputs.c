@@ -93,16 +93,22 @@ cJSON *importance_report_json(const scene *s, const device *d, const importance_
     cJSON *meshes = cJSON_AddArrayToObject(root, "meshes");
     importance_weights weights = importance_weights_of(o);
     for (size_t m = 0; m < s->mesh_count; m++) {
-        importance_sums sums = importance_mesh_sums(r, s, m, &weights);
         cJSON *mesh = cJSON_CreateObject();
         cJSON_AddStringToObject(mesh, "name", s->meshes[m].name);
         cJSON_AddNumberToObject(mesh, "vertices", s->meshes[m].vertex_count);
         cJSON_AddNumberToObject(mesh, "triangles", s->meshes[m].triangle_count);
+        cJSON_AddItemToArray(meshes, mesh);
+        if (scene_mesh_is_later_copy(s, m)) {
+            /* its triangles are its prototype's: the sums stand on the first copy, over all */
+            cJSON_AddStringToObject(mesh, "instance_of",
+                                    s->meshes[s->meshes[m].instance_first].name);
+            continue;
+        }
+        importance_sums sums = importance_mesh_sums(r, s, m, &weights);
         cJSON_AddNumberToObject(mesh, "importance_sum", sums.amount);
         cJSON_AddNumberToObject(mesh, "camera_sum", sums.camera);
         cJSON_AddNumberToObject(mesh, "light_sum", sums.light);
         cJSON_AddNumberToObject(mesh, "shadow_sum", sums.shadow);
-        cJSON_AddItemToArray(meshes, mesh);
     }
     cJSON_AddItemToObject(root, "convergence",
                           cJSON_CreateDoubleArray(r->convergence, (int)run->iterations));
@@ -114,6 +120,8 @@ double **importance_vertex_values(const importance_result *r, const scene *s,
 {
     double **values = xcalloc(s->mesh_count + 1, sizeof *values);
     for (size_t m = 0; m < s->mesh_count; m++) {
+        if (scene_mesh_is_later_copy(s, m))
+            continue; /* no vertices of its own: its representative's are the prototype's */
         values[m] = xmalloc((s->meshes[m].vertex_count + 1) * sizeof **values);
         importance_mesh_vertices(r, s, m, w, values[m]);
     }
@@ -176,10 +184,12 @@ static double vertex_percentile99(const scene *s, double *const *values)
 {
     size_t total = 0;
     for (size_t m = 0; m < s->mesh_count; m++)
-        total += s->meshes[m].vertex_count;
+        total += values[m] ? s->meshes[m].vertex_count : 0;
     double *all = xmalloc((total + 1) * sizeof *all);
     size_t at = 0;
     for (size_t m = 0; m < s->mesh_count; m++) {
+        if (!values[m])
+            continue;
         memcpy(all + at, values[m], s->meshes[m].vertex_count * sizeof *all);
         at += s->meshes[m].vertex_count;
     }
@@ -194,6 +204,8 @@ static int write_mesh_files(const char *dir, const scene *s, double *const *valu
     int status = 0;
     for (size_t m = 0; m < s->mesh_count && !status; m++) {
         const scene_mesh *mesh = &s->meshes[m];
+        if (!values[m])
+            continue; /* a later copy of an instanced shape: its representative's file shows it */
         float *property = xmalloc((mesh->vertex_count + 1) * sizeof *property);
         unsigned char *colours = xmalloc(3 * ((size_t)mesh->vertex_count + 1));
         for (uint32_t v = 0; v < mesh->vertex_count; v++) {

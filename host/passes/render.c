@@ -267,8 +267,8 @@ cJSON *render_report_json(const scene *s, const device *d, const render_options 
     cJSON_AddNumberToObject(root, "first_radius", run->iterations ? run->radius[0] : 0);
     cJSON_AddNumberToObject(root, "last_radius",
                             run->iterations ? run->radius[run->iterations - 1] : 0);
-    cJSON_AddNumberToObject(root, "triangles", (double)s->triangle_count);
-    cJSON_AddNumberToObject(root, "vertices", (double)s->vertex_count);
+    cJSON_AddNumberToObject(root, "triangles", (double)s->rendered_triangle_count);
+    cJSON_AddNumberToObject(root, "vertices", (double)s->rendered_vertex_count);
     cJSON *seconds = cJSON_AddObjectToObject(root, "seconds");
     double n = run->iterations ? run->iterations : 1;
     cJSON_AddNumberToObject(seconds, "build", run->seconds.build);

@@ -31,7 +31,8 @@ budget_mesh reduce_budget_entry(const reduce_state *st, const importance_result 
         entry.pinned = 0;
         entry.importance = 0.0;
     } else if (reduce_method_uses_importance(o->method)) {
-        entry.importance = reduce_instance_importance(st, r, m, &weights);
+        /* a representative's triangles are its prototype's: every copy's importance */
+        entry.importance = importance_mesh_sums(r, st->simulated, m, &weights).amount;
     }
     return entry;
 }
@@ -46,8 +47,7 @@ int reduce_plan_budget(reduce_state *st)
         st->input[m] = reduce_decimation_input(st, m);
         budget[m] = reduce_budget_entry(st, &st->importance, m);
     }
-    int status = reduce_instances_sum_vertex_importance(st) ||
-                 budget_distribute(budget, st->count, st->target, o->min_vertices, &st->plan);
+    int status = budget_distribute(budget, st->count, st->target, o->min_vertices, &st->plan);
     /* Nothing to remove (D = 1): every mesh that could be decimated is still rewritten, as its
      * PLY without a collapse, so the output is the scene converted (and a check of the writer:
      * another renderer must show it as the input). */
@@ -61,7 +61,6 @@ int reduce_plan_budget(reduce_state *st)
 
 void reduce_budget_forget(reduce_state *st)
 {
-    reduce_instances_forget(st);
     free(st->input);
     free(st->budget);
     st->input = NULL;

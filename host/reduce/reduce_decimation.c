@@ -593,8 +593,6 @@ int reduce_decimation(reduce_state *st)
     }
     if (!status)
         keep_unreduced(st, first_target);
-    if (!status)
-        status = reduce_instances_derive(st, st->output);
     free(first_target);
     free(redo);
     if (!status)

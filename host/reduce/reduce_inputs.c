@@ -87,9 +87,11 @@ static int holds_decimation(const decimate_output *o)
 
 scene *reduce_view_of(reduce_state *st, const decimate_output *meshes)
 {
-    /* A released mesh without a decimation here is shown as it is: read again (and kept). */
+    /* A released mesh without a decimation here is shown as it is: read again (and kept). A
+     * later copy of an instanced shape holds no geometry: the view places its representative's. */
     for (size_t m = 0; m < st->count; m++)
-        if (!holds_decimation(&meshes[m]) && scene_mesh_restore(st->scene, m))
+        if (!holds_decimation(&meshes[m]) && !scene_mesh_is_later_copy(st->scene, m) &&
+            scene_mesh_restore(st->scene, m))
             return NULL;
     scene *view = scene_view(st->scene);
     for (size_t m = 0; m < st->count; m++) {

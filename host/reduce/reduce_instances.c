@@ -2,24 +2,21 @@
  * a Mitsuba shapegroup placed by instances, a pbrt-v4 object placed by ObjectInstances, a glTF
  * mesh that several nodes name.
  *
- * The loaders flatten every instance into world-space copies and chain the copies of one shape
- * (core/scene.h: instanced), so the importance pass sees each copy where it stands. The
- * reduction folds the copies of one shape back into one prototype, which the reduced scene
- * stores once:
+ * The loaders hold an instanced shape once (core/scene.h: instanced): its first copy, the
+ * representative, holds the geometry in its own world space; the later copies hold none and
+ * share its triangles, so the passes (on the two-level BVH) add every copy's importance to
+ * the prototype's triangles. The reduction reduces the prototype once:
  *
- *   plan          the prototype is planned once (Eq. 3), through its first copy, the
- *                 representative: its vertices counted once (what the written scene stores,
- *                 so D is a fraction of the stored vertices) and its importance summed over
- *                 every copy; the other copies (followers) have no vertices of their own in
- *                 the plan, and --keep on any copy keeps the prototype whole
- *   decimation    the representative is decimated in its own world space with the importance
- *                 summed per vertex over the copies (vertex v of every copy is the
- *                 prototype's vertex v: the loader makes them so)
- *   followers     each follower's reduced mesh is the representative's moved by
- *                 T_f T_r^-1 (T: an instance's to_world, the winding kept on its side as the
- *                 loader keeps it), so every later stage (the next pass's view, the memory
- *                 fit, the error budget's check renders) sees the reduced scene flattened; the
- *                 initial reduction (--initial) reduces each prototype once so too
+ *   plan          the prototype is planned once (Eq. 3), through the representative: its
+ *                 vertices counted once (what the written scene stores, so D is a fraction of
+ *                 the stored vertices) and its importance, which sums every copy's; the later
+ *                 copies have no vertices of their own in the plan, and --keep on any copy
+ *                 keeps the prototype whole
+ *   decimation    the representative is decimated in its own world space with that importance;
+ *                 a later copy has no decimation of its own: a view of the reduced scene (the
+ *                 next pass, the memory fit, the error budget's check renders) places the
+ *                 representative's reduction at every copy (core/scene.h), and so does the
+ *                 initial reduction (--initial)
  *   write         Mitsuba: the shapegroup's shape points to the reduced prototype in the
  *                 group's own space (T_r^-1 of the representative's), the shapegroup and its
  *                 instances as written; pbrt-v4: the object's Shape, in its own space, once;
@@ -53,11 +50,6 @@ size_t reduce_instance_next_copy(const reduce_state *st, size_t c)
     return mesh->instanced && mesh->instance_next ? mesh->instance_next : st->count;
 }
 
-int reduce_instance_has_followers(const reduce_state *st, size_t m)
-{
-    return reduce_instance_next_copy(st, m) < st->count;
-}
-
 int reduce_instance_named_by_keep(const reduce_state *st, size_t m)
 {
     for (size_t c = m; c < st->count; c = reduce_instance_next_copy(st, c))
@@ -72,59 +64,6 @@ int reduce_instance_pinned(const reduce_state *st, size_t m)
         if (reduce_mesh_pinned(st->options, &st->scene->meshes[c]))
             return 1;
     return 0;
-}
-
-/* Whether copy c has the representative r's vertex and triangle counts (the loader makes every
- * copy so; a mesh file changed between reads would not be). 0, or -1 with the error set. */
-static int check_copy(const reduce_state *st, size_t r, size_t c)
-{
-    const scene_mesh *a = &st->scene->meshes[r], *b = &st->scene->meshes[c];
-    if (a->vertex_count == b->vertex_count && a->triangle_count == b->triangle_count)
-        return 0;
-    return error_set(IDMR_EXIT_INPUT,
-                     "mesh '%s' (%u vertices, %u triangles) and mesh '%s' (%u, %u) are copies of "
-                     "one shapegroup shape (%s:%d) but differ",
-                     a->name, a->vertex_count, a->triangle_count, b->name, b->vertex_count,
-                     b->triangle_count, a->xml_file ? a->xml_file : st->scene->file, a->xml_line);
-}
-
-double reduce_instance_importance(const reduce_state *st, const importance_result *r, size_t m,
-                                  const importance_weights *weights)
-{
-    double sum = 0.0;
-    for (size_t c = m; c < st->count; c = reduce_instance_next_copy(st, c))
-        sum += importance_mesh_sums(r, st->simulated, c, weights).amount;
-    return sum;
-}
-
-int reduce_instances_sum_vertex_importance(reduce_state *st)
-{
-    for (size_t m = 0; m < st->count; m++) {
-        if (reduce_instance_follower(st, m) || !reduce_instance_has_followers(st, m) ||
-            !st->input[m].vertex_importance)
-            continue;
-        uint32_t n = st->scene->meshes[m].vertex_count;
-        if (!st->instance_importance)
-            st->instance_importance = xcalloc(st->count + 1, sizeof *st->instance_importance);
-        double *sum = st->instance_importance[m] = xcalloc((size_t)n + 1, sizeof *sum);
-        for (size_t c = m; c < st->count; c = reduce_instance_next_copy(st, c)) {
-            if (check_copy(st, m, c))
-                return -1;
-            const double *own = reduce_decimation_input(st, c).vertex_importance;
-            for (uint32_t v = 0; own && v < n; v++)
-                sum[v] += own[v];
-        }
-        st->input[m].vertex_importance = sum;
-    }
-    return 0;
-}
-
-void reduce_instances_forget(reduce_state *st)
-{
-    for (size_t m = 0; st->instance_importance && m < st->count; m++)
-        free(st->instance_importance[m]);
-    free(st->instance_importance);
-    st->instance_importance = NULL;
 }
 
 /* A malloc'd copy of `bytes` at `from`, or NULL for NULL. */
@@ -146,18 +85,6 @@ static void copy_mesh(const mesh_data *from, mesh_data *to)
     to->indices = duplicate(from->indices, 3 * t * sizeof *from->indices);
     to->texcoords = duplicate(from->texcoords, 2 * v * sizeof *from->texcoords);
     to->normals = duplicate(from->normals, 3 * v * sizeof *from->normals);
-}
-
-/* A copy of `from`, the decimation of a mesh of `input_vertices` vertices (its history too,
- * where it has one). */
-static void copy_output(const decimate_output *from, uint32_t input_vertices, decimate_output *to)
-{
-    *to = *from;
-    copy_mesh(&from->mesh, &to->mesh);
-    size_t h = from->history_count;
-    to->collapsed_into = duplicate(from->collapsed_into, h * sizeof *from->collapsed_into);
-    to->output_index = duplicate(from->output_index, h * sizeof *from->output_index);
-    to->welded_of = duplicate(from->welded_of, input_vertices * sizeof *from->welded_of);
 }
 
 /* Copy c's instance transform and its inverse; 0, or -1 with the error set (a singular one). */
@@ -185,32 +112,13 @@ int reduce_instance_prototype_mesh(const reduce_state *st, size_t m, mesh_data *
     return 0;
 }
 
-int reduce_instances_derive(reduce_state *st, decimate_output *outputs)
-{
-    for (size_t f = 0; f < st->count; f++) {
-        if (!reduce_instance_follower(st, f))
-            continue;
-        size_t r = reduce_instance_representative(st, f);
-        decimate_output_free(&outputs[f]);
-        if (!outputs[r].mesh.positions)
-            continue;
-        xform representative_world, representative_object, follower_world, follower_object;
-        if (check_copy(st, r, f) ||
-            instance_transforms(st, r, &representative_world, &representative_object) ||
-            instance_transforms(st, f, &follower_world, &follower_object))
-            return -1;
-        copy_output(&outputs[r], st->scene->meshes[r].vertex_count, &outputs[f]);
-        shapes_transform_keeping_side(&outputs[f].mesh, &representative_object);
-        shapes_transform_keeping_side(&outputs[f].mesh, &follower_world);
-    }
-    return 0;
-}
-
 uint64_t reduce_instances_rendered_vertices(const reduce_state *st)
 {
     uint64_t vertices = 0;
-    for (size_t m = 0; m < st->count; m++)
-        vertices += st->output[m].mesh.positions ? st->output[m].mesh.vertex_count
-                                                 : st->scene->meshes[m].vertex_count;
+    for (size_t m = 0; m < st->count; m++) {
+        const decimate_output *reduced = &st->output[reduce_instance_representative(st, m)];
+        vertices += reduced->mesh.positions ? reduced->mesh.vertex_count
+                                            : st->scene->meshes[m].vertex_count;
+    }
     return vertices;
 }

@@ -106,8 +106,11 @@ static int line_of(const reduce_state *st, memory_pass pass, memory_line *line)
     scene *bare = scene_view(st->scene);
     line->fixed_triangles = line->free_triangles = 0;
     for (size_t m = 0; m < st->count; m++) {
-        /* An instance's copy is reduced as its shape's first copy is (reduce_instances.c). */
-        if (reduce_decimatable(st, reduce_instance_representative(st, m))) {
+        /* A later copy of an instanced shape takes no memory of its own: its triangles are
+         * its representative's (core/scene.h), whose count the view's finalize gives it. */
+        if (reduce_instance_follower(st, m))
+            continue;
+        if (reduce_decimatable(st, m)) {
             line->free_triangles += st->scene->meshes[m].triangle_count;
             bare->meshes[m].vertex_count = bare->meshes[m].triangle_count = 0;
         } else {

@@ -63,8 +63,6 @@ int reduce_initial(reduce_state *st)
     st->history = xcalloc(st->count + 1, sizeof *st->history);
     int status = reduce_decimate_meshes(st, inputs, targets, selected, DECIMATE_QUADRIC,
                                         "initial reduction", 1, st->history);
-    if (!status)
-        status = reduce_instances_derive(st, st->history);
     free(inputs);
     free(targets);
     free(selected);

@@ -92,12 +92,13 @@ static void add_mesh(cJSON *meshes, const reduce_state *st, size_t m)
     cJSON_AddBoolToObject(mesh, "decimated", decimated);
     cJSON_AddNumberToObject(mesh, "vertices_before", in->vertex_count);
     cJSON_AddNumberToObject(mesh, "vertices_target", (double)st->plan.target[m]);
-    /* An instance's copy after its shape's first holds the first's decimation, moved. */
-    int holds = out->mesh.positions != NULL;
+    /* An instance's copy after its shape's first is the first's decimation, placed. */
+    const decimate_output *placed = &st->output[reduce_instance_representative(st, m)];
+    int holds = placed->mesh.positions != NULL;
     cJSON_AddNumberToObject(mesh, "vertices_after",
-                            holds ? out->mesh.vertex_count : in->vertex_count);
+                            holds ? placed->mesh.vertex_count : in->vertex_count);
     cJSON_AddNumberToObject(mesh, "triangles_after",
-                            holds ? out->mesh.triangle_count : in->triangle_count);
+                            holds ? placed->mesh.triangle_count : in->triangle_count);
     int not_reduced = st->not_reduced && st->not_reduced[m];
     if ((decimated || not_reduced) && st->budget[m].floor > 0)
         cJSON_AddNumberToObject(mesh, "vertices_floor", (double)st->budget[m].floor);

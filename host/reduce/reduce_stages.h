@@ -188,9 +188,6 @@ typedef struct reduce_state {
     decimate_input *input;         /* what each mesh is decimated from */
     budget_mesh *budget;           /* what the plan was made from, with the decimation's floors */
     budget_plan plan;              /* targets and factors */
-    double **instance_importance;  /* per representative of copies (reduce_instances.c), the
-                                      importance per vertex summed over its copies; NULL
-                                      where there are none */
     double seconds_budget;
 
     /* decimation: */
@@ -247,30 +244,17 @@ scene *reduce_view_of(reduce_state *st, const decimate_output *meshes);
 /* The mesh that represents mesh m's prototype in the plan and the decimation: the first copy
  * of its shape (core/scene.h: instanced), or m itself for any other mesh. */
 size_t reduce_instance_representative(const reduce_state *st, size_t m);
-/* Whether mesh m is a copy other than its shape's first (a follower: no vertices of its own in
- * the plan, its reduction the representative's moved to its place). */
+/* Whether mesh m is a copy other than its shape's first (a follower, the scene's later copy: no
+ * vertices of its own in the plan, no decimation of its own; its reduction is the
+ * representative's, placed where it stands). */
 int reduce_instance_follower(const reduce_state *st, size_t m);
 /* The copy after copy c of the same shape, or st->count after the last (and for any mesh not a
  * copy): for (c = m; c < st->count; c = reduce_instance_next_copy(st, c)). */
 size_t reduce_instance_next_copy(const reduce_state *st, size_t c);
-/* Whether mesh m has copies after it. */
-int reduce_instance_has_followers(const reduce_state *st, size_t m);
 /* Whether --keep names mesh m or any copy after it. */
 int reduce_instance_named_by_keep(const reduce_state *st, size_t m);
 /* Whether any copy from mesh m on is pinned (reduce_mesh_pinned): it keeps the prototype whole. */
 int reduce_instance_pinned(const reduce_state *st, size_t m);
-/* The importance sum of mesh m and every copy after it, from `r` on the simulated scene. */
-double reduce_instance_importance(const reduce_state *st, const importance_result *r, size_t m,
-                                  const importance_weights *weights);
-/* The budget stage: each representative's input importance per vertex summed over its copies
- * (st->instance_importance). 0, or -1 with the error set (copies that differ). */
-int reduce_instances_sum_vertex_importance(reduce_state *st);
-/* Frees st->instance_importance. */
-void reduce_instances_forget(reduce_state *st);
-/* After a decimation into `outputs` (the initial reduction's, the decimation stage's): each
- * follower's output, its representative's decimation moved to its place (none where the
- * representative holds none). 0, or -1 with the error set. */
-int reduce_instances_derive(reduce_state *st, decimate_output *outputs);
 /* The decimated representative m in its Mitsuba shapegroup's own space, for the writer (*out
  * malloc'd). 0, or -1 with the error set (a singular instance transform). */
 int reduce_instance_prototype_mesh(const reduce_state *st, size_t m, mesh_data *out);

@@ -57,11 +57,12 @@ static int write_reduced_gltf(reduce_state *st)
     for (size_t m = 0; m < st->count; m++) {
         /* A copy of a primitive that several nodes name shares its first copy's reduction
          * (reduce_instances.c): its node keeps naming the same mesh. */
-        int shared = reduce_instance_follower(st, m);
-        if (!st->plan.decimate[m] && !(shared && st->output[m].mesh.positions))
+        size_t first = reduce_instance_representative(st, m);
+        int shared = first != m;
+        if (!st->plan.decimate[first])
             continue;
         replacements[replaced++] =
-            (gltf_replacement){s->meshes[m].xml_line, &st->output[m].mesh, shared};
+            (gltf_replacement){s->meshes[m].xml_line, &st->output[first].mesh, shared};
         st->meshes_written += !shared;
     }
     int status =
