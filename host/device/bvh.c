@@ -525,6 +525,7 @@ static int scene_placement(const scene *s, size_t m, uint32_t p, instance_placem
  * placed by each copy of its chain (itself first). Returns 0, or -1 with the error set. */
 static int build_instanced(const scene *s, bvh *out)
 {
+    memset(out, 0, sizeof *out); /* nothing to free on failure, as bvh_build_meshes leaves it */
     bvh_mesh *parts = xmalloc(s->mesh_count * sizeof *parts + 1);
     instance_prototype *prototypes = xcalloc(s->mesh_count + 1, sizeof *prototypes);
     instance_placement *placements = xcalloc(s->mesh_count + 1, sizeof *placements);
@@ -568,15 +569,7 @@ static int build_instanced(const scene *s, bvh *out)
     free(parts);
     free(prototypes);
     free(placements);
-    if (status)
-        return -1;
-    log_verbose("BVH: two-level, %zu prototypes placed %zu times: %zu top nodes (depth %d), "
-                "%zu nodes, %zu leaves, %zu triangle references (%zu degenerate triangles left "
-                "out), depth %d, %.2f s",
-                prototype_count, out->instance_count, out->top_node_count, out->top_depth,
-                out->node_count, out->leaf_count, out->reference_count, out->degenerate_count,
-                out->depth, out->build_seconds);
-    return 0;
+    return status ? -1 : 0; /* instance_bvh_build logged the build */
 }
 
 int bvh_build(const scene *s, bvh *out)
