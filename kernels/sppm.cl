@@ -15,6 +15,7 @@
  *                     (each counting its pixel's weight where the pass is pixel-weighted)
  *   path_importance   per path, from its last vertex back: running sum s of gather counts;
  *                     vertex j adds weight_j × s to its triangle's light importance
+ *                     (an instanced scene: to its instance's total too, lib/paths.h)
  *   shadow_rays       per hit point, one shadow ray: its occluder gets shadow importance
  *                     (lib/shadows.h; built with IDMR_SHADOW_IMPORTANCE=1)
  *   pixel_centre_hits the triangle seen through each pixel centre (the importance image)
@@ -42,6 +43,16 @@
 #define SEEN_LIGHT_ARGUMENT
 #endif
 
+/* With INSTANCE_TOTALS (lib/paths.h) photon_paths writes each record's instance to a side array
+ * parallel to the records, and path_importance reads it. */
+#if INSTANCE_TOTALS
+#define PHOTON_PASS_PARAMETERS , global uint *record_instances
+#define RECORD_INSTANCES , record_instances
+#else
+#define PHOTON_PASS_PARAMETERS
+#define RECORD_INSTANCES
+#endif
+
 kernel void camera_paths(idmr_sppm_params params, idmr_camera camera, SCENE_BUFFERS,
                          global idmr_hit_point *hit_points,
                          camera_records records CAMERA_PASS_PARAMETERS)
@@ -61,14 +72,14 @@ kernel void camera_paths(idmr_sppm_params params, idmr_camera camera, SCENE_BUFF
  * sums are integers, so results stay the same bit for bit. */
 kernel void photon_paths(idmr_sppm_params params, SCENE_BUFFERS, global uint *path_length,
                          global photon_record *records, volatile global uint *stored_count,
-                         global uint *record_index)
+                         global uint *record_index PHOTON_PASS_PARAMETERS)
 {
     uint slot = get_global_id(0); /* this device's path slot: path path_first + slot */
     if (slot >= params.device_paths)
         return;
     scene_view scene = SCENE_VIEW();
     path_record_list list = {records, stored_count,
-                             record_index + (size_t)slot * IDMR_PATH_VERTICES};
+                             record_index + (size_t)slot * IDMR_PATH_VERTICES RECORD_INSTANCES};
     path_length[slot] = photon_path(&scene, &params, params.path_first + slot, list);
 }
 
@@ -150,7 +161,7 @@ kernel void gather_count(idmr_sppm_params params, global const idmr_photon_verte
 kernel void path_importance(idmr_sppm_params params, global const idmr_photon_vertex *vertices,
                             global const uint *path_length, global const uint *record_index,
                             global const uint *gathered,
-                            volatile global fixed_word *light_importance)
+                            volatile global fixed_word *light_importance PHOTON_PASS_PARAMETERS)
 {
     uint path = get_global_id(0); /* this device's path slot */
     if (path >= params.device_paths)
@@ -160,9 +171,14 @@ kernel void path_importance(idmr_sppm_params params, global const idmr_photon_ve
     for (int j = (int)path_length[path] - 1; j >= 0; j--) {
         uint v = index[j];
         running += gathered[v];
+#if INSTANCE_TOTALS
+        uint instance = record_instances[v];
+#else
+        uint instance = 0u;
+#endif
         if (running != 0ul)
-            fixed_add(light_importance, vertices[v].triangle,
-                      weight_units(vertices[v].weight) * running);
+            importance_add(light_importance, &params, vertices[v].triangle, instance,
+                           weight_units(vertices[v].weight) * running);
     }
 }
 
@@ -179,12 +195,12 @@ kernel void shadow_rays(idmr_sppm_params params, idmr_camera camera, SCENE_BUFFE
     idmr_rng rng =
         idmr_rng_init(params.seed, params.iteration, IDMR_STREAM_IMPORTANCE_SHADOW, pixel);
     camera.width = params.width;
-    uint occluder;
-    float weight =
-        shadow_occluder_weight(&scene, &params, &camera, hit_points + pixel, &rng, &occluder);
+    uint occluder, instance;
+    float weight = shadow_occluder_weight(&scene, &params, &camera, hit_points + pixel, &rng,
+                                          &occluder, &instance);
     if (weight > 0.0f)
-        fixed_add(shadow_importance, occluder,
-                  weight_units(weight) * pixel_weight(&params, pixel_weights, pixel));
+        importance_add(shadow_importance, &params, occluder, instance,
+                       weight_units(weight) * pixel_weight(&params, pixel_weights, pixel));
 }
 #endif
 

@@ -10,7 +10,9 @@
  * keeps an instance's side where its placement mirrors but a plain shape's winding as its file
  * has it (core/scene.h, instances). Either may be written with the whole scene scaled (every
  * top-level transform, the sensor's included, followed by a uniform scale), to try the passes'
- * numbers far from the unit scale: the image stays the same. */
+ * numbers far from the unit scale: the image stays the same. instanced_cornell_write_variant()
+ * writes other placements and another material for the knot (test_instance_totals: a copy
+ * hidden behind the back wall, mirror knots). */
 #ifndef IDMR_TESTS_INSTANCED_CORNELL_H
 #define IDMR_TESTS_INSTANCED_CORNELL_H
 
@@ -83,13 +85,25 @@ static inline int instanced_cornell_write_with(const char *dir, const char *name
     return fclose(f) == 0 ? 0 : -1;
 }
 
-/* DIR/instanced-SCALE.xml (flat = 0) or DIR/flat-SCALE.xml (flat = 1), the whole scene scaled
- * by `scale` (1: as the box is), into path; 0 or -1. */
-static inline int instanced_cornell_write(const char *dir, int flat, double scale, char *path,
-                                          size_t size)
+/* The knot's copies and material: copy k is named names[k] (its instance's id; the flat
+ * scene's shape is NAME_knot), placed by placements[k] (transform XML after the knot's own),
+ * mirroring where mirrored[k]; bsdf is the knot's material (XML: a <ref> or a <bsdf>). */
+typedef struct instanced_cornell_variant {
+    int count;
+    const char *const *names;
+    const char *const *placements;
+    const int *mirrored;
+    const char *bsdf;
+} instanced_cornell_variant;
+
+/* DIR/instancedTAG-SCALE.xml (flat = 0) or DIR/flatTAG-SCALE.xml (flat = 1) of variant v, the
+ * whole scene scaled by `scale` (1: as the box is), into path; 0 or -1. */
+static inline int instanced_cornell_write_variant(const char *dir, int flat, double scale,
+                                                  const instanced_cornell_variant *v,
+                                                  const char *tag, char *path, size_t size)
 {
-    char knot[PATH_MAX], file[64];
-    static char group[PATH_MAX + 512], text[16384];
+    char knot[PATH_MAX], file[128];
+    static char group[PATH_MAX + 1024], text[16384];
     if (!realpath(IDMR_ROOT "/data/cornell/meshes/knot.ply", knot))
         return -1;
     int at = 0;
@@ -101,12 +115,12 @@ static inline int instanced_cornell_write(const char *dir, int flat, double scal
                  "            <string name=\"filename\" value=\"%s\"/>\n"
                  "            <transform name=\"to_world\">" INSTANCED_CORNELL_KNOT_TO_WORLD
                  "</transform>\n"
-                 "            <ref id=\"orange\"/>\n"
+                 "            %s\n"
                  "        </shape>\n"
                  "    </shape>\n",
-                 knot);
-    for (int k = 0; k < INSTANCED_CORNELL_COPIES; k++) {
-        const char *name = instanced_cornell_copies[k], *placement = instanced_cornell_placements[k];
+                 knot, v->bsdf);
+    for (int k = 0; k < v->count; k++) {
+        const char *name = v->names[k], *placement = v->placements[k];
         if (!flat)
             at += snprintf(text + at, sizeof text - (size_t)at,
                            "    <shape type=\"instance\" id=\"%s\"><ref id=\"knots\"/>"
@@ -119,12 +133,23 @@ static inline int instanced_cornell_write(const char *dir, int flat, double scal
                            "        <boolean name=\"flip_normals\" value=\"%s\"/>\n"
                            "        <transform name=\"to_world\">" INSTANCED_CORNELL_KNOT_TO_WORLD
                            "%s</transform>\n"
-                           "        <ref id=\"orange\"/>\n"
+                           "        %s\n"
                            "    </shape>\n",
-                           name, knot, instanced_cornell_mirrored[k] ? "true" : "false", placement);
+                           name, knot, v->mirrored[k] ? "true" : "false", placement, v->bsdf);
     }
-    snprintf(file, sizeof file, "%s-%g.xml", flat ? "flat" : "instanced", scale);
+    snprintf(file, sizeof file, "%s%s-%g.xml", flat ? "flat" : "instanced", tag, scale);
     return instanced_cornell_write_with(dir, file, group, text, scale, path, size);
+}
+
+/* DIR/instanced-SCALE.xml (flat = 0) or DIR/flat-SCALE.xml (flat = 1): the three copies above,
+ * the knot orange; into path; 0 or -1. */
+static inline int instanced_cornell_write(const char *dir, int flat, double scale, char *path,
+                                          size_t size)
+{
+    const instanced_cornell_variant three = {INSTANCED_CORNELL_COPIES, instanced_cornell_copies,
+                                             instanced_cornell_placements,
+                                             instanced_cornell_mirrored, "<ref id=\"orange\"/>"};
+    return instanced_cornell_write_variant(dir, flat, scale, &three, "", path, size);
 }
 
 #endif

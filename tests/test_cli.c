@@ -846,10 +846,10 @@ static void test_reduce_refuses_unusable_simulation(void **state)
         {"cd %s && cp sim/simulation.bin photons.bin && printf '\\001' | dd of=photons.bin bs=1 "
          "seek=30 conv=notrunc status=none # %s",
          "data/cornell/scene.xml", "--simulation %s/photons.bin", "checksum does not match"},
-        /* The top byte of a camera sum (triangle 100, after the header's 80 bytes and the radii
-         * and changes of 6 iterations) changed. */
+        /* The top byte of a camera sum (triangle 100, after the magic's and the header's 88
+         * bytes and the radii and changes of 6 iterations) changed. */
         {"cd %s && cp sim/simulation.bin sums.bin && printf '\\177' | dd of=sums.bin bs=1 "
-         "seek=983 conv=notrunc status=none # %s",
+         "seek=991 conv=notrunc status=none # %s",
          "data/cornell/scene.xml", "--simulation %s/sums.bin", "checksum does not match"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
@@ -908,9 +908,9 @@ static void test_reduce_refuses_simulation_values(void **state)
     const char *dir = shared_runs_dir(&simulations);
     uint32_t no_photons = 0;
     double nan_sum = NAN, negative_sum = -1.0;
-    /* The header is 80 bytes; then 6 radii and 6 changes; then camera, light and shadow sums of
-     * the 96024 triangles. */
-    size_t sums = 80 + 2 * 6 * 8, triangles = 96024;
+    /* The magic and the header are 88 bytes; then 6 radii and 6 changes; then camera, light and
+     * shadow sums of the 96024 triangles. */
+    size_t sums = 88 + 2 * 6 * 8, triangles = 96024;
     write_edited_simulation(dir, "no-photons.bin", 28, &no_photons, sizeof no_photons);
     write_edited_simulation(dir, "nan-light.bin", sums + 8 * (triangles + 1), &nan_sum, 8);
     write_edited_simulation(dir, "negative-camera.bin", sums + 8 * 95990, &negative_sum, 8);

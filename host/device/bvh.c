@@ -520,32 +520,63 @@ static int scene_placement(const scene *s, size_t m, uint32_t p, instance_placem
     return 0;
 }
 
+size_t bvh_scene_instances(const scene *s, size_t *mesh_of_instance)
+{
+    if (!(s->features & IDMR_FEATURE_INSTANCES))
+        return 0;
+    size_t count = 0;
+    for (size_t m = 0; m < s->mesh_count; m++)
+        if (!s->meshes[m].instanced) {
+            if (mesh_of_instance)
+                mesh_of_instance[count] = BVH_NO_MESH;
+            count++;
+            break;
+        }
+    for (size_t m = 0; m < s->mesh_count; m++) {
+        if (!s->meshes[m].instanced || s->meshes[m].instance_first != m)
+            continue;
+        for (size_t copy = m;; copy = s->meshes[copy].instance_next) {
+            if (mesh_of_instance)
+                mesh_of_instance[count] = copy;
+            count++;
+            if (s->meshes[copy].instance_next == 0)
+                break;
+        }
+    }
+    return count;
+}
+
 /* The two-level BVH of a scene with later copies (bvh.h): prototype 0 the meshes that are not
  * instanced, placed by the identity (when there are any), then one prototype per representative,
- * placed by each copy of its chain (itself first). Returns 0, or -1 with the error set. */
+ * placed by each copy of its chain (itself first), in bvh_scene_instances()' order. Returns 0,
+ * or -1 with the error set. */
 static int build_instanced(const scene *s, bvh *out)
 {
     memset(out, 0, sizeof *out); /* nothing to free on failure, as bvh_build_meshes leaves it */
     bvh_mesh *parts = xmalloc(s->mesh_count * sizeof *parts + 1);
     instance_prototype *prototypes = xcalloc(s->mesh_count + 1, sizeof *prototypes);
     instance_placement *placements = xcalloc(s->mesh_count + 1, sizeof *placements);
-    size_t part_count = 0, prototype_count = 1, placement_count = 0;
+    size_t *placed = xmalloc((s->mesh_count + 1) * sizeof *placed);
+    size_t part_count = 0, prototype_count = 1;
+    size_t placement_count = bvh_scene_instances(s, placed);
     for (size_t m = 0; m < s->mesh_count; m++)
         if (!s->meshes[m].instanced)
             parts[part_count++] = scene_part(s, m);
     prototypes[0] = (instance_prototype){.parts = parts, .part_count = part_count};
-    int status = part_count ? scene_placement(s, 0, 0, &placements[placement_count++]) : 0;
-    for (size_t m = 0; m < s->mesh_count && status == 0; m++) {
-        if (!s->meshes[m].instanced || s->meshes[m].instance_first != m)
+    int status = 0;
+    uint32_t p = 0; /* the prototype of the chain being placed */
+    for (size_t i = 0; i < placement_count && status == 0; i++) {
+        size_t m = placed[i];
+        if (m == BVH_NO_MESH) { /* prototype 0, by the identity (mesh 0 is never a later copy) */
+            status = scene_placement(s, 0, 0, &placements[i]);
             continue;
-        uint32_t p = (uint32_t)prototype_count++;
-        parts[part_count] = scene_part(s, m);
-        prototypes[p] = (instance_prototype){.parts = &parts[part_count++], .part_count = 1};
-        for (size_t copy = m; status == 0; copy = s->meshes[copy].instance_next) {
-            status = scene_placement(s, copy, p, &placements[placement_count++]);
-            if (s->meshes[copy].instance_next == 0)
-                break;
         }
+        if (s->meshes[m].instance_first == m) { /* a representative: its prototype */
+            p = (uint32_t)prototype_count++;
+            parts[part_count] = scene_part(s, m);
+            prototypes[p] = (instance_prototype){.parts = &parts[part_count++], .part_count = 1};
+        }
+        status = scene_placement(s, m, p, &placements[i]);
     }
     instanced_scene input = {prototypes, prototype_count, placements, placement_count};
     instance_bvh two_level;
@@ -569,6 +600,7 @@ static int build_instanced(const scene *s, bvh *out)
     free(parts);
     free(prototypes);
     free(placements);
+    free(placed);
     return status ? -1 : 0; /* instance_bvh_build logged the build */
 }
 

@@ -51,6 +51,17 @@ typedef struct bvh {
  * kernels' traversal stack allows, a placement that cannot be inverted). */
 int bvh_build(const scene *s, bvh *out);
 
+/* What no mesh places: prototype 0's instance (every mesh that is not instanced, together). */
+#define BVH_NO_MESH SIZE_MAX
+
+/* The instances bvh_build() gives the two-level BVH of scene s (IDMR_FEATURE_INSTANCES), in
+ * the order of bvh.instances: prototype 0's (BVH_NO_MESH) where some mesh is not instanced,
+ * then each instanced shape's copies, its representative first, along its chain. Writes the
+ * scene mesh each instance places into mesh_of_instance (may be NULL; room for
+ * mesh_count + 1) and returns the count; 0 for a scene without later copies (a flat BVH).
+ * The importance pass keeps each copy's totals by it (passes/importance.h). */
+size_t bvh_scene_instances(const scene *s, size_t *mesh_of_instance);
+
 /* One triangle mesh for bvh_build_meshes(): leaf lanes number its triangle t as
  * first_triangle + t. */
 typedef struct bvh_mesh {

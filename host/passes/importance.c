@@ -1,7 +1,12 @@
 /* importance.c — the importance pass on the SPPM core (see importance.h): its buffers and
  * kernels (gather_count, path_importance, shadow_rays, pixel_centre_hits in kernels/sppm.cl),
  * reading the fixed-point accumulators into double sums every iteration, the convergence
- * measure and its stop rule, and the importance per triangle, vertex and mesh. */
+ * measure and its stop rule, and the importance per triangle, vertex, mesh and instance copy.
+ *
+ * An accumulator holds one word per scene triangle and, in an instanced scene, one more per
+ * instance of the two-level BVH after them (idmr/importance_layout.h): read back, added over
+ * devices and ranks and checked together, then converted into the per-triangle sums and each
+ * copy's totals. */
 #include "passes/importance.h"
 
 #include <math.h>
@@ -12,6 +17,7 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "core/ranks.h"
+#include "device/bvh.h"
 
 #define STOP_AFTER_CALM_ITERATIONS 3
 #define PER_MILLION_SAMPLES 1e6
@@ -47,6 +53,10 @@ enum { CAMERA, LIGHT, SHADOW, SEEN_LIGHT, KINDS };
 static const char *const KIND_NAMES[KINDS] = {"camera importance", "light importance",
                                               "shadow importance", "seen light"};
 
+/* path_importance's arguments before an instanced scene's record instances (prepare binds
+ * those, gather the others). */
+#define PATH_IMPORTANCE_ARGUMENTS 6
+
 /* The pass's kernels and buffers on one device of the run. Camera importance, shadow
  * importance and seen light are added on the first device only (sppm.h); every device adds
  * light importance for its own photon paths. */
@@ -54,6 +64,7 @@ typedef struct importance_device {
     cl_kernel gather, path, shadow, centre_hits;
     cl_mem gathered, accumulators[KINDS];
     cl_mem pixel_weights; /* options' pixel weights (unweighted: not read) */
+    cl_mem record_instances; /* an instanced scene: the instance of each photon record */
     double path_seconds;   /* its path walks, summed */
     double shadow_seconds; /* its shadow rays, summed */
 } importance_device;
@@ -65,7 +76,12 @@ typedef struct importance_pass {
     int shadows; /* σ > 0: shadow rays */
     double total_power; /* Σ of the lights' luminous power (scene_finalize) */
     importance_device device[SPPM_MAX_DEVICES]; /* by sppm.index */
-    size_t words;     /* accumulator words: one per triangle (at least one) */
+    size_t words;     /* accumulator words allocated: pass_sizes.words */
+    size_t triangles; /* scene triangles: the accumulators' first words */
+    size_t instances; /* instances of the two-level BVH, a word each after them (0: flat) */
+    size_t *instance_mesh; /* per instance, the scene mesh it places (bvh_scene_instances) */
+    double *instance_sums[SHADOW + 1]; /* per instance, its totals of camera, light (the
+                                          seen light included) and shadow importance */
     uint64_t *read_back[SPPM_MAX_DEVICES]; /* each device's accumulator of one kind, read back */
     uint64_t *combined[KINDS]; /* each kind's words, the devices' (and ranks') added */
     double *previous;  /* each triangle's weighted sum before this iteration */
@@ -97,19 +113,24 @@ static double brightest_visible_luminance(const scene *s)
 }
 
 /* The sizes of the pass's buffers: per photon slot a gather count, per kind an accumulator word
- * per scene triangle (one at least), and (finish) the triangle seen through each pixel: one
- * place for prepare(), finish() and pass_bytes(). */
+ * per scene triangle and per instance (one at least), an instanced scene's instance per photon
+ * slot, and (finish) the triangle seen through each pixel: one place for prepare(), finish()
+ * and pass_bytes(). */
 typedef struct pass_sizes {
     size_t words; /* accumulator words per kind */
-    size_t gathered, accumulator, pixel_triangles, pixel_weights; /* bytes */
+    size_t gathered, accumulator, record_instances, pixel_triangles, pixel_weights; /* bytes */
 } pass_sizes;
 
 static pass_sizes sizes_of(const scene *s, unsigned int pixels, size_t slots)
 {
     pass_sizes z;
-    z.words = s->triangle_count ? (size_t)s->triangle_count : 1;
+    size_t instances = bvh_scene_instances(s, NULL);
+    z.words = (size_t)s->triangle_count + instances;
+    if (z.words == 0)
+        z.words = 1;
     z.gathered = slots * sizeof(cl_uint);
     z.accumulator = z.words * sizeof(cl_ulong);
+    z.record_instances = instances ? slots * sizeof(cl_uint) : 0;
     z.pixel_triangles = (size_t)pixels * sizeof(cl_uint);
     z.pixel_weights = (size_t)pixels * sizeof(cl_uint);
     return z;
@@ -118,8 +139,8 @@ static pass_sizes sizes_of(const scene *s, unsigned int pixels, size_t slots)
 static uint64_t pass_bytes(const scene *s, unsigned int pixels, size_t slots)
 {
     pass_sizes z = sizes_of(s, pixels, slots);
-    return (uint64_t)z.gathered + KINDS * (uint64_t)z.accumulator + z.pixel_triangles +
-           z.pixel_weights;
+    return (uint64_t)z.gathered + KINDS * (uint64_t)z.accumulator + z.record_instances +
+           z.pixel_triangles + z.pixel_weights;
 }
 
 static int prepare(sppm *core, void *state)
@@ -166,6 +187,17 @@ static int prepare(sppm *core, void *state)
         if (device_clear(core->dev, d->accumulators[k], p->words * sizeof(cl_ulong),
                          KIND_NAMES[k]))
             return -1;
+    /* An instanced scene: photon_paths writes each record's instance, path_importance reads
+     * it (kernels/sppm.cl, after their other arguments). */
+    if (p->instances &&
+        (device_buffer(core->dev, CL_MEM_READ_WRITE, z.record_instances, NULL,
+                       "photon record instances", &d->record_instances) ||
+         DEVICE_SET_ARG(core->photon_paths, "photon_paths", core->photon_pass_argument,
+                        d->record_instances) ||
+         DEVICE_SET_ARG(d->path, "path_importance", PATH_IMPORTANCE_ARGUMENTS,
+                        d->record_instances)))
+        return -1;
+    core->buffer_bytes += z.record_instances;
     return DEVICE_SET_ARGS_FROM(core->camera_paths, "camera_paths", core->camera_pass_argument,
                                 DEVICE_ARG(d->accumulators[CAMERA]),
                                 DEVICE_ARG(d->accumulators[SEEN_LIGHT]),
@@ -254,12 +286,25 @@ static const char *remedy_of(int k)
     return k == LIGHT ? "fewer photons per iteration" : "a smaller --resolution";
 }
 
+/* Accumulator word t's name in a message: its triangle's, or its instance's and mesh's. */
+static void word_name(const importance_pass *p, const scene *s, size_t t, char *out,
+                      size_t size)
+{
+    size_t i = t - p->triangles, m = t < p->triangles ? 0 : p->instance_mesh[i];
+    if (t < p->triangles)
+        snprintf(out, size, "triangle %zu", t);
+    else if (m == BVH_NO_MESH)
+        snprintf(out, size, "the total of instance %zu (the meshes that are not instanced)", i);
+    else
+        snprintf(out, size, "the total of instance %zu (mesh '%s')", i, s->meshes[m].name);
+}
+
 /* Reads accumulator k of the first `count` devices back, clears them, and adds their words as
  * integers into p->combined[k] (importance_add_words' checks: no word or partial sum at the
  * saturation limit). */
 static int read_accumulator(sppm *cores, unsigned int count, importance_pass *p, int k)
 {
-    size_t n = (size_t)cores->scene->triangle_count;
+    size_t n = p->triangles + p->instances;
     for (unsigned int j = 0; j < count; j++) {
         cl_mem accumulator = p->device[j].accumulators[k];
         if (!p->read_back[j])
@@ -278,24 +323,44 @@ static int read_accumulator(sppm *cores, unsigned int count, importance_pass *p,
         sum[t] = 0;
         for (unsigned int j = 0; j < count; j++)
             if (p->read_back[j][t] >= IDMR_FIXED_SATURATION ||
-                (sum[t] += p->read_back[j][t]) >= IDMR_FIXED_SATURATION)
+                (sum[t] += p->read_back[j][t]) >= IDMR_FIXED_SATURATION) {
+                char name[256];
+                word_name(p, cores->scene, t, name, sizeof name);
                 return error_set(IDMR_EXIT_FAILURE,
-                                 "%s of triangle %zu came within a factor 2 of the 64-bit "
-                                 "fixed-point limit in one iteration; use %s",
-                                 KIND_NAMES[k], t, remedy_of(k));
+                                 "%s of %s came within a factor 2 of the 64-bit fixed-point "
+                                 "limit in one iteration; use %s",
+                                 KIND_NAMES[k], name, remedy_of(k));
+            }
     }
     return 0;
 }
 
-/* p->combined[k] (every device's and rank's words) added to `sums` (importance_add_words: × scale
- * per fixed-point unit, the one conversion); adds the total it added to *added where that is
- * not NULL. */
-static int add_combined(const sppm *core, importance_pass *p, int k, double *sums, double scale,
+/* p->combined[k] (every device's and rank's words) added to the per-triangle `sums` and, in an
+ * instanced scene, its instance words to the instances' totals of kind `into` (importance_add_words:
+ * × scale per fixed-point unit, the one conversion); adds the triangles' total it added to
+ * *added where that is not NULL. */
+static int add_combined(importance_pass *p, int k, int into, double *sums, double scale,
                         double *added)
 {
-    const uint64_t *words[1] = {p->combined[k]};
-    return importance_add_words(sums, words, 1, (size_t)core->scene->triangle_count, scale,
-                                KIND_NAMES[k], remedy_of(k), added);
+    const uint64_t *words[1] = {p->combined[k]}, *instance_words[1] = {words[0] + p->triangles};
+    return importance_add_words(sums, words, 1, p->triangles, scale, KIND_NAMES[k], remedy_of(k),
+                                added) ||
+                   (p->instances &&
+                    importance_add_words(p->instance_sums[into], instance_words, 1, p->instances,
+                                         scale, KIND_NAMES[k], remedy_of(k), NULL))
+               ? -1
+               : 0;
+}
+
+/* The result's copy totals from the instances' (each instance but prototype 0's places one
+ * mesh). */
+static void set_copy_totals(const importance_pass *p, importance_result *r)
+{
+    double *copies[SHADOW + 1] = {r->copy_camera, r->copy_light, r->copy_shadow};
+    for (size_t i = 0; i < p->instances; i++)
+        if (p->instance_mesh[i] != BVH_NO_MESH)
+            for (int k = CAMERA; k <= SHADOW; k++)
+                copies[k][p->instance_mesh[i]] = p->instance_sums[k][i];
 }
 
 /* Hit points found by the first iteration's photon vertices on one device, for the report:
@@ -313,19 +378,27 @@ static int count_gathered(sppm *core, importance_pass *p, uint64_t *found)
     return status;
 }
 
-/* Triangle t's sum of kind k over the iterations so far, per million of its samples (photon
- * paths for light importance, pixels of the hit-point image for the others). */
-static double per_million(const importance_result *r, int k, uint64_t t)
+/* A sum of kind k over the iterations so far (a triangle's, a copy's), per million of its
+ * samples (photon paths for light importance, pixels of the hit-point image for the others). */
+static double per_million(const importance_result *r, int k, double sum)
 {
     double samples = k == LIGHT ? r->sppm.photons : (double)r->sppm.width * r->sppm.height;
-    return samples > 0 ? PER_MILLION_SAMPLES * sums_of(r, k)[t] / samples : 0.0;
+    return samples > 0 ? PER_MILLION_SAMPLES * sum / samples : 0.0;
 }
 
-/* Triangle t's weighted sum over the iterations so far: A(T) (importance.h) times iterations. */
+/* The weighted sum of a triangle's or a copy's sums over the iterations so far: A(T)
+ * (importance.h) times iterations. */
+static double weighted(const importance_result *r, const importance_weights *w, double camera,
+                       double light, double shadow)
+{
+    return w->gamma * per_million(r, CAMERA, camera) + per_million(r, LIGHT, light) +
+           w->shadow * per_million(r, SHADOW, shadow);
+}
+
+/* Triangle t's weighted sum (above). */
 static double weighted_sum(const importance_result *r, const importance_weights *w, uint64_t t)
 {
-    return w->gamma * per_million(r, CAMERA, t) + per_million(r, LIGHT, t) +
-           w->shadow * per_million(r, SHADOW, t);
+    return weighted(r, w, r->camera[t], r->light[t], r->shadow[t]);
 }
 
 /* Δ_n (importance.h) from the sums after n iterations and the ones before (p->previous), which
@@ -389,7 +462,7 @@ static int collect(sppm *cores, unsigned int count, void *state, unsigned int n,
         return -1;
     /* light importance from every rank's paths: summed; the camera side is rank 0's alone
      * (zero elsewhere): copied from it, which is the same sum at less cost */
-    size_t n_words = (size_t)core->scene->triangle_count;
+    size_t n_words = p->triangles + p->instances;
     for (int k = 0; k < KINDS; k++)
         if (has_kind(core, p, k) && k == LIGHT)
             ranks_sum_words(p->combined[k], n_words);
@@ -401,12 +474,13 @@ static int collect(sppm *cores, unsigned int count, void *state, unsigned int n,
     }
     for (int k = CAMERA; k <= SHADOW; k++)
         if (has_kind(core, p, k) &&
-            add_combined(core, p, k, sums_of(r, k), 1.0 / IDMR_FIXED_SCALE, NULL))
+            add_combined(p, k, k, sums_of(r, k), 1.0 / IDMR_FIXED_SCALE, NULL))
             return -1;
     if (has_kind(core, p, SEEN_LIGHT) &&
-        add_combined(core, p, SEEN_LIGHT, r->light,
+        add_combined(p, SEEN_LIGHT, LIGHT, r->light,
                      seen_light_gathers(core, p) / core->params.fixed_scale, &r->seen_light))
         return -1;
+    set_copy_totals(p, r);
     for (unsigned int j = 0; j < count; j++) {
         r->path_seconds = fmax(r->path_seconds, p->device[j].path_seconds);
         r->shadow_seconds = fmax(r->shadow_seconds, p->device[j].shadow_seconds);
@@ -489,11 +563,15 @@ static void release(void *state)
         device_release_buffers(&d->gathered, 1);
         device_release_buffers(d->accumulators, KINDS);
         device_release_buffers(&d->pixel_weights, 1);
+        device_release_buffers(&d->record_instances, 1);
     }
     for (unsigned int j = 0; j < SPPM_MAX_DEVICES; j++)
         free(p->read_back[j]);
     for (int k = 0; k < KINDS; k++)
         free(p->combined[k]);
+    for (int k = CAMERA; k <= SHADOW; k++)
+        free(p->instance_sums[k]);
+    free(p->instance_mesh);
     free(p->previous);
 }
 
@@ -548,9 +626,28 @@ int importance_run_devices(device *devices, unsigned int count, const scene *s, 
     r->camera = xcalloc(r->triangle_count + 1, sizeof *r->camera);
     r->light = xcalloc(r->triangle_count + 1, sizeof *r->light);
     r->shadow = xcalloc(r->triangle_count + 1, sizeof *r->shadow);
+    r->mesh_count = s->mesh_count;
+    r->copy_camera = xcalloc(r->mesh_count + 1, sizeof *r->copy_camera);
+    r->copy_light = xcalloc(r->mesh_count + 1, sizeof *r->copy_light);
+    r->copy_shadow = xcalloc(r->mesh_count + 1, sizeof *r->copy_shadow);
     r->convergence = xcalloc(o->sppm.iterations + 1, sizeof *r->convergence);
-    importance_pass state = {
-        .options = o, .result = r, .shadows = o->shadow_weight > 0, .total_power = total_power};
+    importance_pass state = {.options = o,
+                             .result = r,
+                             .shadows = o->shadow_weight > 0,
+                             .total_power = total_power,
+                             .triangles = (size_t)s->triangle_count};
+    /* the instances in the order of the two-level BVH's records, which the kernels number */
+    state.instance_mesh = xmalloc((s->mesh_count + 1) * sizeof *state.instance_mesh);
+    state.instances = bvh_scene_instances(s, state.instance_mesh);
+    if (state.instances != b->instance_count) {
+        free(state.instance_mesh);
+        return error_set(IDMR_EXIT_FAILURE,
+                         "importance: the BVH has %zu instances, the scene %zu (a BVH of "
+                         "another scene?)",
+                         b->instance_count, state.instances);
+    }
+    for (int k = CAMERA; k <= SHADOW; k++)
+        state.instance_sums[k] = xcalloc(state.instances + 1, sizeof *state.instance_sums[k]);
     char defines[128];
     importance_defines(o->accumulate_importance, o->gamma > 0, state.shadows, defines,
                        sizeof defines);
@@ -575,6 +672,9 @@ void importance_result_free(importance_result *r)
     free(r->camera);
     free(r->light);
     free(r->shadow);
+    free(r->copy_camera);
+    free(r->copy_light);
+    free(r->copy_shadow);
     free(r->convergence);
     free(r->pixel_triangle);
     sppm_summary_free(&r->sppm);
@@ -624,9 +724,24 @@ importance_sums importance_mesh_sums(const importance_result *r, const scene *s,
     for (uint32_t t = 0; t < mesh->triangle_count && iterations > 0; t++) {
         uint64_t global = (uint64_t)mesh->first_triangle + t;
         sums.amount += weighted_sum(r, w, global) / iterations;
-        sums.camera += per_million(r, CAMERA, global) / iterations;
-        sums.light += per_million(r, LIGHT, global) / iterations;
-        sums.shadow += per_million(r, SHADOW, global) / iterations;
+        sums.camera += per_million(r, CAMERA, r->camera[global]) / iterations;
+        sums.light += per_million(r, LIGHT, r->light[global]) / iterations;
+        sums.shadow += per_million(r, SHADOW, r->shadow[global]) / iterations;
     }
+    return sums;
+}
+
+importance_sums importance_copy_sums(const importance_result *r, const scene *s, size_t m,
+                                     const importance_weights *w)
+{
+    importance_sums sums = {0, 0, 0, 0};
+    double iterations = r->sppm.iterations;
+    if (!s->meshes[m].instanced || m >= r->mesh_count || !r->copy_camera || !(iterations > 0))
+        return sums;
+    double camera = r->copy_camera[m], light = r->copy_light[m], shadow = r->copy_shadow[m];
+    sums.amount = weighted(r, w, camera, light, shadow) / iterations;
+    sums.camera = per_million(r, CAMERA, camera) / iterations;
+    sums.light = per_million(r, LIGHT, light) / iterations;
+    sums.shadow = per_million(r, SHADOW, shadow) / iterations;
     return sums;
 }

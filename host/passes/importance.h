@@ -38,6 +38,15 @@
  * importance atomics are left out (camera importance is then 0: it would be multiplied by γ = 0
  * anyway), and with σ = 0 the shadow rays.
  *
+ * Copies: in an instanced scene (core/scene.h: a prototype's triangles are its representative's,
+ * shared by every later copy) each sum above is the prototype's, over all its copies. Each copy
+ * (the representative and every later copy) keeps its own totals besides: whatever a camera path
+ * hit, a photon vertex gathered or a shadow ray stopped on that copy adds to a triangle is added
+ * to the copy's camera, light or shadow total too, in the same fixed-point units and weights
+ * (kernels/lib/paths.h, one more word per instance in each accumulator), so that a prototype's
+ * copies' totals add up to the sums over its triangles (up to the rounding of the double sums).
+ * importance_copy_sums() weighs them as importance_mesh_sums() weighs a mesh's.
+ *
  * Convergence after iteration n: Δ_n = Σ_T (I_n(T) - I_{n-1}(T))² / Σ_T I_n(T)², with I_n the
  * per-triangle importance after n iterations; Δ_1 = 1. It is scale-free. With
  * a tolerance E > 0 the pass stops once Δ stays below E for 3 iterations in a row. A caller
@@ -72,7 +81,9 @@ typedef struct importance_snapshot {
     sppm_snapshot core;             /* hit points, path lengths, params, photon records */
     const idmr_photon_vertex *vertices; /* core.photon_records as the pass's records */
     uint32_t *gathered;             /* gather counts by slot, as core.photon_records */
-    uint64_t *camera_fixed;         /* this iteration's accumulators, fixed point */
+    uint64_t *camera_fixed;         /* this iteration's accumulators, fixed point: a word per
+                                       scene triangle, then (an instanced scene) one per
+                                       instance, its total (bvh_scene_instances' order) */
     uint64_t *light_fixed;
     uint64_t *shadow_fixed;         /* zero without shadow rays */
     uint64_t *seen_light_fixed;     /* the light camera paths saw through specular surfaces */
@@ -112,6 +123,10 @@ struct importance_result {
     double *camera;          /* per scene triangle, summed over iterations, in weight units */
     double *light;
     double *shadow;          /* zero without shadow rays */
+    /* Each copy's own totals (below, "Copies"), per scene mesh (mesh_count of them), in the
+     * units of the per-triangle sums; 0 for a mesh that is not instanced. */
+    size_t mesh_count;
+    double *copy_camera, *copy_light, *copy_shadow;
     double *convergence;     /* Δ per iteration run */
     uint32_t *pixel_triangle; /* per pixel of the hit-point image, the scene triangle seen
                                  through its centre (IDMR_NO_HIT: none): the importance image */
@@ -184,6 +199,12 @@ typedef struct importance_sums {
 } importance_sums;
 
 importance_sums importance_mesh_sums(const importance_result *r, const scene *s, size_t m,
+                                     const importance_weights *w);
+
+/* The same sums of mesh m's own copy totals (above, "Copies"): what the paths that met that copy
+ * added. All 0 for a mesh that is not instanced. Over an instanced shape's copies they add up to
+ * importance_mesh_sums() of its representative (which sums the prototype's triangles). */
+importance_sums importance_copy_sums(const importance_result *r, const scene *s, size_t m,
                                      const importance_weights *w);
 
 #endif

@@ -4,6 +4,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -14,7 +15,10 @@
 #include "core/hash.h"
 #include "core/files.h"
 
-static const char MAGIC[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '4'};
+static const char MAGIC[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '5'};
+/* Version 4 had no copy totals: read for a scene without instances (it lacks nothing there),
+ * refused for one with them. */
+static const char MAGIC_VERSION_4[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '4'};
 /* Version 1's light sums left out the light seen through specular surfaces (importance.h). */
 static const char MAGIC_VERSION_1[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '1'};
 /* Version 2's weighted it IMPORTANCE_SEEN_LIGHT_WEIGHT times less. */
@@ -23,13 +27,16 @@ static const char MAGIC_VERSION_2[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '2'};
 static const char MAGIC_VERSION_3[8] = {'I', 'D', 'M', 'R', 'S', 'I', 'M', '3'};
 enum { KIND_CAMERA = 1, KIND_SHADOW = 2 };
 
-/* The fixed-size part after the magic. */
+/* The fixed-size part after the magic; version 4's ends before `meshes` (0 for it). */
 typedef struct simulation_header {
     uint64_t fingerprint, triangles;
     uint32_t iterations, photons, width, height, kinds, seed;
     uint64_t hit_points, photon_records, gathered;
     double seen_light;
+    uint64_t meshes; /* the copy totals' length: the scene's meshes */
 } simulation_header;
+
+#define HEADER_VERSION_4 offsetof(simulation_header, meshes)
 
 int importance_file_fingerprint(const scene *s, uint64_t *fingerprint)
 {
@@ -69,6 +76,11 @@ static size_t sums_bytes(const simulation_header *h)
     return 3 * sizeof(double) * h->triangles;
 }
 
+static size_t copies_bytes(const simulation_header *h)
+{
+    return 3 * sizeof(double) * h->meshes;
+}
+
 static size_t pixels_bytes(const simulation_header *h)
 {
     return sizeof(uint32_t) * (size_t)h->width * h->height;
@@ -88,13 +100,20 @@ int importance_file_write(const char *path, const scene *s, const importance_opt
                            .hit_points = r->sppm.hit_points,
                            .photon_records = r->sppm.photon_records,
                            .gathered = r->gathered,
-                           .seen_light = r->seen_light};
+                           .seen_light = r->seen_light,
+                           .meshes = s->mesh_count};
+    if (r->mesh_count != s->mesh_count)
+        return error_set(IDMR_EXIT_FAILURE,
+                         "simulation: the pass has copy totals of %zu meshes, the scene %zu",
+                         r->mesh_count, s->mesh_count);
     if (importance_file_fingerprint(s, &h.fingerprint))
         return -1;
-    size_t body = sizeof MAGIC + sizeof h + series_bytes(&h) + sums_bytes(&h) + pixels_bytes(&h);
+    size_t body = sizeof MAGIC + sizeof h + series_bytes(&h) + sums_bytes(&h) +
+                  copies_bytes(&h) + pixels_bytes(&h);
     size_t size = body + sizeof(uint64_t);
     unsigned char *bytes = xmalloc(size), *at = bytes;
     size_t per_series = sizeof(double) * h.iterations, per_kind = sizeof(double) * h.triangles;
+    size_t per_copies = sizeof(double) * h.meshes;
     memcpy(at, MAGIC, sizeof MAGIC), at += sizeof MAGIC;
     memcpy(at, &h, sizeof h), at += sizeof h;
     memcpy(at, r->sppm.radius, per_series), at += per_series;
@@ -102,6 +121,9 @@ int importance_file_write(const char *path, const scene *s, const importance_opt
     memcpy(at, r->camera, per_kind), at += per_kind;
     memcpy(at, r->light, per_kind), at += per_kind;
     memcpy(at, r->shadow, per_kind), at += per_kind;
+    memcpy(at, r->copy_camera, per_copies), at += per_copies;
+    memcpy(at, r->copy_light, per_copies), at += per_copies;
+    memcpy(at, r->copy_shadow, per_copies), at += per_copies;
     memcpy(at, r->pixel_triangle, pixels_bytes(&h)), at += pixels_bytes(&h);
     uint64_t checksum = hash_fnv1a(HASH_FNV1A_START, bytes, body);
     memcpy(at, &checksum, sizeof checksum);
@@ -150,16 +172,17 @@ static const char *file_kind(mode_t mode)
                             : "not a regular file";
 }
 
-/* The file's size that the header promises (magic, header, arrays, checksum), or 0 where it
- * overflows. */
-static uint64_t promised_size(const simulation_header *h)
+/* The file's size that the header promises (magic, a header of header_bytes, arrays,
+ * checksum), or 0 where it overflows. */
+static uint64_t promised_size(const simulation_header *h, size_t header_bytes)
 {
     uint64_t pixels = (uint64_t)h->width * h->height;
-    if (h->triangles > (UINT64_MAX >> 8) || pixels > (UINT64_MAX >> 8))
+    if (h->triangles > (UINT64_MAX >> 8) || pixels > (UINT64_MAX >> 8) ||
+        h->meshes > (UINT64_MAX >> 8))
         return 0;
-    uint64_t size = sizeof MAGIC + sizeof *h + 2 * sizeof(double) * (uint64_t)h->iterations +
-                    3 * sizeof(double) * h->triangles + sizeof(uint32_t) * pixels +
-                    sizeof(uint64_t);
+    uint64_t size = sizeof MAGIC + header_bytes + 2 * sizeof(double) * (uint64_t)h->iterations +
+                    3 * sizeof(double) * h->triangles + 3 * sizeof(double) * h->meshes +
+                    sizeof(uint32_t) * pixels + sizeof(uint64_t);
     return size > SIZE_MAX ? 0 : size;
 }
 
@@ -189,10 +212,12 @@ static int read_failure(const char *path)
                      errno ? strerror(errno) : "it ended before its size (changed while read?)");
 }
 
-/* The whole file into memory (*size bytes), checked before it is read: a regular file (a device
- * such as /dev/zero would be read without end, a FIFO would block), a simulation file of this
- * version whose header promises the file's size, whose checksum holds. NULL with the error set. */
-static unsigned char *read_checked(const char *path, size_t *size)
+/* The whole file into memory (*size bytes) and its header into *h, checked before it is read: a
+ * regular file (a device such as /dev/zero would be read without end, a FIFO would block), a
+ * simulation file of this version or version 4 (*header_bytes: its header's size) whose header
+ * promises the file's size, whose checksum holds. NULL with the error set. */
+static unsigned char *read_checked(const char *path, size_t *size, simulation_header *h,
+                                   size_t *header_bytes)
 {
     /* O_NONBLOCK: opening a FIFO does not wait for a writer; fstat() then refuses it. */
     int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
@@ -218,23 +243,29 @@ static unsigned char *read_checked(const char *path, size_t *size)
     unsigned char head[sizeof MAGIC + sizeof(simulation_header)];
     size_t have = (uint64_t)info.st_size < sizeof head ? (size_t)info.st_size : sizeof head;
     int status = read_exactly(fd, head, have) ? read_failure(path) : 0;
-    if (!status && (have < sizeof MAGIC || memcmp(head, MAGIC, sizeof MAGIC)))
+    int version_4 =
+        !status && have >= sizeof MAGIC && !memcmp(head, MAGIC_VERSION_4, sizeof MAGIC);
+    if (!status && !version_4 && (have < sizeof MAGIC || memcmp(head, MAGIC, sizeof MAGIC)))
         status = refuse_other_file(path, have < sizeof MAGIC ? NULL : head);
-    if (!status && have < sizeof head)
+    *header_bytes = version_4 ? HEADER_VERSION_4 : sizeof *h;
+    size_t head_bytes = sizeof MAGIC + *header_bytes;
+    if (!status && have < head_bytes)
         status = error_set(IDMR_EXIT_INPUT,
                            "--simulation: '%s' is %zu bytes, shorter than the header of a "
                            "simulation file (truncated)",
                            path, have);
-    simulation_header h;
     uint64_t promised = 0;
     if (!status) {
-        memcpy(&h, head + sizeof MAGIC, sizeof h);
-        promised = promised_size(&h);
+        memset(h, 0, sizeof *h);
+        memcpy(h, head + sizeof MAGIC, *header_bytes);
+        promised = promised_size(h, *header_bytes);
         if (promised == 0)
             status = error_set(IDMR_EXIT_INPUT,
-                               "--simulation: '%s': its header's counts (%llu triangles, a "
-                               "%ux%u image) describe a file larger than any (damaged)",
-                               path, (unsigned long long)h.triangles, h.width, h.height);
+                               "--simulation: '%s': its header's counts (%llu triangles, %llu "
+                               "meshes, a %ux%u image) describe a file larger than any "
+                               "(damaged)",
+                               path, (unsigned long long)h->triangles,
+                               (unsigned long long)h->meshes, h->width, h->height);
         else if (promised != (uint64_t)info.st_size)
             status = error_set(IDMR_EXIT_INPUT,
                                "--simulation: '%s' is %llu bytes, not the %llu its header "
@@ -244,9 +275,10 @@ static unsigned char *read_checked(const char *path, size_t *size)
     }
     unsigned char *bytes = NULL;
     if (!status) {
+        /* `have` <= promised: a file holds at least its magic, header and checksum */
         bytes = xmalloc((size_t)promised);
-        memcpy(bytes, head, sizeof head);
-        if (read_exactly(fd, bytes + sizeof head, (size_t)promised - sizeof head))
+        memcpy(bytes, head, have);
+        if (read_exactly(fd, bytes + have, (size_t)promised - have))
             status = read_failure(path);
     }
     if (!status) {
@@ -269,9 +301,19 @@ static unsigned char *read_checked(const char *path, size_t *size)
     return bytes;
 }
 
-/* The header checked against the scene and the weights, and for values no pass writes. */
-static int check_header(const char *path, const simulation_header *h, const scene *s,
-                        const importance_options *o)
+/* Whether scene s has an instanced shape (whose copies have totals of their own). */
+static int has_instances(const scene *s)
+{
+    for (size_t m = 0; m < s->mesh_count; m++)
+        if (s->meshes[m].instanced)
+            return 1;
+    return 0;
+}
+
+/* The header (of a version 4 file where version_4) checked against the scene and the weights,
+ * and for values no pass writes. */
+static int check_header(const char *path, const simulation_header *h, int version_4,
+                        const scene *s, const importance_options *o)
 {
     if (h->iterations == 0)
         return error_set(IDMR_EXIT_INPUT, "--simulation: '%s' holds no iteration (damaged)",
@@ -296,10 +338,18 @@ static int check_header(const char *path, const simulation_header *h, const scen
     uint64_t fingerprint;
     if (importance_file_fingerprint(s, &fingerprint))
         return -1;
-    if (h->triangles != (uint64_t)s->triangle_count || h->fingerprint != fingerprint)
+    if (h->triangles != (uint64_t)s->triangle_count || h->fingerprint != fingerprint ||
+        (!version_4 && h->meshes != (uint64_t)s->mesh_count))
         return error_set(IDMR_EXIT_INPUT,
                          "--simulation: '%s' was made from another scene than '%s' (or from "
                          "this one before it changed): run `idmr importance` on it again",
+                         path, s->file);
+    if (version_4 && has_instances(s))
+        return error_set(IDMR_EXIT_INPUT,
+                         "--simulation: '%s' was written by an older idmr, without the totals "
+                         "of each instance's own importance that '%s' (a scene with instances) "
+                         "needs; run `idmr importance SCENE -o DIR` again and pass "
+                         "DIR/simulation.bin",
                          path, s->file);
     if (o->gamma > 0 && !(h->kinds & KIND_CAMERA))
         return error_set(IDMR_EXIT_INPUT,
@@ -346,6 +396,18 @@ static int check_values(const char *path, const importance_result *r, const scen
                              "(damaged, or written by a failed pass)",
                              path, kinds[k].name, t, s->meshes[m].name, t - first, sum);
         }
+    const double *copies[3] = {r->copy_camera, r->copy_light, r->copy_shadow};
+    for (size_t k = 0; k < sizeof kinds / sizeof *kinds; k++)
+        for (size_t m = 0; m < r->mesh_count; m++) {
+            double sum = copies[k][m];
+            if (sum >= 0 && isfinite(sum) && (sum == 0 || s->meshes[m].instanced))
+                continue;
+            return error_set(IDMR_EXIT_INPUT,
+                             "--simulation: '%s': the %s importance total of mesh '%s' as a "
+                             "copy is %g; it must be finite and >= 0, and 0 for a mesh that is "
+                             "not instanced (damaged, or written by a failed pass)",
+                             path, kinds[k].name, s->meshes[m].name, sum);
+        }
     return 0;
 }
 
@@ -362,15 +424,15 @@ int importance_file_read(const char *path, const scene *s, const importance_opti
                          importance_result *r)
 {
     memset(r, 0, sizeof *r);
-    size_t size = 0;
-    unsigned char *bytes = read_checked(path, &size);
+    size_t size = 0, header_bytes = 0;
+    simulation_header h;
+    unsigned char *bytes = read_checked(path, &size, &h, &header_bytes);
     if (!bytes)
         return -1;
-    simulation_header h;
-    memcpy(&h, bytes + sizeof MAGIC, sizeof h);
-    int status = check_header(path, &h, s, o);
+    int version_4 = header_bytes != sizeof h;
+    int status = check_header(path, &h, version_4, s, o);
     if (!status) {
-        const unsigned char *at = bytes + sizeof MAGIC + sizeof h;
+        const unsigned char *at = bytes + sizeof MAGIC + header_bytes;
         size_t per_series = sizeof(double) * h.iterations, per_kind = sizeof(double) * h.triangles;
         r->triangle_count = (size_t)h.triangles;
         r->sppm.radius = take(&at, per_series);
@@ -378,6 +440,12 @@ int importance_file_read(const char *path, const scene *s, const importance_opti
         r->camera = take(&at, per_kind);
         r->light = take(&at, per_kind);
         r->shadow = take(&at, per_kind);
+        /* version 4 (a scene without instances, check_header): every copy total is 0 */
+        r->mesh_count = s->mesh_count;
+        double **copies[3] = {&r->copy_camera, &r->copy_light, &r->copy_shadow};
+        for (int k = 0; k < 3; k++)
+            *copies[k] = version_4 ? xcalloc(s->mesh_count + 1, sizeof(double))
+                                   : take(&at, sizeof(double) * h.meshes);
         r->pixel_triangle = take(&at, pixels_bytes(&h));
         r->sppm.iterations = h.iterations;
         r->sppm.photons = h.photons;

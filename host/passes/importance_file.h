@@ -4,17 +4,22 @@
  * can all be varied over one simulation.
  *
  * Layout, in the writer's byte order (the magic is read back only in the same order):
- *   char[8]  "IDMRSIM4" (versions 1 to 3 are refused, each saying what it lacked and how to
+ *   char[8]  "IDMRSIM5" (versions 1 to 3 are refused, each saying what it lacked and how to
  *            make the file again: version 1's light sums lacked the seen light, version 2's
- *            weighted it IMPORTANCE_SEEN_LIGHT_WEIGHT times less, version 3 had no checksum)
+ *            weighted it IMPORTANCE_SEEN_LIGHT_WEIGHT times less, version 3 had no checksum;
+ *            version 4, without `meshes` and the copy totals, is read for a scene without
+ *            instances, where it lacks nothing, and refused for one with them)
  *   uint64   scene fingerprint, triangles
  *   uint32   iterations, photons per iteration, hit-point image width, height,
  *            kinds (bit 0: camera importance accumulated, γ > 0; bit 1: shadow rays, σ > 0),
  *            seed
  *   uint64   hit points, photon records, gathered (first iteration)
  *   double   seen light (importance_result.seen_light)
+ *   uint64   meshes (the scene's)
  *   double   gather radius [iterations], convergence Δ [iterations]
  *   double   camera [triangles], light [triangles], shadow [triangles]
+ *   double   each copy's own totals (importance.h, "Copies"): camera [meshes], light [meshes],
+ *            shadow [meshes]; 0 for a mesh that is not instanced
  *   uint32   the triangle seen through each pixel centre [width × height]
  *   uint64   checksum: FNV-1a over every byte before it
  * The fingerprint is FNV-1a over every mesh's positions and indices, in scene order, and the
@@ -46,9 +51,10 @@ int importance_file_write(const char *path, const scene *s, const importance_opt
  * simulation file or one of an older version, truncated or too long, a checksum that does not
  * hold (damaged), a header no pass writes (no iteration, no photons, an empty image, unknown
  * kinds), another scene (fingerprint or triangle count), a weight the simulation cannot serve
- * (γ > 0 without camera importance, σ > 0 without shadow rays), a radius, change or sum that is
- * NaN, infinite or negative (naming the triangle and its mesh). 0, or -1 with the error set
- * (IDMR_EXIT_INPUT). */
+ * (γ > 0 without camera importance, σ > 0 without shadow rays), a version 4 file for a scene
+ * with instances, a radius, change or sum that is NaN, infinite or negative (naming the
+ * triangle and its mesh; a copy total: its mesh), a copy total on a mesh that is not
+ * instanced. 0, or -1 with the error set (IDMR_EXIT_INPUT). */
 int importance_file_read(const char *path, const scene *s, const importance_options *o,
                          importance_result *r);
 

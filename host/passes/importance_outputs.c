@@ -102,13 +102,20 @@ cJSON *importance_report_json(const scene *s, const device *d, const importance_
             /* its triangles are its prototype's: the sums stand on the first copy, over all */
             cJSON_AddStringToObject(mesh, "instance_of",
                                     s->meshes[s->meshes[m].instance_first].name);
-            continue;
+        } else {
+            importance_sums sums = importance_mesh_sums(r, s, m, &weights);
+            cJSON_AddNumberToObject(mesh, "importance_sum", sums.amount);
+            cJSON_AddNumberToObject(mesh, "camera_sum", sums.camera);
+            cJSON_AddNumberToObject(mesh, "light_sum", sums.light);
+            cJSON_AddNumberToObject(mesh, "shadow_sum", sums.shadow);
         }
-        importance_sums sums = importance_mesh_sums(r, s, m, &weights);
-        cJSON_AddNumberToObject(mesh, "importance_sum", sums.amount);
-        cJSON_AddNumberToObject(mesh, "camera_sum", sums.camera);
-        cJSON_AddNumberToObject(mesh, "light_sum", sums.light);
-        cJSON_AddNumberToObject(mesh, "shadow_sum", sums.shadow);
+        if (s->meshes[m].instanced) { /* this copy's own, of the sums above over all copies */
+            importance_sums own = importance_copy_sums(r, s, m, &weights);
+            cJSON_AddNumberToObject(mesh, "copy_importance_sum", own.amount);
+            cJSON_AddNumberToObject(mesh, "copy_camera_sum", own.camera);
+            cJSON_AddNumberToObject(mesh, "copy_light_sum", own.light);
+            cJSON_AddNumberToObject(mesh, "copy_shadow_sum", own.shadow);
+        }
     }
     cJSON_AddItemToObject(root, "convergence",
                           cJSON_CreateDoubleArray(r->convergence, (int)run->iterations));

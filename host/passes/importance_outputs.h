@@ -1,6 +1,11 @@
 /* importance_outputs.h — what `idmr importance` and `idmr reduce` write of an importance pass:
  *
- *   DIR/report.json          options, per-stage seconds, per-mesh sums, convergence, counts
+ *   DIR/report.json          options, per-stage seconds, per-mesh sums, convergence, counts;
+ *                            an instanced shape's copies: the sums on the representative are
+ *                            the prototype's, over all copies (importance_sum, ...), and every
+ *                            copy, the representative too, has its own (copy_importance_sum,
+ *                            copy_camera_sum, copy_light_sum, copy_shadow_sum:
+ *                            importance_copy_sums), which over the copies add up to those
  *   DIR/convergence.csv      iteration, change Δ, gather radius
  *   DIR/importance/<m>.ply   each mesh (world space) with a per-vertex `importance` property
  *                            and false-colour vertex colours

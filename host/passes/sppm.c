@@ -262,6 +262,7 @@ static int allocate(sppm *core, const sppm_pass *pass)
     idmr_camera camera = core->scene->camera;
     cl_uint scene_first = 2, after_scene = scene_first + DEVICE_SCENE_BUFFERS;
     core->camera_pass_argument = after_scene + 1;
+    core->photon_pass_argument = 1 + DEVICE_SCENE_BUFFERS + 4; /* after record_index */
     return DEVICE_SET_ARG(core->camera_paths, "camera_paths", 1, camera) ||
                    device_scene_set_args(&core->uploaded, core->camera_paths, "camera_paths",
                                          scene_first) ||

@@ -188,6 +188,7 @@ typedef struct sppm {
     sppm_seconds seconds;           /* this device's stages, summed */
     double photon_pass_seconds;     /* the last iteration's photon pass (for the split) */
     unsigned int camera_pass_argument; /* camera_paths' first argument after the core's */
+    unsigned int photon_pass_argument; /* photon_paths' first argument after the core's */
     idmr_sppm_params params; /* this iteration's (path_first, device_paths: this device's) */
     sppm_summary *summary;
 } sppm;
@@ -207,7 +208,8 @@ typedef struct sppm_pass {
     uint64_t (*pass_bytes)(const scene *s, unsigned int pixels, size_t slots);
     /* Once the program is built and the core's buffers exist, on each device's core in turn:
      * creates the pass's kernels and buffers (adding their bytes to core->buffer_bytes), binds
-     * camera_paths' records (argument core->camera_pass_argument), and may set constant params. */
+     * camera_paths' records (argument core->camera_pass_argument) and any arguments of its own
+     * that photon_paths takes (from core->photon_pass_argument), and may set constant params. */
     int (*prepare)(sppm *core, void *state);
     /* Every iteration, once the grid is built: the pass's gather kernels, on every device's
      * core at once (one host thread each: touch only what belongs to core->index). */

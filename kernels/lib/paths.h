@@ -31,7 +31,14 @@
  *     importance  records a vertex (triangle, side normal, Eq. 2 weight) at every surface,
  *                 specular ones too; paths carry no flux
  *     render      records a photon (flux, direction, side normal) at every non-specular surface
- *                 on a side that reflects; flux is multiplied by each scattering weight */
+ *                 on a side that reflects; flux is multiplied by each scattering weight
+ *
+ * Importance per instance (INSTANCE_TOTALS: the importance pass on an instanced scene): every
+ * amount added to a triangle's word (importance_add) is added to the total of the instance the
+ * path met the triangle on as well, so that each copy of a prototype keeps its own total and the
+ * copies' totals add up to the prototype's triangles' sums (idmr/importance_layout.h). Photon
+ * vertices carry their instance in a side array parallel to the records (the path_record_list's
+ * `instances`), which keeps idmr_photon_vertex 32 bytes; a flat scene's program has neither. */
 #ifndef IDMR_KERNEL_PATHS_H
 #define IDMR_KERNEL_PATHS_H
 
@@ -56,6 +63,7 @@
 #ifndef IDMR_CAMERA_IMPORTANCE
 #define IDMR_CAMERA_IMPORTANCE 1 /* 0 when γ = 0: camera importance would be multiplied by 0 */
 #endif
+#define INSTANCE_TOTALS (PASS_IMPORTANCE && HAS_FEATURE(IDMR_FEATURE_INSTANCES))
 
 /* What a pass's paths record into: camera_records, the camera paths' buffer (importance: camera
  * importance per triangle; render: one record per pixel), and photon_record, a photon path's
@@ -95,14 +103,40 @@ inline float3 camera_ray(idmr_camera camera, const idmr_sppm_params *params, uin
 }
 
 #if PASS_IMPORTANCE
+/* Adds `units` to the word of scene triangle `triangle` and, with INSTANCE_TOTALS, to the total
+ * of `instance`, the instance the path met the triangle on: word params->triangle_count +
+ * instance of the same accumulator (idmr/importance_layout.h). */
+inline void importance_add(volatile global fixed_word *words, const idmr_sppm_params *params,
+                           uint triangle, uint instance, ulong units)
+{
+    fixed_add(words, triangle, units);
+#if INSTANCE_TOTALS
+    fixed_add(words, params->triangle_count + instance, units);
+#endif
+}
+
 /* The specular triangles a camera path has passed (the first IDMR_SEEN_LIGHT_CHAIN), their
- * Eq. 2 weights, and the mirrors' colour so far. */
+ * Eq. 2 weights (and with INSTANCE_TOTALS the instances they were met on), and the mirrors'
+ * colour so far. */
 typedef struct specular_chain {
     uint triangles[IDMR_SEEN_LIGHT_CHAIN];
     float weights[IDMR_SEEN_LIGHT_CHAIN];
+#if INSTANCE_TOTALS
+    uint instances[IDMR_SEEN_LIGHT_CHAIN];
+#endif
     uint length;
     float3 colour;
 } specular_chain;
+
+/* The instance chain entry k was met on (0 in a flat scene, where it is not kept). */
+inline uint chain_instance(const specular_chain *chain, uint k)
+{
+#if INSTANCE_TOTALS
+    return chain->instances[k];
+#else
+    return 0u;
+#endif
+}
 
 /* Adds weight × the luminance of `emitted` (× the chain's colour) to the seen-light sum of every
  * triangle of the chain, in params->fixed_scale units per unit of luminance, times the pixel's
@@ -118,8 +152,8 @@ inline void credit_seen_light(const idmr_sppm_params *params, const specular_cha
     if (!(units > 0.0f))
         return;
     for (uint k = 0; k < chain->length; k++)
-        fixed_add(seen_light, chain->triangles[k],
-                  (ulong)(chain->weights[k] * units + 0.5f) * pixel_weight);
+        importance_add(seen_light, params, chain->triangles[k], chain_instance(chain, k),
+                       (ulong)(chain->weights[k] * units + 0.5f) * pixel_weight);
 }
 
 /* The weight of pixel `pixel`'s hit point (passes/importance.h: pixel weights): what its camera
@@ -172,9 +206,9 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
         global const idmr_material *m = triangle_material(scene, hit.triangle);
 #if PASS_IMPORTANCE && IDMR_ACCUMULATE_IMPORTANCE && IDMR_CAMERA_IMPORTANCE
         if (params->camera_sums)
-            fixed_add(records, hit.triangle,
-                      weight_units(idmr_eq2_weight(n.x, n.y, n.z, d.x, d.y, d.z)) *
-                          pixel_weight);
+            importance_add(records, params, hit.triangle, found.instance,
+                           weight_units(idmr_eq2_weight(n.x, n.y, n.z, d.x, d.y, d.z)) *
+                               pixel_weight);
 #endif
 #if PASS_RENDER
         radiance += throughput * surface_emission(scene, params->light_count, hit.triangle, d, n);
@@ -204,6 +238,9 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
 #if PASS_IMPORTANCE && IDMR_ACCUMULATE_IMPORTANCE
         if (chain.length < IDMR_SEEN_LIGHT_CHAIN) {
             chain.triangles[chain.length] = hit.triangle;
+#if INSTANCE_TOTALS
+            chain.instances[chain.length] = found.instance;
+#endif
             chain.weights[chain.length++] = idmr_eq2_weight(n.x, n.y, n.z, d.x, d.y, d.z);
         }
         if (m->kind == IDMR_MATERIAL_MIRROR)
@@ -231,19 +268,24 @@ inline void camera_path(const scene_view *scene, const idmr_sppm_params *params,
 }
 
 /* Where a photon path's records go: the dense list of all paths' records, its length, and the
- * path's slot of record_index (idmr/sppm_layout.h). */
+ * path's slot of record_index (idmr/sppm_layout.h); with INSTANCE_TOTALS, the list's instances
+ * (above). */
 typedef struct path_record_list {
     global photon_record *records;
     volatile global uint *count;
     global uint *index; /* IDMR_PATH_VERTICES entries */
+#if INSTANCE_TOTALS
+    global uint *instances; /* per record of the list, in its order: the instance it is on */
+#endif
 } path_record_list;
 
-/* Appends record r as the path's record `j`. */
-inline void append_record(path_record_list list, uint j, photon_record r)
+/* Appends record r as the path's record `j`; returns its place in the list. */
+inline uint append_record(path_record_list list, uint j, photon_record r)
 {
     uint at = atomic_inc(list.count);
     list.records[at] = r;
     list.index[j] = at;
+    return at;
 }
 
 /* Traces photon path `path` into the list; returns how many records it stored. */
@@ -274,7 +316,11 @@ inline uint photon_path(const scene_view *scene, const idmr_sppm_params *params,
         v.triangle = hit.triangle;
         vstore3(n_side, 0, v.normal);
         v.weight = idmr_eq2_weight(n.x, n.y, n.z, d.x, d.y, d.z);
+#if INSTANCE_TOTALS
+        list.instances[append_record(list, stored++, v)] = found.instance;
+#else
         append_record(list, stored++, v);
+#endif
 #else
         if (!material_is_specular(m) && side_reflects(m, d, n)) {
             idmr_render_photon photon;

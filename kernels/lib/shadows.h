@@ -26,11 +26,12 @@
 #include "lib/scene.h"
 #include "lib/surface.h"
 
-/* The shadow weight of hit point hp's shadow ray (above), its occluder into *occluder; 0 when the
- * ray reaches the light or no light reaches hp. */
+/* The shadow weight of hit point hp's shadow ray (above), its occluder's triangle into *occluder
+ * and the instance it is on into *occluder_instance (0 in a flat scene); 0 when the ray reaches
+ * the light or no light reaches hp. */
 inline float shadow_occluder_weight(const scene_view *scene, const idmr_sppm_params *params,
                                     const idmr_camera *camera, global const idmr_hit_point *hp,
-                                    idmr_rng *rng, uint *occluder)
+                                    idmr_rng *rng, uint *occluder, uint *occluder_instance)
 {
     float3 p = vload3(0, hp->position), n = vload3(0, hp->normal);
     float3 d;
@@ -47,6 +48,7 @@ inline float shadow_occluder_weight(const scene_view *scene, const idmr_sppm_par
     if (hit.triangle == IDMR_NO_HIT)
         return 0.0f;
     *occluder = hit.triangle;
+    *occluder_instance = found.instance;
     float3 m = found.normal;
     float grazing = idmr_eq2_weight(m.x, m.y, m.z, d.x, d.y, d.z); /* 1 - |c| */
     float silhouette = grazing / fmax(1.0f - grazing, 0.1f);

@@ -8,9 +8,10 @@
  *   instanced scene    (IDMR_FEATURE_INSTANCES) traverse_instanced_closest() on the two-level
  *                      BVH (lib/traverse_instanced.h): the scene-global triangle of the
  *                      prototype (a later copy's triangles are its representative's) and the
- *                      instance hit. The per-triangle buffers hold the representative's
- *                      world-space data, the prototype's object space, which the instance's
- *                      placement M (world = M object + m) carries to the copy:
+ *                      instance hit (surface.instance: which copy, for the importance pass's
+ *                      per-instance totals, lib/paths.h). The per-triangle buffers hold the
+ *                      representative's world-space data, the prototype's object space, which
+ *                      the instance's placement M (world = M object + m) carries to the copy:
  *     normal           normalize(M^-T n) = normalize(W^T n), W the instance's world_to_object
  *                      3x3 (no second matrix). The loaders reverse a mirrored copy's winding, so
  *                      its winding normal is +M^-T n, not det(M) M^-T n;
@@ -46,6 +47,7 @@ typedef struct surface {
     float3 normal;   /* unit winding normal */
     float3 shading;  /* shading normal, in normal's hemisphere (lib/shading.h) */
     float offset;    /* how far rays leaving it start off it (idmr/ray.h) */
+    uint instance;   /* the instance hit (instances[] of the two-level BVH); 0 in a flat scene */
 } surface;
 
 #if HAS_FEATURE(IDMR_FEATURE_INSTANCES)
@@ -97,6 +99,7 @@ inline surface trace_surface(const scene_view *scene, float3 origin, float3 d, f
     s.hit.triangle = ih.triangle;
     if (ih.triangle == IDMR_NO_HIT)
         return s;
+    s.instance = ih.instance;
     global const idmr_instance *inst = scene->instances + ih.instance;
     float4 prototype = scene->triangle_normals[ih.triangle];
     s.normal = instance_normal_to_world(inst, prototype.xyz);
@@ -113,6 +116,7 @@ inline surface trace_surface(const scene_view *scene, float3 origin, float3 d, f
     s.shading = shading_normal(scene->triangle_shading, s.hit, s.normal);
     s.position = origin + s.hit.t * d;
     s.offset = surface_offset(scene, s.hit.triangle, origin);
+    s.instance = 0u;
 #endif
     return s;
 }

@@ -157,7 +157,7 @@ static inline scene *fuzz_simulation_scene(const char *root, const char *dir)
     return mitsuba_load(path);
 }
 
-#define FUZZ_SIMULATION_HEADER 80 /* magic (8) and the fixed header (72) */
+#define FUZZ_SIMULATION_HEADER 80 /* magic (8) and the fixed header (72; version 5: 80) */
 
 static inline uint64_t fuzz_fnv1a(const uint8_t *bytes, size_t size)
 {
@@ -176,7 +176,7 @@ static inline int fuzz_simulation_input(const uint8_t *data, size_t size, const 
     if (importance_file_fingerprint(s, &fingerprint))
         abort();
     if (size >= FUZZ_SIMULATION_HEADER + sizeof(uint64_t) &&
-        memcmp(bytes, "IDMRSIM4", 8) == 0) {
+        (memcmp(bytes, "IDMRSIM4", 8) == 0 || memcmp(bytes, "IDMRSIM5", 8) == 0)) {
         memcpy(bytes + 8, &fingerprint, sizeof fingerprint);
         uint64_t checksum = fuzz_fnv1a(bytes, size - sizeof checksum);
         memcpy(bytes + size - sizeof checksum, &checksum, sizeof checksum);
