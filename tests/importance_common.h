@@ -25,7 +25,7 @@
 #include "idmr/material.h"
 #include "idmr/rng.h"
 #include "idmr/weight.h"
-#include "io/mesh_io.h"
+#include "io/mesh/mesh_io.h"
 #include "core/scene.h"
 #include "io/shapes.h"
 #include "test_support.h"

@@ -54,7 +54,7 @@
 
 #include "core/error.h"
 #include "core/files.h"
-#include "io/gltf.h"
+#include "io/gltf/gltf.h"
 #include "io/shapes.h"
 #include "reduce/decimate.h"
 

@@ -52,7 +52,7 @@
 
 #include "core/error.h"
 #include "core/scene.h"
-#include "io/gltf.h"
+#include "io/gltf/gltf.h"
 
 #define DRACO_MODEL "/usr/share/assimp/models/glTF2/draco/2CylinderEngine.gltf"
 

@@ -13,7 +13,7 @@
 
 #include "mitsuba_common.h"
 
-#include "io/mesh_io.h"
+#include "io/mesh/mesh_io.h"
 
 static char temp_dir[64];
 

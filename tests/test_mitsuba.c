@@ -20,7 +20,7 @@
 #include "mitsuba_common.h"
 
 #include "io/image.h"
-#include "io/mitsuba_xml.h"
+#include "io/mitsuba/mitsuba_xml.h"
 #include "io/shapes.h"
 #include "io/spectrum.h"
 #include "core/xform.h"

@@ -20,9 +20,9 @@
 #include "mitsuba_common.h"
 
 #include "io/image.h"
-#include "io/mesh_io.h"
+#include "io/mesh/mesh_io.h"
 #include "io/mitsuba_paths.h"
-#include "io/mitsuba_write.h"
+#include "io/mitsuba/mitsuba_write.h"
 #include "io/shapes.h"
 #include "core/xform.h"
 

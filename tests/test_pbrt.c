@@ -17,9 +17,9 @@
 
 #include "mitsuba_common.h"
 
-#include "io/mesh_io.h"
-#include "io/pbrt.h"
-#include "io/pbrt_loader.h"
+#include "io/mesh/mesh_io.h"
+#include "io/pbrt/pbrt.h"
+#include "io/pbrt/pbrt_loader.h"
 #include "io/scene_export.h"
 #include "core/xform.h"
 #include <zlib.h>

@@ -17,9 +17,9 @@
 #include "core/error.h"
 #include "core/files.h"
 #include "io/export_internal.h"
-#include "io/mesh_io.h"
+#include "io/mesh/mesh_io.h"
 #include "io/mitsuba_paths.h"
-#include "io/ply_check.h"
+#include "io/mesh/ply_check.h"
 
 /* ---- text ---- */
 
