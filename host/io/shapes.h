@@ -15,7 +15,7 @@
 #define IDMR_SHAPES_H
 
 #include "core/scene.h"
-#include "io/mesh/mesh_io.h"
+#include "core/mesh_data.h"
 #include "core/xform.h"
 
 #define SHAPES_DISK_SEGMENTS 64

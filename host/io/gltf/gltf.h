@@ -59,7 +59,7 @@
 #include <stddef.h>
 
 #include "core/scene.h"
-#include "io/mesh/mesh_io.h"
+#include "core/mesh_data.h"
 
 #ifdef __cplusplus
 extern "C" {

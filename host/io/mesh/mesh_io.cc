@@ -362,14 +362,3 @@ extern "C" int mesh_io_write_ply(const char *path, const mesh_data *mesh, const 
     }
     return 0;
 }
-
-extern "C" void mesh_data_free(mesh_data *mesh)
-{
-    if (!mesh)
-        return;
-    std::free(mesh->positions);
-    std::free(mesh->indices);
-    std::free(mesh->texcoords);
-    std::free(mesh->normals);
-    std::memset(mesh, 0, sizeof *mesh);
-}

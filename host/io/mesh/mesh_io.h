@@ -14,27 +14,18 @@
  * every format and counted in triangles_dropped: they have no area, so they change no image,
  * and no half-edge mesh can hold them (OpenMesh's add_face aborts on one). A vertex that only
  * they used goes with them. Every position, texture coordinate and normal read is finite, or
- * the read fails naming the file. */
+ * the read fails naming the file. The record read into, mesh_data, and mesh_data_free() are
+ * declared in core/mesh_data.h. */
 #ifndef IDMR_MESH_IO_H
 #define IDMR_MESH_IO_H
 
 #include <stdint.h>
 
+#include "core/mesh_data.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-typedef struct mesh_data {
-    uint32_t vertex_count;
-    uint32_t triangle_count;
-    float *positions;  /* xyz per vertex, malloc'd */
-    uint32_t *indices; /* three per triangle, malloc'd */
-    float *texcoords;  /* uv per vertex if the file has them, else NULL; malloc'd */
-    float *normals;    /* xyz per vertex if the file has them (not normalised), else NULL;
-                        * malloc'd */
-    uint32_t triangles_dropped; /* mesh_io_read(): triangles of the file that repeat a vertex,
-                                   left out (see above) */
-} mesh_data;
 
 /* Reads `path` into `out`. Returns 0, or -1 with the error set (error.h) naming the file:
  * missing, unreadable, unknown format, or no triangles. `out` is zeroed on failure. */
@@ -58,9 +49,6 @@ int mesh_io_read_oriented(const char *path, mesh_data *out, int orient, uint32_t
  * every write and the close checked, and renamed. Returns 0, or -1 with the error set. */
 int mesh_io_write_ply(const char *path, const mesh_data *mesh, const float *values,
                       const char *value_name, const unsigned char *colors);
-
-/* Frees what mesh_io_read() allocated; `mesh` may be NULL. */
-void mesh_data_free(mesh_data *mesh);
 
 /* Turns OpenMesh's own log output off (idmr reports what matters itself); idempotent and
  * thread-safe. Reading a mesh and decimating call it. */

@@ -25,7 +25,7 @@
 #ifndef IDMR_MESH_STL_H
 #define IDMR_MESH_STL_H
 
-#include "io/mesh/mesh_io.h"
+#include "core/mesh_data.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -22,7 +22,7 @@
 #ifndef IDMR_MESH_TEXT_H
 #define IDMR_MESH_TEXT_H
 
-#include "io/mesh/mesh_io.h"
+#include "core/mesh_data.h"
 
 #ifdef __cplusplus
 extern "C" {

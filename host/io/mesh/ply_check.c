@@ -15,7 +15,7 @@
 #include <unistd.h>
 
 #include "core/error.h"
-#include "io/mesh/mesh_io.h"
+#include "core/mesh_data.h"
 
 #define PLY_HEADER_MAX (1 << 16) /* bytes of header read at most */
 #define PLY_PROPERTIES_MAX 64    /* per element */

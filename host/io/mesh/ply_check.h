@@ -28,7 +28,7 @@
 #ifndef IDMR_PLY_CHECK_H
 #define IDMR_PLY_CHECK_H
 
-#include "io/mesh/mesh_io.h"
+#include "core/mesh_data.h"
 
 /* Proves `path` well formed, keeping nothing. */
 int ply_check(const char *path);

@@ -38,7 +38,7 @@
 #include <stddef.h>
 
 #include "core/scene.h"
-#include "io/mesh/mesh_io.h"
+#include "core/mesh_data.h"
 
 /* Whether `path` names a pbrt scene (ends in .pbrt). */
 int pbrt_is_scene_file(const char *path);

@@ -34,6 +34,7 @@
 #include <unistd.h>
 
 #include "core/error.h"
+#include "io/mesh/mesh_io.h"
 #include "io/shapes.h"
 
 /* What a Shape statement gives besides its geometry. */
