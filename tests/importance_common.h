@@ -27,7 +27,7 @@
 #include "idmr/weight.h"
 #include "io/mesh/mesh_io.h"
 #include "core/scene.h"
-#include "io/shapes.h"
+#include "core/shapes.h"
 #include "test_support.h"
 #include "trace_common.h"
 

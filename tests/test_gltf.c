@@ -55,7 +55,7 @@
 #include "core/error.h"
 #include "core/files.h"
 #include "io/gltf/gltf.h"
-#include "io/shapes.h"
+#include "core/shapes.h"
 #include "reduce/decimate.h"
 
 #define MODELS "/usr/share/assimp/models/glTF2"

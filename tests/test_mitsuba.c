@@ -21,8 +21,8 @@
 
 #include "io/image.h"
 #include "io/mitsuba/mitsuba_xml.h"
-#include "io/shapes.h"
-#include "io/spectrum.h"
+#include "core/shapes.h"
+#include "core/spectrum.h"
 #include "core/xform.h"
 
 #define EPS 1e-4f

@@ -23,7 +23,7 @@
 #include "io/mesh/mesh_io.h"
 #include "io/mitsuba_paths.h"
 #include "io/mitsuba/mitsuba_write.h"
-#include "io/shapes.h"
+#include "core/shapes.h"
 #include "core/xform.h"
 
 /* ---------------------------------------------------------------------------------------- */

@@ -23,7 +23,7 @@
 
 #include "device/device_scene.h"
 #include "idmr/normal_packing.h"
-#include "io/shapes.h"
+#include "core/shapes.h"
 
 #define DEGREES (180.0 / M_PI)
 

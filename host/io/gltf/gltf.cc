@@ -22,7 +22,7 @@ extern "C" {
 #include "io/gltf/gltf_validate.h"
 #include "io/image.h"
 #include "io/mitsuba_paths.h"
-#include "io/shapes.h"
+#include "core/shapes.h"
 #include "core/xform.h"
 }
 

@@ -8,7 +8,7 @@
 #include <string.h>
 
 #include "core/error.h"
-#include "io/spectrum.h"
+#include "core/spectrum.h"
 
 /* How a <spectrum> converts: as an emission when an <emitter> holds it, else as a reflectance. */
 static spectrum_use spectrum_use_of(xmlNodePtr node)

@@ -27,7 +27,7 @@
 
 #include "core/error.h"
 #include "io/mesh/mesh_io.h"
-#include "io/shapes.h"
+#include "core/shapes.h"
 
 static int is_mesh_file_type(const char *type)
 {

@@ -25,7 +25,7 @@
 
 #include "core/error.h"
 #include "io/image.h"
-#include "io/spectrum.h"
+#include "core/spectrum.h"
 
 /* Planck's law (relative spectral radiance at `lambda` nm for temperature T kelvin). */
 static double planck(double lambda_nm, double kelvin)

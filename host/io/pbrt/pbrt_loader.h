@@ -28,7 +28,7 @@
 
 #include "core/scene.h"
 #include "io/pbrt/pbrt.h"
-#include "io/spectrum.h"
+#include "core/spectrum.h"
 #include "core/xform.h"
 
 /* ---- tokens (pbrt_lexer.c) ---- */

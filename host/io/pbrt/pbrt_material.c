@@ -36,7 +36,7 @@
 
 #include "core/error.h"
 #include "io/image.h"
-#include "io/spectrum.h"
+#include "core/spectrum.h"
 
 typedef struct named_rgb {
     const char *name;

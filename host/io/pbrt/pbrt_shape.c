@@ -35,7 +35,7 @@
 
 #include "core/error.h"
 #include "io/mesh/mesh_io.h"
-#include "io/shapes.h"
+#include "core/shapes.h"
 
 /* What a Shape statement gives besides its geometry. */
 typedef struct shape_record {

@@ -1,5 +1,5 @@
 /* shapes.c — built-in Mitsuba shapes as triangle meshes (see shapes.h for the layouts). */
-#include "io/shapes.h"
+#include "core/shapes.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -1,6 +1,6 @@
 /* spectrum.c — sampled spectrum → linear sRGB, and the sRGB transfer function (see spectrum.h
  * for the method). */
-#include "io/spectrum.h"
+#include "core/spectrum.h"
 
 #include <math.h>
 #include <stddef.h>
