@@ -1,5 +1,5 @@
-/* test_mitsuba.c — the Mitsuba loader (host/io/mitsuba_*.c) and its helpers (xform, spectrum,
- * shapes).
+/* test_mitsuba.c — the Mitsuba loader (host/io/mitsuba/mitsuba_*.c) and its helpers (xform,
+ * spectrum, shapes).
  *
  * Most tests write a small scene into a temporary directory, load it, and compare what came
  * out with values worked out by hand: transform matrices, camera frames, material fields,

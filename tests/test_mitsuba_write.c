@@ -1,4 +1,4 @@
-/* test_mitsuba_write.c — writing the reduced scene's XML (host/io/mitsuba_write*.c).
+/* test_mitsuba_write.c — writing the reduced scene's XML (host/io/mitsuba/mitsuba_write*.c).
  *
  * Each scenario writes a small scene into a fresh input directory (an OBJ, a PLY written
  * through OpenMesh, a PNG texture, built-in shapes, <include> fragments, <default>/$name),

@@ -1,6 +1,6 @@
 /* shapes.h — tessellation of Mitsuba's built-in shapes into triangle meshes (object space).
  *
- * Each function fills a mesh_data (host/mesh_io.h, the same record a mesh file is read into)
+ * Each function fills a mesh_data (core/mesh_data.h, the same record a mesh file is read into)
  * with malloc'd arrays; the loader then transforms it to world space and hands the arrays to
  * the scene. All surfaces are wound counter-clockwise seen from the side their geometric
  * normal points to (outward for closed shapes), and closed shapes share their vertices

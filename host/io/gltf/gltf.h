@@ -1,8 +1,8 @@
 /* gltf.h — glTF 2.0 scenes (.gltf, .glb) in and out, through Assimp: the second scene format
- * beside Mitsuba XML (io/mitsuba.h, the primary one).
+ * beside Mitsuba XML (io/mitsuba/mitsuba.h, the primary one).
  *
  * Reading (gltf_load): the file is read as its own document and checked as the glTF
- * specification says (io/gltf_validate.h: what Assimp 5.2 would drop, misread or crash on is
+ * specification says (io/gltf/gltf_validate.h: what Assimp 5.2 would drop, misread or crash on is
  * refused, naming the file and the JSON pointer, line and column, or GLB byte at fault); then
  * Assimp imports it (triangulated, primitives sorted by type); lights and the camera are read
  * from the document at the nodes of the default scene, and texture coordinates of normalized

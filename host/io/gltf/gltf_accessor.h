@@ -1,5 +1,5 @@
 /* gltf_accessor.h — the elements of a glTF accessor, read from the document's buffers
- * (io/gltf_document.h) once io/gltf_validate.h has checked that they lie where it says.
+ * (io/gltf/gltf_document.h) once io/gltf/gltf_validate.h has checked that they lie where it says.
  *
  * An accessor is `count` elements of `components` numbers each (SCALAR 1, VEC2 2, VEC3 3,
  * VEC4 4, MAT2 4, MAT3 9, MAT4 16) of one component type, element i at byte offset + i × stride

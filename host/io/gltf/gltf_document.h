@@ -1,6 +1,6 @@
 /* gltf_document.h — a glTF 2.0 file as its own JSON document and binary data (cJSON): what the
- * loader checks before Assimp reads the file (io/gltf_validate.h) and what the writer rewrites
- * (io/gltf.h: gltf_write_reduced) without going through Assimp.
+ * loader checks before Assimp reads the file (io/gltf/gltf_validate.h) and what the writer rewrites
+ * (io/gltf/gltf.h: gltf_write_reduced) without going through Assimp.
  *
  * A .gltf file is its JSON text; a .glb file is a 12-byte header ("glTF", version 2, total
  * length), a JSON chunk and an optional BIN chunk (each an 8-byte length and type, then the

@@ -1,4 +1,4 @@
-/* gltf_validate.h — a glTF 2.0 document (io/gltf_document.h) checked as the specification says
+/* gltf_validate.h — a glTF 2.0 document (io/gltf/gltf_document.h) checked as the specification says
  * before Assimp reads it: Assimp 5.2 drops triangles whose indices are out of range, reads
  * bytes of any component type as floats, takes a byteStride shorter than the element, and
  * ignores extensionsRequired, all without a word. What is checked:

@@ -1,5 +1,5 @@
-/* gltf_write.c — the reduced glTF scene (io/gltf.h: gltf_write_reduced), written by rewriting
- * the input's own JSON document (io/gltf_document.h), not through Assimp's exporter: every
+/* gltf_write.c — the reduced glTF scene (io/gltf/gltf.h: gltf_write_reduced), written by rewriting
+ * the input's own JSON document (io/gltf/gltf_document.h), not through Assimp's exporter: every
  * node, camera, light, material, texture, sampler, animation, extension and extras of the input
  * comes out as it went in, and only the geometry of the replaced mesh primitives changes.
  *

@@ -1,10 +1,10 @@
 /* mesh_io.h — reading and writing triangle meshes from C (the bridge to OpenMesh, which reads
  * what idmr has no reader of its own for).
  *
- * OBJ and OFF are read by idmr's own strict readers (io/mesh_text.h: errors with file and
+ * OBJ and OFF are read by idmr's own strict readers (io/mesh/mesh_text.h: errors with file and
  * line, one vertex per distinct OBJ (v, vt, vn) corner), PLY (ascii and binary) by its own
- * (io/ply_check.h: every value checked, the vertices and faces exactly as the file has them),
- * STL by its own (io/mesh_stl.h: no texture coordinates or normals, errors with the line or
+ * (io/mesh/ply_check.h: every value checked, the vertices and faces exactly as the file has them),
+ * STL by its own (io/mesh/mesh_stl.h: no texture coordinates or normals, errors with the line or
  * byte offset); OM by OpenMesh, which builds a half-edge mesh: a vertex where the surface is
  * not manifold is split into copies, so vertex_count may exceed the file's. Polygons are
  * fan-triangulated. Positions are as stored in the file (object space).

@@ -1,6 +1,6 @@
 /* export_mitsuba.c — a scene as a Mitsuba 3 document (version 3.0.0), the inverse of the
- * loader's mapping (io/mitsuba_bsdf.c, mitsuba_emitter.c, mitsuba_sensor.c), so that reading it
- * back gives the same materials, lights and camera:
+ * loader's mapping (io/mitsuba/mitsuba_bsdf.c, mitsuba_emitter.c, mitsuba_sensor.c), so that
+ * reading it back gives the same materials, lights and camera:
  *
  *   camera        <sensor type="perspective">: fov and fov_axis as read, to_world a matrix whose
  *                 columns are (-right, up, forward, origin) (Mitsuba's camera +x is the image's

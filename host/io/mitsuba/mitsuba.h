@@ -12,9 +12,9 @@
  *             of -x: right = -to_world(+x), up = to_world(+y), forward = to_world(+z),
  *             re-orthonormalised (a mirroring <scale x="-1"/> therefore mirrors the image, as in
  *             Mitsuba). No sensor: a warning, and has_camera stays 0.
- *   shape     obj, off (io/mesh_text.h), ply, stl (through OpenMesh), rectangle, cube, disk,
- *             sphere (tessellated, host/io/shapes.h); to_world, flip_normals; a bsdf by <ref> or inline (none: diffuse
- *             0.5, as Mitsuba); an area emitter inline or by <ref>.
+ *   shape     obj, off (io/mesh/mesh_text.h), ply, stl (through OpenMesh), rectangle, cube, disk,
+ *             sphere (tessellated, host/core/shapes.h); to_world, flip_normals; a bsdf by <ref> or
+ *             inline (none: diffuse 0.5, as Mitsuba); an area emitter inline or by <ref>.
  *   bsdf      diffuse, dielectric, thindielectric, roughdielectric (as smooth, warned),
  *             conductor, roughconductor, plastic, roughplastic, twosided, mask (opacity
  *             ignored), bumpmap/normalmap (inner bsdf, warned). A bitmap texture is accepted for
@@ -26,7 +26,7 @@
  *   include   <include filename=...>: the fragment's elements are read in place.
  *   ignored   integrator, sampler, rfilter, other film settings, unknown properties.
  * Colours: rgb (linear), srgb (linearised), spectrum (grey value or λ:v pairs,
- * host/io/spectrum.h), float (grey). Relative paths resolve from the directory of the file that
+ * host/core/spectrum.h), float (grey). Relative paths resolve from the directory of the file that
  * names them, then from the scene's directory. The loader's files are listed in
  * mitsuba_loader.h. */
 #ifndef IDMR_MITSUBA_H

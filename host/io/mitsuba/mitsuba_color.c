@@ -1,5 +1,5 @@
 /* mitsuba_color.c — colour-valued properties: <rgb> (linear), <srgb> (linearised), <spectrum>
- * (a grey value, or wavelength:value pairs; converted by host/io/spectrum.h as an emission inside
+ * (a grey value, or wavelength:value pairs; converted by host/core/spectrum.h as an emission inside
  * an <emitter>, else as a reflectance, as Mitsuba 3 does), <float> (grey), and bitmap <texture>s
  * (inline or by <ref>), which only a diffuse reflectance accepts. */
 #include "io/mitsuba/mitsuba_loader.h"

@@ -1,6 +1,6 @@
 /* mitsuba_shape.c — <shape> elements → world-space meshes: mesh files (obj, ply, off, stl,
  * read through OpenMesh, oriented by their normals unless face_normals is set) and built-in
- * shapes (rectangle, cube, disk, sphere, tessellated by host/io/shapes.h); to_world and
+ * shapes (rectangle, cube, disk, sphere, tessellated by host/core/shapes.h); to_world and
  * flip_normals; a bsdf by <ref> or inline (none: Mitsuba's diffuse 0.5); an area emitter inline
  * or by <ref>. A mesh is named by its id, else its file's stem, else its type.
  *

@@ -1,7 +1,7 @@
 /* pbrt.h — pbrt-v4 scenes (.pbrt): the reader (a file in, a flattened world-space scene out) and
  * the writer of a reduced scene (the input text with reduced shapes swapped for PLY files).
  *
- * What is read (host/io/pbrt_loader.h lists the files; README "pbrt-v4 scenes" says it for
+ * What is read (host/io/pbrt/pbrt_loader.h lists the files; README "pbrt-v4 scenes" says it for
  * users):
  *   statements  Include, Import (as Include), AttributeBegin/End, TransformBegin/End, Identity,
  *               Translate, Scale, Rotate, LookAt, CoordinateSystem, CoordSysTransform,

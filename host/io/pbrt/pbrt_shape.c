@@ -2,7 +2,7 @@
  * object's shapes.
  *
  *   trianglemesh  P, indices (may be left out for one triangle), uv, N
- *   plymesh       filename: ASCII or binary PLY through idmr's reader (io/mesh_io.h; polygons
+ *   plymesh       filename: ASCII or binary PLY through idmr's reader (io/mesh/mesh_io.h; polygons
  *                 fan-triangulated); a gzipped one (.ply.gz) is unpacked with zlib into a
  *                 temporary file under $TMPDIR (else /tmp), read, and removed
  *   bilinearmesh  P, indices (4 per patch: p00 p10 p01 p11), uv, N: two triangles per patch
