@@ -55,7 +55,9 @@ else
   $(error config must be release, debug, sanitize or fuzz)
 endif
 
-LIB_SOURCES := $(filter-out host/cli/%,$(wildcard host/*/*.c host/*/*.cc))
+# Sources sit one or two folders deep (host/core/scene.c, host/io/mitsuba/mitsuba_shape.c); objects
+# and dependency files mirror the tree under $(BUILD)/host/.
+LIB_SOURCES := $(filter-out host/cli/%,$(wildcard host/*/*.c host/*/*.cc host/*/*/*.c host/*/*/*.cc))
 LIB_OBJECTS := $(patsubst host/%,$(BUILD)/host/%.o,$(LIB_SOURCES))
 CLI_OBJECTS := $(patsubst host/%,$(BUILD)/host/%.o,$(wildcard host/cli/*.c))
 TEST_PROGRAMS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/test_*.c))
@@ -222,4 +224,4 @@ report: bin/idmr kernels
 clean:
 	rm -rf build bin
 
--include $(wildcard $(BUILD)/host/*/*.d $(BUILD)/tests/*.d)
+-include $(wildcard $(BUILD)/host/*/*.d $(BUILD)/host/*/*/*.d $(BUILD)/tests/*.d)

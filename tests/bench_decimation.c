@@ -20,7 +20,7 @@
 #include <stdlib.h>
 
 #include "reduce/decimate.h"
-#include "io/mitsuba.h"
+#include "io/mitsuba/mitsuba.h"
 #include "trace_common.h"
 
 /* Rounds of the dragon's measurements: each round runs every method on one and two threads and

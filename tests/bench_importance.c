@@ -32,7 +32,7 @@
 #include "core/error.h"
 #include "core/ranks.h"
 #include "passes/importance.h"
-#include "io/mitsuba.h"
+#include "io/mitsuba/mitsuba.h"
 
 #define ITERATIONS 3
 #define ROUNDS 2

@@ -20,7 +20,7 @@
 #include "device/bvh.h"
 #include "device/device.h"
 #include "instanced_cornell.h"
-#include "io/mitsuba.h"
+#include "io/mitsuba/mitsuba.h"
 #include "passes/importance.h"
 
 #define ITERATIONS 3

@@ -19,7 +19,7 @@
 #include "device/bvh.h"
 #include "device/device.h"
 #include "core/error.h"
-#include "io/mitsuba.h"
+#include "io/mitsuba/mitsuba.h"
 #include "reduce/reduce.h"
 #include "passes/render.h"
 

@@ -19,7 +19,7 @@
 #include "device/program.h"
 #include "core/error.h"
 #include "passes/importance.h"
-#include "io/mitsuba.h"
+#include "io/mitsuba/mitsuba.h"
 #include "passes/render.h"
 #include "core/progress.h"
 

@@ -15,7 +15,7 @@
 
 #include "core/error.h"
 #include "idmr/rng.h"
-#include "io/mesh_io.h"
+#include "io/mesh/mesh_io.h"
 #include "reduce/decimate.h"
 
 #ifndef IDMR_ROOT

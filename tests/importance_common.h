@@ -3,7 +3,7 @@
  * functions).
  *
  * Scenes: quads (two triangles, wound so that the normal is u × v), boxes and UV spheres
- * (host/io/shapes.h), diffuse / glossy / mirror / dielectric materials, point and area lights,
+ * (host/core/shapes.h), diffuse / glossy / mirror / dielectric materials, point and area lights,
  * and a look-at pinhole camera (trace_look_at: right = forward × up, up = right × forward).
  * Host references: the camera pass's jittered direction (the same rng stream and the shared
  * formula of idmr/camera.h, through trace_common.h) and per-triangle unit normals computed as
@@ -25,9 +25,9 @@
 #include "idmr/material.h"
 #include "idmr/rng.h"
 #include "idmr/weight.h"
-#include "io/mesh_io.h"
+#include "io/mesh/mesh_io.h"
 #include "core/scene.h"
-#include "io/shapes.h"
+#include "core/shapes.h"
 #include "test_support.h"
 #include "trace_common.h"
 

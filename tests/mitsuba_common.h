@@ -20,7 +20,7 @@
 
 #include "core/error.h"
 #include "core/scene.h"
-#include "io/mitsuba.h"
+#include "io/mitsuba/mitsuba.h"
 #include "test_support.h"
 
 #ifndef IDMR_ROOT

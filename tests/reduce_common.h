@@ -20,7 +20,7 @@
 #include <cjson/cJSON.h>
 
 #include "core/error.h"
-#include "io/mitsuba.h"
+#include "io/mitsuba/mitsuba.h"
 #include "io/scene_load.h"
 #include "reduce/reduce.h"
 #include "test_support.h"

@@ -33,7 +33,7 @@
 #include <cmocka.h>
 
 #include "decimate_common.h"
-#include "io/shapes.h"
+#include "core/shapes.h"
 
 /* ---- 1. importance module order on a flat grid ---- */
 

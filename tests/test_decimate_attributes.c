@@ -23,7 +23,7 @@
 #include <cmocka.h>
 
 #include "decimate_common.h"
-#include "io/shapes.h"
+#include "core/shapes.h"
 
 #define GRID 11       /* vertices per side of the grid */
 #define SEAM_X 5.0f   /* the seam's line */

@@ -20,7 +20,7 @@
 #include <cmocka.h>
 
 #include "decimate_common.h"
-#include "io/shapes.h"
+#include "core/shapes.h"
 
 /* ---- spike ---- */
 

@@ -1,4 +1,4 @@
-/* test_gltf.c — glTF 2.0 read through Assimp (host/io/gltf.cc), on the real models of
+/* test_gltf.c — glTF 2.0 read through Assimp (host/io/gltf/gltf.cc), on the real models of
  * Debian's assimp-testmodels (/usr/share/assimp/models/glTF2; scripts/install-deps.sh installs
  * them: a missing model fails the test, it never skips):
  *   - Cameras.gltf: the perspective camera at its node (0.5, 0.5, 3) looking down -z with
@@ -17,7 +17,7 @@
  *   - a missing file, and Debian's broken samples (an index out of range, which Assimp dropped
  *     in silence, views past their buffer, a node its own ancestor, wrong types), are errors
  *     naming the file and where it is wrong.
- * The reduced scenes io/gltf_write.c writes are read by readers nobody here wrote
+ * The reduced scenes io/gltf/gltf_write.c writes are read by readers nobody here wrote
  * (scripts/gltf-check, from .venv: trimesh's loader, pygltflib, the glTF JSON schema, and checks of
  * POSITION min and max, index ranges and unit normals), and by Assimp again:
  *   - a lit scene (KHR_lights_punctual on two nodes, object-valued extras on nodes, asset, scene,
@@ -54,8 +54,8 @@
 
 #include "core/error.h"
 #include "core/files.h"
-#include "io/gltf.h"
-#include "io/shapes.h"
+#include "io/gltf/gltf.h"
+#include "core/shapes.h"
 #include "reduce/decimate.h"
 
 #define MODELS "/usr/share/assimp/models/glTF2"

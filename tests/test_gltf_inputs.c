@@ -1,6 +1,6 @@
 /* test_gltf_inputs.c — glTF inputs that are wrong, or right but unusual, as gltf_load reads
- * them (host/io/gltf_document.c, gltf_validate.c, gltf.cc). Each case is a small document built
- * here from one scene, drawn below, and changed in one place:
+ * them (host/io/gltf/gltf_document.c, gltf_validate.c, gltf.cc). Each case is a small document
+ * built here from one scene, drawn below, and changed in one place:
  *
  *        2 ---- 3     4 vertices in z = 0, normals +z; triangles 0 1 2 and 2 1 3 (indices
  *        |    / |     UNSIGNED_SHORT); uv (u, v) = (x, y), stored three ways: FLOAT (the one
@@ -52,7 +52,7 @@
 
 #include "core/error.h"
 #include "core/scene.h"
-#include "io/gltf.h"
+#include "io/gltf/gltf.h"
 
 #define DRACO_MODEL "/usr/share/assimp/models/glTF2/draco/2CylinderEngine.gltf"
 

@@ -34,7 +34,7 @@
 #include "command_common.h"
 #include "mitsuba_common.h"
 
-#include "io/mesh_io.h"
+#include "io/mesh/mesh_io.h"
 
 static char temp_dir[64];
 

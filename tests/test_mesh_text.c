@@ -1,4 +1,4 @@
-/* test_mesh_text.c — the strict OBJ and OFF readers (host/io/mesh_text.h) through
+/* test_mesh_text.c — the strict OBJ and OFF readers (host/io/mesh/mesh_text.h) through
  * mesh_io_read(), on files written here: what a well-formed file gives (fan-triangulated
  * polygons, negative indices, one vertex per distinct OBJ corner, attributes where the file has
  * them) and that every malformed file OpenMesh used to read wrongly without a word (a NaN
@@ -13,7 +13,7 @@
 
 #include "mitsuba_common.h"
 
-#include "io/mesh_io.h"
+#include "io/mesh/mesh_io.h"
 
 static char temp_dir[64];
 

@@ -1,5 +1,5 @@
-/* test_mitsuba.c — the Mitsuba loader (host/io/mitsuba_*.c) and its helpers (xform, spectrum,
- * shapes).
+/* test_mitsuba.c — the Mitsuba loader (host/io/mitsuba/mitsuba_*.c) and its helpers (xform,
+ * spectrum, shapes).
  *
  * Most tests write a small scene into a temporary directory, load it, and compare what came
  * out with values worked out by hand: transform matrices, camera frames, material fields,
@@ -20,9 +20,9 @@
 #include "mitsuba_common.h"
 
 #include "io/image.h"
-#include "io/mitsuba_xml.h"
-#include "io/shapes.h"
-#include "io/spectrum.h"
+#include "io/mitsuba/mitsuba_xml.h"
+#include "core/shapes.h"
+#include "core/spectrum.h"
 #include "core/xform.h"
 
 #define EPS 1e-4f

@@ -1,4 +1,4 @@
-/* test_mitsuba_write.c — writing the reduced scene's XML (host/io/mitsuba_write*.c).
+/* test_mitsuba_write.c — writing the reduced scene's XML (host/io/mitsuba/mitsuba_write*.c).
  *
  * Each scenario writes a small scene into a fresh input directory (an OBJ, a PLY written
  * through OpenMesh, a PNG texture, built-in shapes, <include> fragments, <default>/$name),
@@ -20,10 +20,10 @@
 #include "mitsuba_common.h"
 
 #include "io/image.h"
-#include "io/mesh_io.h"
+#include "io/mesh/mesh_io.h"
 #include "io/mitsuba_paths.h"
-#include "io/mitsuba_write.h"
-#include "io/shapes.h"
+#include "io/mitsuba/mitsuba_write.h"
+#include "core/shapes.h"
 #include "core/xform.h"
 
 /* ---------------------------------------------------------------------------------------- */

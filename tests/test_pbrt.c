@@ -1,4 +1,4 @@
-/* test_pbrt.c — the pbrt-v4 reader and writer (host/io/pbrt_*.c).
+/* test_pbrt.c — the pbrt-v4 reader and writer (host/io/pbrt/pbrt_*.c).
  *
  * Host tests: the lexer and parameter lists on small inline strings (malformed ones each give a
  * message naming file and line), transforms against exact matrices, the camera against a ray
@@ -17,9 +17,9 @@
 
 #include "mitsuba_common.h"
 
-#include "io/mesh_io.h"
-#include "io/pbrt.h"
-#include "io/pbrt_loader.h"
+#include "io/mesh/mesh_io.h"
+#include "io/pbrt/pbrt.h"
+#include "io/pbrt/pbrt_loader.h"
 #include "io/scene_export.h"
 #include "core/xform.h"
 #include <zlib.h>
@@ -879,7 +879,7 @@ static void test_coffee(void **state)
     scene_free(s);
 }
 
-/* The shipped Cornell box written as pbrt-v4 by `idmr convert` (io/export_pbrt.c, written by
+/* The shipped Cornell box written as pbrt-v4 by `idmr convert` (io/pbrt/export_pbrt.c, written by
  * another hand from pbrt's documentation) and read back here: the same camera frame, film and
  * field of view, meshes, materials and light, so the two agree on pbrt's camera space and
  * conventions. */

@@ -1,4 +1,4 @@
-/* test_shading.c — shading normals: where they come from (the loader, host/io/shapes.c), how
+/* test_shading.c — shading normals: where they come from (the loader, host/core/shapes.c), how
  * they travel (idmr/normal_packing.h) and what the kernels make of them at a hit
  * (kernels/lib/shading.h through the hit_shading_normals kernel of kernels/trace.cl).
  *
@@ -23,7 +23,7 @@
 
 #include "device/device_scene.h"
 #include "idmr/normal_packing.h"
-#include "io/shapes.h"
+#include "core/shapes.h"
 
 #define DEGREES (180.0 / M_PI)
 

@@ -15,7 +15,7 @@
 #include "device/bvh.h"
 #include "device/program.h"
 #include "device_test.h"
-#include "io/mitsuba.h"
+#include "io/mitsuba/mitsuba.h"
 #include "passes/importance.h"
 #include "passes/render.h"
 

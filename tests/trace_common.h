@@ -24,7 +24,7 @@
 #include "idmr/camera.h"
 #include "idmr/ray.h"
 #include "idmr/rng.h"
-#include "io/mesh_io.h"
+#include "io/mesh/mesh_io.h"
 #include "core/scene.h"
 
 #define SHARED_DATA "../shared/data"

@@ -6,7 +6,7 @@
  * scene-globally: mesh m's triangle t is scene triangle meshes[m].first_triangle + t; the
  * importance buffers, the BVH and area lights all use that numbering.
  *
- * Building: scene_create(), then scene_add_*() from a loader (host/io/mitsuba*.c), then
+ * Building: scene_create(), then scene_add_*() from a loader (host/io/mitsuba/mitsuba*.c), then
  * scene_finalize(), which numbers the triangles, fills the area lights' triangle ranges,
  * areas and powers, the bounding box and the feature bits. */
 #ifndef IDMR_SCENE_H
@@ -27,22 +27,22 @@ typedef struct scene_mesh {
     char *xml_file;   /* the XML file holding the <shape> element (the scene or an include);
                          a glTF scene: the glTF file */
     int xml_line;     /* line of the <shape> element in that file; a glTF scene: the number
-                         of the mesh instance (io/gltf.h) */
+                         of the mesh instance (io/gltf/gltf.h) */
     uint32_t vertex_count;
     uint32_t triangle_count;
     float *positions;  /* world space, xyz per vertex */
     uint32_t *indices; /* three vertex indices per triangle */
     float *texcoords;  /* uv per vertex as Mitsuba reads them (an OBJ's v turned), or NULL */
     float *normals;    /* world-space unit shading normal per vertex, or NULL: shaded flat.
-                        * The loader sets them (io/shapes.h: shapes_smooth_normals); a zero
+                        * The loader sets them (core/shapes.h: shapes_smooth_normals); a zero
                         * normal shades its triangles flat. Owned by the scene. */
     int file_normals;  /* the normals are the mesh file's own; 0: computed by the loader, or
                         * none (a reduced mesh writes both kinds unless told to leave computed
                         * ones to the reader: reduce.h, recompute_normals) */
-    int flat_normals;  /* the file's normals shade the mesh flat (io/shapes.h:
+    int flat_normals;  /* the file's normals shade the mesh flat (core/shapes.h:
                         * shapes_normals_flat): a reduced mesh says face_normals instead */
     uint32_t triangles_dropped; /* triangles the file gave that repeat a vertex (f 1 2 1, the
-                                   joins of a triangle strip), left out on load (io/mesh_io.h)
+                                   joins of a triangle strip), left out on load (io/mesh/mesh_io.h)
                                    and so in no numbering: `idmr info` counts them */
     uint32_t material; /* index into scene.materials */
     int light;         /* index into scene.lights if the shape is an area emitter, else -1 */
@@ -54,13 +54,14 @@ typedef struct scene_mesh {
     int had_texcoords, had_normals; /* of a released mesh: what its geometry holds */
     float box_min[3], box_max[3]; /* of a released mesh: its bounding box */
     struct scene_mesh_source *source; /* how the loader reads it again; NULL: it cannot */
-    /* A pbrt-v4 scene (io/pbrt.h), for the writer; zero for the other formats. */
+    /* A pbrt-v4 scene (io/pbrt/pbrt.h), for the writer; zero for the other formats. */
     long source_offset;         /* byte offset of the `Shape` keyword in xml_file */
     double object_to_world[16]; /* row-major: the transform the shape's points were given in */
     int source_flipped;         /* the loader reversed the winding the statement gives */
     /* A Mitsuba scene's copy of a shapegroup's shape placed by a <shape type="instance">
-     * (instances are flattened on load: io/mitsuba_shape.c): the file and line of the instance
-     * element (xml_file and xml_line name the group's <shape>); NULL and 0 for any other mesh. */
+     * (instances are flattened on load: io/mitsuba/mitsuba_shape.c): the file and line of the
+     * instance element (xml_file and xml_line name the group's <shape>); NULL and 0 for any
+     * other mesh. */
     char *instance_xml_file;
     int instance_xml_line;
     /* A copy an instance placed (instanced set): of a Mitsuba shapegroup's shape (above), of a

@@ -1,7 +1,7 @@
 /* scene_export.c — `idmr convert`'s writing (see scene_export.h): the output's paths and the
  * checks that keep inputs safe, the names of meshes and materials in the output, the meshes as
- * world-space PLYs in the staged folder, then the format's own text (io/export_mitsuba.c,
- * io/export_pbrt.c), published folder first, scene file last. */
+ * world-space PLYs in the staged folder, then the format's own text (io/mitsuba/export_mitsuba.c,
+ * io/pbrt/export_pbrt.c), published folder first, scene file last. */
 #include "io/scene_export.h"
 
 #include <errno.h>
@@ -17,9 +17,9 @@
 #include "core/error.h"
 #include "core/files.h"
 #include "io/export_internal.h"
-#include "io/mesh_io.h"
+#include "io/mesh/mesh_io.h"
 #include "io/mitsuba_paths.h"
-#include "io/ply_check.h"
+#include "io/mesh/ply_check.h"
 
 /* ---- text ---- */
 

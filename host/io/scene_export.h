@@ -2,8 +2,8 @@
  * what idmr read, written so that idmr (and the other renderer) reads it back as the same scene.
  *
  * The format is the one OUT's extension names (any case):
- *   .xml    a Mitsuba 3 scene (io/export_mitsuba.c)
- *   .pbrt   a pbrt-v4 scene (io/export_pbrt.c)
+ *   .xml    a Mitsuba 3 scene (io/mitsuba/export_mitsuba.c)
+ *   .pbrt   a pbrt-v4 scene (io/pbrt/export_pbrt.c)
  * Every mesh is written as a world-space binary PLY (positions, the shading normals where the
  * mesh has smooth ones, texture coordinates) into a folder beside OUT named after OUT's stem:
  * `-o out/cornell.xml` writes out/cornell.xml and out/cornell/<mesh>.ply; the environment map,

@@ -2,9 +2,9 @@
 #include "io/scene_load.h"
 
 #include "core/progress.h"
-#include "io/gltf.h"
-#include "io/mitsuba.h"
-#include "io/pbrt.h"
+#include "io/gltf/gltf.h"
+#include "io/mitsuba/mitsuba.h"
+#include "io/pbrt/pbrt.h"
 
 /* The scene with the seconds its loading took. */
 static scene *timed(scene *s, double start)

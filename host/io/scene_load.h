@@ -1,6 +1,6 @@
 /* scene_load.h — the one entry every command loads a scene through: a Mitsuba XML file
- * (io/mitsuba.h), a glTF 2.0 file (.gltf, .glb: io/gltf.h) or a pbrt-v4 file (.pbrt:
- * io/pbrt.h), told apart by the extension. */
+ * (io/mitsuba/mitsuba.h), a glTF 2.0 file (.gltf, .glb: io/gltf/gltf.h) or a pbrt-v4 file (.pbrt:
+ * io/pbrt/pbrt.h), told apart by the extension. */
 #ifndef IDMR_SCENE_LOAD_H
 #define IDMR_SCENE_LOAD_H
 
@@ -12,7 +12,7 @@
 scene *scene_load(const char *path);
 
 /* As scene_load(), with the mesh files of at least release_from vertices released once read
- * (io/mitsuba.h, mitsuba_load_streaming; a glTF or pbrt scene is loaded whole). */
+ * (io/mitsuba/mitsuba.h, mitsuba_load_streaming; a glTF or pbrt scene is loaded whole). */
 scene *scene_load_streaming(const char *path, uint32_t release_from);
 
 /* Whether the scene was read from a glTF file (and is written back as one). */

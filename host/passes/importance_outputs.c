@@ -11,8 +11,8 @@
 #include "core/json.h"
 #include "core/ranks.h"
 #include "io/image.h"
-#include "io/mesh_io.h"
-#include "io/ply_check.h"
+#include "io/mesh/mesh_io.h"
+#include "io/mesh/ply_check.h"
 
 void importance_file_name(const char *mesh_name, char *out, size_t size)
 {

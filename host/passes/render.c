@@ -11,7 +11,7 @@
 
 #include "core/error.h"
 #include "io/image.h"
-#include "io/spectrum.h"
+#include "core/spectrum.h"
 
 void render_options_default(render_options *o)
 {

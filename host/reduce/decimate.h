@@ -90,7 +90,7 @@
 #include <stdint.h>
 
 #include "core/progress.h"
-#include "io/mesh_io.h"
+#include "io/mesh/mesh_io.h"
 
 #ifdef __cplusplus
 extern "C" {

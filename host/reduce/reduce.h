@@ -3,7 +3,7 @@
  *
  *   OUTDIR/scene.xml         the input XML, decimated shapes pointing to meshes/<name>.ply
  *   OUTDIR/meshes/NAME.ply   the decimated meshes (world space)
- *   (a glTF scene instead: OUTDIR/scene.gltf + scene.bin, or scene.glb, io/gltf.h)
+ *   (a glTF scene instead: OUTDIR/scene.gltf + scene.bin, or scene.glb, io/gltf/gltf.h)
  *   OUTDIR/report.json       the importance report's keys, plus target, method, per mesh
  *                            factor / vertices_before / vertices_after, per-stage seconds;
  *                            with --max-error, error_budget: the curve the search walked;
@@ -20,7 +20,7 @@
  * Emitters and meshes named with --keep are never decimated; meshes with at most min_vertices
  * vertices neither. OUTDIR must not exist or be empty unless force is set, and must not be the
  * scene's own directory. The paths OUTDIR/scene.xml names are relative to OUTDIR; with bundle,
- * every file it names is copied under OUTDIR (io/mitsuba_write.h).
+ * every file it names is copied under OUTDIR (io/mitsuba/mitsuba_write.h).
  *
  * Multiple passes and the initial reduction (paper 3.5, options initial and passes): the first
  * importance pass runs on the scene quadric-reduced to D0 (or on the scene itself), each later

@@ -29,7 +29,7 @@
 #include <string.h>
 
 #include "core/error.h"
-#include "io/shapes.h"
+#include "core/shapes.h"
 #include "core/xform.h"
 #include "reduce/reduce_stages.h"
 

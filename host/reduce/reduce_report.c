@@ -9,7 +9,7 @@
 #include <sys/resource.h>
 
 #include "core/json.h"
-#include "io/gltf.h"
+#include "io/gltf/gltf.h"
 #include "io/scene_load.h"
 #include "reduce/reduce_stages.h"
 

@@ -1,11 +1,11 @@
 /* reduce_write.c — the write stage of `idmr reduce` (see reduce.h, reduce_stages.h): the
  * reduced scene in the staging directory. A Mitsuba scene: meshes/NAME.ply for every mesh the
  * plan decimated, a shapegroup's shape once, in the group's space (each read back and checked:
- * io/ply_check.h), and scene.xml, the input's XML with those shapes pointing to them and its
- * shapegroups and instances kept (io/mitsuba_write.h, reduce_instances.c); a glTF scene:
+ * io/mesh/ply_check.h), and scene.xml, the input's XML with those shapes pointing to them and its
+ * shapegroups and instances kept (io/mitsuba/mitsuba_write.h, reduce_instances.c); a glTF scene:
  * scene.gltf (.glb) with the decimated meshes in it, a mesh that nodes share still shared
- * (io/gltf.h); a pbrt-v4 scene: meshes/NAME.ply in each shape's own space and scene.pbrt, the
- * input's text with those Shape statements naming them, an object's shape once (io/pbrt.h). */
+ * (io/gltf/gltf.h); a pbrt-v4 scene: meshes/NAME.ply in each shape's own space and scene.pbrt, the
+ * input's text with those Shape statements naming them, an object's shape once (io/pbrt/pbrt.h). */
 #include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -14,11 +14,11 @@
 #include "core/error.h"
 #include "core/files.h"
 #include "core/progress.h"
-#include "io/gltf.h"
-#include "io/mesh_io.h"
-#include "io/mitsuba_write.h"
-#include "io/pbrt.h"
-#include "io/ply_check.h"
+#include "io/gltf/gltf.h"
+#include "io/mesh/mesh_io.h"
+#include "io/mitsuba/mitsuba_write.h"
+#include "io/pbrt/pbrt.h"
+#include "io/mesh/ply_check.h"
 #include "io/scene_load.h"
 #include "passes/importance_outputs.h"
 #include "reduce/reduce_stages.h"
@@ -34,7 +34,7 @@ static int ply_name_taken(const reduce_state *st, size_t m)
 
 /* st->ply[m] = "meshes/NAME.ply"; two mesh names can make the same file name ("a/b", "a_b"):
  * the later ones are numbered ("meshes/NAME.2.ply"). A shapegroup's shape is named as in its
- * group: without the "INSTANCE/" its first copy's name begins with (io/mitsuba_shape.c). */
+ * group: without the "INSTANCE/" its first copy's name begins with (io/mitsuba/mitsuba_shape.c). */
 static void name_ply(reduce_state *st, size_t m)
 {
     char name[256];
@@ -48,7 +48,7 @@ static void name_ply(reduce_state *st, size_t m)
         snprintf(st->ply[m], length, "meshes/%s.%u.ply", name, suffix);
 }
 
-/* A glTF scene: OUTDIR/scene.gltf or scene.glb with the decimated meshes in it (io/gltf.h). */
+/* A glTF scene: OUTDIR/scene.gltf or scene.glb with the decimated meshes in it (io/gltf/gltf.h). */
 static int write_reduced_gltf(reduce_state *st)
 {
     const scene *s = st->scene;
@@ -72,8 +72,8 @@ static int write_reduced_gltf(reduce_state *st)
 }
 
 /* A pbrt-v4 scene: OUTDIR/meshes/NAME.ply for every decimated mesh, in the space its Shape
- * statement gives points in (io/pbrt.h: pbrt_mesh_to_object_space), then OUTDIR/scene.pbrt, the
- * input's text with those statements naming them. */
+ * statement gives points in (io/pbrt/pbrt.h: pbrt_mesh_to_object_space), then OUTDIR/scene.pbrt,
+ * the input's text with those statements naming them. */
 static int write_reduced_pbrt(reduce_state *st, const char *meshes)
 {
     const scene *s = st->scene;

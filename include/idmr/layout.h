@@ -14,7 +14,7 @@
 #else
 #include <stddef.h>
 #define IDMR_INLINE static inline
-#ifdef __cplusplus /* host C++ that reads the scene (io/gltf.cc) */
+#ifdef __cplusplus /* host C++ that reads the scene (io/gltf/gltf.cc) */
 #define IDMR_STATIC_ASSERT(cond, msg) static_assert(cond, msg)
 #define IDMR_OFFSET_ASSERT(type, member, offset)                                               \
     static_assert(offsetof(type, member) == (offset),                                          \

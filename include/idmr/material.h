@@ -1,6 +1,6 @@
 /* idmr/material.h — a surface's scattering as the kernels see it (48 bytes).
  *
- * Every Mitsuba bsdf maps onto one of four kinds (host/io/mitsuba_bsdf.c does the mapping):
+ * Every Mitsuba bsdf maps onto one of four kinds (host/io/mitsuba/mitsuba_bsdf.c does the mapping):
  *   DIFFUSE     diffuse                         reflectance
  *   GLOSSY      roughconductor, plastic,        reflectance (diffuse part, black for metals),
  *               roughplastic                    specular, roughness (GGX alpha), int/ext IOR

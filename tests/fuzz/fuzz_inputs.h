@@ -35,10 +35,10 @@
 
 #include "core/error.h"
 #include "core/scene.h"
-#include "io/gltf.h"
-#include "io/mesh_io.h"
-#include "io/mitsuba.h"
-#include "io/pbrt.h"
+#include "io/gltf/gltf.h"
+#include "io/mesh/mesh_io.h"
+#include "io/mitsuba/mitsuba.h"
+#include "io/pbrt/pbrt.h"
 #include "passes/importance_file.h"
 
 #define FUZZ_FILE_SEPARATOR "--idmr-fuzz-next-file--\n"

@@ -1,6 +1,7 @@
 /* fuzz_mesh.c — libFuzzer target: one mesh reader, chosen by FUZZ_MESH_EXTENSION (".obj" and
- * ".off": host/io/mesh_text.c; ".ply": host/io/ply_check.c; ".stl": host/io/mesh_stl.c; all
- * idmr's own, behind mesh_io_read_oriented()). `make fuzz` builds it once per extension. */
+ * ".off": host/io/mesh/mesh_text.c; ".ply": host/io/mesh/ply_check.c; ".stl":
+ * host/io/mesh/mesh_stl.c; all idmr's own, behind mesh_io_read_oriented()). `make fuzz` builds
+ * it once per extension. */
 #include <stdlib.h>
 #include <unistd.h>
 
