@@ -94,6 +94,15 @@ void *xcalloc(size_t count, size_t size)
 void *xrealloc(void *ptr, size_t size) { return check_allocation(realloc(ptr, size ? size : 1), size); }
 char *xstrdup(const char *s) { return check_allocation(strdup(s ? s : ""), 1); }
 
+void *xmemdup(const void *from, size_t bytes)
+{
+    if (!from)
+        return NULL;
+    void *to = xmalloc(bytes ? bytes : 1);
+    memcpy(to, from, bytes);
+    return to;
+}
+
 static int verbose_logging;
 
 void log_set_verbose(int verbose) { verbose_logging = verbose; }

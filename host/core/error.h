@@ -48,6 +48,8 @@ void *xmalloc(size_t size) __attribute__((returns_nonnull, malloc));
 void *xcalloc(size_t count, size_t size) __attribute__((returns_nonnull, malloc));
 void *xrealloc(void *ptr, size_t size) __attribute__((returns_nonnull));
 char *xstrdup(const char *s) __attribute__((returns_nonnull, malloc));
+/* A malloc'd copy of the `bytes` bytes at `from`, or NULL when from is NULL. */
+void *xmemdup(const void *from, size_t bytes) __attribute__((malloc));
 
 /* Verbose log ("idmr: ..." on stderr), printed only after log_set_verbose(1) (the -v flag). */
 void log_verbose(const char *fmt, ...) __attribute__((format(printf, 1, 2)));

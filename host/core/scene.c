@@ -591,16 +591,6 @@ void scene_mesh_set_geometry(scene_mesh *mesh, uint32_t vertex_count, float *pos
     mesh->released = 0;
 }
 
-/* A malloc'd copy of `bytes` at `from`, or NULL for NULL. */
-static void *duplicate(const void *from, size_t bytes)
-{
-    if (!from)
-        return NULL;
-    void *to = xmalloc(bytes ? bytes : 1);
-    memcpy(to, from, bytes);
-    return to;
-}
-
 /* Makes later copy m's world-space geometry from its representative's (read again for the
  * while if it is released). 0, or -1 with the error set. */
 static int restore_later_copy(scene *s, size_t m)
@@ -614,11 +604,11 @@ static int restore_later_copy(scene *s, size_t m)
     scene_mesh *copy = &s->meshes[m];
     size_t v = first->vertex_count, t = first->triangle_count;
     scene_mesh_set_geometry(copy, first->vertex_count,
-                            duplicate(first->positions, 3 * v * sizeof *first->positions),
+                            xmemdup(first->positions, 3 * v * sizeof *first->positions),
                             first->triangle_count,
-                            duplicate(first->indices, 3 * t * sizeof *first->indices),
-                            duplicate(first->texcoords, 2 * v * sizeof *first->texcoords),
-                            duplicate(first->normals, 3 * v * sizeof *first->normals));
+                            xmemdup(first->indices, 3 * t * sizeof *first->indices),
+                            xmemdup(first->texcoords, 2 * v * sizeof *first->texcoords),
+                            xmemdup(first->normals, 3 * v * sizeof *first->normals));
     xform placement = xform_from_rows(rows);
     xform_apply_keeping_side(&placement, copy->positions, copy->normals, v, copy->indices, t);
     if (first_was_released)

@@ -66,25 +66,15 @@ int reduce_instance_pinned(const reduce_state *st, size_t m)
     return 0;
 }
 
-/* A malloc'd copy of `bytes` at `from`, or NULL for NULL. */
-static void *duplicate(const void *from, size_t bytes)
-{
-    if (!from)
-        return NULL;
-    void *to = xmalloc(bytes ? bytes : 1);
-    memcpy(to, from, bytes);
-    return to;
-}
-
 /* A copy of the mesh `from` into `to`. */
 static void copy_mesh(const mesh_data *from, mesh_data *to)
 {
     *to = *from;
     size_t v = from->vertex_count, t = from->triangle_count;
-    to->positions = duplicate(from->positions, 3 * v * sizeof *from->positions);
-    to->indices = duplicate(from->indices, 3 * t * sizeof *from->indices);
-    to->texcoords = duplicate(from->texcoords, 2 * v * sizeof *from->texcoords);
-    to->normals = duplicate(from->normals, 3 * v * sizeof *from->normals);
+    to->positions = xmemdup(from->positions, 3 * v * sizeof *from->positions);
+    to->indices = xmemdup(from->indices, 3 * t * sizeof *from->indices);
+    to->texcoords = xmemdup(from->texcoords, 2 * v * sizeof *from->texcoords);
+    to->normals = xmemdup(from->normals, 3 * v * sizeof *from->normals);
 }
 
 /* Copy c's instance transform and its inverse; 0, or -1 with the error set (a singular one). */
