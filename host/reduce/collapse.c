@@ -53,6 +53,8 @@ enum {
 #define CHUNK 1024 /* candidates judged at a time when taking collapses */
 #define JUDGE_BLOCK 8  /* candidates a thread judges at a time */
 #define APPLY_BLOCK 16 /* collapses a thread takes at a time */
+#define PREFETCH_AHEAD 4 /* collapses ahead whose reads are asked for while one is taken */
+#define JUDGE_AHEAD 8    /* candidates ahead whose reads are asked for while one is judged */
 #define SPIN_LIMIT 4000 /* pauses (about 0.1 ms) a thread spins before it sleeps or yields */
 
 typedef struct worker_pool worker_pool;
@@ -190,8 +192,10 @@ typedef struct engine {
     /* taking collapses in chunks (take_in_chunks) */
     const candidate *chunk;         /* the ranked candidates of the pass */
     uint32_t *chunk_items;          /* the chunk: positions in it, deferred ones first */
+    uint32_t chunk_size;            /* its items */
     struct judgement *judgements;   /* per item of the chunk */
     uint32_t *accepted;             /* the chunk's items taken */
+    uint32_t accepted_count;
     uint32_t *deferred;             /* positions deferred to the next chunk */
     uint32_t *written;              /* the vertices marked FLAG_WRITTEN in this chunk */
     size_t written_count, written_capacity;
@@ -1652,14 +1656,65 @@ static void take(engine *e, const judgement *j, scratch *s)
     apply_collapse(e, f0, j->v0, j->v1, e->history, s);
 }
 
+/* Judging and taking read at random vertices (the ranking is by cost, not by place): each
+ * collapse's reads wait on each other (a vertex's flags, then its adjacency, then its ring or
+ * triangles), and a step is too long for the processor to start the next item's reads by
+ * itself. The items ahead are known, so their first reads are asked for early: prefetches, which
+ * change no result. */
+
+/* For the candidate JUDGE_AHEAD items on: its target and v0's flags and adjacency; for the one
+ * half as far: v0's ring and v1's flags and adjacency (read by then, they cost no wait). */
+static void prefetch_judging(const engine *e, uint32_t item)
+{
+    if (item + JUDGE_AHEAD < e->chunk_size) {
+        uint32_t v0 = e->chunk[e->chunk_items[item + JUDGE_AHEAD]].vertex;
+        __builtin_prefetch(&e->best_target[v0]);
+        __builtin_prefetch(&e->flags[v0]);
+        __builtin_prefetch(&e->adjacency_start[v0]);
+        __builtin_prefetch(&e->ring_size[v0]);
+    }
+    if (item + JUDGE_AHEAD / 2 < e->chunk_size) {
+        uint32_t v0 = e->chunk[e->chunk_items[item + JUDGE_AHEAD / 2]].vertex;
+        uint32_t v1 = e->best_target[v0];
+        __builtin_prefetch(pass_ring_entries(e, v0));
+        __builtin_prefetch(&e->flags[v1]);
+        __builtin_prefetch(&e->adjacency_start[v1]);
+        __builtin_prefetch(&e->ring_size[v1]);
+    }
+}
+
+/* For the collapse PREFETCH_AHEAD accepted ones on: the quadrics it merges, v1's records it
+ * writes and v0's triangles it moves. */
+static void prefetch_taking(const engine *e, uint32_t item)
+{
+    if (item + PREFETCH_AHEAD >= e->accepted_count)
+        return;
+    const judgement *j = &e->judgements[e->accepted[item + PREFETCH_AHEAD]];
+    if (e->quadric) { /* 80 bytes each: two cache lines */
+        const double *q0 = &e->quadric[10 * (size_t)j->v0], *q1 = &e->quadric[10 * (size_t)j->v1];
+        __builtin_prefetch(q0);
+        __builtin_prefetch(q0 + 9);
+        __builtin_prefetch(q1, 1);
+        __builtin_prefetch(q1 + 9, 1);
+        __builtin_prefetch(&e->self_error[j->v1], 1);
+    }
+    __builtin_prefetch(&e->donor[j->v1], 1);
+    __builtin_prefetch(&e->history[j->v0], 1);
+    fan f0 = pass_fan(e, j->v0);
+    for (uint32_t i = 0; i < f0.count; i++)
+        __builtin_prefetch(corners(e, f0.triangle[i]), 1);
+}
+
 static void judge_item(engine *e, uint32_t item, scratch *s)
 {
+    prefetch_judging(e, item);
     uint32_t v0 = e->chunk[e->chunk_items[item]].vertex;
     judge(e, v0, e->best_target[v0], s, &e->judgements[item]);
 }
 
 static void apply_item(engine *e, uint32_t item, scratch *s)
 {
+    prefetch_taking(e, item);
     take(e, &e->judgements[e->accepted[item]], s);
 }
 
@@ -1717,6 +1772,7 @@ static uint32_t take_in_chunks(engine *e, const candidate *list, size_t count, f
         uint32_t n = deferred; /* the deferred ones are at the head already */
         while (n < CHUNK && next < count)
             items[n++] = (uint32_t)next++;
+        e->chunk_size = n;
         run_on_pool(e, STEP_JUDGE, n, JUDGE_BLOCK);
         uint32_t accepted = 0;
         deferred = 0;
@@ -1742,6 +1798,7 @@ static uint32_t take_in_chunks(engine *e, const candidate *list, size_t count, f
                 break;
             }
         }
+        e->accepted_count = accepted;
         if (accepted)
             run_on_pool(e, STEP_APPLY, accepted, APPLY_BLOCK);
         for (size_t k = 0; k < e->written_count; k++)
