@@ -241,6 +241,25 @@ static uint32_t ring_count(const ring *r, uint32_t w)
     return i < r->size ? r->entry[i].count : 0;
 }
 
+/* A ring's vertices summarised in 64 bits, one bit set per vertex (by a hash of it): a vertex
+ * whose bit is clear is not in the ring. The link condition asks for each neighbour of v0
+ * whether v1's ring holds it, and most are not there: the summary answers them without a scan. */
+static uint32_t summary_bit(uint32_t w) { return (w * 0x9e3779b1u) >> 26; }
+
+static uint64_t ring_summary(const ring *r)
+{
+    uint64_t summary = 0;
+    for (uint32_t i = 0; i < r->size; i++)
+        summary |= (uint64_t)1 << summary_bit(r->entry[i].vertex);
+    return summary;
+}
+
+/* Whether w is in the ring (summary: ring_summary's). */
+static int ring_holds(const ring *r, uint64_t summary, uint32_t w)
+{
+    return (summary >> summary_bit(w) & 1) && ring_find(r, w) < r->size;
+}
+
 static void scratch_free(scratch *s)
 {
     for (int k = 0; k < SLOTS; k++) {
@@ -295,8 +314,25 @@ static void normal_of(const float *p[3], double n[3])
     cross(e1, e2, n);
 }
 
+/* A position as doubles. */
+static void widen(const float *p, double out[3])
+{
+    out[0] = p[0];
+    out[1] = p[1];
+    out[2] = p[2];
+}
+
+/* The normal (not normalised) of the triangle with corners p0, p1, p2 as doubles: normal_of's
+ * value. */
+static void normal_from(const double p0[3], const double p1[3], const double p2[3], double n[3])
+{
+    double e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+    double e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+    cross(e1, e2, n);
+}
+
 /* q(p) */
-static double quadric_error(const double *q, const float *point)
+static inline __attribute__((always_inline)) double quadric_error(const double *q, const float *point)
 {
     double x = point[0], y = point[1], z = point[2];
     return q[0] * x * x + 2 * q[1] * x * y + 2 * q[2] * x * z + q[3] * y * y + 2 * q[4] * y * z +
@@ -387,12 +423,16 @@ static fan current_fan(const engine *e, uint32_t v, scratch *s, int slot)
     return f;
 }
 
-/* Adds neighbour w to the ring being written (size so far *size, room for `capacity`); its
- * slot. A ring that would outgrow its room is marked complex (an edge counted 255 times):
- * only a vertex of more than one fan has more neighbours than triangles plus one. */
-static uint32_t ring_add(ring_entry *r, uint32_t *size, uint32_t capacity, uint32_t w)
+/* Adds neighbour w to the ring being written (size so far *size, room for `capacity`, *summary
+ * its ring_summary, kept up to date: half the neighbours come new, and their search is
+ * skipped); its slot. A ring that would outgrow its room is marked complex (an edge counted 255
+ * times): only a vertex of more than one fan has more neighbours than triangles plus one. */
+static inline __attribute__((always_inline)) uint32_t
+ring_add(ring_entry *r, uint32_t *size, uint32_t capacity, uint64_t *summary, uint32_t w)
 {
-    uint32_t j = 0;
+    uint64_t bit = (uint64_t)1 << summary_bit(w);
+    uint32_t j = *summary & bit ? 0 : *size;
+    *summary |= bit;
     while (j < *size && r[j].vertex != w)
         j++;
     if (j < *size) {
@@ -414,13 +454,14 @@ static uint32_t ring_add(ring_entry *r, uint32_t *size, uint32_t capacity, uint3
 static uint32_t fill_ring(const engine *e, uint32_t v, fan f, ring_entry *r, uint32_t capacity)
 {
     uint32_t size = 0;
+    uint64_t summary = 0;
     for (uint32_t i = 0; i < f.count; i++) {
         uint32_t t = f.triangle[i];
         const uint32_t *c = corners(e, t);
         int k = corner_at(e, t, v);
         uint32_t next = c[(k + 1) % 3], previous = c[(k + 2) % 3];
-        r[ring_add(r, &size, capacity, next)].left = previous;
-        r[ring_add(r, &size, capacity, previous)].right = next;
+        r[ring_add(r, &size, capacity, &summary, next)].left = previous;
+        r[ring_add(r, &size, capacity, &summary, previous)].right = next;
     }
     return size;
 }
@@ -769,6 +810,9 @@ static void build_quadric(engine *e, uint32_t v)
     double quadric[10] = {0}; /* summed here, stored once: e->quadric is not zeroed */
     fan f = pass_fan(e, v);
     ring r = ring_of(e, v);
+    int open = 0; /* whether v has an open edge: most have none, and skip the search for them */
+    for (uint32_t i = 0; i < r.size && combined; i++)
+        open |= r.entry[i].count == 1;
     for (uint32_t i = 0; i < f.count; i++) {
         uint32_t t = f.triangle[i];
         const uint32_t *c = corners(e, t);
@@ -789,7 +833,7 @@ static void build_quadric(engine *e, uint32_t v)
         quadric_add_plane(quadric, n, d, weight);
         if (!combined)
             continue;
-        for (int k = 0; k < 3; k++) {
+        for (int k = 0; k < 3 && open; k++) {
             uint32_t a = c[k], b = c[(k + 1) % 3];
             if ((a != v && b != v) || ring_count(&r, a == v ? b : a) != 1)
                 continue; /* not an edge at v, or not open */
@@ -824,16 +868,19 @@ static void build_quadric(engine *e, uint32_t v)
 /* No triangle of v0 that moves (one without v1) turns by more than the limit or degenerates. */
 static int normals_kept(const engine *e, const ring *r0, uint32_t v0, uint32_t v1)
 {
-    const float *p1 = position(e, v1);
+    /* normal_of's arithmetic, the points widened once (exact) instead of in every difference */
+    double p0[3], p1[3];
+    widen(position(e, v0), p0);
+    widen(position(e, v1), p1);
     for (uint32_t i = 0; i < r0->size; i++) { /* v0's triangles: (v0, vertex[i], left[i]) */
         uint32_t a = r0->entry[i].vertex, b = r0->entry[i].left;
         if (b == COLLAPSE_NONE || a == v1 || b == v1)
             continue;
-        const float *before[3] = {position(e, v0), position(e, a), position(e, b)};
-        const float *after[3] = {p1, before[1], before[2]};
-        double nb[3], na[3];
-        normal_of(before, nb);
-        normal_of(after, na);
+        double pa[3], pb[3], nb[3], na[3];
+        widen(position(e, a), pa);
+        widen(position(e, b), pb);
+        normal_from(p0, pa, pb, nb); /* before */
+        normal_from(p1, pa, pb, na); /* after */
         /* cos(turn) >= min_cos, without square roots: dot >= min_cos |nb| |na| */
         double lb2 = dot(nb, nb), la2 = dot(na, na), d = dot(nb, na);
         if (!(la2 > 0))
@@ -999,9 +1046,10 @@ static int collapse_legal(const engine *e, uint32_t v0, uint32_t v1, fan f0, con
         return *rule = "interior edge between boundaries", 0;
     if (boundary0 && (!boundary1 || both_sides))
         return *rule = "boundary vertex off the boundary", 0;
+    uint64_t summary1 = ring_summary(r1);
     for (uint32_t i = 0; i < r0->size; i++) {
         uint32_t w = r0->entry[i].vertex;
-        if (w != v1 && w != vl && w != vr && ring_count(r1, w))
+        if (w != v1 && w != vl && w != vr && ring_holds(r1, summary1, w))
             return *rule = "link condition", 0;
     }
     if (both_sides && valence_three(e, vl, current, vr) &&
@@ -1024,7 +1072,8 @@ static int collapse_legal(const engine *e, uint32_t v0, uint32_t v1, fan f0, con
 }
 
 /* The cost of v0 -> v1 for QUADRIC and COMBINED. */
-static double collapse_cost(const engine *e, fan f0, uint32_t v0, uint32_t v1, scratch *s)
+static inline __attribute__((always_inline)) double
+collapse_cost(const engine *e, fan f0, uint32_t v0, uint32_t v1, scratch *s)
 {
     const float *p1 = position(e, v1);
     /* (Q0 + Q1)(p1) = Q0(p1) + Q1(p1), the second v1's own error, kept per pass */
@@ -1044,7 +1093,7 @@ static double collapse_cost(const engine *e, fan f0, uint32_t v0, uint32_t v1, s
         }
     }
     CHECK_FINITE(error, "collapse cost");
-    return fmax(error, 0.0);
+    return error >= 0.0 ? error : 0.0; /* fmax(error, 0.0), -0 and NaN alike, without a call */
 }
 
 static uint32_t distance_of(const engine *e, uint32_t v)
@@ -1093,7 +1142,8 @@ static void set_best(engine *e, uint32_t v, const ring *r0, const target_key *t)
         CHECK_FINITE(priority, "ring importance");
     }
     e->best_target[v] = t->vertex;
-    e->best[v] = (candidate){(float)fmin(priority, (double)FLT_MAX / 2), distance_of(e, v),
+    double largest = (double)FLT_MAX / 2; /* fmin(priority, largest), without a call */
+    e->best[v] = (candidate){(float)(priority <= largest ? priority : largest), distance_of(e, v),
                              by_importance ? e->importance[t->vertex] : 0.0, t->distance, v};
 }
 
