@@ -18,9 +18,9 @@
  * most once in a pass, as an end of a taken collapse is not taken again.
  *
  * Threads: one pool per run (worker_pool) takes the steps (vertex_step): the per-vertex rings,
- * quadrics and scores, the ranking's listing and gathering by ranges, and the chunks' judging
- * and taking (take_in_chunks); each writes only its own vertex's, range's or collapse's records,
- * so the result is the same on any number of threads. */
+ * quadrics and scores, the ranking's listing by ranges, and the chunks' judging and taking
+ * (take_in_chunks); each writes only its own vertex's, range's or collapse's records, so the
+ * result is the same on any number of threads. */
 #include "reduce/collapse.h"
 
 #include <float.h>
@@ -68,7 +68,6 @@ typedef enum vertex_step {
     STEP_SCORES,
     STEP_COUNT_CANDIDATES, /* per range of vertices (rank_candidates) */
     STEP_WRITE_KEYS,
-    STEP_GATHER_CANDIDATES, /* per range of the ranking */
     STEP_JUDGE, /* per candidate of a chunk (take_in_chunks) */
     STEP_APPLY
 } vertex_step;
@@ -126,10 +125,18 @@ typedef struct candidate {
     uint32_t vertex;
 } candidate;
 
-/* A candidate's place in the ranking (rank_candidates): its cost's bits and its vertex. */
+/* A candidate's place in the ranking (rank_candidates): its cost's bits and its vertex (the
+ * rest of its record is best[vertex]). */
 typedef struct rank_key {
     uint32_t cost_bits, vertex;
 } rank_key;
+
+static float key_cost(const rank_key *key)
+{
+    float cost;
+    memcpy(&cost, &key->cost_bits, sizeof cost);
+    return cost;
+}
 
 /* A candidate judged on the mesh as it is, ahead of taking it (judge): its verdict, the
  * vertices its verdict read (v0, v1, vl, vr) and those taking it writes (v0 and its ring; more
@@ -184,13 +191,12 @@ typedef struct engine {
     worker_pool *pool;
     unsigned int threads; /* the pool's, the caller's included */
     /* the ranking (rank_candidates): per range of vertices the offset of its candidates; the
-     * keys sorted (and their spare); the ranked candidates, `ranked` of them */
+     * keys sorted, `ranked` of them (and their spare) */
     uint32_t range_offset[MAX_THREADS + 1];
     rank_key *keys, *spare_keys;
-    candidate *list;
     size_t ranked;
     /* taking collapses in chunks (take_in_chunks) */
-    const candidate *chunk;         /* the ranked candidates of the pass */
+    const rank_key *chunk;          /* the ranked candidates of the pass */
     uint32_t *chunk_items;          /* the chunk: positions in it, deferred ones first */
     uint32_t chunk_size;            /* its items */
     struct judgement *judgements;   /* per item of the chunk */
@@ -1243,7 +1249,6 @@ struct worker_pool {
 
 static void count_candidates(engine *e, uint32_t range);
 static void write_keys(engine *e, uint32_t range);
-static void gather_candidates(engine *e, uint32_t range);
 static void judge_item(engine *e, uint32_t item, scratch *s);
 static void apply_item(engine *e, uint32_t item, scratch *s);
 
@@ -1266,9 +1271,6 @@ static void run_item(engine *e, vertex_step step, uint32_t i, scratch *s)
         break;
     case STEP_WRITE_KEYS:
         write_keys(e, i);
-        break;
-    case STEP_GATHER_CANDIDATES:
-        gather_candidates(e, i);
         break;
     case STEP_JUDGE:
         judge_item(e, i, s);
@@ -1467,19 +1469,36 @@ static void write_keys(engine *e, uint32_t range)
         }
 }
 
-/* The ranked candidates' records, from the sorted keys: list[i] of a range of the list. */
-static void gather_candidates(engine *e, uint32_t range)
+/* Sorts keys[0 .. count) by the full order of their candidates (compare_candidates on best[]),
+ * with spare[0 .. count) as room: a merge sort, as qsort takes no context. The order is total,
+ * so the result is the one any sort gives. */
+static void sort_ties(const engine *e, rank_key *keys, rank_key *spare, size_t count)
 {
-    size_t first = e->ranked * range / e->threads, end = e->ranked * (range + 1) / e->threads;
-    for (size_t i = first; i < end; i++)
-        e->list[i] = e->best[e->keys[i].vertex];
+    for (size_t width = 1; width < count; width *= 2) {
+        for (size_t low = 0; low < count; low += 2 * width) {
+            size_t middle = low + width < count ? low + width : count;
+            size_t high = low + 2 * width < count ? low + 2 * width : count;
+            size_t a = low, b = middle, k = low;
+            while (a < middle && b < high)
+                spare[k++] = compare_candidates(&e->best[keys[b].vertex],
+                                                &e->best[keys[a].vertex]) < 0
+                                 ? keys[b++]
+                                 : keys[a++];
+            while (a < middle)
+                spare[k++] = keys[a++];
+            while (b < high)
+                spare[k++] = keys[b++];
+        }
+        memcpy(keys, spare, sizeof(rank_key) * count);
+    }
 }
 
-/* Ranks the candidates into e->list (e->ranked of them): their keys (the cost's bits and the
+/* Ranks the candidates into e->keys (e->ranked of them): their keys (the cost's bits and the
  * vertex) listed in vertex order, a radix sort on the cost's bits (costs are not negative, so
- * their bits order as the costs do), stable, so equal costs stay in vertex order; the records
- * gathered in that order; then runs of equal cost sorted by the full order where the ties have
- * keys beyond the vertex. */
+ * their bits order as the costs do), stable, so equal costs stay in vertex order; then runs of
+ * equal cost sorted by the full order where the ties have keys beyond the vertex. The ranking
+ * is of keys alone: the judging reads a candidate's vertex and the taking its cost, both in its
+ * key, so the records are not gathered into the ranked order. */
 static void rank_candidates(engine *e, int full_ties)
 {
     uint32_t ranges = e->threads;
@@ -1511,16 +1530,15 @@ static void rank_candidates(engine *e, int full_ties)
             to[histogram[digit][bucket]++] = from[i];
         }
     }
-    run_on_pool(e, STEP_GATHER_CANDIDATES, ranges, 1);
     if (!full_ties)
         return;
-    candidate *list = e->list;
+    rank_key *keys = e->keys;
     for (size_t i = 0; i < count;) {
         size_t j = i + 1;
-        while (j < count && list[j].cost == list[i].cost)
+        while (j < count && key_cost(&keys[j]) == key_cost(&keys[i]))
             j++;
         if (j - i > 1)
-            qsort(&list[i], j - i, sizeof(candidate), compare_candidates);
+            sort_ties(e, &keys[i], &e->spare_keys[i], j - i);
         i = j;
     }
 }
@@ -1800,7 +1818,7 @@ static void mark_writes(engine *e, const judgement *j, scratch *s)
         mark_written(e, r0.entry[i].vertex);
 }
 
-/* Takes the ranked candidates list[0 .. count) in order, greedily, in chunks of CHUNK
+/* Takes the ranked candidates keys[0 .. count) in order, greedily, in chunks of CHUNK
  * candidates whose judging and taking run on the pool's threads. A chunk's candidates are judged
  * side by side on the mesh as the chunk found it (judge). Then, in order, each is accepted as
  * judged, unless an earlier one accepted in the chunk wrote a vertex its verdict read: that one
@@ -1811,13 +1829,13 @@ static void mark_writes(engine *e, const judgement *j, scratch *s)
  * the same bytes on any number of them. Against the strict order, a deferred candidate may come
  * after costlier ones of its chunk (a relaxed order, as a relaxed priority queue's). Returns the
  * collapses taken. */
-static uint32_t take_in_chunks(engine *e, const candidate *list, size_t count, float cost_limit,
+static uint32_t take_in_chunks(engine *e, const rank_key *keys, size_t count, float cost_limit,
                                scratch *s)
 {
     uint32_t taken = 0, *items = e->chunk_items, deferred = 0;
     size_t next = 0;
     int stop = 0;
-    e->chunk = list;
+    e->chunk = keys;
     while (!stop && (deferred || next < count) && e->alive > e->o->target_vertices) {
         uint32_t n = deferred; /* the deferred ones are at the head already */
         while (n < CHUNK && next < count)
@@ -1828,7 +1846,7 @@ static uint32_t take_in_chunks(engine *e, const candidate *list, size_t count, f
         deferred = 0;
         for (uint32_t i = 0; i < n; i++) {
             const judgement *j = &e->judgements[i];
-            if (list[items[i]].cost > cost_limit && taken > 0) {
+            if (key_cost(&keys[items[i]]) > cost_limit && taken > 0) {
                 stop = 1;
                 break;
             }
@@ -1873,8 +1891,8 @@ static uint32_t run_pass(engine *e, scratch *s)
     rank_candidates(e, e->o->method == DECIMATE_IMPORTANCE || e->m->distance);
     if (!e->ranked)
         return 0;
-    float cost_limit = e->list[e->ranked / 4].cost * PASS_COST_FACTOR;
-    return take_in_chunks(e, e->list, e->ranked, cost_limit, s);
+    float cost_limit = key_cost(&e->keys[e->ranked / 4]) * PASS_COST_FACTOR;
+    return take_in_chunks(e, e->keys, e->ranked, cost_limit, s);
 }
 
 /* ---- setup ---- */
@@ -1898,7 +1916,6 @@ static void engine_free(engine *e)
     free(e->best_target);
     free(e->best);
     free(e->attribute_terms);
-    free(e->list);
     free(e->keys);
     free(e->spare_keys);
     free(e->judgements);
@@ -2012,10 +2029,10 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
 size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_method method)
 {
     /* flags, adjacency_start, ring_size, donor, best_target, best, importance, the
-     * ranking's keys (and their spare) and list, the quadric and its own error; a ring slot
-     * (its ring_entry); per triangle its place in the live list */
+     * ranking's keys (and their spare), the quadric and its own error; a ring slot (its
+     * ring_entry); per triangle its place in the live list */
     size_t per_vertex = 1 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
-                        2 * sizeof(rank_key) + sizeof(candidate) +
+                        2 * sizeof(rank_key) +
                         (method != DECIMATE_IMPORTANCE ? 11 * sizeof(double) : 0);
     size_t ring_slot = sizeof(ring_entry);
     /* per corner: the adjacency and a ring slot */
@@ -2034,7 +2051,6 @@ int collapse_run(collapse_mesh *m, const collapse_options *o, collapse_result *r
     result->vertices_before = e.alive;
     result->collapses = 0;
     result->passes = 0;
-    e.list = large_array(sizeof(candidate) * ((size_t)e.n + 1));
     e.keys = xmalloc(sizeof(rank_key) * ((size_t)e.n + 1));
     e.spare_keys = xmalloc(sizeof(rank_key) * ((size_t)e.n + 1));
     e.history = result->collapsed_into;
