@@ -429,18 +429,28 @@ static fan current_fan(const engine *e, uint32_t v, scratch *s, int slot)
     return f;
 }
 
-/* Adds neighbour w to the ring being written (size so far *size, room for `capacity`, *summary
- * its ring_summary, kept up to date: half the neighbours come new, and their search is
- * skipped); its slot. A ring that would outgrow its room is marked complex (an edge counted 255
- * times): only a vertex of more than one fan has more neighbours than triangles plus one. */
+/* Where a ring being written holds its vertices: per summary bit (ring_summary) that is set,
+ * the slot of the first vertex added with it. A neighbour whose bit is clear is new (half of
+ * them come new), and one whose bit is set is most often at that slot: few are searched for. */
+typedef struct ring_index {
+    uint64_t summary;
+    uint32_t slot[64]; /* valid where the summary's bit is set */
+} ring_index;
+
+/* Adds neighbour w to the ring being written (size so far *size, room for `capacity`, `index`
+ * kept up to date); its slot. A ring that would outgrow its room is marked complex (an edge
+ * counted 255 times): only a vertex of more than one fan has more neighbours than triangles
+ * plus one. */
 static inline __attribute__((always_inline)) uint32_t
-ring_add(ring_entry *r, uint32_t *size, uint32_t capacity, uint64_t *summary, uint32_t w)
+ring_add(ring_entry *r, uint32_t *size, uint32_t capacity, ring_index *index, uint32_t w)
 {
-    uint64_t bit = (uint64_t)1 << summary_bit(w);
-    uint32_t j = *summary & bit ? 0 : *size;
-    *summary |= bit;
-    while (j < *size && r[j].vertex != w)
-        j++;
+    uint32_t b = summary_bit(w), j = *size;
+    if (index->summary >> b & 1) {
+        j = index->slot[b];
+        if (r[j].vertex != w) /* another vertex with its bit: search */
+            for (j = 0; j < *size && r[j].vertex != w;)
+                j++;
+    }
     if (j < *size) {
         if (r[j].count < 255)
             r[j].count++;
@@ -452,6 +462,10 @@ ring_add(ring_entry *r, uint32_t *size, uint32_t capacity, uint64_t *summary, ui
     }
     r[j] = (ring_entry){w, COLLAPSE_NONE, COLLAPSE_NONE, 1};
     (*size)++;
+    if (!(index->summary >> b & 1)) {
+        index->summary |= (uint64_t)1 << b;
+        index->slot[b] = j;
+    }
     return j;
 }
 
@@ -460,14 +474,15 @@ ring_add(ring_entry *r, uint32_t *size, uint32_t capacity, uint64_t *summary, ui
 static uint32_t fill_ring(const engine *e, uint32_t v, fan f, ring_entry *r, uint32_t capacity)
 {
     uint32_t size = 0;
-    uint64_t summary = 0;
+    ring_index index;
+    index.summary = 0;
     for (uint32_t i = 0; i < f.count; i++) {
         uint32_t t = f.triangle[i];
         const uint32_t *c = corners(e, t);
         int k = corner_at(e, t, v);
         uint32_t next = c[(k + 1) % 3], previous = c[(k + 2) % 3];
-        r[ring_add(r, &size, capacity, &summary, next)].left = previous;
-        r[ring_add(r, &size, capacity, &summary, previous)].right = next;
+        r[ring_add(r, &size, capacity, &index, next)].left = previous;
+        r[ring_add(r, &size, capacity, &index, previous)].right = next;
     }
     return size;
 }
