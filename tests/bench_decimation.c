@@ -5,12 +5,15 @@
  *   decimation: mesh=dragon target=0.1 threads=<1, then 2> combined=<s> importance=<s>
  *               quadric=<s> openmesh=<s> meshopt=<s> combined/meshopt=<r> quadric/meshopt=<r>
  *   decimation-parallel: mesh=dragon threads=2 method=combined one=<s> two=<s> speedup=<x>
+ *   decimation-memory: mesh=dragon quadric=<bytes per vertex> importance=<bytes per vertex>
  *
  * combined, importance: a synthetic importance field (high on one side of the dragon); openmesh:
  * stock DecimaterT + ModQuadricT as Debian ships it (one run, 20-40 s); meshopt: meshoptimizer's
  * meshopt_simplify to 10 % of the triangles, one thread. Each engine figure is decimate_mesh()
  * whole (the welded rebuild, the engine, the output), the best of ROUNDS rounds that run every
- * figure once, meshoptimizer's too. And the parallel
+ * figure once, meshoptimizer's too. The memory is what the engine allocates (collapse_memory())
+ * per vertex of the dragon, with the quadric methods (COMBINED's without attributes, which the
+ * dragon has none of) and with importance. And the parallel
  * decimation of the living room's meshes (meshes on threads):
  *
  *   decimation-parallel: scene=living-room meshes=<n> one=<s> two=<s> speedup=<one/two>
@@ -19,6 +22,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "reduce/collapse.h"
 #include "reduce/decimate.h"
 #include "io/mitsuba/mitsuba.h"
 #include "trace_common.h"
@@ -111,6 +115,11 @@ static void bench_dragon(void)
     printf("decimation-parallel: mesh=dragon threads=2 method=combined one=%.3f two=%.3f "
            "speedup=%.2f\n",
            seconds[0][0], seconds[0][1], seconds[0][0] / seconds[0][1]);
+    printf("decimation-memory: mesh=dragon quadric=%.0f importance=%.0f\n",
+           (double)collapse_memory(mesh.vertex_count, mesh.triangle_count, DECIMATE_QUADRIC) /
+               mesh.vertex_count,
+           (double)collapse_memory(mesh.vertex_count, mesh.triangle_count, DECIMATE_IMPORTANCE) /
+               mesh.vertex_count);
     fflush(stdout);
     free(destination);
     free(importance);

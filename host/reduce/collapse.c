@@ -18,9 +18,9 @@
  * most once in a pass, as an end of a taken collapse is not taken again.
  *
  * Threads: one pool per run (worker_pool) takes the steps (vertex_step): the per-vertex rings,
- * quadrics and scores, the ranking's listing and gathering by ranges, and the chunks' judging
- * and taking (take_in_chunks); each writes only its own vertex's, range's or collapse's records,
- * so the result is the same on any number of threads. */
+ * quadrics and scores, the ranking's listing by ranges, and the chunks' judging and taking
+ * (take_in_chunks); each writes only its own vertex's, range's or collapse's records, so the
+ * result is the same on any number of threads. */
 #include "reduce/collapse.h"
 
 #include <float.h>
@@ -53,6 +53,8 @@ enum {
 #define CHUNK 1024 /* candidates judged at a time when taking collapses */
 #define JUDGE_BLOCK 8  /* candidates a thread judges at a time */
 #define APPLY_BLOCK 16 /* collapses a thread takes at a time */
+#define PREFETCH_AHEAD 4 /* collapses ahead whose reads are asked for while one is taken */
+#define JUDGE_AHEAD 8    /* candidates ahead whose reads are asked for while one is judged */
 #define SPIN_LIMIT 4000 /* pauses (about 0.1 ms) a thread spins before it sleeps or yields */
 
 typedef struct worker_pool worker_pool;
@@ -66,7 +68,6 @@ typedef enum vertex_step {
     STEP_SCORES,
     STEP_COUNT_CANDIDATES, /* per range of vertices (rank_candidates) */
     STEP_WRITE_KEYS,
-    STEP_GATHER_CANDIDATES, /* per range of the ranking */
     STEP_JUDGE, /* per candidate of a chunk (take_in_chunks) */
     STEP_APPLY
 } vertex_step;
@@ -124,10 +125,18 @@ typedef struct candidate {
     uint32_t vertex;
 } candidate;
 
-/* A candidate's place in the ranking (rank_candidates): its cost's bits and its vertex. */
+/* A candidate's place in the ranking (rank_candidates): its cost's bits and its vertex (the
+ * rest of its record is best[vertex]). */
 typedef struct rank_key {
     uint32_t cost_bits, vertex;
 } rank_key;
+
+static float key_cost(const rank_key *key)
+{
+    float cost;
+    memcpy(&cost, &key->cost_bits, sizeof cost);
+    return cost;
+}
 
 /* A candidate judged on the mesh as it is, ahead of taking it (judge): its verdict, the
  * vertices its verdict read (v0, v1, vl, vr) and those taking it writes (v0 and its ring; more
@@ -182,16 +191,17 @@ typedef struct engine {
     worker_pool *pool;
     unsigned int threads; /* the pool's, the caller's included */
     /* the ranking (rank_candidates): per range of vertices the offset of its candidates; the
-     * keys sorted (and their spare); the ranked candidates, `ranked` of them */
+     * keys sorted, `ranked` of them (and their spare) */
     uint32_t range_offset[MAX_THREADS + 1];
     rank_key *keys, *spare_keys;
-    candidate *list;
     size_t ranked;
     /* taking collapses in chunks (take_in_chunks) */
-    const candidate *chunk;         /* the ranked candidates of the pass */
+    const rank_key *chunk;          /* the ranked candidates of the pass */
     uint32_t *chunk_items;          /* the chunk: positions in it, deferred ones first */
+    uint32_t chunk_size;            /* its items */
     struct judgement *judgements;   /* per item of the chunk */
     uint32_t *accepted;             /* the chunk's items taken */
+    uint32_t accepted_count;
     uint32_t *deferred;             /* positions deferred to the next chunk */
     uint32_t *written;              /* the vertices marked FLAG_WRITTEN in this chunk */
     size_t written_count, written_capacity;
@@ -235,6 +245,25 @@ static uint32_t ring_count(const ring *r, uint32_t w)
 {
     uint32_t i = ring_find(r, w);
     return i < r->size ? r->entry[i].count : 0;
+}
+
+/* A ring's vertices summarised in 64 bits, one bit set per vertex (by a hash of it): a vertex
+ * whose bit is clear is not in the ring. The link condition asks for each neighbour of v0
+ * whether v1's ring holds it, and most are not there: the summary answers them without a scan. */
+static uint32_t summary_bit(uint32_t w) { return (w * 0x9e3779b1u) >> 26; }
+
+static uint64_t ring_summary(const ring *r)
+{
+    uint64_t summary = 0;
+    for (uint32_t i = 0; i < r->size; i++)
+        summary |= (uint64_t)1 << summary_bit(r->entry[i].vertex);
+    return summary;
+}
+
+/* Whether w is in the ring (summary: ring_summary's). */
+static int ring_holds(const ring *r, uint64_t summary, uint32_t w)
+{
+    return (summary >> summary_bit(w) & 1) && ring_find(r, w) < r->size;
 }
 
 static void scratch_free(scratch *s)
@@ -291,8 +320,25 @@ static void normal_of(const float *p[3], double n[3])
     cross(e1, e2, n);
 }
 
+/* A position as doubles. */
+static void widen(const float *p, double out[3])
+{
+    out[0] = p[0];
+    out[1] = p[1];
+    out[2] = p[2];
+}
+
+/* The normal (not normalised) of the triangle with corners p0, p1, p2 as doubles: normal_of's
+ * value. */
+static void normal_from(const double p0[3], const double p1[3], const double p2[3], double n[3])
+{
+    double e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+    double e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+    cross(e1, e2, n);
+}
+
 /* q(p) */
-static double quadric_error(const double *q, const float *point)
+static inline __attribute__((always_inline)) double quadric_error(const double *q, const float *point)
 {
     double x = point[0], y = point[1], z = point[2];
     return q[0] * x * x + 2 * q[1] * x * y + 2 * q[2] * x * z + q[3] * y * y + 2 * q[4] * y * z +
@@ -383,14 +429,28 @@ static fan current_fan(const engine *e, uint32_t v, scratch *s, int slot)
     return f;
 }
 
-/* Adds neighbour w to the ring being written (size so far *size, room for `capacity`); its
- * slot. A ring that would outgrow its room is marked complex (an edge counted 255 times):
- * only a vertex of more than one fan has more neighbours than triangles plus one. */
-static uint32_t ring_add(ring_entry *r, uint32_t *size, uint32_t capacity, uint32_t w)
+/* Where a ring being written holds its vertices: per summary bit (ring_summary) that is set,
+ * the slot of the first vertex added with it. A neighbour whose bit is clear is new (half of
+ * them come new), and one whose bit is set is most often at that slot: few are searched for. */
+typedef struct ring_index {
+    uint64_t summary;
+    uint32_t slot[64]; /* valid where the summary's bit is set */
+} ring_index;
+
+/* Adds neighbour w to the ring being written (size so far *size, room for `capacity`, `index`
+ * kept up to date); its slot. A ring that would outgrow its room is marked complex (an edge
+ * counted 255 times): only a vertex of more than one fan has more neighbours than triangles
+ * plus one. */
+static inline __attribute__((always_inline)) uint32_t
+ring_add(ring_entry *r, uint32_t *size, uint32_t capacity, ring_index *index, uint32_t w)
 {
-    uint32_t j = 0;
-    while (j < *size && r[j].vertex != w)
-        j++;
+    uint32_t b = summary_bit(w), j = *size;
+    if (index->summary >> b & 1) {
+        j = index->slot[b];
+        if (r[j].vertex != w) /* another vertex with its bit: search */
+            for (j = 0; j < *size && r[j].vertex != w;)
+                j++;
+    }
     if (j < *size) {
         if (r[j].count < 255)
             r[j].count++;
@@ -402,6 +462,10 @@ static uint32_t ring_add(ring_entry *r, uint32_t *size, uint32_t capacity, uint3
     }
     r[j] = (ring_entry){w, COLLAPSE_NONE, COLLAPSE_NONE, 1};
     (*size)++;
+    if (!(index->summary >> b & 1)) {
+        index->summary |= (uint64_t)1 << b;
+        index->slot[b] = j;
+    }
     return j;
 }
 
@@ -410,13 +474,15 @@ static uint32_t ring_add(ring_entry *r, uint32_t *size, uint32_t capacity, uint3
 static uint32_t fill_ring(const engine *e, uint32_t v, fan f, ring_entry *r, uint32_t capacity)
 {
     uint32_t size = 0;
+    ring_index index;
+    index.summary = 0;
     for (uint32_t i = 0; i < f.count; i++) {
         uint32_t t = f.triangle[i];
         const uint32_t *c = corners(e, t);
         int k = corner_at(e, t, v);
         uint32_t next = c[(k + 1) % 3], previous = c[(k + 2) % 3];
-        r[ring_add(r, &size, capacity, next)].left = previous;
-        r[ring_add(r, &size, capacity, previous)].right = next;
+        r[ring_add(r, &size, capacity, &index, next)].left = previous;
+        r[ring_add(r, &size, capacity, &index, previous)].right = next;
     }
     return size;
 }
@@ -765,6 +831,9 @@ static void build_quadric(engine *e, uint32_t v)
     double quadric[10] = {0}; /* summed here, stored once: e->quadric is not zeroed */
     fan f = pass_fan(e, v);
     ring r = ring_of(e, v);
+    int open = 0; /* whether v has an open edge: most have none, and skip the search for them */
+    for (uint32_t i = 0; i < r.size && combined; i++)
+        open |= r.entry[i].count == 1;
     for (uint32_t i = 0; i < f.count; i++) {
         uint32_t t = f.triangle[i];
         const uint32_t *c = corners(e, t);
@@ -785,7 +854,7 @@ static void build_quadric(engine *e, uint32_t v)
         quadric_add_plane(quadric, n, d, weight);
         if (!combined)
             continue;
-        for (int k = 0; k < 3; k++) {
+        for (int k = 0; k < 3 && open; k++) {
             uint32_t a = c[k], b = c[(k + 1) % 3];
             if ((a != v && b != v) || ring_count(&r, a == v ? b : a) != 1)
                 continue; /* not an edge at v, or not open */
@@ -820,16 +889,19 @@ static void build_quadric(engine *e, uint32_t v)
 /* No triangle of v0 that moves (one without v1) turns by more than the limit or degenerates. */
 static int normals_kept(const engine *e, const ring *r0, uint32_t v0, uint32_t v1)
 {
-    const float *p1 = position(e, v1);
+    /* normal_of's arithmetic, the points widened once (exact) instead of in every difference */
+    double p0[3], p1[3];
+    widen(position(e, v0), p0);
+    widen(position(e, v1), p1);
     for (uint32_t i = 0; i < r0->size; i++) { /* v0's triangles: (v0, vertex[i], left[i]) */
         uint32_t a = r0->entry[i].vertex, b = r0->entry[i].left;
         if (b == COLLAPSE_NONE || a == v1 || b == v1)
             continue;
-        const float *before[3] = {position(e, v0), position(e, a), position(e, b)};
-        const float *after[3] = {p1, before[1], before[2]};
-        double nb[3], na[3];
-        normal_of(before, nb);
-        normal_of(after, na);
+        double pa[3], pb[3], nb[3], na[3];
+        widen(position(e, a), pa);
+        widen(position(e, b), pb);
+        normal_from(p0, pa, pb, nb); /* before */
+        normal_from(p1, pa, pb, na); /* after */
         /* cos(turn) >= min_cos, without square roots: dot >= min_cos |nb| |na| */
         double lb2 = dot(nb, nb), la2 = dot(na, na), d = dot(nb, na);
         if (!(la2 > 0))
@@ -995,9 +1067,10 @@ static int collapse_legal(const engine *e, uint32_t v0, uint32_t v1, fan f0, con
         return *rule = "interior edge between boundaries", 0;
     if (boundary0 && (!boundary1 || both_sides))
         return *rule = "boundary vertex off the boundary", 0;
+    uint64_t summary1 = ring_summary(r1);
     for (uint32_t i = 0; i < r0->size; i++) {
         uint32_t w = r0->entry[i].vertex;
-        if (w != v1 && w != vl && w != vr && ring_count(r1, w))
+        if (w != v1 && w != vl && w != vr && ring_holds(r1, summary1, w))
             return *rule = "link condition", 0;
     }
     if (both_sides && valence_three(e, vl, current, vr) &&
@@ -1020,7 +1093,8 @@ static int collapse_legal(const engine *e, uint32_t v0, uint32_t v1, fan f0, con
 }
 
 /* The cost of v0 -> v1 for QUADRIC and COMBINED. */
-static double collapse_cost(const engine *e, fan f0, uint32_t v0, uint32_t v1, scratch *s)
+static inline __attribute__((always_inline)) double
+collapse_cost(const engine *e, fan f0, uint32_t v0, uint32_t v1, scratch *s)
 {
     const float *p1 = position(e, v1);
     /* (Q0 + Q1)(p1) = Q0(p1) + Q1(p1), the second v1's own error, kept per pass */
@@ -1040,7 +1114,7 @@ static double collapse_cost(const engine *e, fan f0, uint32_t v0, uint32_t v1, s
         }
     }
     CHECK_FINITE(error, "collapse cost");
-    return fmax(error, 0.0);
+    return error >= 0.0 ? error : 0.0; /* fmax(error, 0.0), -0 and NaN alike, without a call */
 }
 
 static uint32_t distance_of(const engine *e, uint32_t v)
@@ -1089,7 +1163,8 @@ static void set_best(engine *e, uint32_t v, const ring *r0, const target_key *t)
         CHECK_FINITE(priority, "ring importance");
     }
     e->best_target[v] = t->vertex;
-    e->best[v] = (candidate){(float)fmin(priority, (double)FLT_MAX / 2), distance_of(e, v),
+    double largest = (double)FLT_MAX / 2; /* fmin(priority, largest), without a call */
+    e->best[v] = (candidate){(float)(priority <= largest ? priority : largest), distance_of(e, v),
                              by_importance ? e->importance[t->vertex] : 0.0, t->distance, v};
 }
 
@@ -1189,7 +1264,6 @@ struct worker_pool {
 
 static void count_candidates(engine *e, uint32_t range);
 static void write_keys(engine *e, uint32_t range);
-static void gather_candidates(engine *e, uint32_t range);
 static void judge_item(engine *e, uint32_t item, scratch *s);
 static void apply_item(engine *e, uint32_t item, scratch *s);
 
@@ -1212,9 +1286,6 @@ static void run_item(engine *e, vertex_step step, uint32_t i, scratch *s)
         break;
     case STEP_WRITE_KEYS:
         write_keys(e, i);
-        break;
-    case STEP_GATHER_CANDIDATES:
-        gather_candidates(e, i);
         break;
     case STEP_JUDGE:
         judge_item(e, i, s);
@@ -1413,19 +1484,36 @@ static void write_keys(engine *e, uint32_t range)
         }
 }
 
-/* The ranked candidates' records, from the sorted keys: list[i] of a range of the list. */
-static void gather_candidates(engine *e, uint32_t range)
+/* Sorts keys[0 .. count) by the full order of their candidates (compare_candidates on best[]),
+ * with spare[0 .. count) as room: a merge sort, as qsort takes no context. The order is total,
+ * so the result is the one any sort gives. */
+static void sort_ties(const engine *e, rank_key *keys, rank_key *spare, size_t count)
 {
-    size_t first = e->ranked * range / e->threads, end = e->ranked * (range + 1) / e->threads;
-    for (size_t i = first; i < end; i++)
-        e->list[i] = e->best[e->keys[i].vertex];
+    for (size_t width = 1; width < count; width *= 2) {
+        for (size_t low = 0; low < count; low += 2 * width) {
+            size_t middle = low + width < count ? low + width : count;
+            size_t high = low + 2 * width < count ? low + 2 * width : count;
+            size_t a = low, b = middle, k = low;
+            while (a < middle && b < high)
+                spare[k++] = compare_candidates(&e->best[keys[b].vertex],
+                                                &e->best[keys[a].vertex]) < 0
+                                 ? keys[b++]
+                                 : keys[a++];
+            while (a < middle)
+                spare[k++] = keys[a++];
+            while (b < high)
+                spare[k++] = keys[b++];
+        }
+        memcpy(keys, spare, sizeof(rank_key) * count);
+    }
 }
 
-/* Ranks the candidates into e->list (e->ranked of them): their keys (the cost's bits and the
+/* Ranks the candidates into e->keys (e->ranked of them): their keys (the cost's bits and the
  * vertex) listed in vertex order, a radix sort on the cost's bits (costs are not negative, so
- * their bits order as the costs do), stable, so equal costs stay in vertex order; the records
- * gathered in that order; then runs of equal cost sorted by the full order where the ties have
- * keys beyond the vertex. */
+ * their bits order as the costs do), stable, so equal costs stay in vertex order; then runs of
+ * equal cost sorted by the full order where the ties have keys beyond the vertex. The ranking
+ * is of keys alone: the judging reads a candidate's vertex and the taking its cost, both in its
+ * key, so the records are not gathered into the ranked order. */
 static void rank_candidates(engine *e, int full_ties)
 {
     uint32_t ranges = e->threads;
@@ -1457,16 +1545,15 @@ static void rank_candidates(engine *e, int full_ties)
             to[histogram[digit][bucket]++] = from[i];
         }
     }
-    run_on_pool(e, STEP_GATHER_CANDIDATES, ranges, 1);
     if (!full_ties)
         return;
-    candidate *list = e->list;
+    rank_key *keys = e->keys;
     for (size_t i = 0; i < count;) {
         size_t j = i + 1;
-        while (j < count && list[j].cost == list[i].cost)
+        while (j < count && key_cost(&keys[j]) == key_cost(&keys[i]))
             j++;
         if (j - i > 1)
-            qsort(&list[i], j - i, sizeof(candidate), compare_candidates);
+            sort_ties(e, &keys[i], &e->spare_keys[i], j - i);
         i = j;
     }
 }
@@ -1652,14 +1739,65 @@ static void take(engine *e, const judgement *j, scratch *s)
     apply_collapse(e, f0, j->v0, j->v1, e->history, s);
 }
 
+/* Judging and taking read at random vertices (the ranking is by cost, not by place): each
+ * collapse's reads wait on each other (a vertex's flags, then its adjacency, then its ring or
+ * triangles), and a step is too long for the processor to start the next item's reads by
+ * itself. The items ahead are known, so their first reads are asked for early: prefetches, which
+ * change no result. */
+
+/* For the candidate JUDGE_AHEAD items on: its target and v0's flags and adjacency; for the one
+ * half as far: v0's ring and v1's flags and adjacency (read by then, they cost no wait). */
+static void prefetch_judging(const engine *e, uint32_t item)
+{
+    if (item + JUDGE_AHEAD < e->chunk_size) {
+        uint32_t v0 = e->chunk[e->chunk_items[item + JUDGE_AHEAD]].vertex;
+        __builtin_prefetch(&e->best_target[v0]);
+        __builtin_prefetch(&e->flags[v0]);
+        __builtin_prefetch(&e->adjacency_start[v0]);
+        __builtin_prefetch(&e->ring_size[v0]);
+    }
+    if (item + JUDGE_AHEAD / 2 < e->chunk_size) {
+        uint32_t v0 = e->chunk[e->chunk_items[item + JUDGE_AHEAD / 2]].vertex;
+        uint32_t v1 = e->best_target[v0];
+        __builtin_prefetch(pass_ring_entries(e, v0));
+        __builtin_prefetch(&e->flags[v1]);
+        __builtin_prefetch(&e->adjacency_start[v1]);
+        __builtin_prefetch(&e->ring_size[v1]);
+    }
+}
+
+/* For the collapse PREFETCH_AHEAD accepted ones on: the quadrics it merges, v1's records it
+ * writes and v0's triangles it moves. */
+static void prefetch_taking(const engine *e, uint32_t item)
+{
+    if (item + PREFETCH_AHEAD >= e->accepted_count)
+        return;
+    const judgement *j = &e->judgements[e->accepted[item + PREFETCH_AHEAD]];
+    if (e->quadric) { /* 80 bytes each: two cache lines */
+        const double *q0 = &e->quadric[10 * (size_t)j->v0], *q1 = &e->quadric[10 * (size_t)j->v1];
+        __builtin_prefetch(q0);
+        __builtin_prefetch(q0 + 9);
+        __builtin_prefetch(q1, 1);
+        __builtin_prefetch(q1 + 9, 1);
+        __builtin_prefetch(&e->self_error[j->v1], 1);
+    }
+    __builtin_prefetch(&e->donor[j->v1], 1);
+    __builtin_prefetch(&e->history[j->v0], 1);
+    fan f0 = pass_fan(e, j->v0);
+    for (uint32_t i = 0; i < f0.count; i++)
+        __builtin_prefetch(corners(e, f0.triangle[i]), 1);
+}
+
 static void judge_item(engine *e, uint32_t item, scratch *s)
 {
+    prefetch_judging(e, item);
     uint32_t v0 = e->chunk[e->chunk_items[item]].vertex;
     judge(e, v0, e->best_target[v0], s, &e->judgements[item]);
 }
 
 static void apply_item(engine *e, uint32_t item, scratch *s)
 {
+    prefetch_taking(e, item);
     take(e, &e->judgements[e->accepted[item]], s);
 }
 
@@ -1695,7 +1833,7 @@ static void mark_writes(engine *e, const judgement *j, scratch *s)
         mark_written(e, r0.entry[i].vertex);
 }
 
-/* Takes the ranked candidates list[0 .. count) in order, greedily, in chunks of CHUNK
+/* Takes the ranked candidates keys[0 .. count) in order, greedily, in chunks of CHUNK
  * candidates whose judging and taking run on the pool's threads. A chunk's candidates are judged
  * side by side on the mesh as the chunk found it (judge). Then, in order, each is accepted as
  * judged, unless an earlier one accepted in the chunk wrote a vertex its verdict read: that one
@@ -1706,23 +1844,24 @@ static void mark_writes(engine *e, const judgement *j, scratch *s)
  * the same bytes on any number of them. Against the strict order, a deferred candidate may come
  * after costlier ones of its chunk (a relaxed order, as a relaxed priority queue's). Returns the
  * collapses taken. */
-static uint32_t take_in_chunks(engine *e, const candidate *list, size_t count, float cost_limit,
+static uint32_t take_in_chunks(engine *e, const rank_key *keys, size_t count, float cost_limit,
                                scratch *s)
 {
     uint32_t taken = 0, *items = e->chunk_items, deferred = 0;
     size_t next = 0;
     int stop = 0;
-    e->chunk = list;
+    e->chunk = keys;
     while (!stop && (deferred || next < count) && e->alive > e->o->target_vertices) {
         uint32_t n = deferred; /* the deferred ones are at the head already */
         while (n < CHUNK && next < count)
             items[n++] = (uint32_t)next++;
+        e->chunk_size = n;
         run_on_pool(e, STEP_JUDGE, n, JUDGE_BLOCK);
         uint32_t accepted = 0;
         deferred = 0;
         for (uint32_t i = 0; i < n; i++) {
             const judgement *j = &e->judgements[i];
-            if (list[items[i]].cost > cost_limit && taken > 0) {
+            if (key_cost(&keys[items[i]]) > cost_limit && taken > 0) {
                 stop = 1;
                 break;
             }
@@ -1742,6 +1881,7 @@ static uint32_t take_in_chunks(engine *e, const candidate *list, size_t count, f
                 break;
             }
         }
+        e->accepted_count = accepted;
         if (accepted)
             run_on_pool(e, STEP_APPLY, accepted, APPLY_BLOCK);
         for (size_t k = 0; k < e->written_count; k++)
@@ -1766,8 +1906,8 @@ static uint32_t run_pass(engine *e, scratch *s)
     rank_candidates(e, e->o->method == DECIMATE_IMPORTANCE || e->m->distance);
     if (!e->ranked)
         return 0;
-    float cost_limit = e->list[e->ranked / 4].cost * PASS_COST_FACTOR;
-    return take_in_chunks(e, e->list, e->ranked, cost_limit, s);
+    float cost_limit = key_cost(&e->keys[e->ranked / 4]) * PASS_COST_FACTOR;
+    return take_in_chunks(e, e->keys, e->ranked, cost_limit, s);
 }
 
 /* ---- setup ---- */
@@ -1791,7 +1931,6 @@ static void engine_free(engine *e)
     free(e->best_target);
     free(e->best);
     free(e->attribute_terms);
-    free(e->list);
     free(e->keys);
     free(e->spare_keys);
     free(e->judgements);
@@ -1905,10 +2044,10 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
 size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_method method)
 {
     /* flags, adjacency_start, ring_size, donor, best_target, best, importance, the
-     * ranking's keys (and their spare) and list, the quadric and its own error; a ring slot
-     * (its ring_entry); per triangle its place in the live list */
+     * ranking's keys (and their spare), the quadric and its own error; a ring slot (its
+     * ring_entry); per triangle its place in the live list */
     size_t per_vertex = 1 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
-                        2 * sizeof(rank_key) + sizeof(candidate) +
+                        2 * sizeof(rank_key) +
                         (method != DECIMATE_IMPORTANCE ? 11 * sizeof(double) : 0);
     size_t ring_slot = sizeof(ring_entry);
     /* per corner: the adjacency and a ring slot */
@@ -1927,7 +2066,6 @@ int collapse_run(collapse_mesh *m, const collapse_options *o, collapse_result *r
     result->vertices_before = e.alive;
     result->collapses = 0;
     result->passes = 0;
-    e.list = large_array(sizeof(candidate) * ((size_t)e.n + 1));
     e.keys = xmalloc(sizeof(rank_key) * ((size_t)e.n + 1));
     e.spare_keys = xmalloc(sizeof(rank_key) * ((size_t)e.n + 1));
     e.history = result->collapsed_into;

@@ -48,10 +48,10 @@
  * the least important neighbour. After a collapse v1 holds v0's quadric (or importance).
  *
  * Memory: collapse_memory() says it (per vertex: flags, the quadric and its own error, the
- * importance, the scores, the ranking's keys and list, the donor; per triangle corner: the
- * adjacency and a ring slot of 16 bytes; per triangle: its place in the live list), 320 bytes
- * per vertex of the dragon with the quadric methods, 232 with IMPORTANCE; COMBINED adds its
- * attribute quadrics per attribute set. The caller's arrays are used in place: the triangles and
+ * importance, the scores, the ranking's keys, the donor; per triangle corner: the adjacency and
+ * a ring slot of 16 bytes; per triangle: its place in the live list), 296 bytes per vertex of
+ * the dragon with the quadric methods, 208 with IMPORTANCE; COMBINED adds its attribute
+ * quadrics per attribute set. The caller's arrays are used in place: the triangles and
  * corner ids are rewritten, nothing else. */
 #ifndef IDMR_COLLAPSE_H
 #define IDMR_COLLAPSE_H
