@@ -171,14 +171,19 @@ scene_mesh *scene_add_mesh(scene *s, const char *name, const char *shape_type, c
     return m;
 }
 
-/* The placement carrying geometry placed by `first_to_world` to where `copy_to_world` places
- * it: copy_to_world × first_to_world^-1 (row-major 4x4). 0, or -1 when the first is singular. */
-static int placement_between(const double first_to_world[16], const double copy_to_world[16],
-                             xform *placement)
+/* The placement carrying the geometry of mesh `first` (a representative: placed by its
+ * instance_to_world) to where `copy_to_world` places the copy named `copy_name`:
+ * copy_to_world × first's instance_to_world^-1 (row-major 4x4). 0, or -1 with the error set
+ * when the first's transform is singular. */
+static int placement_from_first(const scene *s, size_t first, const char *copy_name,
+                                const double copy_to_world[16], xform *placement)
 {
-    xform first_world = xform_from_rows(first_to_world), first_object;
+    xform first_world = xform_from_rows(s->meshes[first].instance_to_world), first_object;
     if (xform_invert_affine(&first_world, &first_object))
-        return -1;
+        return error_set(IDMR_EXIT_INPUT,
+                         "mesh '%s': the transform of its shape's first instance is singular, "
+                         "so its copy '%s' cannot be placed from it",
+                         s->meshes[first].name, copy_name);
     xform copy_world = xform_from_rows(copy_to_world);
     *placement = xform_multiply(&copy_world, &first_object);
     return 0;
@@ -187,15 +192,11 @@ static int placement_between(const double first_to_world[16], const double copy_
 int scene_instance_placement(const scene *s, size_t m, double object_to_world[16])
 {
     xform placement = xform_identity();
-    if (scene_mesh_is_later_copy(s, m)) {
-        const scene_mesh *first = &s->meshes[s->meshes[m].instance_first];
-        if (placement_between(first->instance_to_world, s->meshes[m].instance_to_world,
-                              &placement))
-            return error_set(IDMR_EXIT_INPUT,
-                             "mesh '%s': the transform of its shape's first instance is "
-                             "singular, so its copy '%s' cannot be placed from it",
-                             first->name, s->meshes[m].name);
-    }
+    const scene_mesh *mesh = &s->meshes[m];
+    if (scene_mesh_is_later_copy(s, m) &&
+        placement_from_first(s, mesh->instance_first, mesh->name, mesh->instance_to_world,
+                             &placement))
+        return -1;
     memcpy(object_to_world, placement.m, sizeof placement.m);
     return 0;
 }
@@ -240,12 +241,8 @@ scene_mesh *scene_add_instance_copy(scene *s, size_t representative, const char 
                                     const double to_world[16])
 {
     xform placement;
-    if (placement_between(s->meshes[representative].instance_to_world, to_world, &placement)) {
-        error_set(IDMR_EXIT_INPUT, "mesh '%s': the transform of its shape's first instance is "
-                                   "singular, so its copy '%s' cannot be placed from it",
-                  s->meshes[representative].name, name);
+    if (placement_from_first(s, representative, name, to_world, &placement))
         return NULL;
-    }
     char *unique = unique_mesh_name(s, name && *name ? name : s->meshes[representative].name);
     s->meshes = grown(s->meshes, s->mesh_count, sizeof *s->meshes);
     size_t c = s->mesh_count++;

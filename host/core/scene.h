@@ -59,7 +59,7 @@ typedef struct scene_mesh {
     double object_to_world[16]; /* row-major: the transform the shape's points were given in */
     int source_flipped;         /* the loader reversed the winding the statement gives */
     /* A Mitsuba scene's copy of a shapegroup's shape placed by a <shape type="instance">
-     * (instances are flattened on load: io/mitsuba/mitsuba_shape.c): the file and line of the
+     * (io/mitsuba/mitsuba_shape.c): the file and line of the
      * instance element (xml_file and xml_line name the group's <shape>); NULL and 0 for any
      * other mesh. */
     char *instance_xml_file;

@@ -17,7 +17,7 @@
  *   mitsuba_sensor.c     <sensor> → camera
  *   mitsuba_emitter.c    <emitter> → light
  *   mitsuba_shape.c      <shape> → world-space mesh with its material and area light;
- *                        shapegroups and their instances (flattened into world-space copies)
+ *                        shapegroups and their instances (each group shape held once)
  *
  * Every function here that can fail returns -1 with the error set through mitsuba_fail() (or
  * error_set()/error_prefix()) and 0 on success, unless it says otherwise. Nodes of included

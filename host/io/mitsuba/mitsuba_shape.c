@@ -10,13 +10,14 @@
  * then moved as Mitsuba 3 moves an instance's geometry: points by the instance's to_world,
  * normals by its inverse transpose, and the winding flipped under a mirror, so that the surface
  * keeps its side (a mesh file under a mirroring to_world of its own does not: Mitsuba takes its
- * front from the world-space winding). Instances are flattened, as the pbrt-v4 reader
- * flattens ObjectInstance: each copy is a world-space mesh of its own, named "<instance id,
- * else group id>/<shape name>" (the scene numbers repeats: "G/leaf.2"), and remembers its
- * instance element (scene_mesh.instance_xml_file/line), its instance's to_world and the other
- * copies of its shape (scene_mesh.instanced: `idmr reduce` folds them back into one prototype,
- * reduce/reduce_instances.c). As in Mitsuba 3, a shapegroup may not hold a shapegroup or an
- * instance, nor a shape with an area emitter. */
+ * front from the world-space winding). Each group shape is held once (core/scene.h:
+ * instanced): the first instance's copy is read and placed so, and holds the geometry; every
+ * later instance's copy is a scene mesh without geometry of its own (scene_add_instance_copy),
+ * its triangles the first's, placed from it. Each copy is named "<instance id, else group
+ * id>/<shape name>" (the scene numbers repeats: "G/leaf.2") and remembers its instance element
+ * (scene_mesh.instance_xml_file/line) and its instance's to_world; `idmr reduce` reduces and
+ * writes the shape once (reduce/reduce_instances.c). As in Mitsuba 3, a shapegroup may not hold
+ * a shapegroup or an instance, nor a shape with an area emitter. */
 #include "io/mitsuba/mitsuba_loader.h"
 
 #include <errno.h>

@@ -1,4 +1,4 @@
-/* pbrt.h — pbrt-v4 scenes (.pbrt): the reader (a file in, a flattened world-space scene out) and
+/* pbrt.h — pbrt-v4 scenes (.pbrt): the reader (a file in, a world-space scene out) and
  * the writer of a reduced scene (the input text with reduced shapes swapped for PLY files).
  *
  * What is read (host/io/pbrt/pbrt_loader.h lists the files; README "pbrt-v4 scenes" says it for
@@ -8,9 +8,10 @@
  *               Transform, ConcatTransform, ReverseOrientation, WorldBegin (WorldEnd of v3 is
  *               accepted), Camera "perspective", Film (xresolution, yresolution),
  *               MakeNamedMaterial, NamedMaterial, Material, Texture, Shape, AreaLightSource,
- *               LightSource, ObjectBegin/End, ObjectInstance (instances flattened: each one
- *               becomes world-space meshes of its own). Statements for what idmr does not
- *               simulate (Integrator, Sampler, PixelFilter, ColorSpace, Option, media,
+ *               LightSource, ObjectBegin/End, ObjectInstance (an object's shapes held
+ *               once: later instances add copies without geometry, core/scene.h).
+ *               Statements for what idmr does not simulate (Integrator, Sampler,
+ *               PixelFilter, ColorSpace, Option, media,
  *               Attribute, ActiveTransform, TransformTimes, ...) are warned about once.
  *   materials   diffuse, coateddiffuse, conductor, coatedconductor, dielectric, thindielectric,
  *               diffusetransmission, interface, mix, mapped onto idmr's four kinds
