@@ -18,6 +18,7 @@
 #include "core/progress.h"
 #include "core/ranks.h"
 #include "device/bvh.h"
+#include "device/program.h"
 
 #define STOP_AFTER_CALM_ITERATIONS 3
 #define PER_MILLION_SAMPLES 1e6
@@ -601,6 +602,21 @@ int importance_memory(const device *d, const scene *s, uint64_t bvh_bytes,
 {
     sppm_pass pass = pass_on_core();
     return sppm_memory_of(d, s, bvh_bytes, &o->sppm, &pass, m);
+}
+
+int importance_build_program(device *d, const scene *s, const importance_options *o)
+{
+    char defines[128];
+    importance_defines(o->accumulate_importance, o->gamma > 0, o->shadow_weight > 0, defines,
+                       sizeof defines);
+    char *options = sppm_build_options(d, sppm_program_features(s, &o->sppm),
+                                       IDMR_SPPM_IMPORTANCE, defines);
+    cl_program program;
+    int status = device_build_program(d, "sppm.cl", options, &program);
+    free(options);
+    if (!status)
+        clReleaseProgram(program);
+    return status;
 }
 
 int importance_run(device *d, const scene *s, const bvh *b, const importance_options *o,

@@ -154,6 +154,13 @@ typedef struct importance_weights {
 
 importance_weights importance_weights_of(const importance_options *o);
 
+/* Builds the pass's program for scene s on device d, as a run would, and lets it go: the
+ * build (PoCL compiles a program it has not cached inside the process, with a passing peak of
+ * resident memory) then happens now, not in the middle of a run whose memory is planned
+ * (reduce/reduce_memory.c); the run's own build then comes from the cache. 0, or -1 with the
+ * error set (the build log). */
+int importance_build_program(device *d, const scene *s, const importance_options *o);
+
 /* The device memory a run of the pass on scene s allocates, with a BVH of bvh_bytes
  * (passes/sppm.h, sppm_memory_of). 0, or -1 with the error set. */
 int importance_memory(const device *d, const scene *s, uint64_t bvh_bytes,

@@ -148,12 +148,16 @@ char *sppm_build_options(const device *d, unsigned int features, int pass,
  * are the summary's, and the build seconds of all of them are added up. --generic builds every
  * material and light kind in, but IDMR_FEATURE_INSTANCES is the scene's either way: it says
  * which BVH the scene was uploaded with (device/bvh.h), not what the program can shade. */
+unsigned int sppm_program_features(const scene *s, const sppm_options *o)
+{
+    return (o->generic ? IDMR_FEATURES_ALL : s->features & IDMR_FEATURES_ALL) |
+           (s->features & IDMR_FEATURE_INSTANCES);
+}
+
 static int build_program(sppm *core, const sppm_pass *pass)
 {
     double start = monotonic_seconds();
-    unsigned int features =
-        (core->options->generic ? IDMR_FEATURES_ALL : core->scene->features & IDMR_FEATURES_ALL) |
-        (core->scene->features & IDMR_FEATURE_INSTANCES);
+    unsigned int features = sppm_program_features(core->scene, core->options);
     char *options = sppm_build_options(core->dev, features, pass->pass, pass->defines);
     int status =
         device_build_program(core->dev, "sppm.cl", options, &core->program) ||

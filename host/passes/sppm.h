@@ -92,6 +92,10 @@ unsigned int sppm_default_photons(const device *d);
 char *sppm_build_options(const device *d, unsigned int features, int pass,
                          const char *pass_defines);
 
+/* The feature bits a pass's program is built for on scene s: the scene's materials and lights
+ * (every kind with o->generic) and its IDMR_FEATURE_INSTANCES bit. */
+unsigned int sppm_program_features(const scene *s, const sppm_options *o);
+
 /* r_1² (above) from the `count` hit points of the first iteration, for a hit-point image
  * `width` pixels wide (a tiny positive value when nothing has extent), and r_{n+1}² from r_n²
  * after iteration n (counted from 0). */
