@@ -63,6 +63,8 @@ typedef struct worker_pool worker_pool;
  * chunk's candidates). Each item's step writes only that item's records, so the items may go to
  * any thread and the result does not depend on which. */
 typedef enum vertex_step {
+    STEP_COUNT_CORNERS, /* per range of vertices (build_adjacency) */
+    STEP_FILL_CORNERS,
     STEP_FIRST_RINGS, /* per vertex: its ring, then its quadric (engine_init) */
     STEP_RINGS,       /* per vertex */
     STEP_SCORES,
@@ -353,35 +355,86 @@ static inline __attribute__((always_inline)) double quadric_error(const double *
  * way, the corners of every triangle a collapse of the last pass touched are marked stale: a
  * vertex's score depends on its triangles, its neighbours' triangles, quadrics and importance,
  * so the touched vertices and their neighbours are scored again and the rest keep their scores
- * (the scoring step clears the marks: settle_vertex). */
+ * (the scoring step clears the marks: settle_vertex). The counting and the filling run on the
+ * pool, one range of vertices each (count_corners, fill_corners): each range sweeps the whole
+ * list and writes only its own vertices' counts, marks and slots, so each vertex's triangles
+ * come in list order on any number of threads. */
+static void run_on_pool(engine *e, vertex_step step, uint32_t items, uint32_t block);
+
 static void build_adjacency(engine *e)
 {
     uint32_t *start = e->adjacency_start, live = 0;
-    memset(start, 0, sizeof(uint32_t) * ((size_t)e->n + 1));
     for (uint32_t i = 0; i < e->live_count; i++) {
         uint32_t t = e->live[i];
-        const uint32_t *c = corners(e, t);
-        if (c[0] == COLLAPSE_NONE)
-            continue;
-        e->live[live++] = t;
-        int touched = (e->flags[c[0]] | e->flags[c[1]] | e->flags[c[2]]) & FLAG_TOUCHED;
-        for (int k = 0; k < 3; k++) {
-            start[c[k] + 1]++;
-            if (touched)
-                e->flags[c[k]] |= FLAG_STALE;
-        }
+        if (corners(e, t)[0] != COLLAPSE_NONE)
+            e->live[live++] = t;
     }
     e->live_count = live;
+    start[0] = 0;
+    run_on_pool(e, STEP_COUNT_CORNERS, e->threads, 1);
     for (uint32_t v = 0; v < e->n; v++)
         start[v + 1] += start[v];
-    for (uint32_t i = 0; i < live; i++) {
-        const uint32_t *c = corners(e, e->live[i]);
-        for (int k = 0; k < 3; k++)
-            e->adjacency[start[c[k]]++] = e->live[i];
-    }
+    run_on_pool(e, STEP_FILL_CORNERS, e->threads, 1);
     for (uint32_t v = e->n; v > 0; v--) /* each start now holds the next vertex's */
         start[v] = start[v - 1];
     start[0] = 0;
+}
+
+/* The vertices of range `range` of as many as the pool has threads: [*first, *end). */
+static void vertex_range(const engine *e, uint32_t range, uint32_t *first, uint32_t *end)
+{
+    uint64_t ranges = e->threads;
+    *first = (uint32_t)((uint64_t)e->n * range / ranges);
+    *end = (uint32_t)((uint64_t)e->n * (range + 1) / ranges);
+}
+
+/* A vertex's flags while the ranges mark their own vertices stale side by side: a range reads
+ * the touched bit of other ranges' vertices, whose stale bit their range may be setting. */
+static uint8_t shared_flags(const engine *e, uint32_t v)
+{
+    return __atomic_load_n(&e->flags[v], __ATOMIC_RELAXED);
+}
+
+/* build_adjacency's count for one range of vertices: into adjacency_start[v + 1], the live
+ * triangles at v; the corners of touched triangles marked stale. */
+static void count_corners(engine *e, uint32_t range)
+{
+    uint32_t first, end, *start = e->adjacency_start;
+    vertex_range(e, range, &first, &end);
+    memset(&start[first + 1], 0, sizeof(uint32_t) * (end - first));
+    for (uint32_t i = 0; i < e->live_count; i++) {
+        const uint32_t *c = corners(e, e->live[i]);
+        int mine[3], any = 0;
+        for (int k = 0; k < 3; k++)
+            any |= mine[k] = c[k] - first < end - first;
+        if (!any)
+            continue;
+        int touched =
+            (shared_flags(e, c[0]) | shared_flags(e, c[1]) | shared_flags(e, c[2])) & FLAG_TOUCHED;
+        for (int k = 0; k < 3; k++) {
+            if (!mine[k])
+                continue;
+            start[c[k] + 1]++;
+            if (touched)
+                __atomic_store_n(&e->flags[c[k]], (uint8_t)(e->flags[c[k]] | FLAG_STALE),
+                                 __ATOMIC_RELAXED);
+        }
+    }
+}
+
+/* build_adjacency's fill for one range of vertices (adjacency_start[v] the next free slot of
+ * v): each live triangle, in list order, into the slots of its corners in the range. */
+static void fill_corners(engine *e, uint32_t range)
+{
+    uint32_t first, end, *start = e->adjacency_start;
+    vertex_range(e, range, &first, &end);
+    for (uint32_t i = 0; i < e->live_count; i++) {
+        uint32_t t = e->live[i];
+        const uint32_t *c = corners(e, t);
+        for (int k = 0; k < 3; k++)
+            if (c[k] - first < end - first)
+                e->adjacency[start[c[k]]++] = t;
+    }
 }
 
 /* v's triangles in this pass's adjacency: all live and current while v is untouched. */
@@ -1270,6 +1323,12 @@ static void apply_item(engine *e, uint32_t item, scratch *s);
 static void run_item(engine *e, vertex_step step, uint32_t i, scratch *s)
 {
     switch (step) {
+    case STEP_COUNT_CORNERS:
+        count_corners(e, i);
+        break;
+    case STEP_FILL_CORNERS:
+        fill_corners(e, i);
+        break;
     case STEP_RINGS:
         build_ring(e, i);
         break;
@@ -1449,14 +1508,6 @@ static int compare_candidates(const void *a, const void *b)
     if (x->target_distance != y->target_distance)
         return x->target_distance < y->target_distance ? -1 : 1;
     return x->vertex < y->vertex ? -1 : x->vertex > y->vertex;
-}
-
-/* The vertices of range `range` of as many as the pool has threads: [*first, *end). */
-static void vertex_range(const engine *e, uint32_t range, uint32_t *first, uint32_t *end)
-{
-    uint64_t ranges = e->threads;
-    *first = (uint32_t)((uint64_t)e->n * range / ranges);
-    *end = (uint32_t)((uint64_t)e->n * (range + 1) / ranges);
 }
 
 /* Lists the candidates of the vertices of one range (vertex_range) as ranking keys, in vertex
