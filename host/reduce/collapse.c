@@ -108,7 +108,10 @@ typedef struct scratch {
     size_t fan_capacity[SLOTS], ring_capacity[SLOTS];
     uint32_t *ids, *mapped; /* the removed vertex's distinct corner ids and their images */
     size_t ids_capacity;
+    uint32_t *ids_before; /* a kept vertex's distinct corner ids before a collapse */
+    size_t ids_before_capacity;
     struct target_key *targets;
+    struct edge_sides *sides; /* per target: the sides of the edge to it (ring_sides) */
     size_t targets_capacity;
 } scratch;
 
@@ -276,7 +279,9 @@ static void scratch_free(scratch *s)
     }
     free(s->ids);
     free(s->mapped);
+    free(s->ids_before);
     free(s->targets);
+    free(s->sides);
 }
 
 static const float *position(const engine *e, uint32_t v) { return &e->m->positions[3 * (size_t)v]; }
@@ -676,6 +681,30 @@ static edge_sides sides_of(const engine *e, fan f0, uint32_t v0, uint32_t v1)
         }
     }
     return sides;
+}
+
+/* sides_of() for every edge of v0 at once: sides[i] for the edge to r0's vertex i (r0 v0's ring,
+ * built from the fan f0), in one sweep of the fan; as sides_of, the last triangle of the fan on
+ * each side counts. */
+static void ring_sides(const engine *e, fan f0, uint32_t v0, const ring *r0, edge_sides *sides)
+{
+    for (uint32_t i = 0; i < r0->size; i++)
+        sides[i] = (edge_sides){COLLAPSE_NONE, COLLAPSE_NONE, COLLAPSE_NONE, COLLAPSE_NONE};
+    for (uint32_t i = 0; i < f0.count; i++) {
+        uint32_t t = f0.triangle[i];
+        const uint32_t *c = corners(e, t);
+        int k = corner_at(e, t, v0);
+        uint32_t next = c[(k + 1) % 3], previous = c[(k + 2) % 3];
+        uint32_t left = ring_find(r0, next), right = ring_find(r0, previous);
+        if (left < r0->size) {
+            sides[left].fl = t;
+            sides[left].vl = previous;
+        }
+        if (right < r0->size && previous != next) {
+            sides[right].fr = t;
+            sides[right].vr = next;
+        }
+    }
 }
 
 static mapping mapping_of(const engine *e, uint32_t v0, uint32_t v1, const edge_sides *sides)
@@ -1145,17 +1174,18 @@ static int collapse_legal(const engine *e, uint32_t v0, uint32_t v1, fan f0, con
     return 1;
 }
 
-/* The cost of v0 -> v1 for QUADRIC and COMBINED. */
+/* The cost of v0 -> v1 for QUADRIC and COMBINED. With attribute quadrics: `sides` are the
+ * edge's (sides_of) and s->ids[0 .. count) v0's distinct corner ids (ids_of), which every
+ * target of v0 shares. */
 static inline __attribute__((always_inline)) double
-collapse_cost(const engine *e, fan f0, uint32_t v0, uint32_t v1, scratch *s)
+collapse_cost(const engine *e, uint32_t v0, uint32_t v1, const edge_sides *sides, size_t count,
+              scratch *s)
 {
     const float *p1 = position(e, v1);
     /* (Q0 + Q1)(p1) = Q0(p1) + Q1(p1), the second v1's own error, kept per pass */
     double error = quadric_error(&e->quadric[10 * (size_t)v0], p1) + e->self_error[v1];
     if (e->attributes_weighted) {
-        edge_sides sides = sides_of(e, f0, v0, v1);
-        mapping map = mapping_of(e, v0, v1, &sides);
-        size_t count = ids_of(e, f0, v0, s);
+        mapping map = mapping_of(e, v0, v1, sides);
         for (size_t k = 0; k < count; k++) {
             s->mapped[k] = mapped_id(&map, s->ids[k]);
             error += attribute_error(e, s->ids[k], p1, s->mapped[k]);
@@ -1192,13 +1222,20 @@ static size_t target_keys(const engine *e, uint32_t v, fan f0, const ring *r0, s
     if (s->targets_capacity < r0->size) {
         s->targets_capacity = 2 * (size_t)r0->size;
         s->targets = xrealloc(s->targets, sizeof(target_key) * s->targets_capacity);
+        s->sides = xrealloc(s->sides, sizeof(edge_sides) * s->targets_capacity);
     }
     int by_importance = e->o->method == DECIMATE_IMPORTANCE;
+    size_t ids = 0;
+    if (!by_importance && e->attributes_weighted) {
+        ring_sides(e, f0, v, r0, s->sides);
+        ids = ids_of(e, f0, v, s);
+    }
     for (uint32_t i = 0; i < r0->size; i++) {
         uint32_t u = r0->entry[i].vertex;
         s->targets[i].vertex = u;
         s->targets[i].distance = distance_of(e, u);
-        s->targets[i].key = by_importance ? e->importance[u] : collapse_cost(e, f0, v, u, s);
+        s->targets[i].key =
+            by_importance ? e->importance[u] : collapse_cost(e, v, u, &s->sides[i], ids, s);
     }
     return r0->size;
 }
@@ -1656,6 +1693,39 @@ static uint64_t current_wedges(const engine *e, uint32_t v, scratch *s)
     return count ? count : 1;
 }
 
+/* current_wedges(v) and current_ids(v, without_a, without_b, s, 0) in one sweep of v's
+ * triangles: returns the wedges; the ids without those two triangles into s->ids, their count
+ * into *after. */
+static uint64_t current_wedges_and_ids(const engine *e, uint32_t v, uint32_t without_a,
+                                       uint32_t without_b, scratch *s, size_t *after)
+{
+    uint32_t sources[2] = {v, donor_of(e, v)};
+    size_t before = 0, kept = 0;
+    for (int k = 0; k < 2; k++) {
+        if (sources[k] == COLLAPSE_NONE)
+            continue;
+        fan f = pass_fan(e, sources[k]);
+        for (uint32_t i = 0; i < f.count; i++) {
+            uint32_t t = f.triangle[i];
+            if (corners(e, t)[0] == COLLAPSE_NONE || corner_at(e, t, v) == 3)
+                continue;
+            uint32_t id = id_at(e, t, v);
+            size_t j = 0;
+            while (j < before && s->ids_before[j] != id)
+                j++;
+            if (j == before) {
+                reserve((void **)&s->ids_before, &s->ids_before_capacity, before + 1,
+                        sizeof(uint32_t));
+                s->ids_before[before++] = id;
+            }
+            if (t != without_a && t != without_b)
+                kept = add_id(s, kept, id);
+        }
+    }
+    *after = kept;
+    return before ? before : 1;
+}
+
 /* The vertices (counted once per wedge) that taking v0 -> v1 would remove, the mesh as it is:
  * v0's wedges, and those that v1, vl and vr lose with the two triangles of the edge (v0's
  * corners go into wedges v1 has). Without attributes, 1. */
@@ -1670,8 +1740,8 @@ static uint64_t collapse_removes(const engine *e, fan f0, uint32_t v0, uint32_t 
     for (int k = 0; k < 3; k++) {
         if (kept[k] == COLLAPSE_NONE)
             continue;
-        uint64_t before = current_wedges(e, kept[k], s);
-        size_t after = current_ids(e, kept[k], sides.fl, sides.fr, s, 0);
+        size_t after;
+        uint64_t before = current_wedges_and_ids(e, kept[k], sides.fl, sides.fr, s, &after);
         if (k == 0) /* v1 also gets v0's corners, in the wedges they map to */
             for (uint32_t i = 0; i < f0.count; i++) {
                 uint32_t t = f0.triangle[i];
@@ -2178,7 +2248,9 @@ int collapse_evaluate(const collapse_mesh *mesh, const collapse_options *options
             for (uint32_t k = 0; k < r0.size; k++)
                 *cost += e.importance[r0.entry[k].vertex];
         } else {
-            *cost = collapse_cost(&e, f0, v0, v1, &s);
+            edge_sides sides = sides_of(&e, f0, v0, v1);
+            *cost = collapse_cost(&e, v0, v1, &sides, e.m->corner_ids ? ids_of(&e, f0, v0, &s) : 0,
+                                  &s);
         }
     }
     scratch_free(&s);
