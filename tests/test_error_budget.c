@@ -17,8 +17,10 @@
  * gives D = 1 and a huge E the floor; --max-error-relative scales by the mean radiance; bad
  * options are refused; and on a real pair, the correlated estimate agrees with the independent
  * one and has the smaller standard error; and a glass ball (a caustic, noisy check renders)
- * within E by the search and by an independent render. Small films and photon counts: a few
- * seconds each. */
+ * within E by the search and by an independent render. --refine (reduce_refine.c): each round
+ * kept exactly by its rule and the written scene the chosen round's; a warning where round 0's
+ * check renders see the change too faintly, and none where they see it. Small films and photon
+ * counts: a few seconds each. */
 #include <math.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -26,6 +28,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include <setjmp.h>
 
@@ -851,6 +854,65 @@ static void test_refine_keeps_the_better(void **state)
     remove_tree(dir);
 }
 
+/* reduction_run() with what it prints on stderr into *text (freed by the caller). */
+static void reduction_run_capturing(reduction *r, scene *s, const reduce_options *o, char **text)
+{
+    char path[] = "/tmp/test_error_budget_stderr_XXXXXX";
+    int fd = mkstemp(path);
+    assert_true(fd >= 0);
+    fflush(stderr);
+    int saved = dup(STDERR_FILENO);
+    dup2(fd, STDERR_FILENO);
+    reduction_run(r, s, o);
+    fflush(stderr);
+    dup2(saved, STDERR_FILENO);
+    close(saved);
+    FILE *file = fdopen(fd, "r");
+    fseek(file, 0, SEEK_END);
+    long length = ftell(file);
+    fseek(file, 0, SEEK_SET);
+    *text = calloc((size_t)(length > 0 ? length : 0) + 1, 1);
+    size_t got = fread(*text, 1, (size_t)(length > 0 ? length : 0), file);
+    (*text)[got] = '\0';
+    fclose(file);
+    unlink(path);
+}
+
+/* --refine warns where round 0's check renders see the change too faintly to refine by (its
+ * standard error above half its error: the sphere kept at D = 0.9, whose change is within the
+ * check renders' noise), and not where they see it (D = 0.05, the change some 20 standard
+ * errors). */
+static void test_refine_warns_when_faint(void **state)
+{
+    char dir[64], path[128];
+    write_sphere_scene(dir, sizeof dir, path, sizeof path);
+    scene *s = test_load_scene(path);
+    const double targets[2] = {0.9, 0.05};
+    for (int k = 0; k < 2; k++) {
+        reduce_options o;
+        small_options(&o);
+        o.target = targets[k];
+        o.refine = 1;
+        o.error.iterations = 4;
+        o.error.photons = 20000;
+        o.error.resolution = 0.25;
+        reduction r;
+        char *text;
+        reduction_run_capturing(&r, s, &o, &text);
+        const cJSON *round0 = cJSON_GetArrayItem(object(object(r.report, "refine"), "rounds"), 0);
+        double e = number(round0, "error"), se = number(round0, "standard_error");
+        int faint = !(se <= 0.5 * e);
+        print_message("  D = %g: round 0 %g \u00b1 %g, %s\n", targets[k], e, se,
+                      faint ? "faint" : "seen");
+        assert_int_equal(faint, k == 0);
+        assert_int_equal(strstr(text, "too faintly to tell a better round") != NULL, faint);
+        free(text);
+        reduction_free(&r);
+    }
+    scene_free(s);
+    remove_tree(dir);
+}
+
 static void test_refine_refused(void **state)
 {
     scene *s = test_load_scene(CORNELL);
@@ -895,6 +957,7 @@ int main(void)
         cmocka_unit_test(test_max_error_refused),
         cmocka_unit_test(test_correlated_real_pair),
         cmocka_unit_test(test_refine_keeps_the_better),
+        cmocka_unit_test(test_refine_warns_when_faint),
         cmocka_unit_test(test_refine_refused),
     };
     return DEVICE_TEST_MAIN("error_budget", host_tests, tests, NULL, NULL);

@@ -37,9 +37,10 @@
 #include "reduce/refine_weights.h"
 
 /* The first round's λ. At 1 (half the budget following the error importance, which is measured
- * only where the check renders saw a change) the living room's error doubled and the three
- * dragons' rose at D = 0.01-0.1; from 0.25 both fell or held, and the dragon box, which gained
- * most at 1, still gained (measured with 64 check iterations of 100,000 photon paths). */
+ * only where the check renders saw a change) the living room's check error doubled (D = 0.03)
+ * and the three dragons' rose (D = 0.01); at 0.25 the living room's fell, the three dragons'
+ * rose least, and the dragon box, which gained most at 1, still gained (README, "Refining a
+ * reduction by its measured change"). */
 #define REFINE_MIX 0.25
 /* Round 0's check renders see the change too faintly to refine by when its standard error is
  * above this share of the error: a warning names the options that sharpen them. */
@@ -212,11 +213,10 @@ int reduce_refine(reduce_state *st)
         rf->round_count = 1;
         report_round(st, 0);
         if (!(round->standard_error <= REFINE_FAINT_SHARE * round->error))
-            fprintf(stderr,
-                    "idmr: refine: warning: the check renders measure the change as %.4g \u00b1 "
-                    "%.2g, too faintly to tell a better round from noise; more "
-                    "--check-iterations and --check-photons sharpen them\n",
-                    round->error, round->standard_error);
+            warn("refine: the check renders measure the change as %.4g \u00b1 %.2g, too "
+                 "faintly to tell a better round from noise; more --check-iterations and "
+                 "--check-photons sharpen them",
+                 round->error, round->standard_error);
     }
     size_t n = st->importance.triangle_count;
     c.best_light = xmalloc((n + 1) * sizeof *c.best_light);
