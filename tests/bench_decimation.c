@@ -17,7 +17,16 @@
  * decimation of the living room's meshes (meshes on threads):
  *
  *   decimation-parallel: scene=living-room meshes=<n> one=<s> two=<s> speedup=<one/two>
+ *
+ * And the dragon as most scenes give their meshes, with shading normals (here computed, area
+ * weighted, from its triangles): `combined` keeps them per corner and weighs them in its cost
+ * (decimate.h, "Attributes"), the path every mesh with normals or texture coordinates takes,
+ * against the same method on the bare dragon in the same run (best of ATTRIBUTE_ROUNDS):
+ *
+ *   decimation-attributes: mesh=dragon normals=computed method=combined one=<s> two=<s>
+ *                          speedup=<one/two> bare_one=<s> attributes/bare=<one/bare_one>
  */
+#include <math.h>
 #include <meshoptimizer.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -31,6 +40,8 @@
  * meshoptimizer once, and each figure is the best of its rounds, so that a spell of noise on
  * the machine costs one round of every figure rather than every round of one. */
 #define ROUNDS 5
+/* Rounds of the attribute path's figures (each about 4 s on one thread). */
+#define ATTRIBUTE_ROUNDS 2
 
 static double best_of(double a, double b) { return a < b ? a : b; }
 
@@ -49,6 +60,51 @@ static double time_engine(decimate_input in, decimate_method method, unsigned in
     *vertices = out.mesh.vertex_count;
     decimate_output_free(&out);
     return seconds;
+}
+
+/* The decimation-attributes line: `in` (the bare dragon) with area-weighted vertex normals. */
+static void bench_attributes(decimate_input in, const mesh_data *mesh)
+{
+    float *normals = calloc(3 * (size_t)mesh->vertex_count + 1, sizeof *normals);
+    for (uint32_t t = 0; t < mesh->triangle_count; t++) {
+        const uint32_t *c = &mesh->indices[3 * (size_t)t];
+        const float *p[3];
+        for (int k = 0; k < 3; k++)
+            p[k] = &mesh->positions[3 * (size_t)c[k]];
+        float e1[3], e2[3];
+        for (int k = 0; k < 3; k++) {
+            e1[k] = p[1][k] - p[0][k];
+            e2[k] = p[2][k] - p[0][k];
+        }
+        const float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                            e1[0] * e2[1] - e1[1] * e2[0]};
+        for (int k = 0; k < 3; k++)
+            for (int j = 0; j < 3; j++)
+                normals[3 * (size_t)c[k] + j] += n[j];
+    }
+    for (uint32_t v = 0; v < mesh->vertex_count; v++) {
+        float *n = &normals[3 * (size_t)v];
+        float length = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (length > 0)
+            for (int j = 0; j < 3; j++)
+                n[j] /= length;
+        else
+            n[2] = 1.0f; /* a vertex of no area: any unit normal */
+    }
+    decimate_input with = in;
+    with.normals = normals;
+    double seconds[2] = {1e30, 1e30}, bare = 1e30;
+    uint32_t vertices;
+    for (int round = 0; round < ATTRIBUTE_ROUNDS; round++) {
+        for (int t = 0; t < 2; t++)
+            seconds[t] = best_of(seconds[t], time_engine(with, DECIMATE_COMBINED, t + 1, &vertices));
+        bare = best_of(bare, time_engine(in, DECIMATE_COMBINED, 1, &vertices));
+    }
+    printf("decimation-attributes: mesh=dragon normals=computed method=combined one=%.3f two=%.3f "
+           "speedup=%.2f bare_one=%.3f attributes/bare=%.2f\n",
+           seconds[0], seconds[1], seconds[0] / seconds[1], bare, seconds[0] / bare);
+    fflush(stdout);
+    free(normals);
 }
 
 static void bench_dragon(void)
@@ -122,6 +178,7 @@ static void bench_dragon(void)
                mesh.vertex_count);
     fflush(stdout);
     free(destination);
+    bench_attributes(in, &mesh);
     free(importance);
     mesh_data_free(&mesh);
 }
