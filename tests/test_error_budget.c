@@ -145,8 +145,8 @@ static void test_search_bounds(void **state)
     assert_true(r.steps[r.chosen].target == 0.003);
     for (size_t k = 0; k < r.count; k++)
         assert_true(r.steps[k].passes);
-    /* 0.25, then down to the floor: 0.25 / 64 (the longest jump the line through D = 1 and 0.25
-     * asks for), 0.003 */
+    /* 0.25, then down to the floor: 0.25 / 16 (the longest jump on the line through D = 1 and
+     * 0.25), then the floor (0.25 / 16 / 64 is below it) */
     assert_int_equal(c.calls, 3);
     error_search_result_free(&r);
     /* nothing to decimate (floor 1): D = 1 without a measure */
@@ -197,10 +197,22 @@ static void test_search_interpolates(void **state)
     error_search_result_free(&r);
 }
 
+/* The most bracketing steps from D = 1 to `floor`: the first goes down by ERROR_SEARCH_BRACKET,
+ * each later one at least (nearly) a step, doubled after each, or its longest jump. */
+static unsigned int bracket_steps_at_most(double step, double floor)
+{
+    double left = -log(floor) - log(ERROR_SEARCH_BRACKET), least = 0.95 * log1p(step);
+    unsigned int count = 1;
+    for (; left > 0; count++, least *= 2)
+        left -= fmin(least, log(count == 1 ? ERROR_SEARCH_FIRST_JUMP : ERROR_SEARCH_LONGEST_JUMP));
+    return count;
+}
+
 /* Whatever the curve (powers, noise that makes it rise as D shrinks in places, a jump the line
  * cannot see), the result is the smallest measured pass with a measured failure within a step
- * below it, and the narrowing stays within twice a bisection's steps (the safeguard promises
- * three times: a halving at least every three steps; these curves need no more than twice). */
+ * below it, the bracket's steps are bounded, and the narrowing stays within twice a bisection's
+ * steps (the safeguard promises three times: a halving at least every three steps; these curves
+ * need no more than twice). */
 static void test_search_any_curve(void **state)
 {
     const double steps[] = {0.1, 0.02, 0.5};
@@ -215,9 +227,10 @@ static void test_search_any_curve(void **state)
         assert_int_equal(error_search_run(max_error, step, 1e-6, measure_power, &c, &r), 0);
         if (r.target < 1.0 && r.target > 1e-6)
             assert_smallest_within_step(&r, max_error, step);
-        /* bracketing from 1 to 1e-6 by at least 4 (10 steps), then twice the bisection of one
-         * factor of 64 to the step */
-        unsigned int bound = 10 + 2 * (unsigned int)ceil(log2(log(64.0) / log1p(step)) + 1);
+        /* bracketing from 1 to 1e-6, then twice the bisection of its longest jump to the step */
+        unsigned int bound =
+            bracket_steps_at_most(step, 1e-6) +
+            2 * (unsigned int)ceil(log2(log(ERROR_SEARCH_LONGEST_JUMP) / log1p(step)) + 1);
         if (c.calls > bound)
             fail_msg("curve %u: %u steps, more than %u", k, c.calls, bound);
         most = c.calls > most ? c.calls : most;
@@ -531,6 +544,7 @@ static void test_max_error_sphere(void **state)
             coarsest = d;
             coarsest_error = e;
         }
+        print_message("  D %.4g: %.4g \u00b1 %.2g%s\n", d, e, se, within ? ", within" : "");
         assert_true(number(item, "seconds") >= 0);
         /* where a measured step's seconds went: its decimation and the renders' iterations */
         const cJSON *stages = object(item, "seconds_by_stage");

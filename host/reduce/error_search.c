@@ -69,20 +69,27 @@ int error_search_run(double max_error, double step, double floor, error_search_m
     size_t hi_index = 0, lo_index = 0, previous_hi_index = 0;
     double log_step = log1p(step);
     error_search_step *s;
+    double inside = 0.95 * log_step; /* a step, less rounding's room to land just outside it */
     /* Bracket: down while the steps pass, to the floor at most. The first step goes down by
-     * ERROR_SEARCH_BRACKET; later ones to just above where the line through the last two
-     * passing steps crosses E, at least ERROR_SEARCH_BRACKET and at most
-     * ERROR_SEARCH_LONGEST_JUMP down. */
+     * ERROR_SEARCH_BRACKET; later ones to half a step below where the line through the last two
+     * passing steps crosses E (a failure there brackets the crossing closely; ERROR_SEARCH_BRACKET
+     * where the line does not fall), at most ERROR_SEARCH_FIRST_JUMP down on the line from D = 1
+     * and ERROR_SEARCH_LONGEST_JUMP on the others, and at least `least_jump` (in log D): a step
+     * at first, doubled by each pass (which the line did not foresee), so that a line that keeps
+     * stopping short gallops. */
+    double least_jump = inside;
     while (floor < hi && out->count < ERROR_SEARCH_MAX_STEPS) {
-        double target = hi / ERROR_SEARCH_BRACKET;
+        double jump = log(ERROR_SEARCH_BRACKET); /* down from hi, in log D */
         if (hi_index > 0) {
             double crossing = crossing_log_target(&out->steps[previous_hi_index],
                                                   &out->steps[hi_index], max_error);
             if (isfinite(crossing))
-                target = fmax(hi / ERROR_SEARCH_LONGEST_JUMP,
-                              fmin(target, exp(crossing + 0.5 * log_step)));
+                jump = log(hi) - (crossing - 0.5 * log_step);
+            double longest =
+                previous_hi_index == 0 ? ERROR_SEARCH_FIRST_JUMP : ERROR_SEARCH_LONGEST_JUMP;
+            jump = fmin(log(longest), fmax(least_jump, jump));
         }
-        target = fmax(floor, target);
+        double target = fmax(floor, hi * exp(-jump));
         if (measure_at(target, max_error, measure, context, out, &s))
             goto failed;
         if (!s->passes) {
@@ -90,6 +97,8 @@ int error_search_run(double max_error, double step, double floor, error_search_m
             lo_index = out->count - 1;
             break;
         }
+        if (hi_index > 0)
+            least_jump *= 2;
         previous_hi_index = hi_index;
         hi = target;
         hi_index = out->count - 1;
@@ -99,7 +108,6 @@ int error_search_run(double max_error, double step, double floor, error_search_m
      * kept (nearly) a step inside each end so that every measure narrows the bracket by about
      * one; a bisection wherever that line says nothing, the bracket is within two steps, or the
      * last two steps did not halve it. */
-    double inside = 0.95 * log_step; /* a step, less rounding's room to land just outside it */
     double width_before[2] = {INFINITY, INFINITY}; /* the bracket one and two steps ago */
     while (lo > 0 && hi / lo > 1.0 + step && out->count < ERROR_SEARCH_MAX_STEPS) {
         double width = log(hi / lo), log_lo = log(lo);

@@ -13,10 +13,17 @@
  * (log D, u) where one end is D = 1 (u = 0):
  *
  *   bracket   from hi = 1 down while the steps pass, to the floor at most: the first step to
- *             hi / ERROR_SEARCH_BRACKET, each later one to half a step above where the line
- *             through the last two passing steps (D = 1 among them) crosses E, going down at
- *             least ERROR_SEARCH_BRACKET and at most ERROR_SEARCH_LONGEST_JUMP times. The first
- *             step that fails is lo. A floor that passes ends the search there (a huge E).
+ *             hi / ERROR_SEARCH_BRACKET, each later one to half a step below where the line
+ *             through the last two passing steps (D = 1 among them) crosses E, so that a failure
+ *             there brackets the crossing within about a step; at most ERROR_SEARCH_FIRST_JUMP
+ *             down on the line from D = 1 (linear in u, which a power law outruns: it aims too
+ *             deep) and ERROR_SEARCH_LONGEST_JUMP on the others, and at least a step down,
+ *             doubled (in log D) by each pass, so that a line that keeps stopping short gallops
+ *             (ERROR_SEARCH_BRACKET down, within those bounds, where the line does not fall). A
+ *             deep step costs more than a shallow one (the decimation takes more collapses, and
+ *             meshes meeting their floors start rounds that plan again), so the bracket does not
+ *             go deeper than the line asks. The first step that fails is lo. A floor that passes
+ *             ends the search there (a huge E).
  *   narrow    on log D between lo and hi: half a step above where the line through lo and hi
  *             crosses E (a pass there, then a failure a step below, end the search), kept
  *             (nearly) a step inside both ends; the geometric mean sqrt(lo · hi) instead where
@@ -37,7 +44,9 @@
 
 /* How far each bracketing step goes down in D. */
 #define ERROR_SEARCH_BRACKET 4.0
-/* The most an extrapolation goes down from the smallest passing D in one bracketing step. */
+/* The most a bracketing step goes down from the smallest passing D: on the line from D = 1
+ * (linear in u, which a power law outruns, so the line overshoots), and on the others. */
+#define ERROR_SEARCH_FIRST_JUMP 16.0
 #define ERROR_SEARCH_LONGEST_JUMP 64.0
 /* The most steps measured; bracketing and bisection within 10 % from 1 to 1e-9 take 31. */
 #define ERROR_SEARCH_MAX_STEPS 64

@@ -67,3 +67,10 @@ void reduce_budget_forget(reduce_state *st)
     st->budget = NULL;
     budget_plan_free(&st->plan);
 }
+
+void reduce_budget_swap(reduce_state *st, reduce_held_decimation *held)
+{
+    REDUCE_SWAP(st->input, held->input);
+    REDUCE_SWAP(st->budget, held->budget);
+    REDUCE_SWAP(st->plan, held->plan);
+}

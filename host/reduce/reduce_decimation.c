@@ -600,3 +600,42 @@ int reduce_decimation(reduce_state *st)
     st->seconds_decimation += monotonic_seconds() - start;
     return status;
 }
+
+void reduce_decimation_swap(reduce_state *st, reduce_held_decimation *held)
+{
+    REDUCE_SWAP(st->output, held->output);
+    REDUCE_SWAP(st->not_reduced, held->not_reduced);
+    REDUCE_SWAP(st->compensation_rounds, held->compensation_rounds);
+    REDUCE_SWAP(st->locks_relaxed, held->locks_relaxed);
+    REDUCE_SWAP(st->seams_freed, held->seams_freed);
+    REDUCE_SWAP(st->vertices_after, held->vertices_after);
+}
+
+/* Exchanges the budget's and the decimation's results in the state with those held. */
+static void swap_held(reduce_state *st, reduce_held_decimation *held)
+{
+    reduce_budget_swap(st, held);
+    reduce_decimation_swap(st, held);
+}
+
+void reduce_held_decimation_free(reduce_state *st, reduce_held_decimation *held)
+{
+    swap_held(st, held);
+    reduce_decimation_forget(st);
+    reduce_budget_forget(st);
+    swap_held(st, held);
+    held->vertices_after = 0;
+}
+
+void reduce_hold_decimation(reduce_state *st, reduce_held_decimation *held)
+{
+    reduce_held_decimation_free(st, held);
+    swap_held(st, held);
+}
+
+void reduce_restore_decimation(reduce_state *st, reduce_held_decimation *held)
+{
+    reduce_decimation_forget(st);
+    reduce_budget_forget(st);
+    swap_held(st, held);
+}

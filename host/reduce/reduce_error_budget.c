@@ -40,8 +40,9 @@ static const unsigned int CHECK_SEEDS[2] = {1, 2};
 typedef struct search_context {
     reduce_state *st;
     float *original[2];    /* A1, A2 */
-    double last_target;    /* the D st->output holds (0: none yet) */
     double seconds_decimation; /* the last decimation's (budget and decimation) */
+    reduce_held_decimation smallest_passing; /* the plan and decimation of the smallest D */
+    double smallest_passing_target;          /* measured to pass (0: none yet) */
 } search_context;
 
 /* The check render's options for seed index k. */
@@ -107,10 +108,8 @@ static int decimate_at(search_context *c, double target)
     reduce_decimation_forget(st);
     reduce_budget_forget(st);
     st->target = target;
-    c->last_target = 0;
     if (reduce_plan_budget(st) || reduce_decimation(st))
         return -1;
-    c->last_target = target;
     c->seconds_decimation = st->seconds_budget + st->seconds_decimation - before;
     return 0;
 }
@@ -147,8 +146,15 @@ static int measure(double target, error_search_step *step, void *context)
     free(images[0]);
     free(images[1]);
     step->seconds = monotonic_seconds() - start;
+    int passes = step->error + step->standard_error <= st->error_search.max_error;
+    /* The search's answer is its smallest passing D: that one's plan and decimation are kept
+     * (deterministic: what decimating at that D again would give), not made again at the end. */
+    if (!status && passes &&
+        (!c->smallest_passing_target || target < c->smallest_passing_target)) {
+        reduce_hold_decimation(st, &c->smallest_passing);
+        c->smallest_passing_target = target;
+    }
     if (!status && st->options->importance.sppm.progress) {
-        int passes = step->error + step->standard_error <= st->error_search.max_error;
         fprintf(stderr, "idmr: max-error: D=%.4g (%llu vertices) error=%.4g \u00b1 %.2g (%s E "
                         "%.4g) %.1f s\n",
                 target, (unsigned long long)step->vertices, step->error, step->standard_error,
@@ -227,14 +233,18 @@ int reduce_error_budget(reduce_state *st)
         status = error_search_run(e->max_error, o->error.step, e->floor, measure, &c,
                                   &e->result);
     }
-    /* The state decimated at the D found (again, unless the last step measured it): what the
-     * write stage writes, as `reduce --target D` would. */
-    double final_seconds = c.seconds_decimation;
-    if (!status && c.last_target != e->result.target) {
-        double before = monotonic_seconds();
+    /* The state decimated at the D found, what the write stage writes as `reduce --target D`
+     * would: the kept decimation of the smallest passing step, or (D = 1, no step passed) a
+     * decimation made now. */
+    double final_start = monotonic_seconds();
+    if (!status && c.smallest_passing_target == e->result.target) {
+        reduce_restore_decimation(st, &c.smallest_passing);
+        st->target = e->result.target;
+    } else if (!status) {
         status = decimate_at(&c, e->result.target);
-        final_seconds = monotonic_seconds() - before;
     }
+    double final_seconds = monotonic_seconds() - final_start;
+    reduce_held_decimation_free(st, &c.smallest_passing);
     if (!status) {
         e->result.steps[0].vertices = st->plan.total_before;
         e->noise_decided = noise_decided(&e->result, e->max_error);

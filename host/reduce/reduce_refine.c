@@ -20,9 +20,10 @@
  * (error + standard error < the best's error: the check renders' noise alone does not choose)
  * is kept, and the next round takes its weights from its change; a round that is not kept
  * halves λ and tries again from the best (its error importance reused). After N rounds (or once
- * no pixel's change stands above the noise) the best round is left decimated, so the result's
- * measured error is never above round 0's. The error importance goes into the light importance sums (report.json's importance
- * outputs show the mixed importance). */
+ * no pixel's change stands above the noise) the best round's decimation, kept aside while later
+ * rounds decimate (reduce_held_decimation), is put back, so the result's measured error is never
+ * above round 0's. The error importance goes into the light importance sums (report.json's
+ * importance outputs show the mixed importance). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -58,6 +59,7 @@ typedef struct refine_context {
     double *best_light;  /* the light importance sums the best round was decimated from */
     importance_result error_importance; /* of the best round's change */
     int has_error_importance;
+    reduce_held_decimation best_decimation; /* the best round's plan and decimation */
 } refine_context;
 
 /* The state's reduction rendered with both seeds and measured against the originals into
@@ -208,6 +210,7 @@ int reduce_refine(reduce_state *st)
     if (!status) {
         double round_start = monotonic_seconds();
         status = measure(&c, round, c.best);
+        reduce_hold_decimation(st, &c.best_decimation);
         round->kept = 1;
         round->seconds = monotonic_seconds() - round_start;
         rf->round_count = 1;
@@ -223,7 +226,7 @@ int reduce_refine(reduce_state *st)
     if (n)
         memcpy(c.best_light, st->importance.light, n * sizeof *c.best_light);
     double best_error = round->error, mix = REFINE_MIX;
-    unsigned int decimated = 0; /* the round the state holds the decimation of */
+    unsigned int decimated = 0; /* the round whose importance the state holds */
     int need_weights = 1;
     for (unsigned int k = 1; !status && k <= o->refine; k++) {
         double round_start = monotonic_seconds();
@@ -257,6 +260,7 @@ int reduce_refine(reduce_state *st)
             c.best[0] = images[0];
             c.best[1] = images[1];
             images[0] = images[1] = NULL;
+            reduce_hold_decimation(st, &c.best_decimation);
             need_weights = 1;
         } else {
             mix *= 0.5;
@@ -266,11 +270,13 @@ int reduce_refine(reduce_state *st)
         if (!status)
             report_round(st, k);
     }
-    /* The best round left decimated (the decimation is deterministic: the same as measured). */
-    if (!status && decimated != rf->chosen) {
-        mix_importance(&c, 0.0);
-        status = decimate_again(st);
+    /* The best round's decimation back in the state, with the importance it was made from. */
+    if (!status) {
+        reduce_restore_decimation(st, &c.best_decimation);
+        if (decimated != rf->chosen)
+            mix_importance(&c, 0.0);
     }
+    reduce_held_decimation_free(st, &c.best_decimation);
     if (!status && o->importance.sppm.progress) {
         const reduce_refine_round *chosen = rf->rounds + rf->chosen;
         fprintf(stderr, "idmr: refine: round %u chosen: error %.4g \u00b1 %.2g against %.4g "

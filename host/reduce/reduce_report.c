@@ -325,10 +325,11 @@ static void add_error_budget(cJSON *root, const reduce_state *st)
     cJSON_AddNumberToObject(seconds, "final_decimation", e->seconds_final_decimation);
     cJSON_AddNumberToObject(seconds, "search", e->seconds_search);
     /* What `reduce --target D` at the D found takes: the importance pass, one plan and
-     * decimation, the writing. */
+     * decimation (the chosen step's; at D = 1, measured by no step, the final one), the
+     * writing. */
+    double decimation = e->result.chosen ? chosen->stages.decimation : e->seconds_final_decimation;
     cJSON_AddNumberToObject(seconds, "plain_reduce",
-                            st->seconds_importance + e->seconds_final_decimation +
-                                st->seconds_write);
+                            st->seconds_importance + decimation + st->seconds_write);
 }
 
 /* The peaks of the run: the most device memory a pass allocated, and the process's resident

@@ -105,7 +105,8 @@ typedef struct reduce_error_state {
                                   originals' renders (freed after them) */
     int has_original_bvh;
     double seconds_search;     /* the whole stage: originals, steps and the final decimation */
-    double seconds_final_decimation; /* the decimation at the D chosen (budget included) */
+    double seconds_final_decimation; /* putting the chosen D's decimation back (or making it,
+                                        where no step kept one: D = 1) */
 } reduce_error_state;
 
 /* One round of --refine (reduce_refine.c; report.json: refine.rounds). Round 0 is the reduction
@@ -350,6 +351,30 @@ int reduce_plan_budget(reduce_state *st);
 /* Frees what the budget stage left (inputs, entries, plan), so that it can run again. */
 void reduce_budget_forget(reduce_state *st);
 
+/* Exchanges two lvalues of one type. */
+#define REDUCE_SWAP(a, b)                                                                          \
+    do {                                                                                           \
+        __typeof__(a) swapped_value = (a);                                                         \
+        (a) = (b);                                                                                 \
+        (b) = swapped_value;                                                                       \
+    } while (0)
+
+/* A plan and its decimation held aside: what the budget and decimation stages leave, moved out of
+ * the state whole, so that a stage which plans and decimates at several D (the error budget's
+ * search, the refinement's rounds) keeps its best instead of decimating it again. Zeroed: holds
+ * nothing. */
+typedef struct reduce_held_decimation {
+    decimate_input *input; /* the budget stage's */
+    budget_mesh *budget;
+    budget_plan plan;
+    decimate_output *output; /* the decimation stage's */
+    char **not_reduced;
+    unsigned int compensation_rounds, locks_relaxed, seams_freed;
+    uint64_t vertices_after;
+} reduce_held_decimation;
+/* Exchanges the budget stage's results in the state with those in `held`. */
+void reduce_budget_swap(reduce_state *st, reduce_held_decimation *held);
+
 /* ---- decimation (reduce_decimation.c) ---- */
 
 /* Decimates every mesh m flagged in `selected` from inputs[m] to targets[m], in parallel
@@ -387,6 +412,16 @@ int reduce_decimation(reduce_state *st);
 decimate_output *reduce_decimation_take_output(reduce_state *st);
 /* Frees what the decimation stage left (outputs, reasons, counts), so that it can run again. */
 void reduce_decimation_forget(reduce_state *st);
+/* Exchanges the decimation stage's results in the state with those in `held`. */
+void reduce_decimation_swap(reduce_state *st, reduce_held_decimation *held);
+/* Moves the state's plan and decimation into `held` (what it held freed first); the state then
+ * holds none. */
+void reduce_hold_decimation(reduce_state *st, reduce_held_decimation *held);
+/* Puts the held plan and decimation back into the state (what the state held freed first);
+ * `held` then holds none. */
+void reduce_restore_decimation(reduce_state *st, reduce_held_decimation *held);
+/* Frees what `held` holds. */
+void reduce_held_decimation_free(reduce_state *st, reduce_held_decimation *held);
 
 /* ---- error budget (reduce_error_budget.c) ---- */
 
