@@ -2,8 +2,7 @@
  * application over flat arrays.
  *
  * State, per vertex: flags (locked by the caller, removed, touched or an end of a collapse taken
- * in this pass, to be scored again, written by a collapse accepted in this chunk, its best
- * collapse not yet checked against the rules, to be scored with the rules), the plane
+ * in this pass, to be scored again, written by a collapse accepted in this chunk), the plane
  * quadric (10 doubles: the upper triangle of A, then b, then c, for p'Ap + 2b'p + c) and its
  * error at the vertex itself, the importance, the best collapse the scoring found (target, cost,
  * tie keys) and the donor (the vertex that went into it in this pass). Per triangle: its three
@@ -42,8 +41,6 @@ enum {
     FLAG_STALE = 8,   /* its score must be computed again (it or a neighbour was touched) */
     FLAG_TAKEN = 16,  /* an end of a collapse taken in this pass */
     FLAG_WRITTEN = 32, /* taking a collapse accepted in this chunk writes it (take_in_chunks) */
-    FLAG_UNCHECKED = 64, /* its best collapse is its cheapest, the rules not yet applied */
-    FLAG_CHECK_FIRST = 128, /* its cheapest collapse broke a rule: scored with them next time */
 };
 
 #define BOUNDARY_WEIGHT 10.0 /* COMBINED: an open edge's plane, per length² (decimate_modules) */
@@ -196,8 +193,6 @@ typedef struct engine {
     double min_cos, boundary_tolerance;
     double importance_floor; /* COMBINED (importance_floor()) */
     uint64_t alive;
-    uint32_t rechecks; /* candidates of this pass whose cheapest collapse broke a rule */
-    float cost_limit;  /* the pass stops at a candidate ranked above it (run_pass) */
     worker_pool *pool;
     unsigned int threads; /* the pool's, the caller's included */
     /* the ranking (rank_candidates): per range of vertices the offset of its candidates; the
@@ -1270,34 +1265,9 @@ static int removable(const engine *e, uint32_t v, const ring *r0, int *boundary0
            ring_simple(r0, boundary0);
 }
 
-/* v's targets s->targets[0 .. count) (target_keys') sorted by the method's order, and the first
- * after the cheapest that v may collapse into by the rules (current: on the mesh as it is; f0,
- * r0 and boundary0 v's fan, ring and boundary flag), or count. */
-static size_t legal_after_cheapest(const engine *e, uint32_t v, fan f0, const ring *r0,
-                                   int boundary0, int current, size_t count, scratch *s)
-{
-    for (size_t i = 1; i < count; i++) { /* an insertion sort: a ring is short */
-        target_key key = s->targets[i];
-        size_t j = i;
-        while (j > 0 && compare_targets(&key, &s->targets[j - 1]) < 0) {
-            s->targets[j] = s->targets[j - 1];
-            j--;
-        }
-        s->targets[j] = key;
-    }
-    const char *rule;
-    for (size_t i = 1; i < count; i++) /* targets[0] is the cheapest */
-        if (collapse_legal(e, v, s->targets[i].vertex, f0, r0, boundary0, current, s, &rule))
-            return i;
-    return count;
-}
-
-/* Scores v into best[v] and best_target[v] (COLLAPSE_NONE: none): with the cost methods its
- * cheapest target, unchecked (FLAG_UNCHECKED: the judging applies the rules), unless a judging
- * found its cheapest collapse breaking a rule (FLAG_CHECK_FIRST); otherwise, and always with
- * the importance method (whose ranking breaks ties by the target, so it must know the legal
- * one), its best legal collapse: the cheapest target if legal, as it is for most vertices,
- * otherwise the targets sorted and tried in order. */
+/* Scores v: its best legal collapse into best[v] and best_target[v] (COLLAPSE_NONE: none). The
+ * cheapest target (by the method's order) is tried first, as it is legal for most vertices;
+ * otherwise the targets are sorted and tried in order. */
 static void score_vertex(engine *e, uint32_t v, scratch *s)
 {
     e->best_target[v] = COLLAPSE_NONE;
@@ -1313,19 +1283,24 @@ static void score_vertex(engine *e, uint32_t v, scratch *s)
             cheapest = i;
     const char *rule;
     uint32_t preferred = s->targets[cheapest].vertex;
-    if (e->o->method != DECIMATE_IMPORTANCE && !(e->flags[v] & FLAG_CHECK_FIRST)) {
-        set_best(e, v, &r0, &s->targets[cheapest]);
-        e->flags[v] |= FLAG_UNCHECKED;
-        return;
-    }
-    e->flags[v] &= (uint8_t)~(FLAG_CHECK_FIRST | FLAG_UNCHECKED);
     if (collapse_legal(e, v, preferred, f0, &r0, boundary0, 0, s, &rule)) {
         set_best(e, v, &r0, &s->targets[cheapest]);
         return;
     }
-    size_t legal = legal_after_cheapest(e, v, f0, &r0, boundary0, 0, count, s);
-    if (legal < count)
-        set_best(e, v, &r0, &s->targets[legal]);
+    for (size_t i = 1; i < count; i++) { /* an insertion sort: a ring is short */
+        target_key key = s->targets[i];
+        size_t j = i;
+        while (j > 0 && compare_targets(&key, &s->targets[j - 1]) < 0) {
+            s->targets[j] = s->targets[j - 1];
+            j--;
+        }
+        s->targets[j] = key;
+    }
+    for (size_t i = 1; i < count; i++) /* targets[0] is the preferred one */
+        if (collapse_legal(e, v, s->targets[i].vertex, f0, &r0, boundary0, 0, s, &rule)) {
+            set_best(e, v, &r0, &s->targets[i]);
+            return;
+        }
 }
 
 /* The scoring step's work on v at the start of a pass: scored again where the last pass made it
@@ -1337,7 +1312,7 @@ static void settle_vertex(engine *e, uint32_t v, scratch *s)
         e->best_target[v] = COLLAPSE_NONE;
     else if (flags & FLAG_STALE)
         score_vertex(e, v, s);
-    e->flags[v] &= (uint8_t) ~(FLAG_STALE | FLAG_TOUCHED | FLAG_TAKEN);
+    e->flags[v] = flags & (uint8_t) ~(FLAG_STALE | FLAG_TOUCHED | FLAG_TAKEN);
 }
 
 /* ---- the per-vertex steps, in parallel ---- */
@@ -1843,10 +1818,9 @@ static int neighbourhood_touched(const engine *e, const judgement *j)
 }
 
 /* Judges v0 -> v1 on the mesh as it is, as the pass's greedy order would when it comes to it:
- * skipped where an end was taken in this pass; legal as scored where it was scored with the
- * rules and no collapse taken touched its neighbourhood; otherwise judged by the rules, on the
- * rings gathered anew where touched (the cost stands: v0 and v1 received nothing, so their
- * quadrics are as scored). */
+ * skipped where an end was taken in this pass; legal as scored where no collapse taken touched
+ * its neighbourhood; otherwise judged again on the rings gathered anew (the cost stands: v0 and
+ * v1 received nothing, so their quadrics are as scored). */
 static void judge(const engine *e, uint32_t v0, uint32_t v1, scratch *s, judgement *j)
 {
     j->v0 = v0, j->v1 = v1, j->vl = j->vr = COLLAPSE_NONE;
@@ -1862,29 +1836,12 @@ static void judge(const engine *e, uint32_t v0, uint32_t v1, scratch *s, judgeme
     if (slot == r0.size)
         return; /* no longer neighbours */
     j->vl = r0.entry[slot].left, j->vr = r0.entry[slot].right;
-    int unchecked = (e->flags[v0] & FLAG_UNCHECKED) != 0;
-    if (unchecked || neighbourhood_touched(e, j)) {
+    if (neighbourhood_touched(e, j)) {
         const char *rule;
         int boundary0;
-        if (!ring_simple(&r0, &boundary0) || r0.size <= 2)
+        if (!ring_simple(&r0, &boundary0) || r0.size <= 2 ||
+            !collapse_legal(e, v0, v1, f0, &r0, boundary0, 1, s, &rule))
             return;
-        if (!collapse_legal(e, v0, v1, f0, &r0, boundary0, 1, s, &rule)) {
-            /* an unchecked cheapest collapse that breaks a rule, v0 untouched (its targets and
-             * their order as scored): its best legal one instead, as scoring with the rules
-             * would have found, where that costs no more than the pass takes (ranked by the
-             * cheapest's cost, it comes earlier than its own would put it: a relaxed order, as
-             * a deferred candidate's) */
-            if (!unchecked || (e->flags[v0] & FLAG_TOUCHED))
-                return;
-            size_t count = target_keys(e, v0, f0, &r0, s);
-            size_t legal = legal_after_cheapest(e, v0, f0, &r0, boundary0, 1, count, s);
-            if (legal == count || !(s->targets[legal].key <= (double)e->cost_limit) ||
-                (e->flags[s->targets[legal].vertex] & FLAG_TAKEN))
-                return; /* (a vertex receives at most once in a pass) */
-            v1 = j->v1 = s->targets[legal].vertex;
-            slot = ring_find(&r0, v1);
-            j->vl = r0.entry[slot].left, j->vr = r0.entry[slot].right;
-        }
     }
     j->verdict = VERDICT_LEGAL;
     j->removes = collapse_removes(e, f0, v0, v1, s);
@@ -2034,15 +1991,8 @@ static uint32_t take_in_chunks(engine *e, const rank_key *keys, size_t count, fl
                 e->deferred[deferred++] = items[i];
                 continue;
             }
-            if (j->verdict != VERDICT_LEGAL) {
-                /* an unchecked cheapest collapse that breaks a rule: v0 is scored with the
-                 * rules in the next pass (its other targets may be legal) */
-                if (j->verdict == VERDICT_ILLEGAL && (e->flags[j->v0] & FLAG_UNCHECKED)) {
-                    e->flags[j->v0] |= FLAG_CHECK_FIRST | FLAG_STALE;
-                    e->rechecks++;
-                }
+            if (j->verdict != VERDICT_LEGAL)
                 continue;
-            }
             e->accepted[accepted++] = i;
             mark_writes(e, j, s);
             e->alive = e->alive > j->removes ? e->alive - j->removes : 0;
@@ -2077,8 +2027,8 @@ static uint32_t run_pass(engine *e, scratch *s)
     rank_candidates(e, e->o->method == DECIMATE_IMPORTANCE || e->m->distance);
     if (!e->ranked)
         return 0;
-    e->cost_limit = key_cost(&e->keys[e->ranked / 4]) * PASS_COST_FACTOR;
-    return take_in_chunks(e, e->keys, e->ranked, e->cost_limit, s);
+    float cost_limit = key_cost(&e->keys[e->ranked / 4]) * PASS_COST_FACTOR;
+    return take_in_chunks(e, e->keys, e->ranked, cost_limit, s);
 }
 
 /* ---- setup ---- */
@@ -2247,9 +2197,8 @@ int collapse_run(collapse_mesh *m, const collapse_options *o, collapse_result *r
     scratch s;
     memset(&s, 0, sizeof s);
     while (e.alive > o->target_vertices) {
-        e.rechecks = 0;
         uint32_t taken = run_pass(&e, &s);
-        if (!taken && !e.rechecks)
+        if (!taken)
             break;
         result->collapses += taken;
         result->passes++;

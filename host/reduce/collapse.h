@@ -4,21 +4,16 @@
  *
  * One pass:
  *   1. adjacency   per vertex, its live triangles (a counting sort of the triangle list)
- *   2. score       every free vertex picks its cheapest collapse (cost, then ties) into a
- *                  neighbour, the rules not yet applied (most cheapest collapses are legal, and
- *                  most candidates are never reached in their pass: the rules run when one is
- *                  judged); a vertex whose cheapest collapse a judging found breaking a rule is
- *                  scored with the rules next time: its best legal collapse, trying its targets
- *                  in order of cost. In parallel, each vertex on its own, so the result does not
- *                  depend on the thread count
+ *   2. score       every free vertex picks its best legal collapse (cost, then ties) into a
+ *                  neighbour; in parallel, each vertex on its own, so the result does not depend
+ *                  on the thread count
  *   3. rank        the candidates sorted by cost (ties broken by a total order, so the order is
  *                  the same on any run)
  *   4. apply       in that order, greedily, in chunks of 1,024 candidates: the chunk's candidates
  *                  are judged side by side on the mesh as the chunk found it (skipped where an end
- *                  was already taken in this pass; legal as scored where it was scored with the
- *                  rules and no collapse taken has touched the triangles of v0, v1, vl or vr;
- *                  judged by the rules otherwise, on rings gathered anew where touched); then, in
- *                  order, each is accepted as judged unless a
+ *                  was already taken in this pass; legal as scored where no collapse taken has
+ *                  touched the triangles of v0, v1, vl or vr; judged again on their rings
+ *                  gathered anew otherwise); then, in order, each is accepted as judged unless a
  *                  collapse accepted earlier in the chunk wrote a vertex its verdict read (v0,
  *                  v1, vl, vr): that one moves to the head of the next chunk and is judged again.
  *                  The accepted collapses write disjoint triangles and vertices and are taken
@@ -31,9 +26,7 @@
  *                  expensive one, as the reference's heap would not). The target only stops
  *                  passes, it does not shape them: reducing to one vertex fewer takes the same
  *                  collapses and one more.
- * Passes repeat until the target is met or no vertex has a legal collapse (a pass that took
- * nothing but found cheapest collapses breaking rules is followed by one that scores those
- * vertices with the rules).
+ * Passes repeat until the target is met or no vertex has a legal collapse.
  *
  * The rules (each is collapse_legal's, on the current mesh; v0 is removed into its neighbour v1;
  * fl, fr the triangles on the edge with vl, vr their third vertices):
