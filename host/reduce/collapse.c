@@ -1663,39 +1663,29 @@ static size_t add_id(scratch *s, size_t count, uint32_t id)
     return count + 1;
 }
 
-/* Adds the corner ids at v among its current triangles (its pass-start ones and its donor's),
- * but triangles without_a and without_b, to s->ids[0 .. count); returns the new count. */
-static size_t current_ids(const engine *e, uint32_t v, uint32_t without_a, uint32_t without_b,
-                          scratch *s, size_t count)
+/* v's wedge count now: its distinct corner ids among its current triangles (its pass-start ones
+ * and its donor's), into s->ids; 1 without attributes (or without triangles). */
+static uint64_t current_wedges(const engine *e, uint32_t v, scratch *s)
 {
+    if (!e->m->corner_ids)
+        return 1;
     uint32_t sources[2] = {v, donor_of(e, v)};
+    size_t count = 0;
     for (int k = 0; k < 2; k++) {
         if (sources[k] == COLLAPSE_NONE)
             continue;
         fan f = pass_fan(e, sources[k]);
         for (uint32_t i = 0; i < f.count; i++) {
             uint32_t t = f.triangle[i];
-            if (corners(e, t)[0] == COLLAPSE_NONE || corner_at(e, t, v) == 3 ||
-                t == without_a || t == without_b)
-                continue;
-            count = add_id(s, count, id_at(e, t, v));
+            if (corners(e, t)[0] != COLLAPSE_NONE && corner_at(e, t, v) != 3)
+                count = add_id(s, count, id_at(e, t, v));
         }
     }
-    return count;
-}
-
-/* v's wedge count now: 1 without attributes (or without triangles). */
-static uint64_t current_wedges(const engine *e, uint32_t v, scratch *s)
-{
-    if (!e->m->corner_ids)
-        return 1;
-    size_t count = current_ids(e, v, COLLAPSE_NONE, COLLAPSE_NONE, s, 0);
     return count ? count : 1;
 }
 
-/* current_wedges(v) and current_ids(v, without_a, without_b, s, 0) in one sweep of v's
- * triangles: returns the wedges; the ids without those two triangles into s->ids, their count
- * into *after. */
+/* current_wedges(v), and v's distinct corner ids without triangles without_a and without_b
+ * (into s->ids, their count into *after), in one sweep of v's triangles. */
 static uint64_t current_wedges_and_ids(const engine *e, uint32_t v, uint32_t without_a,
                                        uint32_t without_b, scratch *s, size_t *after)
 {
