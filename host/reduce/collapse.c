@@ -2,7 +2,8 @@
  * application over flat arrays.
  *
  * State, per vertex: flags (locked by the caller, removed, touched or an end of a collapse taken
- * in this pass, to be scored again, written by a collapse accepted in this chunk), the plane
+ * in this pass, to be scored again, written by a collapse accepted in this chunk, its candidate
+ * not yet checked against the rules, moved when checked, or with no legal collapse), the plane
  * quadric (10 doubles: the upper triangle of A, then b, then c, for p'Ap + 2b'p + c) and its
  * error at the vertex itself, the importance, the best collapse the scoring found (target, cost,
  * tie keys) and the donor (the vertex that went into it in this pass). Per triangle: its three
@@ -18,9 +19,10 @@
  * most once in a pass, as an end of a taken collapse is not taken again.
  *
  * Threads: one pool per run (worker_pool) takes the steps (vertex_step): the per-vertex rings,
- * quadrics and scores, the ranking's listing by ranges, and the chunks' judging and taking
- * (take_in_chunks); each writes only its own vertex's, range's or collapse's records, so the
- * result is the same on any number of threads. */
+ * quadrics, scores and checks (check_ranking), the ranking's listing by ranges, and the chunks'
+ * judging and taking (take_in_chunks); each writes only its own vertex's, range's or collapse's
+ * records (and a check its thread's list of moved candidates, whose order does not matter), so
+ * the result is the same on any number of threads. */
 #include "reduce/collapse.h"
 
 #include <float.h>
@@ -41,7 +43,13 @@ enum {
     FLAG_STALE = 8,   /* its score must be computed again (it or a neighbour was touched) */
     FLAG_TAKEN = 16,  /* an end of a collapse taken in this pass */
     FLAG_WRITTEN = 32, /* taking a collapse accepted in this chunk writes it (take_in_chunks) */
+    FLAG_UNCHECKED = 64, /* its candidate is its cheapest collapse, the rules not yet applied */
+    FLAG_MOVED = 128, /* checked, its candidate moved: its ranking key is stale (check_ranking) */
+    FLAG_NO_LEGAL = 256, /* scored: it has targets, but no collapse into one is legal */
 };
+
+/* A vertex's flags (FLAG_...). */
+typedef uint16_t vertex_flags;
 
 #define BOUNDARY_WEIGHT 10.0 /* COMBINED: an open edge's plane, per length² (decimate_modules) */
 #define FLOOR_SHARE 0.01     /* COMBINED: the importance floor, a share of the mean */
@@ -70,6 +78,7 @@ typedef enum vertex_step {
     STEP_SCORES,
     STEP_COUNT_CANDIDATES, /* per range of vertices (rank_candidates) */
     STEP_WRITE_KEYS,
+    STEP_CHECK_CANDIDATES, /* per vertex: its candidate checked where due (check_ranking) */
     STEP_JUDGE, /* per candidate of a chunk (take_in_chunks) */
     STEP_APPLY
 } vertex_step;
@@ -113,6 +122,8 @@ typedef struct scratch {
     struct target_key *targets;
     struct edge_sides *sides; /* per target: the sides of the edge to it (ring_sides) */
     size_t targets_capacity;
+    struct rank_key *moved; /* the keys of the candidates that moved in a check (check_vertex) */
+    size_t moved_count, moved_capacity;
 } scratch;
 
 /* One candidate target of a vertex, for ordering them. */
@@ -170,7 +181,7 @@ typedef struct engine {
     collapse_mesh *m;
     const collapse_options *o;
     uint32_t n, t;
-    uint8_t *flags;
+    vertex_flags *flags;
     uint32_t *adjacency_start, *adjacency;
     uint32_t *live, live_count; /* the triangles live at the last adjacency, in order */
     /* the rings of this pass: v's from slot adjacency_start[v] + v on (room for one neighbour
@@ -198,16 +209,24 @@ typedef struct engine {
     /* the ranking (rank_candidates): per range of vertices the offset of its candidates; the
      * keys sorted, `ranked` of them (and their spare) */
     uint32_t range_offset[MAX_THREADS + 1];
+    uint32_t range_no_legal[MAX_THREADS]; /* per range: its vertices with no legal collapse */
+    size_t no_legal;                      /* theirs summed: ranked at no cost */
     rank_key *keys, *spare_keys;
     size_t ranked;
     /* taking collapses in chunks (take_in_chunks) */
-    const rank_key *chunk;          /* the ranked candidates of the pass */
-    uint32_t *chunk_items;          /* the chunk: positions in it, deferred ones first */
+    rank_key *chunk;                /* the chunk's candidates, in ranking order */
     uint32_t chunk_size;            /* its items */
     struct judgement *judgements;   /* per item of the chunk */
     uint32_t *accepted;             /* the chunk's items taken */
     uint32_t accepted_count;
-    uint32_t *deferred;             /* positions deferred to the next chunk */
+    size_t waiting; /* candidates deferred, or moved when checked (in spare_keys, a heap) */
+    /* the ranking's check against the rules (check_ranking) */
+    float check_up_to;     /* the candidates costing at most this are checked */
+    float score_rules_up_to; /* the cost methods' scoring applies the rules up to this cost */
+    float last_limit;        /* the last pass's cost limit */
+    uint32_t *moved_costs; /* the checked candidates that moved: their new costs' bits */
+    uint32_t *moved_from;  /* and their keys' (those with no legal collapse too) */
+    size_t moved_count, moved_from_count, moved_capacity, moved_from_capacity;
     uint32_t *written;              /* the vertices marked FLAG_WRITTEN in this chunk */
     size_t written_count, written_capacity;
     uint32_t *history;
@@ -282,6 +301,7 @@ static void scratch_free(scratch *s)
     free(s->ids_before);
     free(s->targets);
     free(s->sides);
+    free(s->moved);
 }
 
 static const float *position(const engine *e, uint32_t v) { return &e->m->positions[3 * (size_t)v]; }
@@ -395,7 +415,7 @@ static void vertex_range(const engine *e, uint32_t range, uint32_t *first, uint3
 
 /* A vertex's flags while the ranges mark their own vertices stale side by side: a range reads
  * the touched bit of other ranges' vertices, whose stale bit their range may be setting. */
-static uint8_t shared_flags(const engine *e, uint32_t v)
+static vertex_flags shared_flags(const engine *e, uint32_t v)
 {
     return __atomic_load_n(&e->flags[v], __ATOMIC_RELAXED);
 }
@@ -421,7 +441,7 @@ static void count_corners(engine *e, uint32_t range)
                 continue;
             start[c[k] + 1]++;
             if (touched)
-                __atomic_store_n(&e->flags[c[k]], (uint8_t)(e->flags[c[k]] | FLAG_STALE),
+                __atomic_store_n(&e->flags[c[k]], (vertex_flags)(e->flags[c[k]] | FLAG_STALE),
                                  __ATOMIC_RELAXED);
         }
     }
@@ -1119,24 +1139,16 @@ static int valence_three(const engine *e, uint32_t v, int current, uint32_t hold
            seen[2] == holding;
 }
 
-/* Whether v0 -> v1 is legal; f0 and r0 are v0's fan and ring, v0 free and with more than two
- * neighbours. `current`: judge the mesh as it is now, in a pass where collapses were taken
- * (the other rings are gathered again), not as the pass found it. *rule names the first rule
- * that forbids it. */
-static int collapse_legal(const engine *e, uint32_t v0, uint32_t v1, fan f0, const ring *r0,
-                          int boundary0, int current, scratch *s, const char **rule)
+/* The rules of v0 -> v1 that read v1's ring r1 (and the edge's sides vl and vr, v0's ring r0):
+ * neither vertex complex, no dangling edge, no fold of boundaries, the link condition.
+ * *rule names the first that forbids it. */
+static int target_rules_kept(uint32_t v1, const ring *r0, uint32_t slot, int boundary0,
+                             const ring *r1, const char **rule)
 {
-    uint32_t slot = ring_find(r0, v1);
-    if (slot == r0->size)
-        return *rule = "not an edge", 0;
-    uint32_t held = r0->entry[slot].count;
-    if (e->m->locked && e->m->locked[v1]) /* the caller's (flags[v1] may be being rewritten) */
-        return *rule = "locked", 0;
-    ring ring1 = ring_for(e, v1, current, s, SLOT_V1), *r1 = &ring1;
     int boundary1;
     if (!ring_simple(r1, &boundary1))
         return *rule = "complex vertex", 0;
-    uint32_t vl = r0->entry[slot].left, vr = r0->entry[slot].right;
+    uint32_t vl = r0->entry[slot].left, vr = r0->entry[slot].right, held = r0->entry[slot].count;
     /* A triangle of the edge whose other two edges are open would leave a dangling edge. */
     if (vl != COLLAPSE_NONE && ring_count(r1, vl) == 1 && ring_count(r0, vl) == 1)
         return *rule = "dangling edge", 0;
@@ -1155,9 +1167,25 @@ static int collapse_legal(const engine *e, uint32_t v0, uint32_t v1, fan f0, con
         if (w != v1 && w != vl && w != vr && ring_holds(r1, summary1, w))
             return *rule = "link condition", 0;
     }
-    if (both_sides && valence_three(e, vl, current, vr) &&
+    return 1;
+}
+
+/* The rule of v0 -> v1 that reads the rings of the edge's sides vl and vr: not both of valence
+ * 3 (with `current`, as they are now). */
+static int sides_rule_kept(const engine *e, uint32_t vl, uint32_t vr, int current,
+                           const char **rule)
+{
+    if (vl != COLLAPSE_NONE && vr != COLLAPSE_NONE && valence_three(e, vl, current, vr) &&
         valence_three(e, vr, current, COLLAPSE_NONE))
         return *rule = "two joined valence-3 vertices", 0;
+    return 1;
+}
+
+/* The rules of v0 -> v1 that read only v0's triangles (fan f0, ring r0) and the positions and
+ * attributes: the normal limit, the boundary lock, the seams, the normals. */
+static int own_rules_kept(const engine *e, uint32_t v0, uint32_t v1, fan f0, const ring *r0,
+                          int boundary0, scratch *s, const char **rule)
+{
     if (!normals_kept(e, r0, v0, v1))
         return *rule = "normal limit", 0;
     if (e->o->method == DECIMATE_COMBINED && boundary0 && !isinf(e->boundary_tolerance) &&
@@ -1172,6 +1200,24 @@ static int collapse_legal(const engine *e, uint32_t v0, uint32_t v1, fan f0, con
             return *rule = "normal behind its triangle", 0;
     }
     return 1;
+}
+
+/* Whether v0 -> v1 is legal; f0 and r0 are v0's fan and ring, v0 free and with more than two
+ * neighbours. `current`: judge the mesh as it is now, in a pass where collapses were taken
+ * (the other rings are gathered again), not as the pass found it. *rule names the first rule
+ * that forbids it. */
+static int collapse_legal(const engine *e, uint32_t v0, uint32_t v1, fan f0, const ring *r0,
+                          int boundary0, int current, scratch *s, const char **rule)
+{
+    uint32_t slot = ring_find(r0, v1);
+    if (slot == r0->size)
+        return *rule = "not an edge", 0;
+    if (e->m->locked && e->m->locked[v1]) /* the caller's (flags[v1] may be being rewritten) */
+        return *rule = "locked", 0;
+    ring r1 = ring_for(e, v1, current, s, SLOT_V1);
+    return target_rules_kept(v1, r0, slot, boundary0, &r1, rule) &&
+           sides_rule_kept(e, r0->entry[slot].left, r0->entry[slot].right, current, rule) &&
+           own_rules_kept(e, v0, v1, f0, r0, boundary0, s, rule);
 }
 
 /* The cost of v0 -> v1 for QUADRIC and COMBINED. With attribute quadrics: `sides` are the
@@ -1240,6 +1286,13 @@ static size_t target_keys(const engine *e, uint32_t v, fan f0, const ring *r0, s
     return r0->size;
 }
 
+/* A priority as the ranking's float: at most FLT_MAX / 2. */
+static float rank_cost(double priority)
+{
+    double largest = (double)FLT_MAX / 2; /* fmin(priority, largest), without a call */
+    return (float)(priority <= largest ? priority : largest);
+}
+
 /* v's candidate for collapsing into target t (r0 its ring): ranked by the cost (QUADRIC,
  * COMBINED) or by the importance of v and its ring (IMPORTANCE, the paper's ring sum). */
 static void set_best(engine *e, uint32_t v, const ring *r0, const target_key *t)
@@ -1253,8 +1306,7 @@ static void set_best(engine *e, uint32_t v, const ring *r0, const target_key *t)
         CHECK_FINITE(priority, "ring importance");
     }
     e->best_target[v] = t->vertex;
-    double largest = (double)FLT_MAX / 2; /* fmin(priority, largest), without a call */
-    e->best[v] = (candidate){(float)(priority <= largest ? priority : largest), distance_of(e, v),
+    e->best[v] = (candidate){rank_cost(priority), distance_of(e, v),
                              by_importance ? e->importance[t->vertex] : 0.0, t->distance, v};
 }
 
@@ -1265,28 +1317,9 @@ static int removable(const engine *e, uint32_t v, const ring *r0, int *boundary0
            ring_simple(r0, boundary0);
 }
 
-/* Scores v: its best legal collapse into best[v] and best_target[v] (COLLAPSE_NONE: none). The
- * cheapest target (by the method's order) is tried first, as it is legal for most vertices;
- * otherwise the targets are sorted and tried in order. */
-static void score_vertex(engine *e, uint32_t v, scratch *s)
+/* Sorts v's targets s->targets[0 .. count) (target_keys') by the method's order. */
+static void sort_targets(size_t count, scratch *s)
 {
-    e->best_target[v] = COLLAPSE_NONE;
-    ring r0 = ring_of(e, v);
-    fan f0 = pass_fan(e, v);
-    int boundary0;
-    if (!removable(e, v, &r0, &boundary0))
-        return;
-    size_t count = target_keys(e, v, f0, &r0, s);
-    size_t cheapest = 0;
-    for (size_t i = 1; i < count; i++)
-        if (compare_targets(&s->targets[i], &s->targets[cheapest]) < 0)
-            cheapest = i;
-    const char *rule;
-    uint32_t preferred = s->targets[cheapest].vertex;
-    if (collapse_legal(e, v, preferred, f0, &r0, boundary0, 0, s, &rule)) {
-        set_best(e, v, &r0, &s->targets[cheapest]);
-        return;
-    }
     for (size_t i = 1; i < count; i++) { /* an insertion sort: a ring is short */
         target_key key = s->targets[i];
         size_t j = i;
@@ -1296,23 +1329,75 @@ static void score_vertex(engine *e, uint32_t v, scratch *s)
         }
         s->targets[j] = key;
     }
-    for (size_t i = 1; i < count; i++) /* targets[0] is the preferred one */
-        if (collapse_legal(e, v, s->targets[i].vertex, f0, &r0, boundary0, 0, s, &rule)) {
-            set_best(e, v, &r0, &s->targets[i]);
+}
+
+/* The first of v's targets s->targets[0 .. count) by the method's order. */
+static size_t cheapest_target(size_t count, const scratch *s)
+{
+    size_t cheapest = 0;
+    for (size_t i = 1; i < count; i++)
+        if (compare_targets(&s->targets[i], &s->targets[cheapest]) < 0)
+            cheapest = i;
+    return cheapest;
+}
+
+/* v's best legal collapse on the mesh as the pass found it, into best[v] and best_target[v]
+ * (COLLAPSE_NONE and FLAG_NO_LEGAL: none): the targets s->targets[0 .. count) (target_keys') sorted by the
+ * method's order and tried in order after the first, which broke a rule (f0, r0 and boundary0
+ * v's fan, ring and boundary flag). */
+static void set_best_after_cheapest(engine *e, uint32_t v, fan f0, const ring *r0, int boundary0,
+                                    size_t count, scratch *s)
+{
+    const char *rule;
+    sort_targets(count, s);
+    for (size_t i = 1; i < count; i++) /* targets[0] is the cheapest */
+        if (collapse_legal(e, v, s->targets[i].vertex, f0, r0, boundary0, 0, s, &rule)) {
+            set_best(e, v, r0, &s->targets[i]);
             return;
         }
+    e->best_target[v] = COLLAPSE_NONE;
+    e->flags[v] |= FLAG_NO_LEGAL;
+}
+
+/* Scores v into best[v] and best_target[v] (COLLAPSE_NONE: none): its best legal collapse, the
+ * cheapest target by the method's order if legal (as it is for most vertices), otherwise the
+ * targets sorted and tried in order. With the cost methods (QUADRIC, COMBINED) a pass reaches
+ * only the first third or so of its ranking, so a vertex whose cheapest collapse costs more than
+ * the pass will likely reach (score_rules_up_to) is scored by that collapse alone, unchecked
+ * (FLAG_UNCHECKED): the ranking applies the rules to those the pass may reach (check_ranking),
+ * as this would have. */
+static void score_vertex(engine *e, uint32_t v, scratch *s)
+{
+    e->best_target[v] = COLLAPSE_NONE;
+    e->flags[v] &= (vertex_flags) ~(FLAG_UNCHECKED | FLAG_NO_LEGAL);
+    ring r0 = ring_of(e, v);
+    fan f0 = pass_fan(e, v);
+    int boundary0;
+    if (!removable(e, v, &r0, &boundary0))
+        return;
+    size_t count = target_keys(e, v, f0, &r0, s);
+    size_t cheapest = cheapest_target(count, s);
+    set_best(e, v, &r0, &s->targets[cheapest]);
+    if (e->o->method != DECIMATE_IMPORTANCE && !(e->best[v].cost <= e->score_rules_up_to)) {
+        e->flags[v] |= FLAG_UNCHECKED;
+        return;
+    }
+    const char *rule;
+    if (!collapse_legal(e, v, s->targets[cheapest].vertex, f0, &r0, boundary0, 0, s, &rule))
+        set_best_after_cheapest(e, v, f0, &r0, boundary0, count, s);
 }
 
 /* The scoring step's work on v at the start of a pass: scored again where the last pass made it
  * stale (its score dropped where it was removed), and the last pass's marks cleared. */
 static void settle_vertex(engine *e, uint32_t v, scratch *s)
 {
-    uint8_t flags = e->flags[v];
-    if (flags & FLAG_REMOVED)
+    vertex_flags flags = e->flags[v];
+    if (flags & FLAG_REMOVED) {
         e->best_target[v] = COLLAPSE_NONE;
-    else if (flags & FLAG_STALE)
+        e->flags[v] &= (vertex_flags)~FLAG_NO_LEGAL;
+    } else if (flags & FLAG_STALE)
         score_vertex(e, v, s);
-    e->flags[v] = flags & (uint8_t) ~(FLAG_STALE | FLAG_TOUCHED | FLAG_TAKEN);
+    e->flags[v] &= (vertex_flags) ~(FLAG_STALE | FLAG_TOUCHED | FLAG_TAKEN | FLAG_MOVED);
 }
 
 /* ---- the per-vertex steps, in parallel ---- */
@@ -1354,6 +1439,7 @@ struct worker_pool {
 
 static void count_candidates(engine *e, uint32_t range);
 static void write_keys(engine *e, uint32_t range);
+static void check_vertex(engine *e, uint32_t v, scratch *s);
 static void judge_item(engine *e, uint32_t item, scratch *s);
 static void apply_item(engine *e, uint32_t item, scratch *s);
 
@@ -1382,6 +1468,9 @@ static void run_item(engine *e, vertex_step step, uint32_t i, scratch *s)
         break;
     case STEP_WRITE_KEYS:
         write_keys(e, i);
+        break;
+    case STEP_CHECK_CANDIDATES:
+        check_vertex(e, i, s);
         break;
     case STEP_JUDGE:
         judge_item(e, i, s);
@@ -1552,11 +1641,14 @@ static int compare_candidates(const void *a, const void *b)
  * written (write_keys). */
 static void count_candidates(engine *e, uint32_t range)
 {
-    uint32_t first, end, count = 0;
+    uint32_t first, end, count = 0, no_legal = 0;
     vertex_range(e, range, &first, &end);
-    for (uint32_t v = first; v < end; v++)
+    for (uint32_t v = first; v < end; v++) {
         count += e->best_target[v] != COLLAPSE_NONE;
+        no_legal += (e->flags[v] & FLAG_NO_LEGAL) != 0;
+    }
     e->range_offset[range + 1] = count;
+    e->range_no_legal[range] = no_legal;
 }
 
 static void write_keys(engine *e, uint32_t range)
@@ -1607,8 +1699,11 @@ static void rank_candidates(engine *e, int full_ties)
     uint32_t ranges = e->threads;
     e->range_offset[0] = 0;
     run_on_pool(e, STEP_COUNT_CANDIDATES, ranges, 1);
-    for (uint32_t r = 0; r < ranges; r++)
+    e->no_legal = 0;
+    for (uint32_t r = 0; r < ranges; r++) {
         e->range_offset[r + 1] += e->range_offset[r];
+        e->no_legal += e->range_no_legal[r];
+    }
     size_t count = e->range_offset[ranges];
     e->ranked = count;
     if (!count)
@@ -1643,6 +1738,167 @@ static void rank_candidates(engine *e, int full_ties)
         if (j - i > 1)
             sort_ties(e, &keys[i], &e->spare_keys[i], j - i);
         i = j;
+    }
+}
+
+/* ---- the ranking checked against the rules ---- */
+
+/* Checks v's candidate against the rules on the mesh as the pass found it, where it is
+ * unchecked and costs at most check_up_to: its cheapest collapse stands where legal; otherwise
+ * its best legal one (set_best_after_cheapest) replaces it, v is marked FLAG_MOVED and its key
+ * (stale now) listed in the scratch. */
+static void check_vertex(engine *e, uint32_t v, scratch *s)
+{
+    if (!(e->flags[v] & FLAG_UNCHECKED) || e->best_target[v] == COLLAPSE_NONE ||
+        !(e->best[v].cost <= e->check_up_to))
+        return;
+    e->flags[v] &= (vertex_flags)~FLAG_UNCHECKED;
+    ring r0 = ring_of(e, v);
+    fan f0 = pass_fan(e, v);
+    int boundary0 = 0;
+    ring_simple(&r0, &boundary0); /* (one fan, as it was when scored) */
+    const char *rule;
+    if (collapse_legal(e, v, e->best_target[v], f0, &r0, boundary0, 0, s, &rule))
+        return;
+    rank_key key = {0, v};
+    memcpy(&key.cost_bits, &e->best[v].cost, sizeof key.cost_bits);
+    size_t count = target_keys(e, v, f0, &r0, s);
+    set_best_after_cheapest(e, v, f0, &r0, boundary0, count, s);
+    e->flags[v] |= FLAG_MOVED;
+    reserve((void **)&s->moved, &s->moved_capacity, s->moved_count + 1, sizeof(rank_key));
+    s->moved[s->moved_count++] = key;
+}
+
+/* Whether the ranking key's candidate moved when checked (its key is stale). */
+static int key_moved(const engine *e, rank_key key)
+{
+    return (e->flags[key.vertex] & FLAG_MOVED) != 0;
+}
+
+static int compare_bits(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+static void wait_push(engine *e, rank_key key);
+
+/* How many of the sorted bits[0 .. count) are at most `bits`. */
+static size_t count_at_most(const uint32_t *sorted, size_t count, uint32_t bits)
+{
+    size_t low = 0, high = count;
+    while (low < high) {
+        size_t middle = low + (high - low) / 2;
+        if (sorted[middle] <= bits)
+            low = middle + 1;
+        else
+            high = middle;
+    }
+    return low;
+}
+
+/* How many keys (sorted by cost) cost at most `bits`. */
+static size_t keys_at_most(const engine *e, uint32_t bits)
+{
+    size_t low = 0, high = e->ranked;
+    while (low < high) {
+        size_t middle = low + (high - low) / 2;
+        if (e->keys[middle].cost_bits <= bits)
+            low = middle + 1;
+        else
+            high = middle;
+    }
+    return low;
+}
+
+/* How many candidates of the ranking as checked cost at most `bits`: the keys, less those that
+ * moved, plus the moved ones' new costs (moved_from and moved_costs sorted). */
+static size_t checked_at_most(const engine *e, uint32_t bits)
+{
+    return keys_at_most(e, bits) - count_at_most(e->moved_from, e->moved_from_count, bits) +
+           count_at_most(e->moved_costs, e->moved_count, bits);
+}
+
+/* The cost at 0-based place `place` of the ranking as checked (the last where there are fewer
+ * candidates): the least cost with more than `place` candidates at most it, found by bisecting
+ * the costs' bits (which order as the costs do: none is negative or NaN); *known: whether it is
+ * certain, i.e. at most check_up_to (an unchecked candidate costs more: its best legal collapse
+ * costs at least its cheapest). */
+static float checked_cost_at(const engine *e, size_t place, int *known)
+{
+    size_t total = e->ranked - e->moved_from_count + e->moved_count;
+    if (place >= total)
+        place = total ? total - 1 : 0;
+    uint32_t low = 0, high = 0x7f800000u; /* +infinity's bits: above every cost */
+    while (low < high) {
+        uint32_t middle = low + (high - low) / 2;
+        if (checked_at_most(e, middle) > place)
+            high = middle;
+        else
+            low = middle + 1;
+    }
+    float cost = 0;
+    if (total)
+        memcpy(&cost, &low, sizeof cost);
+    *known = cost <= e->check_up_to;
+    return cost;
+}
+
+/* Checks the unchecked candidates costing at most `bound` (check_vertex, on the pool); those
+ * that moved wait at their own keys (wait_push), their new costs and their stale keys' listed in
+ * moved_costs and moved_from, sorted. */
+static void check_up_to(engine *e, float bound)
+{
+    e->check_up_to = bound;
+    worker_pool *pool = e->pool;
+    for (unsigned int t = 0; t <= pool->count; t++)
+        pool->scratch[t].moved_count = 0;
+    for_each_vertex(e, STEP_CHECK_CANDIDATES);
+    for (unsigned int t = 0; t <= pool->count; t++) {
+        const scratch *moved = &pool->scratch[t];
+        for (size_t k = 0; k < moved->moved_count; k++) {
+            uint32_t v = moved->moved[k].vertex;
+            reserve((void **)&e->moved_from, &e->moved_from_capacity, e->moved_from_count + 1,
+                    sizeof(uint32_t));
+            e->moved_from[e->moved_from_count++] = moved->moved[k].cost_bits;
+            if (e->best_target[v] == COLLAPSE_NONE)
+                continue; /* no legal collapse */
+            rank_key key = {0, v};
+            memcpy(&key.cost_bits, &e->best[v].cost, sizeof key.cost_bits);
+            wait_push(e, key);
+            reserve((void **)&e->moved_costs, &e->moved_capacity, e->moved_count + 1,
+                    sizeof(uint32_t));
+            e->moved_costs[e->moved_count++] = key.cost_bits;
+        }
+    }
+    qsort(e->moved_costs, e->moved_count, sizeof(uint32_t), compare_bits);
+    qsort(e->moved_from, e->moved_from_count, sizeof(uint32_t), compare_bits);
+}
+
+/* The rules applied to the ranking (the cost methods, whose scores are unchecked), as far as the
+ * pass may reach, and the pass's cost limit: PASS_COST_FACTOR x the cost a quarter down the
+ * ranking of best legal collapses. The candidates costing up to the cost at 3/8 of the ranking
+ * are checked (check_vertex, on the pool, in vertex order, where their neighbourhoods are at
+ * hand), then up to 4/8, and so on, until the limit is at most that cost: every candidate the
+ * pass may take is then ranked at its best legal collapse, as if scored with the rules, and the
+ * limit is the one that ranking gives. Those that moved wait at their own keys (wait_push). A
+ * pass reaches a quarter to a half of its ranking, so most candidates are never checked. */
+static float check_ranking(engine *e)
+{
+    size_t ranked = e->ranked;
+    e->moved_count = e->moved_from_count = 0;
+    if (e->o->method == DECIMATE_IMPORTANCE) { /* scored with the rules */
+        e->check_up_to = INFINITY;
+        return key_cost(&e->keys[ranked / 4]) * PASS_COST_FACTOR;
+    }
+    size_t share = ranked / 8 > CHUNK ? ranked / 8 : CHUNK;
+    for (size_t end = 3 * share;; end += share) {
+        check_up_to(e, end < ranked ? key_cost(&e->keys[end - 1]) : INFINITY);
+        int known;
+        /* a quarter down the candidates, counting those with no legal collapse (as the last) */
+        float limit = checked_cost_at(e, (ranked + e->no_legal) / 4, &known) * PASS_COST_FACTOR;
+        if (end >= ranked || (known && limit <= e->check_up_to))
+            return limit;
     }
 }
 
@@ -1744,7 +2000,7 @@ static uint64_t collapse_removes(const engine *e, fan f0, uint32_t v0, uint32_t 
 }
 
 /* Sets bits of a vertex's flags; atomic, as collapses taken side by side may touch one vertex. */
-static void flag(engine *e, uint32_t v, uint8_t bits)
+static void flag(engine *e, uint32_t v, vertex_flags bits)
 {
     /* most corners are flagged twice or more: the locked read-modify-write only where needed */
     if ((__atomic_load_n(&e->flags[v], __ATOMIC_RELAXED) & bits) != bits)
@@ -1807,10 +2063,32 @@ static int neighbourhood_touched(const engine *e, const judgement *j)
            (j->vr != COLLAPSE_NONE && (e->flags[j->vr] & FLAG_TOUCHED));
 }
 
+/* A checked candidate v0 -> v1 whose v0 is untouched (its triangles, fan and ring r0 as the pass
+ * found them) but whose target or sides were touched: whether the rules that read those still
+ * hold (target_rules_kept, sides_rule_kept; own_rules_kept reads v0's triangles alone, and holds
+ * as checked). */
+static int changed_rules_kept(const engine *e, const judgement *j, const ring *r0, uint32_t slot,
+                              scratch *s)
+{
+    const char *rule;
+    int boundary0 = 0;
+    ring_simple(r0, &boundary0); /* (one fan, as when checked) */
+    if (e->flags[j->v1] & FLAG_TOUCHED) {
+        ring r1 = ring_for(e, j->v1, 1, s, SLOT_V1);
+        if (!target_rules_kept(j->v1, r0, slot, boundary0, &r1, &rule))
+            return 0;
+    }
+    int sides_touched = (j->vl != COLLAPSE_NONE && (e->flags[j->vl] & FLAG_TOUCHED)) ||
+                        (j->vr != COLLAPSE_NONE && (e->flags[j->vr] & FLAG_TOUCHED));
+    return !sides_touched || sides_rule_kept(e, j->vl, j->vr, 1, &rule);
+}
+
 /* Judges v0 -> v1 on the mesh as it is, as the pass's greedy order would when it comes to it:
  * skipped where an end was taken in this pass; legal as scored where no collapse taken touched
- * its neighbourhood; otherwise judged again on the rings gathered anew (the cost stands: v0 and
- * v1 received nothing, so their quadrics are as scored). */
+ * its neighbourhood; otherwise judged again by the rules that read what was touched, on the
+ * rings gathered anew (the cost stands: v0 and v1 received nothing, so their quadrics are as
+ * scored). A candidate not checked against the rules (check_ranking) is illegal here: it costs
+ * more than the pass's limit, which stops the pass before it or checks it first. */
 static void judge(const engine *e, uint32_t v0, uint32_t v1, scratch *s, judgement *j)
 {
     j->v0 = v0, j->v1 = v1, j->vl = j->vr = COLLAPSE_NONE;
@@ -1826,13 +2104,16 @@ static void judge(const engine *e, uint32_t v0, uint32_t v1, scratch *s, judgeme
     if (slot == r0.size)
         return; /* no longer neighbours */
     j->vl = r0.entry[slot].left, j->vr = r0.entry[slot].right;
-    if (neighbourhood_touched(e, j)) {
+    if (e->flags[v0] & FLAG_UNCHECKED)
+        return;
+    if (e->flags[v0] & FLAG_TOUCHED) {
         const char *rule;
         int boundary0;
         if (!ring_simple(&r0, &boundary0) || r0.size <= 2 ||
             !collapse_legal(e, v0, v1, f0, &r0, boundary0, 1, s, &rule))
             return;
-    }
+    } else if (neighbourhood_touched(e, j) && !changed_rules_kept(e, j, &r0, slot, s))
+        return;
     j->verdict = VERDICT_LEGAL;
     j->removes = collapse_removes(e, f0, v0, v1, s);
     j->writes[0] = v0;
@@ -1861,14 +2142,14 @@ static void take(engine *e, const judgement *j, scratch *s)
 static void prefetch_judging(const engine *e, uint32_t item)
 {
     if (item + JUDGE_AHEAD < e->chunk_size) {
-        uint32_t v0 = e->chunk[e->chunk_items[item + JUDGE_AHEAD]].vertex;
+        uint32_t v0 = e->chunk[item + JUDGE_AHEAD].vertex;
         __builtin_prefetch(&e->best_target[v0]);
         __builtin_prefetch(&e->flags[v0]);
         __builtin_prefetch(&e->adjacency_start[v0]);
         __builtin_prefetch(&e->ring_size[v0]);
     }
     if (item + JUDGE_AHEAD / 2 < e->chunk_size) {
-        uint32_t v0 = e->chunk[e->chunk_items[item + JUDGE_AHEAD / 2]].vertex;
+        uint32_t v0 = e->chunk[item + JUDGE_AHEAD / 2].vertex;
         uint32_t v1 = e->best_target[v0];
         __builtin_prefetch(pass_ring_entries(e, v0));
         __builtin_prefetch(&e->flags[v1]);
@@ -1902,7 +2183,7 @@ static void prefetch_taking(const engine *e, uint32_t item)
 static void judge_item(engine *e, uint32_t item, scratch *s)
 {
     prefetch_judging(e, item);
-    uint32_t v0 = e->chunk[e->chunk_items[item]].vertex;
+    uint32_t v0 = e->chunk[item].vertex;
     judge(e, v0, e->best_target[v0], s, &e->judgements[item]);
 }
 
@@ -1944,41 +2225,102 @@ static void mark_writes(engine *e, const judgement *j, scratch *s)
         mark_written(e, r0.entry[i].vertex);
 }
 
+/* Whether candidate a comes before candidate b in the ranking: by cost, then compare_candidates
+ * on the records of best[] (the ranking's order with or without the full ties, as the keys are
+ * sorted by cost, then in vertex order). */
+static int ranks_before(const engine *e, rank_key a, rank_key b)
+{
+    if (a.cost_bits != b.cost_bits)
+        return a.cost_bits < b.cost_bits;
+    return compare_candidates(&e->best[a.vertex], &e->best[b.vertex]) < 0;
+}
+
+/* The candidates waiting in this pass (deferred, or moved when checked): a binary heap in ranking
+ * order over spare_keys[0 .. waiting), free once the ranking is sorted (a vertex is one
+ * candidate: in the ranking still to come, in the chunk, or here). */
+static void wait_push(engine *e, rank_key key)
+{
+    rank_key *heap = e->spare_keys;
+    size_t i = e->waiting++;
+    while (i > 0 && ranks_before(e, key, heap[(i - 1) / 2])) {
+        heap[i] = heap[(i - 1) / 2];
+        i = (i - 1) / 2;
+    }
+    heap[i] = key;
+}
+
+static rank_key wait_pop(engine *e)
+{
+    rank_key *heap = e->spare_keys, top = heap[0], last = heap[--e->waiting];
+    size_t i = 0, n = e->waiting;
+    for (;;) {
+        size_t child = 2 * i + 1;
+        if (child >= n)
+            break;
+        if (child + 1 < n && ranks_before(e, heap[child + 1], heap[child]))
+            child++;
+        if (!ranks_before(e, heap[child], last))
+            break;
+        heap[i] = heap[child];
+        i = child;
+    }
+    heap[i] = last;
+    return top;
+}
+
 /* Takes the ranked candidates keys[0 .. count) in order, greedily, in chunks of CHUNK
  * candidates whose judging and taking run on the pool's threads. A chunk's candidates are judged
  * side by side on the mesh as the chunk found it (judge). Then, in order, each is accepted as
  * judged, unless an earlier one accepted in the chunk wrote a vertex its verdict read: that one
- * is deferred to the head of the next chunk and judged again there. The accepted ones write
- * disjoint triangles and vertices (apply_collapse: v0's triangles, v0's ring's flags, v1's
- * quadric) and are taken side by side. Every collapse taken is legal on the mesh it is applied
- * to, and which ones are taken depends only on the ranking and the chunks, never on the threads:
- * the same bytes on any number of them. Against the strict order, a deferred candidate may come
- * after costlier ones of its chunk (a relaxed order, as a relaxed priority queue's). Returns the
- * collapses taken. */
+ * waits, to be judged again in the next chunk (the chunks take the ranking and the waiting
+ * candidates, which include those that moved when checked, in ranking order). The pass stops at
+ * the first candidate costing more than cost_limit once it has taken a collapse; where nothing
+ * under the limit could be taken, every candidate is checked against the rules first and the
+ * pass goes on to the first it can take. The accepted ones write disjoint triangles and vertices
+ * (apply_collapse: v0's triangles, v0's ring's flags, v1's quadric) and are taken side by side.
+ * Every collapse taken is legal on the mesh it is applied to, and which ones are taken depends
+ * only on the ranking and the chunks, never on the threads: the same bytes on any number of
+ * them. Against the strict order, a deferred candidate may come after costlier ones of its
+ * chunk (a relaxed order, as a relaxed priority queue's). Returns the collapses taken. */
 static uint32_t take_in_chunks(engine *e, const rank_key *keys, size_t count, float cost_limit,
                                scratch *s)
 {
-    uint32_t taken = 0, *items = e->chunk_items, deferred = 0;
+    uint32_t taken = 0;
+    rank_key *items = e->chunk;
     size_t next = 0;
     int stop = 0;
-    e->chunk = keys;
-    while (!stop && (deferred || next < count) && e->alive > e->o->target_vertices) {
-        uint32_t n = deferred; /* the deferred ones are at the head already */
-        while (n < CHUNK && next < count)
-            items[n++] = (uint32_t)next++;
+    while (!stop && (next < count || e->waiting) && e->alive > e->o->target_vertices) {
+        uint32_t n = 0;
+        for (;;) {
+            while (next < count && key_moved(e, keys[next]))
+                next++;
+            if (n == CHUNK || (next == count && !e->waiting))
+                break;
+            items[n++] = next < count && (!e->waiting || ranks_before(e, keys[next],
+                                                                      e->spare_keys[0]))
+                             ? keys[next++]
+                             : wait_pop(e);
+        }
         e->chunk_size = n;
         run_on_pool(e, STEP_JUDGE, n, JUDGE_BLOCK);
         uint32_t accepted = 0;
-        deferred = 0;
         for (uint32_t i = 0; i < n; i++) {
             const judgement *j = &e->judgements[i];
-            if (key_cost(&keys[items[i]]) > cost_limit && taken > 0) {
+            if (key_cost(&items[i]) > cost_limit && taken > 0) {
                 stop = 1;
+                break;
+            }
+            if (key_cost(&items[i]) > cost_limit && e->check_up_to < INFINITY) {
+                /* nothing under the limit could be taken: the rest checked, then judged again */
+                check_up_to(e, INFINITY);
+                for (uint32_t k = i; k < n; k++)
+                    if (!key_moved(e, items[k]))
+                        wait_push(e, items[k]);
                 break;
             }
             if (written(e, j->v0) || written(e, j->v1) || written(e, j->vl) ||
                 written(e, j->vr)) {
-                e->deferred[deferred++] = items[i];
+                wait_push(e, items[i]);
                 continue;
             }
             if (j->verdict != VERDICT_LEGAL)
@@ -1996,16 +2338,48 @@ static uint32_t take_in_chunks(engine *e, const rank_key *keys, size_t count, fl
         if (accepted)
             run_on_pool(e, STEP_APPLY, accepted, APPLY_BLOCK);
         for (size_t k = 0; k < e->written_count; k++)
-            e->flags[e->written[k]] &= (uint8_t)~FLAG_WRITTEN;
+            e->flags[e->written[k]] &= (vertex_flags)~FLAG_WRITTEN;
         e->written_count = 0;
-        memcpy(items, e->deferred, sizeof(uint32_t) * deferred);
     }
     return taken;
 }
 
+#ifdef COLLAPSE_SCORE_RULES_FIXED
+/* A test's copy of the engine (tests/test_collapse_checking.c): its scoring applies the rules up
+ * to this cost in every pass. */
+static float collapse_score_rules_fixed;
+#endif
+
+/* Up to which cost the scoring applies the rules: `predicted`, or a test's fixed bound. The
+ * meshes do not depend on it, only the time. */
+static float score_rules_bound(float predicted)
+{
+#ifdef COLLAPSE_SCORE_RULES_FIXED
+    (void)predicted;
+    return collapse_score_rules_fixed;
+#else
+    return predicted;
+#endif
+}
+
+/* The cost methods: up to which cost the next pass's scoring applies the rules (where a vertex's
+ * neighbourhood is at hand, as it is not when the ranking is checked), from this pass's cost
+ * limit and the growth since the last pass's (2 to 8 x; 4 x after the first pass, whose scoring
+ * applies none). Guessed too low, the ranking's check does the rest; too high, more vertices
+ * are checked than the pass reaches. */
+static void predict_limit(engine *e, float limit)
+{
+    float growth = 4.0f;
+    if (e->last_limit > 0)
+        growth = fminf(8.0f, fmaxf(2.0f, limit / e->last_limit));
+    e->last_limit = limit;
+    e->score_rules_up_to = score_rules_bound(limit * growth);
+}
+
 /* One pass; returns the collapses it took. Every vertex whose neighbourhood changed is scored
- * (its best legal collapse), the candidates ranked and taken greedily, the pass stopping at
- * PASS_COST_FACTOR x the cost of the candidate a quarter down the ranking. */
+ * (score_vertex), the candidates ranked, checked against the rules as far as the pass may
+ * reach (check_ranking) and taken greedily, the pass stopping at PASS_COST_FACTOR x the cost of
+ * the candidate a quarter down the ranking. */
 static uint32_t run_pass(engine *e, scratch *s)
 {
     if (!e->rings_current) { /* the first pass has those engine_init built */
@@ -2017,7 +2391,9 @@ static uint32_t run_pass(engine *e, scratch *s)
     rank_candidates(e, e->o->method == DECIMATE_IMPORTANCE || e->m->distance);
     if (!e->ranked)
         return 0;
-    float cost_limit = key_cost(&e->keys[e->ranked / 4]) * PASS_COST_FACTOR;
+    e->waiting = 0;
+    float cost_limit = check_ranking(e);
+    predict_limit(e, cost_limit);
     return take_in_chunks(e, e->keys, e->ranked, cost_limit, s);
 }
 
@@ -2043,11 +2419,12 @@ static void engine_free(engine *e)
     free(e->best);
     free(e->attribute_terms);
     free(e->keys);
+    free(e->moved_costs);
+    free(e->moved_from);
     free(e->spare_keys);
     free(e->judgements);
-    free(e->chunk_items);
+    free(e->chunk);
     free(e->accepted);
-    free(e->deferred);
     free(e->written);
     memset(e, 0, sizeof *e);
 }
@@ -2103,7 +2480,7 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     e->boundary_tolerance =
         o->boundary_tolerance > 0 ? o->boundary_tolerance : DECIMATE_BOUNDARY_TOLERANCE;
     size_t n = (size_t)e->n + 1;
-    e->flags = xcalloc(n, 1);
+    e->flags = xcalloc(n, sizeof(vertex_flags));
     e->adjacency_start = xmalloc(sizeof(uint32_t) * (n + 1));
     e->adjacency = large_array(sizeof(uint32_t) * (3 * (size_t)e->t + 1));
     e->live = xmalloc(sizeof(uint32_t) * ((size_t)e->t + 1));
@@ -2155,10 +2532,11 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
 size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_method method)
 {
     /* flags, adjacency_start, ring_size, donor, best_target, best, importance, the
-     * ranking's keys (and their spare), the quadric and its own error; a ring slot (its
-     * ring_entry); per triangle its place in the live list */
-    size_t per_vertex = 1 + 4 + 4 + 4 + 4 + sizeof(candidate) + sizeof(double) +
-                        2 * sizeof(rank_key) +
+     * ranking's keys (and their spare), at most the lists of candidates that moved when checked
+     * (check_ranking: the threads' keys, their new and old costs), the quadric and its own error;
+     * a ring slot (its ring_entry); per triangle its place in the live list */
+    size_t per_vertex = sizeof(vertex_flags) + 4 + 4 + 4 + 4 + sizeof(candidate) +
+                        sizeof(double) + 3 * sizeof(rank_key) + 2 * sizeof(uint32_t) +
                         (method != DECIMATE_IMPORTANCE ? 11 * sizeof(double) : 0);
     size_t ring_slot = sizeof(ring_entry);
     /* per corner: the adjacency and a ring slot */
@@ -2180,10 +2558,10 @@ int collapse_run(collapse_mesh *m, const collapse_options *o, collapse_result *r
     e.keys = xmalloc(sizeof(rank_key) * ((size_t)e.n + 1));
     e.spare_keys = xmalloc(sizeof(rank_key) * ((size_t)e.n + 1));
     e.history = result->collapsed_into;
+    e.score_rules_up_to = score_rules_bound(0); /* the first pass checks its ranking alone */
     e.judgements = xmalloc(sizeof(judgement) * CHUNK);
-    e.chunk_items = xmalloc(sizeof(uint32_t) * CHUNK);
+    e.chunk = xmalloc(sizeof(rank_key) * CHUNK);
     e.accepted = xmalloc(sizeof(uint32_t) * CHUNK);
-    e.deferred = xmalloc(sizeof(uint32_t) * CHUNK);
     scratch s;
     memset(&s, 0, sizeof s);
     while (e.alive > o->target_vertices) {

@@ -4,23 +4,37 @@
  *
  * One pass:
  *   1. adjacency   per vertex, its live triangles (a counting sort of the triangle list)
- *   2. score       every free vertex picks its best legal collapse (cost, then ties) into a
- *                  neighbour; in parallel, each vertex on its own, so the result does not depend
- *                  on the thread count
+ *   2. score       every free vertex whose neighbourhood changed picks its best legal
+ *                  collapse (cost, then ties) into a neighbour; in parallel, each vertex on its
+ *                  own, so the result does not depend on the thread count. With the cost methods
+ *                  (QUADRIC, COMBINED) only where its cheapest collapse costs no more than the
+ *                  pass is likely to reach (a guess from the last pass); the others are scored
+ *                  by their cheapest collapse, unchecked
  *   3. rank        the candidates sorted by cost (ties broken by a total order, so the order is
- *                  the same on any run)
+ *                  the same on any run); then, from the cheapest, the unchecked candidates are
+ *                  checked against the rules until the pass's limit (below) lies under the
+ *                  cheapest cost left unchecked: a pass reaches a quarter to a half of its
+ *                  ranking, so most of the rules' work on the rest is never done. A candidate
+ *                  whose cheapest collapse breaks a rule moves to its best legal one, at its own
+ *                  cost. The collapses taken are those of step 2 done for every vertex, byte for
+ *                  byte, whatever the guess (tests/test_collapse_checking.c)
  *   4. apply       in that order, greedily, in chunks of 1,024 candidates: the chunk's candidates
  *                  are judged side by side on the mesh as the chunk found it (skipped where an end
  *                  was already taken in this pass; legal as scored where no collapse taken has
- *                  touched the triangles of v0, v1, vl or vr; judged again on their rings
- *                  gathered anew otherwise); then, in order, each is accepted as judged unless a
- *                  collapse accepted earlier in the chunk wrote a vertex its verdict read (v0,
- *                  v1, vl, vr): that one moves to the head of the next chunk and is judged again.
+ *                  touched the triangles of v0, v1, vl or vr; otherwise judged again by the
+ *                  rules that read what was touched, on the rings gathered anew); then, in
+ *                  order, each is accepted as judged unless a collapse accepted earlier in the
+ *                  chunk wrote a vertex its verdict read (v0, v1, vl, vr): that one waits for
+ *                  the next chunk and is judged again. (An
+ *                  unchecked candidate, reached only where nothing under the limit could be
+ *                  taken, is checked there; one whose cheapest collapse breaks a rule waits at
+ *                  its best legal one's cost, and the chunk's costlier ones wait with it.)
  *                  The accepted collapses write disjoint triangles and vertices and are taken
  *                  side by side. So every collapse is legal on the mesh it is applied to, and
  *                  which are taken depends on the ranking and the chunks, never on the threads.
  *                  The pass stops at the target, or at 1.5 x the cost of the candidate ranked
- *                  at a quarter of the list (after meshoptimizer's rule, which ranks at the
+ *                  at a quarter of the list (the vertices with no legal collapse counted, as
+ *                  the last; after meshoptimizer's rule, which ranks at the
  *                  target: cheap collapses left for the next pass are cheaper than expensive
  *                  ones taken now; a quarter keeps a cheap region from being outrun by an
  *                  expensive one, as the reference's heap would not). The target only stops
@@ -48,9 +62,10 @@
  * the least important neighbour. After a collapse v1 holds v0's quadric (or importance).
  *
  * Memory: collapse_memory() says it (per vertex: flags, the quadric and its own error, the
- * importance, the scores, the ranking's keys, the donor; per triangle corner: the adjacency and
- * a ring slot of 16 bytes; per triangle: its place in the live list), 296 bytes per vertex of
- * the dragon with the quadric methods, 208 with IMPORTANCE; COMBINED adds its attribute
+ * importance, the scores, the ranking's keys, the donor, room for the candidates that move when
+ * checked; per triangle corner: the adjacency and a ring slot of 16 bytes; per triangle: its
+ * place in the live list), 313 bytes per vertex of the dragon with the quadric methods, 225
+ * with IMPORTANCE; COMBINED adds its attribute
  * quadrics per attribute set. The caller's arrays are used in place: the triangles and
  * corner ids are rewritten, nothing else. */
 #ifndef IDMR_COLLAPSE_H

@@ -1,0 +1,153 @@
+/* test_collapse_checking.c — the collapse engine's check of its ranking (host/reduce/collapse.c,
+ * check_ranking). With the cost methods a vertex is scored by its cheapest collapse, and the
+ * rules are applied only to the candidates a pass may reach, where its scoring cannot see them
+ * coming; the engine promises the meshes that applying the rules to every vertex while scoring
+ * gives. How far the scoring applies them is a guess from the last pass (predict_limit), so that
+ * guess must not change a byte either.
+ *
+ * This file builds a second copy of the engine (collapse.c included, its entry points renamed)
+ * whose scoring applies the rules up to a fixed cost in every pass (COLLAPSE_SCORE_RULES_FIXED):
+ * to every candidate (infinity: each vertex scored with the rules, every check of the ranking
+ * finds nothing to do) or to none (0: every candidate the pass reaches is checked in the
+ * ranking, and those whose cheapest collapse breaks a rule move). Both must give the engine's
+ * own result, triangle for triangle and collapse for collapse, on the bunny and the dragon (res
+ * 2, non-manifold), with quadric and combined, and combined again with a normal per vertex (the
+ * attribute quadrics). */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+
+#include <cmocka.h>
+
+#include "decimate_common.h"
+#include "reduce/collapse.h"
+
+#define COLLAPSE_SCORE_RULES_FIXED 1
+#define collapse_run collapse_run_fixed
+#define collapse_memory collapse_memory_fixed
+#define collapse_evaluate collapse_evaluate_fixed
+#include "reduce/collapse.c"
+#undef collapse_run
+#undef collapse_memory
+#undef collapse_evaluate
+
+/* One reduction of `mesh` to a tenth: by the engine (fixed < 0) or by the copy whose scoring
+ * applies the rules up to `fixed`. Its triangles, history and counts. */
+typedef struct reduction {
+    uint32_t *triangles, *history;
+    collapse_result result;
+} reduction;
+
+static void reduce_once(const mesh_data *mesh, const double *importance, const float *normals,
+                        decimate_method method, float fixed, reduction *out)
+{
+    size_t corners = 3 * (size_t)mesh->triangle_count;
+    out->triangles = malloc(sizeof(uint32_t) * corners + 1);
+    memcpy(out->triangles, mesh->indices, sizeof(uint32_t) * corners);
+    uint32_t *ids = NULL;
+    collapse_mesh m = {.vertex_count = mesh->vertex_count,
+                       .positions = mesh->positions,
+                       .triangle_count = mesh->triangle_count,
+                       .triangles = out->triangles,
+                       .importance = importance};
+    if (normals) { /* one attribute set per vertex: its normal */
+        ids = malloc(sizeof(uint32_t) * corners + 1);
+        memcpy(ids, mesh->indices, sizeof(uint32_t) * corners);
+        m.corner_ids = ids;
+        m.attributes = normals;
+        m.attribute_count = mesh->vertex_count;
+        m.normal_floats = 3;
+    }
+    collapse_options o = {.method = method,
+                          .target_vertices = mesh->vertex_count / 10,
+                          .max_normal_angle = 60,
+                          .boundary_tolerance = DECIMATE_BOUNDARY_TOLERANCE,
+                          .uv_weight = DECIMATE_UV_WEIGHT,
+                          .normal_weight = DECIMATE_NORMAL_WEIGHT,
+                          .threads = 2};
+    out->history = malloc(sizeof(uint32_t) * mesh->vertex_count + 1);
+    out->result = (collapse_result){.collapsed_into = out->history};
+    collapse_score_rules_fixed = fixed;
+    int status = fixed < 0 ? collapse_run(&m, &o, &out->result)
+                           : collapse_run_fixed(&m, &o, &out->result);
+    assert_int_equal(status, 0);
+    free(ids);
+}
+
+static void reduction_free(reduction *r)
+{
+    free(r->triangles);
+    free(r->history);
+}
+
+/* Per-vertex unit normals: each vertex's faces' (area-weighted) normals summed. */
+static float *vertex_normals(const mesh_data *m)
+{
+    float *normals = calloc(3 * (size_t)m->vertex_count + 3, sizeof(float));
+    for (uint32_t t = 0; t < m->triangle_count; t++) {
+        double n[3];
+        face_normal(m, t, n);
+        for (int k = 0; k < 3; k++)
+            for (int c = 0; c < 3; c++)
+                normals[3 * (size_t)m->indices[3 * t + k] + c] += (float)n[c];
+    }
+    for (uint32_t v = 0; v < m->vertex_count; v++) {
+        float *n = &normals[3 * (size_t)v];
+        float length = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (length > 0)
+            for (int c = 0; c < 3; c++)
+                n[c] /= length;
+        else
+            n[2] = 1;
+    }
+    return normals;
+}
+
+static void same_as_engine(const char *file)
+{
+    mesh_data mesh;
+    read_model(file, &mesh);
+    double *importance = random_importance(mesh.vertex_count, 7);
+    float *normals = vertex_normals(&mesh);
+    const decimate_method methods[3] = {DECIMATE_QUADRIC, DECIMATE_COMBINED, DECIMATE_COMBINED};
+    const float fixed[2] = {INFINITY, 0};
+    for (int i = 0; i < 3; i++) {
+        const float *with = i == 2 ? normals : NULL;
+        reduction own;
+        reduce_once(&mesh, importance, with, methods[i], -1, &own);
+        assert_true(own.result.collapses > 0);
+        for (int k = 0; k < 2; k++) {
+            reduction copy;
+            reduce_once(&mesh, importance, with, methods[i], fixed[k], &copy);
+            assert_int_equal(copy.result.collapses, own.result.collapses);
+            assert_int_equal(copy.result.passes, own.result.passes);
+            assert_int_equal(copy.result.vertices_after, own.result.vertices_after);
+            assert_memory_equal(copy.triangles, own.triangles,
+                                3 * sizeof(uint32_t) * mesh.triangle_count);
+            assert_memory_equal(copy.history, own.history,
+                                sizeof(uint32_t) * mesh.vertex_count);
+            reduction_free(&copy);
+        }
+        print_message("  %s, %s%s: %u collapses in %u passes, the same with the rules applied "
+                      "while scoring and with none\n",
+                      file, i == 0 ? "quadric" : "combined", with ? " with normals" : "",
+                      own.result.collapses, own.result.passes);
+        reduction_free(&own);
+    }
+    free(normals);
+    free(importance);
+    mesh_data_free(&mesh);
+}
+
+static void test_bunny(void **state) { same_as_engine("bunny.ply"); }
+
+static void test_dragon(void **state) { same_as_engine("dragon_vrip_res2.ply"); }
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_bunny),
+        cmocka_unit_test(test_dragon),
+    };
+    return cmocka_run_group_tests_name("collapse_checking", tests, NULL, NULL);
+}
