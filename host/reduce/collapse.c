@@ -1871,8 +1871,10 @@ static void check_up_to(engine *e, float bound)
             e->moved_costs[e->moved_count++] = key.cost_bits;
         }
     }
-    qsort(e->moved_costs, e->moved_count, sizeof(uint32_t), compare_bits);
-    qsort(e->moved_from, e->moved_from_count, sizeof(uint32_t), compare_bits);
+    if (e->moved_count > 1) /* (an empty list may be no array at all) */
+        qsort(e->moved_costs, e->moved_count, sizeof(uint32_t), compare_bits);
+    if (e->moved_from_count > 1)
+        qsort(e->moved_from, e->moved_from_count, sizeof(uint32_t), compare_bits);
 }
 
 /* The rules applied to the ranking (the cost methods, whose scores are unchecked), as far as the
