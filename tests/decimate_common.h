@@ -1,9 +1,10 @@
 /* decimate_common.h — shared by the decimation tests (test_decimate.c, the collapse loop;
  * test_decimate_normal_limit.c; test_decimate_weld.c): decimation inputs, random importance
  * fields from the project's generator (idmr/rng.h), real meshes from ../shared/data/models (via
- * IDMR_ROOT; a missing file fails the test), a flat grid, and the checks every decimation must
- * pass (sound faces, a complete history, survivors at input positions). Header-only (static
- * functions): each program includes it once, after cmocka.h. */
+ * IDMR_ROOT; a missing file fails the test), a flat grid, smooth normals for a mesh without
+ * them, and the checks every decimation must pass (sound faces, a complete history, survivors
+ * at input positions). Header-only (static functions): each program includes it once, after
+ * cmocka.h. */
 #ifndef IDMR_TESTS_DECIMATE_COMMON_H
 #define IDMR_TESTS_DECIMATE_COMMON_H
 
@@ -72,6 +73,21 @@ static inline void face_normal(const mesh_data *m, uint32_t t, double n[3])
     n[0] = e1[1] * e2[2] - e1[2] * e2[1];
     n[1] = e1[2] * e2[0] - e1[0] * e2[2];
     n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+}
+
+/* Smooth normals for a mesh without them: per vertex the sum of its faces' (area-weighted)
+ * normals, as a loader computes them (not normalised). */
+static inline float *smooth_normals(const mesh_data *m)
+{
+    float *normals = calloc(3 * (size_t)m->vertex_count + 3, sizeof(float));
+    for (uint32_t t = 0; t < m->triangle_count; t++) {
+        double n[3];
+        face_normal(m, t, n);
+        for (int k = 0; k < 3; k++)
+            for (int c = 0; c < 3; c++)
+                normals[3 * (size_t)m->indices[3 * t + k] + c] += (float)n[c];
+    }
+    return normals;
 }
 
 static inline uint32_t degenerate_faces(const mesh_data *m)

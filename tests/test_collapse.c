@@ -170,21 +170,6 @@ static void decimate_with_threads(model_fixture *f, unsigned int threads, decima
     assert_int_equal(decimate_mesh(&f->in, method, out), 0);
 }
 
-/* Smooth normals for a mesh without them: per vertex the sum of its faces' (area-weighted)
- * normals, as a loader computes them. */
-static float *smooth_normals(const mesh_data *m)
-{
-    float *normals = calloc(3 * (size_t)m->vertex_count + 3, sizeof(float));
-    for (uint32_t t = 0; t < m->triangle_count; t++) {
-        double n[3];
-        face_normal(m, t, n);
-        for (int k = 0; k < 3; k++)
-            for (int c = 0; c < 3; c++)
-                normals[3 * (size_t)m->indices[3 * t + k] + c] += (float)n[c];
-    }
-    return normals;
-}
-
 /* The dragon at resolution 2 (non-manifold: the OpenMesh rebuild's input) with combined and
  * importance, and again with smooth normals (attribute sets, seams and the attribute quadrics)
  * with combined: the same bytes on 1, 2 and 7 threads. */

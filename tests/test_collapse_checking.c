@@ -80,35 +80,12 @@ static void reduction_free(reduction *r)
     free(r->history);
 }
 
-/* Per-vertex unit normals: each vertex's faces' (area-weighted) normals summed. */
-static float *vertex_normals(const mesh_data *m)
-{
-    float *normals = calloc(3 * (size_t)m->vertex_count + 3, sizeof(float));
-    for (uint32_t t = 0; t < m->triangle_count; t++) {
-        double n[3];
-        face_normal(m, t, n);
-        for (int k = 0; k < 3; k++)
-            for (int c = 0; c < 3; c++)
-                normals[3 * (size_t)m->indices[3 * t + k] + c] += (float)n[c];
-    }
-    for (uint32_t v = 0; v < m->vertex_count; v++) {
-        float *n = &normals[3 * (size_t)v];
-        float length = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        if (length > 0)
-            for (int c = 0; c < 3; c++)
-                n[c] /= length;
-        else
-            n[2] = 1;
-    }
-    return normals;
-}
-
 static void same_as_engine(const char *file)
 {
     mesh_data mesh;
     read_model(file, &mesh);
     double *importance = random_importance(mesh.vertex_count, 7);
-    float *normals = vertex_normals(&mesh);
+    float *normals = smooth_normals(&mesh);
     const decimate_method methods[3] = {DECIMATE_QUADRIC, DECIMATE_COMBINED, DECIMATE_COMBINED};
     const float fixed[2] = {INFINITY, 0};
     for (int i = 0; i < 3; i++) {
