@@ -2278,12 +2278,14 @@ static rank_key wait_pop(engine *e)
  * candidates, which include those that moved when checked, in ranking order). The pass stops at
  * the first candidate costing more than cost_limit once it has taken a collapse; where nothing
  * under the limit could be taken, every candidate is checked against the rules first and the
- * pass goes on to the first it can take. The accepted ones write disjoint triangles and vertices
- * (apply_collapse: v0's triangles, v0's ring's flags, v1's quadric) and are taken side by side.
- * Every collapse taken is legal on the mesh it is applied to, and which ones are taken depends
- * only on the ranking and the chunks, never on the threads: the same bytes on any number of
- * them. Against the strict order, a deferred candidate may come after costlier ones of its
- * chunk (a relaxed order, as a relaxed priority queue's). Returns the collapses taken. */
+ * pass goes on to the first it can take (a guard: the pass's first candidate is checked, costs
+ * no more than the limit and, nothing being taken yet, is legal as checked). The accepted ones
+ * write disjoint triangles and vertices (apply_collapse: v0's triangles, v0's ring's flags, v1's
+ * quadric) and are taken side by side. Every collapse taken is legal on the mesh it is applied
+ * to, and which ones are taken depends only on the ranking and the chunks, never on the
+ * threads: the same bytes on any number of them. Against the strict order, a deferred
+ * candidate may come after costlier ones of its chunk (a relaxed order, as a relaxed priority
+ * queue's). Returns the collapses taken. */
 static uint32_t take_in_chunks(engine *e, const rank_key *keys, size_t count, float cost_limit,
                                scratch *s)
 {
