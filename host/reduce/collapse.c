@@ -210,7 +210,7 @@ typedef struct engine {
      * keys sorted, `ranked` of them (and their spare) */
     uint32_t range_offset[MAX_THREADS + 1];
     uint32_t range_no_legal[MAX_THREADS]; /* per range: its vertices with no legal collapse */
-    size_t no_legal;                      /* theirs summed: ranked at no cost */
+    size_t no_legal;                      /* theirs summed: counted last in the pass's quarter */
     rank_key *keys, *spare_keys;
     size_t ranked;
     /* taking collapses in chunks (take_in_chunks) */
@@ -1847,7 +1847,7 @@ static float checked_cost_at(const engine *e, size_t place, int *known)
 /* Checks the unchecked candidates costing at most `bound` (check_vertex, on the pool); those
  * that moved wait at their own keys (wait_push), their new costs and their stale keys' listed in
  * moved_costs and moved_from, sorted. */
-static void check_up_to(engine *e, float bound)
+static void check_candidates_up_to(engine *e, float bound)
 {
     e->check_up_to = bound;
     worker_pool *pool = e->pool;
@@ -1895,7 +1895,7 @@ static float check_ranking(engine *e)
     }
     size_t share = ranked / 8 > CHUNK ? ranked / 8 : CHUNK;
     for (size_t end = 3 * share;; end += share) {
-        check_up_to(e, end < ranked ? key_cost(&e->keys[end - 1]) : INFINITY);
+        check_candidates_up_to(e, end < ranked ? key_cost(&e->keys[end - 1]) : INFINITY);
         int known;
         /* a quarter down the candidates, counting those with no legal collapse (as the last) */
         float limit = checked_cost_at(e, (ranked + e->no_legal) / 4, &known) * PASS_COST_FACTOR;
@@ -2316,7 +2316,7 @@ static uint32_t take_in_chunks(engine *e, const rank_key *keys, size_t count, fl
             }
             if (key_cost(&items[i]) > cost_limit && e->check_up_to < INFINITY) {
                 /* nothing under the limit could be taken: the rest checked, then judged again */
-                check_up_to(e, INFINITY);
+                check_candidates_up_to(e, INFINITY);
                 for (uint32_t k = i; k < n; k++)
                     if (!key_moved(e, items[k]))
                         wait_push(e, items[k]);
