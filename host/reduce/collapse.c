@@ -81,7 +81,7 @@ typedef enum vertex_step {
     STEP_SCORES,
     STEP_COUNT_CANDIDATES, /* per range of vertices (rank_candidates) */
     STEP_WRITE_KEYS,
-    STEP_CHECK_CANDIDATES, /* per vertex: its candidate checked where due (check_ranking) */
+    STEP_CHECK_CANDIDATES, /* per 64 vertices: the candidates due checked (check_ranking) */
     STEP_JUDGE, /* per candidate of a chunk (take_in_chunks) */
     STEP_APPLY
 } vertex_step;
@@ -226,7 +226,8 @@ typedef struct engine {
     uint32_t accepted_count;
     size_t waiting; /* candidates deferred, or moved when checked (in spare_keys, a heap) */
     /* the ranking's check against the rules (check_ranking) */
-    float check_up_to;     /* the candidates costing at most this are checked */
+    float check_up_to;     /* the candidates costing at most this are checked (-1: none yet) */
+    uint64_t *due;         /* a bit per vertex: its candidate is to be checked in this round */
     float score_rules_up_to; /* the cost methods' scoring applies the rules up to this cost */
     float last_limit;        /* the last pass's cost limit */
     uint32_t *moved_costs; /* the checked candidates that moved: their new costs' bits */
@@ -1482,7 +1483,7 @@ struct worker_pool {
 
 static void count_candidates(engine *e, uint32_t range);
 static void write_keys(engine *e, uint32_t range);
-static void check_vertex(engine *e, uint32_t v, scratch *s);
+static void check_due(engine *e, uint32_t word, scratch *s);
 static void judge_item(engine *e, uint32_t item, scratch *s);
 static void apply_item(engine *e, uint32_t item, scratch *s);
 
@@ -1516,7 +1517,7 @@ static void run_item(engine *e, vertex_step step, uint32_t i, scratch *s)
         write_keys(e, i);
         break;
     case STEP_CHECK_CANDIDATES:
-        check_vertex(e, i, s);
+        check_due(e, i, s);
         break;
     case STEP_JUDGE:
         judge_item(e, i, s);
@@ -1815,6 +1816,18 @@ static void check_vertex(engine *e, uint32_t v, scratch *s)
     s->moved[s->moved_count++] = key;
 }
 
+/* Checks the candidates of the vertices due in word `word` of the due bits (64 vertices), in
+ * vertex order, and clears the word. */
+static void check_due(engine *e, uint32_t word, scratch *s)
+{
+    uint64_t due = e->due[word];
+    e->due[word] = 0;
+    while (due) {
+        check_vertex(e, 64 * word + (uint32_t)__builtin_ctzll(due), s);
+        due &= due - 1;
+    }
+}
+
 /* Whether the ranking key's candidate moved when checked (its key is stale). */
 static int key_moved(const engine *e, rank_key key)
 {
@@ -1892,14 +1905,34 @@ static float checked_cost_at(const engine *e, size_t place, int *known)
 
 /* Checks the unchecked candidates costing at most `bound` (check_vertex, on the pool); those
  * that moved wait at their own keys (wait_push), their new costs and their stale keys' listed in
- * moved_costs and moved_from, sorted. */
+ * moved_costs and moved_from, sorted. The unchecked ones cost more than the last bound (those
+ * below it were checked): their keys, a stretch of the ranking, mark their vertices due (a bit
+ * each), and the pool checks the due bits 64 vertices at a time, in vertex order, where their
+ * neighbourhoods are near each other (a sweep of every vertex's flags and cost took a quarter
+ * of the check's time on the dragon). */
 static void check_candidates_up_to(engine *e, float bound)
 {
+    /* the keys costing more than the last bound and at most this one */
+    uint32_t bits;
+    size_t from = 0, to = e->ranked;
+    if (e->check_up_to >= 0) {
+        memcpy(&bits, &e->check_up_to, sizeof bits);
+        from = keys_at_most(e, bits);
+    }
+    if (bound < INFINITY) {
+        memcpy(&bits, &bound, sizeof bits);
+        to = keys_at_most(e, bits);
+    }
     e->check_up_to = bound;
+    for (size_t i = from; i < to; i++) {
+        uint32_t v = e->keys[i].vertex;
+        if (e->flags[v] & FLAG_UNCHECKED)
+            e->due[v / 64] |= (uint64_t)1 << (v % 64);
+    }
     worker_pool *pool = e->pool;
     for (unsigned int t = 0; t <= pool->count; t++)
         pool->scratch[t].moved_count = 0;
-    for_each_vertex(e, STEP_CHECK_CANDIDATES);
+    run_on_pool(e, STEP_CHECK_CANDIDATES, e->n / 64 + 1, SCORE_BLOCK / 64);
     for (unsigned int t = 0; t <= pool->count; t++) {
         const scratch *moved = &pool->scratch[t];
         for (size_t k = 0; k < moved->moved_count; k++) {
@@ -1935,6 +1968,7 @@ static float check_ranking(engine *e)
 {
     size_t ranked = e->ranked;
     e->moved_count = e->moved_from_count = 0;
+    e->check_up_to = -1.0f; /* nothing checked yet in this pass */
     if (e->o->method == DECIMATE_IMPORTANCE) { /* scored with the rules */
         e->check_up_to = INFINITY;
         return key_cost(&e->keys[ranked / 4]) * PASS_COST_FACTOR;
@@ -2521,6 +2555,7 @@ static void engine_free(engine *e)
     free(e->chunk);
     free(e->accepted);
     free(e->chunk_marks);
+    free(e->due);
     memset(e, 0, sizeof *e);
 }
 
@@ -2587,6 +2622,7 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     e->ring_size = xcalloc(n, sizeof(uint32_t));
     e->donor = xmalloc(sizeof(uint32_t) * n);
     e->chunk_marks = xcalloc(n, 1);
+    e->due = xcalloc(n / 64 + 2, sizeof(uint64_t));
     e->chunk_mark = 1;
     e->best_target = xmalloc(sizeof(uint32_t) * n);
     e->best = large_array(e, sizeof(candidate) * n);
@@ -2637,14 +2673,16 @@ size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_
     /* flags, the chunk mark, adjacency_start, ring_size, donor, best_target, best, importance,
      * the ranking's keys (and their spare), at most the lists of candidates that moved when
      * checked (check_ranking: the threads' keys, their new and old costs), the quadric and its
-     * own error; a ring slot (its ring_entry); per triangle its place in the live list */
+     * own error; a ring slot (its ring_entry); the due bits (check_candidates_up_to); per
+     * triangle its place in the live list */
     size_t per_vertex = sizeof(vertex_flags) + 1 + 4 + 4 + 4 + 4 + sizeof(candidate) +
                         sizeof(double) + 3 * sizeof(rank_key) + 2 * sizeof(uint32_t) +
                         (method != DECIMATE_IMPORTANCE ? 11 * sizeof(double) : 0);
     size_t ring_slot = sizeof(ring_entry);
     /* per corner: the adjacency and a ring slot */
     size_t per_corner = sizeof(uint32_t) + ring_slot;
-    return (per_vertex + ring_slot) * ((size_t)vertex_count + 1) +
+    size_t due_bits = ((size_t)vertex_count / 64 + 2) * sizeof(uint64_t);
+    return (per_vertex + ring_slot) * ((size_t)vertex_count + 1) + due_bits +
            (3 * per_corner + sizeof(uint32_t)) * (size_t)triangle_count;
 }
 
