@@ -268,16 +268,18 @@ static void *large_array(engine *e, size_t bytes)
 #ifdef MADV_HUGEPAGE
     madvise(array, rounded, MADV_HUGEPAGE);
 #endif
-    e->fresh[e->fresh_count].array = array;
-    e->fresh[e->fresh_count].pages = rounded / HUGE_PAGE;
-    e->fresh_count++;
+    if (e->fresh_count < FRESH_ARRAYS) { /* (one more would only be touched later) */
+        e->fresh[e->fresh_count].array = array;
+        e->fresh[e->fresh_count].pages = rounded / HUGE_PAGE;
+        e->fresh_count++;
+    }
     return array;
 }
 
 /* Page `page` of the fresh large arrays (counted through them in order) written, so that the
  * kernel gives it now. The first parallel step would otherwise take the pages' faults side by
  * side, and they wait on each other: on the dragon with two threads, the first rings and
- * quadrics took 0.10 s so, 0.06 s after this step (which costs about 0.01 s). With one thread
+ * quadrics took 0.10 s that way, 0.06 s after this step (which costs about 0.01 s). With one thread
  * there is nothing to gain, and engine_init does not run it. */
 static void first_touch(engine *e, uint32_t page)
 {
@@ -1908,8 +1910,8 @@ static float checked_cost_at(const engine *e, size_t place, int *known)
  * moved_costs and moved_from, sorted. The unchecked ones cost more than the last bound (those
  * below it were checked): their keys, a stretch of the ranking, mark their vertices due (a bit
  * each), and the pool checks the due bits 64 vertices at a time, in vertex order, where their
- * neighbourhoods are near each other (a sweep of every vertex's flags and cost took a quarter
- * of the check's time on the dragon). */
+ * neighbourhoods are near each other (a sweep of every vertex's flags and cost took a fifth of
+ * the check's time on the dragon). */
 static void check_candidates_up_to(engine *e, float bound)
 {
     /* the keys costing more than the last bound and at most this one */
@@ -2231,10 +2233,11 @@ static void prefetch_fan(const engine *e, uint32_t v)
  * - JUDGE_AHEAD: v0's flags, adjacency start and ring size, and its target;
  * - half as far: v0's ring (or, where v0 was touched, its adjacency, as judge gathers its ring
  *   from its triangles), and v1's flags, adjacency start and ring size;
- * - 2: a touched v0's triangles; v1's ring, or its adjacency where touched; the flags and ring
- *   sizes of the edge's sides vl and vr, where v0's ring (untouched) gives them;
+ * - 2: a touched v0's triangles; v1's ring, or its adjacency where touched; the flags,
+ *   adjacency starts and ring sizes of the edge's sides vl and vr, where v0's ring (untouched)
+ *   gives them;
  * - 1: a touched v1's triangles.
- * Judging the dragon to 10 % (722,000 candidates, a third with v0 touched) took 0.34 s on one
+ * Judging the dragon to 10 % (722,000 candidates, a sixth with v0 touched) took 0.34 s on one
  * thread with only the first two, 0.22 s with all four. */
 static void prefetch_judging(const engine *e, uint32_t item)
 {
