@@ -1388,9 +1388,9 @@ static size_t cheapest_target(size_t count, const scratch *s)
 }
 
 /* v's best legal collapse on the mesh as the pass found it, into best[v] and best_target[v]
- * (COLLAPSE_NONE and FLAG_NO_LEGAL: none): the targets s->targets[0 .. count) (target_keys') sorted by the
- * method's order and tried in order after the first, which broke a rule (f0, r0 and boundary0
- * v's fan, ring and boundary flag). */
+ * (COLLAPSE_NONE and FLAG_NO_LEGAL: none): the targets s->targets[0 .. count) (target_keys')
+ * sorted by the method's order and tried in order after the first, which broke a rule (f0, r0
+ * and boundary0 v's fan, ring and boundary flag). */
 static void set_best_after_cheapest(engine *e, uint32_t v, fan f0, const ring *r0, int boundary0,
                                     size_t count, scratch *s)
 {
@@ -1792,15 +1792,12 @@ static void rank_candidates(engine *e, int full_ties)
 
 /* ---- the ranking checked against the rules ---- */
 
-/* Checks v's candidate against the rules on the mesh as the pass found it, where it is
- * unchecked and costs at most check_up_to: its cheapest collapse stands where legal; otherwise
- * its best legal one (set_best_after_cheapest) replaces it, v is marked FLAG_MOVED and its key
- * (stale now) listed in the scratch. */
+/* Checks v's candidate against the rules on the mesh as the pass found it (v due: unchecked,
+ * its cheapest collapse costing at most check_up_to): its cheapest collapse stands where legal;
+ * otherwise its best legal one (set_best_after_cheapest) replaces it, v is marked FLAG_MOVED and
+ * its key (stale now) listed in the scratch. */
 static void check_vertex(engine *e, uint32_t v, scratch *s)
 {
-    if (!(e->flags[v] & FLAG_UNCHECKED) || e->best_target[v] == COLLAPSE_NONE ||
-        !(e->best[v].cost <= e->check_up_to))
-        return;
     e->flags[v] &= (vertex_flags)~FLAG_UNCHECKED;
     ring r0 = ring_of(e, v);
     fan f0 = pass_fan(e, v);
@@ -1926,7 +1923,7 @@ static void check_candidates_up_to(engine *e, float bound)
         to = keys_at_most(e, bits);
     }
     e->check_up_to = bound;
-    for (size_t i = from; i < to; i++) {
+    for (size_t i = from; i < to; i++) { /* an unchecked vertex's key is its candidate's */
         uint32_t v = e->keys[i].vertex;
         if (e->flags[v] & FLAG_UNCHECKED)
             e->due[v / 64] |= (uint64_t)1 << (v % 64);
