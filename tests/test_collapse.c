@@ -4,7 +4,8 @@
  *   rules      collapse_evaluate on hand-drawn meshes, each answer worked out below:
  *              a flat fan (the centre's collapse costs 0, its ring sum is known), a spike (the
  *              normal limit), a boundary vertex into an inner one, a tetrahedron (the two
- *              joined valence-3 vertices), a locked vertex, the boundary lock
+ *              joined valence-3 vertices), a locked vertex, the boundary lock, a fan of 100
+ *              triangles (its centre's ring)
  *   threads    the dragon (res 2) decimated on 1, 2 and 7 threads, with and without normals:
  *              the same bytes
  *   reference  the bunny to 10 % by engine and reference, quadric and combined: the mean
@@ -137,6 +138,38 @@ static void test_spike(void **state)
     }
     assert_true(expected > 0);
     assert_true(fabs(cost - expected) <= 1e-9 * expected);
+}
+
+/* A wide flat fan: centre 0 and WIDE_RIM rim vertices, more than a ring is built from on the
+ * stack (build_ring copies a vertex's half-edges aside first, beyond 64 into its scratch). The
+ * centre's ring must hold every rim vertex once: the ring sum with importance k + 1 at vertex k
+ * is 1 + 2 + ... + (WIDE_RIM + 1), and the flat collapse costs 0. */
+#define WIDE_RIM 100
+static void test_wide_fan(void **state)
+{
+    float positions[3 * (WIDE_RIM + 1)] = {0};
+    uint32_t triangles[3 * WIDE_RIM];
+    double importance[WIDE_RIM + 1];
+    for (int k = 0; k <= WIDE_RIM; k++)
+        importance[k] = k + 1;
+    for (int k = 0; k < WIDE_RIM; k++) {
+        positions[3 * (k + 1) + 0] = (float)cos(2 * M_PI * k / WIDE_RIM);
+        positions[3 * (k + 1) + 1] = (float)sin(2 * M_PI * k / WIDE_RIM);
+        triangles[3 * k + 0] = 0;
+        triangles[3 * k + 1] = 1 + k;
+        triangles[3 * k + 2] = 1 + (k + 1) % WIDE_RIM;
+    }
+    collapse_mesh m;
+    memset(&m, 0, sizeof m);
+    m.vertex_count = WIDE_RIM + 1;
+    m.positions = positions;
+    m.triangle_count = WIDE_RIM;
+    m.triangles = triangles;
+    m.importance = importance;
+    assert_true(expect(&m, DECIMATE_IMPORTANCE, 0, 1, 1, NULL) ==
+                (WIDE_RIM + 1) * (WIDE_RIM + 2) / 2.0);
+    assert_true(expect(&m, DECIMATE_QUADRIC, 0, WIDE_RIM / 2, 1, NULL) == 0.0);
+    expect(&m, DECIMATE_QUADRIC, 1, 0, 0, "boundary vertex off the boundary");
 }
 
 /* A tetrahedron: every vertex has valence 3 and every collapse would fold it flat. Collapsing 0
@@ -324,6 +357,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_flat_fan),
         cmocka_unit_test(test_spike),
+        cmocka_unit_test(test_wide_fan),
         cmocka_unit_test(test_tetrahedron),
         cmocka_unit_test(test_same_result_on_any_thread_count),
         cmocka_unit_test(test_quadric_against_reference),

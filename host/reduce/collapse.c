@@ -65,7 +65,7 @@ typedef uint8_t vertex_flags;
 #define JUDGE_AHEAD 8    /* candidates ahead whose reads are asked for while one is judged */
 #define SPIN_LIMIT 4000 /* pauses (about 0.1 ms) a thread spins before it sleeps or yields */
 #define FRESH_ARRAYS 4  /* the engine's large arrays: adjacency, rings, scores, quadrics */
-#define RING_AHEAD 16   /* vertices ahead whose triangles are asked for while a ring is built */
+#define HALF_EDGES_AT_HAND 64 /* a vertex's half-edges build_ring copies onto the stack */
 
 typedef struct worker_pool worker_pool;
 
@@ -76,6 +76,7 @@ typedef enum vertex_step {
     STEP_FIRST_TOUCH,   /* per 2 MiB page of the large arrays (engine_init) */
     STEP_COUNT_CORNERS, /* per range of vertices (build_adjacency) */
     STEP_FILL_CORNERS,
+    STEP_WEIGH_FACES, /* per triangle (importance_floor) */
     STEP_FIRST_RINGS, /* per vertex: its ring, then its quadric (engine_init) */
     STEP_RINGS,       /* per vertex */
     STEP_SCORES,
@@ -96,6 +97,11 @@ typedef struct ring_entry {
     uint32_t vertex, left, right;
     uint32_t count;
 } ring_entry;
+
+/* A corner of a triangle at a vertex v: the triangle's corners after and before v. */
+typedef struct half_edge {
+    uint32_t next, previous;
+} half_edge;
 
 /* A vertex's one-ring: a view into ring records (the pass's or a scratch's). */
 typedef struct ring {
@@ -125,6 +131,8 @@ typedef struct scratch {
     struct target_key *targets;
     struct edge_sides *sides; /* per target: the sides of the edge to it (ring_sides) */
     size_t targets_capacity;
+    struct half_edge *half_edges; /* a copy of a vertex's half-edges (build_ring) */
+    size_t half_edges_capacity;
     struct rank_key *moved; /* the keys of the candidates that moved in a check (check_vertex) */
     size_t moved_count, moved_capacity;
 } scratch;
@@ -276,17 +284,20 @@ static void *large_array(engine *e, size_t bytes)
     return array;
 }
 
-/* Page `page` of the fresh large arrays (counted through them in order) written, so that the
- * kernel gives it now. The first parallel step would otherwise take the pages' faults side by
- * side, and they wait on each other: on the dragon with two threads, the first rings and
- * quadrics took 0.10 s that way, 0.06 s after this step (which costs about 0.01 s). With one thread
- * there is nothing to gain, and engine_init does not run it. */
+/* Page `page` of the fresh large arrays (counted through them in order) written, a byte per 4 KiB,
+ * so that the kernel gives it now (a huge page, or its small pages where it has none). The
+ * first parallel step would otherwise take the pages' faults side by side, and they wait on each
+ * other: on the dragon with two threads, the first rings and quadrics took 0.10 s that way, 0.06 s
+ * after this step (which costs about 0.01 s). With one thread there is nothing to gain, and
+ * engine_init does not run it. */
 static void first_touch(engine *e, uint32_t page)
 {
     size_t a = 0, first = page;
     while (first >= e->fresh[a].pages)
         first -= e->fresh[a++].pages;
-    memset((char *)e->fresh[a].array + first * HUGE_PAGE, 0, HUGE_PAGE);
+    char *bytes = (char *)e->fresh[a].array + first * HUGE_PAGE;
+    for (size_t offset = 0; offset < HUGE_PAGE; offset += 4096)
+        bytes[offset] = 0;
 }
 
 /* The slot of neighbour w in the ring, or r->size. */
@@ -336,6 +347,7 @@ static void scratch_free(scratch *s)
     free(s->targets);
     free(s->sides);
     free(s->moved);
+    free(s->half_edges);
 }
 
 static const float *position(const engine *e, uint32_t v) { return &e->m->positions[3 * (size_t)v]; }
@@ -418,7 +430,9 @@ static inline __attribute__((always_inline)) double quadric_error(const double *
  * pool, one range of vertices each (count_corners, fill_corners): each range sweeps the whole
  * list and writes only its own vertices' counts, marks, starts and slots, so each vertex's
  * triangles come in list order on any number of threads; between the two, only the ranges'
- * totals are summed, one after the other. */
+ * totals are summed, one after the other. The filling also leaves each vertex's half-edges in
+ * its ring records, from which the ring step builds its ring (build_ring): the triangles are
+ * read here in list order, not again at random for each of their corners. */
 static void run_on_pool(engine *e, vertex_step step, uint32_t items, uint32_t block);
 
 static void build_adjacency(engine *e)
@@ -486,7 +500,10 @@ static void count_corners(engine *e, uint32_t range)
 /* build_adjacency's fill for one range of vertices (adjacency_start[v] v's count): each
  * vertex's count made the end of its slots (the range's corners start at corner_offset[range]),
  * then each live triangle, from the last of the list to the first, into the last free slot of
- * each of its corners in the range, which leaves adjacency_start[v] the first of v's slots. */
+ * each of its corners in the range, which leaves adjacency_start[v] the first of v's slots.
+ * The corner's half-edge goes into the first bytes of ring record slot + v: v's ring records
+ * (pass_ring_entries) start at adjacency_start[v] + v, so v's i-th triangle leaves its half-edge
+ * in v's i-th record. */
 static void fill_corners(engine *e, uint32_t range)
 {
     uint32_t first, end, *start = e->adjacency_start, slots_end = e->corner_offset[range];
@@ -497,8 +514,12 @@ static void fill_corners(engine *e, uint32_t range)
         uint32_t t = e->live[i];
         const uint32_t *c = corners(e, t);
         for (int k = 0; k < 3; k++)
-            if (c[k] - first < end - first)
-                e->adjacency[--start[c[k]]] = t;
+            if (c[k] - first < end - first) {
+                uint32_t slot = --start[c[k]];
+                e->adjacency[slot] = t;
+                half_edge h = {c[(k + 1) % 3], c[(k + 2) % 3]};
+                memcpy(&e->rings[(size_t)slot + c[k]], &h, sizeof h);
+            }
     }
 }
 
@@ -587,6 +608,15 @@ ring_add(ring_entry *r, uint32_t *size, uint32_t capacity, ring_index *index, ui
     return j;
 }
 
+/* Adds a triangle of the vertex whose ring is being written (its corners after and before the
+ * vertex: h) to the ring (as ring_add). */
+static inline __attribute__((always_inline)) void
+ring_add_triangle(ring_entry *r, uint32_t *size, uint32_t capacity, ring_index *index, half_edge h)
+{
+    r[ring_add(r, size, capacity, index, h.next)].left = h.previous;
+    r[ring_add(r, size, capacity, index, h.previous)].right = h.next;
+}
+
 /* Writes v's one-ring from the triangles of fan f (room for `capacity` neighbours); returns its
  * size. */
 static uint32_t fill_ring(const engine *e, uint32_t v, fan f, ring_entry *r, uint32_t capacity)
@@ -598,10 +628,29 @@ static uint32_t fill_ring(const engine *e, uint32_t v, fan f, ring_entry *r, uin
         uint32_t t = f.triangle[i];
         const uint32_t *c = corners(e, t);
         int k = corner_at(e, t, v);
-        uint32_t next = c[(k + 1) % 3], previous = c[(k + 2) % 3];
-        r[ring_add(r, &size, capacity, &index, next)].left = previous;
-        r[ring_add(r, &size, capacity, &index, previous)].right = next;
+        half_edge h = {c[(k + 1) % 3], c[(k + 2) % 3]};
+        ring_add_triangle(r, &size, capacity, &index, h);
     }
+    return size;
+}
+
+/* The same from v's half-edges, one in the first bytes of each of r[0 .. count) (its triangles'
+ * corners after and before v, in fan order): they are copied out first. */
+static uint32_t fill_ring_from_half_edges(uint32_t count, ring_entry *r, uint32_t capacity,
+                                          scratch *s)
+{
+    half_edge local[HALF_EDGES_AT_HAND], *copy = local;
+    if (count > HALF_EDGES_AT_HAND) {
+        reserve((void **)&s->half_edges, &s->half_edges_capacity, count, sizeof(half_edge));
+        copy = s->half_edges;
+    }
+    for (uint32_t i = 0; i < count; i++)
+        memcpy(&copy[i], &r[i], sizeof(half_edge));
+    uint32_t size = 0;
+    ring_index index;
+    index.summary = 0;
+    for (uint32_t i = 0; i < count; i++)
+        ring_add_triangle(r, &size, capacity, &index, copy[i]);
     return size;
 }
 
@@ -611,19 +660,15 @@ static ring_entry *pass_ring_entries(const engine *e, uint32_t v)
     return &e->rings[(size_t)e->adjacency_start[v] + v];
 }
 
-/* Builds v's one-ring from its pass-start triangles into the pass's ring arrays; the
- * triangles of the vertex RING_AHEAD on are asked for (their order is the mesh's, not v's). */
-static void build_ring(engine *e, uint32_t v)
+/* Builds v's one-ring from its pass-start triangles into the pass's ring records, from the
+ * half-edges the adjacency left there (fill_corners): on the dragon the rings took 0.16 s of
+ * a run on one thread from the triangles, 0.09 s from the half-edges (and the adjacency 0.06
+ * s more, 0.11 s, for writing them). */
+static void build_ring(engine *e, uint32_t v, scratch *s)
 {
-    if (v + RING_AHEAD < e->n) {
-        fan ahead = pass_fan(e, v + RING_AHEAD);
-        for (uint32_t i = 0; i < ahead.count; i++)
-            __builtin_prefetch(corners(e, ahead.triangle[i]));
-    }
     uint32_t degree = e->adjacency_start[v + 1] - e->adjacency_start[v];
-    e->ring_size[v] = fill_ring(e, v, pass_fan(e, v),
-                                pass_ring_entries(e, v),
-                                degree + 1);
+    ring_entry *r = pass_ring_entries(e, v);
+    e->ring_size[v] = fill_ring_from_half_edges(degree, r, degree + 1, s);
 }
 
 /* v's one-ring now, into slot `slot` of the scratch (its fan too). */
@@ -949,20 +994,38 @@ static void start_attribute_quadrics(engine *e)
         xcalloc((size_t)m->attribute_count * attribute_stride(e->channels) + 1, sizeof(double));
 }
 
-/* COMBINED's importance floor: FLOOR_SHARE of the area-weighted mean importance of the faces (a
- * face's the mean of its vertices'), 1 when the mesh has none. */
-static double importance_floor(const engine *e)
+/* Where importance_floor's step writes triangle t's area and its area x importance: the pass's
+ * ring records, which the first rings step writes only after (room for 3 t + n records of 16
+ * bytes, 16 bytes per triangle taken). */
+static double *face_weights(const engine *e, uint32_t t) { return (double *)&e->rings[t]; }
+
+/* Triangle t's area and its area x importance (the mean of its vertices'), for
+ * importance_floor; nothing for a dead one. */
+static void weigh_face(engine *e, uint32_t t)
 {
+    if (corners(e, t)[0] == COLLAPSE_NONE)
+        return;
+    const float *p[3];
+    double face_importance = triangle_points(e, t, p), n[3];
+    normal_of(p, n);
+    double a = 0.5 * sqrt(dot(n, n));
+    face_weights(e, t)[0] = a;
+    face_weights(e, t)[1] = a * face_importance;
+}
+
+/* COMBINED's importance floor: FLOOR_SHARE of the area-weighted mean importance of the faces (a
+ * face's the mean of its vertices'), 1 when the mesh has none. The faces are weighed on the pool
+ * (weigh_face) and summed here in triangle order, so the floor is the same on any number of
+ * threads (weighed here as well, it took the dragon 0.016 s on one thread alone). */
+static double importance_floor(engine *e)
+{
+    run_on_pool(e, STEP_WEIGH_FACES, e->t, SCORE_BLOCK);
     double weighted = 0, area = 0;
     for (uint32_t t = 0; t < e->t; t++) {
         if (corners(e, t)[0] == COLLAPSE_NONE)
             continue;
-        const float *p[3];
-        double face_importance = triangle_points(e, t, p), n[3];
-        normal_of(p, n);
-        double a = 0.5 * sqrt(dot(n, n));
-        weighted += a * face_importance;
-        area += a;
+        weighted += face_weights(e, t)[1];
+        area += face_weights(e, t)[0];
     }
     double mean = area > 0 ? weighted / area : 0;
     return mean > 0 && isfinite(mean) ? FLOOR_SHARE * mean : 1.0;
@@ -1501,11 +1564,14 @@ static void run_item(engine *e, vertex_step step, uint32_t i, scratch *s)
     case STEP_FILL_CORNERS:
         fill_corners(e, i);
         break;
+    case STEP_WEIGH_FACES:
+        weigh_face(e, i);
+        break;
     case STEP_RINGS:
-        build_ring(e, i);
+        build_ring(e, i, s);
         break;
     case STEP_FIRST_RINGS:
-        build_ring(e, i);
+        build_ring(e, i, s);
         if (e->quadric)
             build_quadric(e, i); /* from v's own ring, built just now */
         break;
@@ -2652,11 +2718,11 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
             pages += e->fresh[a].pages;
         run_on_pool(e, STEP_FIRST_TOUCH, (uint32_t)pages, 1);
     }
+    if (e->quadric && o->method == DECIMATE_COMBINED)
+        e->importance_floor = importance_floor(e); /* before the adjacency: on its ring records */
     build_adjacency(e);
-    if (e->quadric && o->method == DECIMATE_COMBINED) {
+    if (e->quadric && o->method == DECIMATE_COMBINED)
         start_attribute_quadrics(e);
-        e->importance_floor = importance_floor(e);
-    }
     for_each_vertex(e, STEP_FIRST_RINGS); /* and the quadrics */
     scratch s;
     memset(&s, 0, sizeof s);

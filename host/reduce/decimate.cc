@@ -154,15 +154,74 @@ void prepare(const decimate_input *in, weld_result *flat, decimate_output *out)
     weld_result_free(&repaired);
 }
 
+// The live triangles (`live` of them), each wound as the input had it (a turned one turned
+// back), followed by the twins of the live ones (weld.h), each on its triangle's corners in its
+// own winding, into m's indices: corner c (3 t + k) as output vertex output_of(c).
+template <typename OutputOf>
+static void write_triangles(const weld_result &flat, size_t live, OutputOf output_of, mesh_data *m)
+{
+    size_t corners = 3 * (size_t)flat.triangle_count, twins = 0;
+    for (uint32_t i = 0; i < flat.twin_count; i++)
+        twins += flat.triangles[3 * (size_t)flat.twins[i].primary] != COLLAPSE_NONE;
+    m->triangle_count = (uint32_t)(live + twins);
+    m->indices = (uint32_t *)xmalloc(3 * sizeof(uint32_t) * (live + twins + 1));
+    size_t written = 0;
+    for (size_t c = 0; c < corners; c += 3) {
+        if (flat.triangles[c] == COLLAPSE_NONE)
+            continue;
+        bool turned = flat.turned && flat.turned[c / 3];
+        m->indices[written++] = output_of(c);
+        m->indices[written++] = output_of(c + (turned ? 2 : 1));
+        m->indices[written++] = output_of(c + (turned ? 1 : 2));
+    }
+    for (uint32_t i = 0; i < flat.twin_count; i++) {
+        size_t c = 3 * (size_t)flat.twins[i].primary;
+        if (flat.triangles[c] == COLLAPSE_NONE)
+            continue;
+        for (int k = 0; k < 3; k++)
+            m->indices[written++] = output_of(c + flat.twins[i].corner[k]);
+    }
+}
+
+// write_output() without attributes: a vertex is one wedge, so its output vertex is its place
+// among the vertices of live triangles, as the corner sort with attributes would number it.
+static void write_output_unsplit(const weld_result &flat, decimate_output *out)
+{
+    size_t n = flat.vertex_count, corners = 3 * (size_t)flat.triangle_count, live = 0;
+    uint32_t *index = (uint32_t *)xmalloc(sizeof(uint32_t) * (n + 1));
+    std::fill(index, index + n, DECIMATE_REMOVED);
+    for (size_t c = 0; c < corners; c += 3)
+        if (flat.triangles[c] != COLLAPSE_NONE) {
+            for (int k = 0; k < 3; k++)
+                index[flat.triangles[c + k]] = 0; // a vertex of a live triangle: numbered below
+            live++;
+        }
+    uint32_t count = 0;
+    for (size_t v = 0; v < n; v++)
+        if (index[v] != DECIMATE_REMOVED)
+            index[v] = count++;
+    mesh_data *m = &out->mesh;
+    m->vertex_count = count;
+    m->positions = (float *)xmalloc(3 * sizeof(float) * ((size_t)count + 1));
+    for (size_t v = 0; v < n; v++)
+        if (index[v] != DECIMATE_REMOVED)
+            std::memcpy(&m->positions[3 * (size_t)index[v]], &flat.positions[3 * v],
+                        3 * sizeof(float));
+    write_triangles(flat, live, [&](size_t c) { return index[flat.triangles[c]]; }, m);
+    out->output_index = index;
+}
+
 // The reduced mesh into out->mesh: every vertex of a live triangle once per wedge (distinct
 // corner id), in vertex order, its wedges in the order its corners come in the triangle list;
-// out->output_index[v] is v's first output vertex, or DECIMATE_REMOVED. The live triangles keep
-// their order, each wound as the input had it (a turned one turned back), followed by the twins
-// of the live ones (weld.h), each on its triangle's corners in its own winding.
+// out->output_index[v] is v's first output vertex, or DECIMATE_REMOVED. The triangles as
+// write_triangles writes them.
 void write_output(const weld_result &flat, decimate_output *out)
 {
+    if (!flat.corner_ids) {
+        write_output_unsplit(flat, out);
+        return;
+    }
     size_t n = flat.vertex_count, corners = 3 * (size_t)flat.triangle_count;
-    bool split = flat.corner_ids != nullptr;
     // Per vertex, its live corners in triangle order (a counting sort).
     std::vector<uint32_t> start(n + 1, 0), corner_of;
     size_t live = 0;
@@ -186,7 +245,7 @@ void write_output(const weld_result &flat, decimate_output *out)
         out->output_index[v] = DECIMATE_REMOVED;
         size_t first = vertex_of.size();
         for (uint32_t i = start[v]; i < start[v + 1]; i++) {
-            uint32_t c = corner_of[i], id = split ? flat.corner_ids[c] : 0;
+            uint32_t c = corner_of[i], id = flat.corner_ids[c];
             size_t w = first;
             while (w < vertex_of.size() && id_of[w] != id)
                 w++;
@@ -200,35 +259,14 @@ void write_output(const weld_result &flat, decimate_output *out)
             out->output_index[v] = (uint32_t)first;
     }
     size_t count = vertex_of.size();
-    size_t twins = 0;
-    for (uint32_t i = 0; i < flat.twin_count; i++)
-        twins += flat.triangles[3 * (size_t)flat.twins[i].primary] != COLLAPSE_NONE;
     mesh_data *m = &out->mesh;
     m->vertex_count = (uint32_t)count;
-    m->triangle_count = (uint32_t)(live + twins);
     m->positions = (float *)xmalloc(3 * sizeof(float) * (count + 1));
-    m->indices = (uint32_t *)xmalloc(3 * sizeof(uint32_t) * (live + twins + 1));
     for (size_t i = 0; i < count; i++)
         std::memcpy(&m->positions[3 * i], &flat.positions[3 * (size_t)vertex_of[i]],
                     3 * sizeof(float));
-    size_t written = 0;
-    for (size_t c = 0; c < corners; c += 3) {
-        if (flat.triangles[c] == COLLAPSE_NONE)
-            continue;
-        bool turned = flat.turned && flat.turned[c / 3];
-        m->indices[written++] = output_of[c];
-        m->indices[written++] = output_of[c + (turned ? 2 : 1)];
-        m->indices[written++] = output_of[c + (turned ? 1 : 2)];
-    }
-    for (uint32_t i = 0; i < flat.twin_count; i++) {
-        size_t c = 3 * (size_t)flat.twins[i].primary;
-        if (flat.triangles[c] == COLLAPSE_NONE)
-            continue;
-        for (int k = 0; k < 3; k++)
-            m->indices[written++] = output_of[c + flat.twins[i].corner[k]];
-    }
-    if (split)
-        copy_attribute_values(flat.uv_floats, flat.normal_floats, flat.attributes, id_of, m);
+    write_triangles(flat, live, [&](size_t c) { return output_of[c]; }, m);
+    copy_attribute_values(flat.uv_floats, flat.normal_floats, flat.attributes, id_of, m);
 }
 
 // decimate_mesh() without the exception boundary.
