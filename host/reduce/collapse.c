@@ -66,6 +66,7 @@ typedef uint8_t vertex_flags;
 #define SPIN_LIMIT 4000 /* pauses (about 0.1 ms) a thread spins before it sleeps or yields */
 #define FRESH_ARRAYS 4  /* the engine's large arrays: adjacency, rings, scores, quadrics */
 #define HALF_EDGES_AT_HAND 64 /* a vertex's half-edges build_ring copies onto the stack */
+#define TOUCHES_KNOWN 255 /* a vertex's touch count (vertex_marks) is exact below this */
 
 typedef struct worker_pool worker_pool;
 
@@ -188,6 +189,16 @@ typedef struct edge_sides {
     uint32_t vl, vr; /* their third vertices */
 } edge_sides;
 
+/* What the acceptance of the chunks (take_in_chunks) marks at a vertex: `chunk` is the engine's
+ * chunk_mark where a collapse accepted in this chunk writes it (written), and `touches` counts
+ * the accepted collapses of this pass whose ring held it (from TOUCHES_KNOWN on: not known), for
+ * valence_three. Written by the acceptance alone, on the calling thread, so that the flags,
+ * which the other threads write, are not written there; the touches cleared where the scoring
+ * clears the flags (settle_vertex). */
+typedef struct vertex_marks {
+    uint8_t chunk, touches;
+} vertex_marks;
+
 typedef struct engine {
     collapse_mesh *m;
     const collapse_options *o;
@@ -241,10 +252,8 @@ typedef struct engine {
     uint32_t *moved_costs; /* the checked candidates that moved: their new costs' bits */
     uint32_t *moved_from;  /* and their keys' (those with no legal collapse too) */
     size_t moved_count, moved_from_count, moved_capacity, moved_from_capacity;
-    /* per vertex: chunk_mark where a collapse accepted in this chunk writes it (written); read
-     * and written by the acceptance alone, on the calling thread, so that the flags, which the
-     * other threads write, are not written there */
-    uint8_t *chunk_marks, chunk_mark;
+    vertex_marks *marks; /* per vertex (take_in_chunks) */
+    uint8_t chunk_mark;
     uint32_t *history;
     /* the arrays of large_array, whole 2 MiB pages each (first_touch) */
     struct {
@@ -1221,6 +1230,13 @@ static int valence_three(const engine *e, uint32_t v, int current, uint32_t hold
         ring r = ring_of(e, v);
         return holding == COLLAPSE_NONE || ring_count(&r, holding);
     }
+    /* Each collapse that touched v took at most one neighbour from it (v0 from a side or from
+     * v1, whose other neighbours stay or come in; v0 from the rest of v0's ring, which gets v1
+     * instead), so v has at least its pass-start neighbours less its touches: most have more
+     * than three, and their triangles are not read. */
+    uint8_t touches = e->marks[v].touches;
+    if (touches < TOUCHES_KNOWN && e->ring_size[v] > 3u + touches)
+        return 0;
     uint32_t seen[3], count = 0, sources[2] = {v, donor_of(e, v)};
     for (int k = 0; k < 2; k++) {
         if (sources[k] == COLLAPSE_NONE)
@@ -1507,6 +1523,7 @@ static void settle_vertex(engine *e, uint32_t v, scratch *s)
     } else if (flags & FLAG_STALE)
         score_vertex(e, v, s);
     e->flags[v] &= (vertex_flags) ~(FLAG_STALE | FLAG_TOUCHED | FLAG_TAKEN | FLAG_MOVED);
+    e->marks[v].touches = 0;
 }
 
 /* ---- the per-vertex steps, in parallel ---- */
@@ -2389,35 +2406,44 @@ static void apply_item(engine *e, uint32_t item, scratch *s)
 /* Whether a collapse accepted earlier in this chunk writes vertex v. */
 static int written(const engine *e, uint32_t v)
 {
-    return v != COLLAPSE_NONE && e->chunk_marks[v] == e->chunk_mark;
+    return v != COLLAPSE_NONE && e->marks[v].chunk == e->chunk_mark;
 }
 
 /* Marks v written in this chunk. */
-static void mark_written(engine *e, uint32_t v) { e->chunk_marks[v] = e->chunk_mark; }
+static void mark_written(engine *e, uint32_t v) { e->marks[v].chunk = e->chunk_mark; }
+
+/* Marks v written in this chunk, and touched once more in this pass. */
+static void mark_touched(engine *e, uint32_t v)
+{
+    mark_written(e, v);
+    if (e->marks[v].touches < TOUCHES_KNOWN)
+        e->marks[v].touches++;
+}
 
 /* The marks of the next chunk: the next value (none is written with it yet), all cleared where
  * the values wrap (once in 255 chunks). */
 static void next_chunk_mark(engine *e)
 {
     if (++e->chunk_mark == 0) {
-        memset(e->chunk_marks, 0, (size_t)e->n + 1);
+        for (uint32_t v = 0; v <= e->n; v++)
+            e->marks[v].chunk = 0;
         e->chunk_mark = 1;
     }
 }
 
-/* Marks what taking the judged collapse writes: v0 and its ring. */
+/* Marks what taking the judged collapse writes: v0 and its ring, which it touches. */
 static void mark_writes(engine *e, const judgement *j, scratch *s)
 {
+    mark_written(e, j->v0);
     if (j->write_count <= WRITES_MAX) {
-        for (uint32_t i = 0; i < j->write_count; i++)
-            mark_written(e, j->writes[i]);
+        for (uint32_t i = 1; i < j->write_count; i++) /* (writes[0] is v0) */
+            mark_touched(e, j->writes[i]);
         return;
     }
     fan f0;
     ring r0 = current_ring(e, j->v0, s, SLOT_V0, &f0);
-    mark_written(e, j->v0);
     for (uint32_t i = 0; i < r0.size; i++)
-        mark_written(e, r0.entry[i].vertex);
+        mark_touched(e, r0.entry[i].vertex);
 }
 
 /* Whether candidate a comes before candidate b in the ranking: by cost, then compare_candidates
@@ -2620,7 +2646,7 @@ static void engine_free(engine *e)
     free(e->judgements);
     free(e->chunk);
     free(e->accepted);
-    free(e->chunk_marks);
+    free(e->marks);
     free(e->due);
     memset(e, 0, sizeof *e);
 }
@@ -2687,7 +2713,7 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     e->rings = large_array(e, sizeof(ring_entry) * ring_slots);
     e->ring_size = xcalloc(n, sizeof(uint32_t));
     e->donor = xmalloc(sizeof(uint32_t) * n);
-    e->chunk_marks = xcalloc(n, 1);
+    e->marks = xcalloc(n, sizeof(vertex_marks));
     e->due = xcalloc(n / 64 + 2, sizeof(uint64_t));
     e->chunk_mark = 1;
     e->best_target = xmalloc(sizeof(uint32_t) * n);
@@ -2736,12 +2762,12 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
 
 size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_method method)
 {
-    /* flags, the chunk mark, adjacency_start, ring_size, donor, best_target, best, importance,
+    /* flags, the chunk mark, the touch count, adjacency_start, ring_size, donor, best_target, best, importance,
      * the ranking's keys (and their spare), at most the lists of candidates that moved when
      * checked (check_ranking: the threads' keys, their new and old costs), the quadric and its
      * own error; a ring slot (its ring_entry); the due bits (check_candidates_up_to); per
      * triangle its place in the live list */
-    size_t per_vertex = sizeof(vertex_flags) + 1 + 4 + 4 + 4 + 4 + sizeof(candidate) +
+    size_t per_vertex = sizeof(vertex_flags) + 1 + 1 + 4 + 4 + 4 + 4 + sizeof(candidate) +
                         sizeof(double) + 3 * sizeof(rank_key) + 2 * sizeof(uint32_t) +
                         (method != DECIMATE_IMPORTANCE ? 11 * sizeof(double) : 0);
     size_t ring_slot = sizeof(ring_entry);
