@@ -330,15 +330,7 @@ static uint32_t ring_count(const ring *r, uint32_t w)
  * whether v1's ring holds it, and most are not there: the summary answers them without a scan. */
 static uint32_t summary_bit(uint32_t w) { return (w * 0x9e3779b1u) >> 26; }
 
-static uint64_t ring_summary(const ring *r)
-{
-    uint64_t summary = 0;
-    for (uint32_t i = 0; i < r->size; i++)
-        summary |= (uint64_t)1 << summary_bit(r->entry[i].vertex);
-    return summary;
-}
-
-/* Whether w is in the ring (summary: ring_summary's). */
+/* Whether w is in the ring (summary: the bits of its vertices, as target_rules_kept sums them). */
 static int ring_holds(const ring *r, uint64_t summary, uint32_t w)
 {
     return (summary >> summary_bit(w) & 1) && ring_find(r, w) < r->size;
@@ -577,7 +569,7 @@ static fan current_fan(const engine *e, uint32_t v, scratch *s, int slot)
     return f;
 }
 
-/* Where a ring being written holds its vertices: per summary bit (ring_summary) that is set,
+/* Where a ring being written holds its vertices: per summary bit (summary_bit) that is set,
  * the slot of the first vertex added with it. A neighbour whose bit is clear is new (half of
  * them come new), and one whose bit is set is most often at that slot: few are searched for. */
 typedef struct ring_index {
@@ -1270,14 +1262,25 @@ static int valence_three(const engine *e, uint32_t v, int current, uint32_t hold
 static int target_rules_kept(uint32_t v1, const ring *r0, uint32_t slot, int boundary0,
                              const ring *r1, const char **rule)
 {
-    int boundary1;
-    if (!ring_simple(r1, &boundary1))
-        return *rule = "complex vertex", 0;
     uint32_t vl = r0->entry[slot].left, vr = r0->entry[slot].right, held = r0->entry[slot].count;
+    /* r1 read once: what ring_simple and ring_count of vl and vr would give, and its summary */
+    uint32_t open1 = 0, vl_count = 0, vr_count = 0, too_many = 0;
+    uint64_t summary1 = 0;
+    for (uint32_t i = 0; i < r1->size; i++) {
+        const ring_entry *x = &r1->entry[i];
+        too_many |= x->count > 2;
+        open1 += x->count == 1;
+        vl_count = x->vertex == vl ? x->count : vl_count;
+        vr_count = x->vertex == vr ? x->count : vr_count;
+        summary1 |= (uint64_t)1 << summary_bit(x->vertex);
+    }
+    if (too_many || open1 > 2)
+        return *rule = "complex vertex", 0;
+    int boundary1 = open1 > 0;
     /* A triangle of the edge whose other two edges are open would leave a dangling edge. */
-    if (vl != COLLAPSE_NONE && ring_count(r1, vl) == 1 && ring_count(r0, vl) == 1)
+    if (vl != COLLAPSE_NONE && vl_count == 1 && ring_count(r0, vl) == 1)
         return *rule = "dangling edge", 0;
-    if (vr != COLLAPSE_NONE && ring_count(r1, vr) == 1 && ring_count(r0, vr) == 1)
+    if (vr != COLLAPSE_NONE && vr_count == 1 && ring_count(r0, vr) == 1)
         return *rule = "dangling edge", 0;
     if (vl == vr)
         return *rule = "one opposite vertex", 0;
@@ -1286,7 +1289,6 @@ static int target_rules_kept(uint32_t v1, const ring *r0, uint32_t slot, int bou
         return *rule = "interior edge between boundaries", 0;
     if (boundary0 && (!boundary1 || both_sides))
         return *rule = "boundary vertex off the boundary", 0;
-    uint64_t summary1 = ring_summary(r1);
     for (uint32_t i = 0; i < r0->size; i++) {
         uint32_t w = r0->entry[i].vertex;
         if (w != v1 && w != vl && w != vr && ring_holds(r1, summary1, w))
