@@ -3,15 +3,15 @@
  *
  * State, per vertex: flags (locked by the caller, removed, touched or an end of a collapse taken
  * in this pass, to be scored again, its candidate not yet checked against the rules, moved when
- * checked, or with no legal collapse) and the chunk mark (written by a collapse accepted in this
- * chunk), the plane
- * quadric (10 doubles: the upper triangle of A, then b, then c, for p'Ap + 2b'p + c) and its
- * error at the vertex itself, the importance, the best collapse the scoring found (target, cost,
- * tie keys) and the donor (the vertex that went into it in this pass). Per triangle: its three
- * vertices and corner ids (the caller's arrays, rewritten). Per attribute id (COMBINED with
- * attributes): its attribute quadric (see "Attribute quadrics" below). At the start of each pass
- * the adjacency (adjacency[adjacency_start[v] ..]: the live triangles at v) and the rings
- * (ring_of: a 16-byte record per neighbour) are built again.
+ * checked, or with no legal collapse) and the acceptance's marks (written by a collapse accepted
+ * in this chunk; touched by how many collapses of this pass), the plane quadric (10 doubles: the
+ * upper triangle of A, then b, then c, for p'Ap + 2b'p + c) and its error at the vertex itself,
+ * the importance, the best collapse the scoring found (target, cost, tie keys) and the donor
+ * (the vertex that went into it in this pass). Per triangle: its three vertices and corner ids
+ * (the caller's arrays, rewritten). Per attribute id (COMBINED with attributes): its attribute
+ * quadric (see "Attribute quadrics" below). At the start of each pass the adjacency
+ * (adjacency[adjacency_start[v] ..]: the live triangles at v) and the rings (ring_of: a 16-byte
+ * record per neighbour, built from the half-edges the adjacency leaves in them) are built again.
  *
  * Why a vertex's pass-start triangles stay exact until it is touched: a triangle changes only
  * when one of its vertices is removed (it then moves to the kept vertex, or dies with the edge),
@@ -662,9 +662,9 @@ static ring_entry *pass_ring_entries(const engine *e, uint32_t v)
 }
 
 /* Builds v's one-ring from its pass-start triangles into the pass's ring records, from the
- * half-edges the adjacency left there (fill_corners): on the dragon the rings took 0.16 s of
- * a run on one thread from the triangles, 0.09 s from the half-edges (and the adjacency 0.06
- * s more, 0.11 s, for writing them). */
+ * half-edges the adjacency left there (fill_corners). From the triangles, read again at random,
+ * the rings of the dragon's run took 0.16 s on one thread; from the half-edges 0.09 s, for 0.04 s
+ * more in the adjacency, which writes them. */
 static void build_ring(engine *e, uint32_t v, scratch *s)
 {
     uint32_t degree = e->adjacency_start[v + 1] - e->adjacency_start[v];
@@ -2764,13 +2764,14 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
 
 size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_method method)
 {
-    /* flags, the chunk mark, the touch count, adjacency_start, ring_size, donor, best_target, best, importance,
-     * the ranking's keys (and their spare), at most the lists of candidates that moved when
-     * checked (check_ranking: the threads' keys, their new and old costs), the quadric and its
-     * own error; a ring slot (its ring_entry); the due bits (check_candidates_up_to); per
-     * triangle its place in the live list */
-    size_t per_vertex = sizeof(vertex_flags) + 1 + 1 + 4 + 4 + 4 + 4 + sizeof(candidate) +
-                        sizeof(double) + 3 * sizeof(rank_key) + 2 * sizeof(uint32_t) +
+    /* flags, the acceptance's marks, adjacency_start, ring_size, donor, best_target, best,
+     * importance, the ranking's keys (and their spare), at most the lists of candidates that
+     * moved when checked (check_ranking: the threads' keys, their new and old costs), the
+     * quadric and its own error; a ring slot (its ring_entry); the due bits
+     * (check_candidates_up_to); per triangle its place in the live list */
+    size_t per_vertex = sizeof(vertex_flags) + sizeof(vertex_marks) + 4 + 4 + 4 + 4 +
+                        sizeof(candidate) + sizeof(double) + 3 * sizeof(rank_key) +
+                        2 * sizeof(uint32_t) +
                         (method != DECIMATE_IMPORTANCE ? 11 * sizeof(double) : 0);
     size_t ring_slot = sizeof(ring_entry);
     /* per corner: the adjacency and a ring slot */

@@ -42,11 +42,9 @@ static void position_bits(const float *p, uint32_t bits[3])
     }
 }
 
-/* The first slot of position p's bits in a table of mask + 1 slots. */
-static size_t position_slot(const float *p, size_t mask)
+/* The first slot of a position (its bits) in a table of mask + 1 slots. */
+static size_t position_slot(const uint32_t bits[3], size_t mask)
 {
-    uint32_t bits[3];
-    position_bits(p, bits);
     return mix(mix(mix(0, bits[0]), bits[1]), bits[2]) & mask;
 }
 
@@ -62,12 +60,14 @@ static void weld_positions(const decimate_input *in, weld_result *out)
     out->importance = xmalloc(sizeof(double) * ((size_t)in->vertex_count + 1));
     uint32_t count = 0;
     for (uint32_t v = 0; v < in->vertex_count; v++) {
-        if (v + WELD_AHEAD < in->vertex_count)
-            __builtin_prefetch(&table[position_slot(&in->positions[3 * ((size_t)v + WELD_AHEAD)],
-                                                    mask)]);
+        if (v + WELD_AHEAD < in->vertex_count) {
+            uint32_t ahead[3];
+            position_bits(&in->positions[3 * ((size_t)v + WELD_AHEAD)], ahead);
+            __builtin_prefetch(&table[position_slot(ahead, mask)]);
+        }
         uint32_t bits[3];
         position_bits(&in->positions[3 * (size_t)v], bits);
-        size_t slot = position_slot(&in->positions[3 * (size_t)v], mask);
+        size_t slot = position_slot(bits, mask);
         double value = in->vertex_importance ? in->vertex_importance[v] : 0.0;
         for (;; slot = (slot + 1) & mask) {
             uint32_t w = table[slot];
