@@ -15,7 +15,6 @@
 #define MAX_ATTRIBUTE_FLOATS 5
 #define WELD_THREADS 64   /* the most the manifold check starts */
 #define WELD_BLOCK 16384  /* vertices a thread of the manifold check takes at the least */
-#define WELD_AHEAD 8      /* vertices ahead whose table slot is asked for (weld_positions) */
 
 static uint32_t mix(uint32_t h, uint32_t word)
 {
@@ -42,14 +41,6 @@ static void position_bits(const float *p, uint32_t bits[3])
     }
 }
 
-/* The first slot of a position (its bits) in a table of mask + 1 slots. */
-static size_t position_slot(const uint32_t bits[3], size_t mask)
-{
-    return mix(mix(mix(0, bits[0]), bits[1]), bits[2]) & mask;
-}
-
-/* The positions welded in input order, the table slot of the vertex WELD_AHEAD on asked for
- * meanwhile (a table of a large mesh's positions is read at random). */
 static void weld_positions(const decimate_input *in, weld_result *out)
 {
     size_t size = table_size(in->vertex_count), mask = size - 1;
@@ -60,14 +51,9 @@ static void weld_positions(const decimate_input *in, weld_result *out)
     out->importance = xmalloc(sizeof(double) * ((size_t)in->vertex_count + 1));
     uint32_t count = 0;
     for (uint32_t v = 0; v < in->vertex_count; v++) {
-        if (v + WELD_AHEAD < in->vertex_count) {
-            uint32_t ahead[3];
-            position_bits(&in->positions[3 * ((size_t)v + WELD_AHEAD)], ahead);
-            __builtin_prefetch(&table[position_slot(ahead, mask)]);
-        }
         uint32_t bits[3];
         position_bits(&in->positions[3 * (size_t)v], bits);
-        size_t slot = position_slot(bits, mask);
+        size_t slot = mix(mix(mix(0, bits[0]), bits[1]), bits[2]) & mask;
         double value = in->vertex_importance ? in->vertex_importance[v] : 0.0;
         for (;; slot = (slot + 1) & mask) {
             uint32_t w = table[slot];
