@@ -136,6 +136,7 @@ typedef struct scratch {
     size_t half_edges_capacity;
     struct rank_key *moved; /* the keys of the candidates that moved in a check (check_vertex) */
     size_t moved_count, moved_capacity;
+    uint32_t step_items; /* the items of the running step published when its block was claimed */
 } scratch;
 
 /* One candidate target of a vertex, for ordering them. */
@@ -242,7 +243,6 @@ typedef struct engine {
     uint32_t chunk_size;            /* its items */
     struct judgement *judgements;   /* per item of the chunk */
     uint32_t *accepted;             /* the chunk's items taken */
-    uint32_t accepted_count;
     size_t waiting; /* candidates deferred, or moved when checked (in spare_keys, a heap) */
     /* the ranking's check against the rules (check_ranking) */
     float check_up_to;     /* the candidates costing at most this are checked (-1: none yet) */
@@ -1539,9 +1539,12 @@ typedef struct worker_start {
 
 /* What one step is: set before its generation is published, read by the threads that claim its
  * items. Two, by the generation's parity: a thread that wakes late reads the parameters of a
- * step already over, but can no longer claim any of its items. */
+ * step already over, but can no longer claim any of its items. A step whose items are still
+ * being listed (pool_open) is open: its count grows as the caller publishes more, and the
+ * threads that have claimed all of them wait for more until the caller closes it (pool_close). */
 typedef struct step_parameters {
     atomic_uint step, items, block;
+    atomic_uint closed; /* whether `items` is final */
 } step_parameters;
 
 /* A step runs as its items are claimed, `block` at a time, from `claim` (the generation in the
@@ -1615,6 +1618,14 @@ static void run_item(engine *e, vertex_step step, uint32_t i, scratch *s)
     }
 }
 
+/* A short wait in a spin loop. */
+static void spin_pause(void)
+{
+#if defined(__x86_64__) || defined(__i386__)
+    __builtin_ia32_pause();
+#endif
+}
+
 /* Claims blocks of the items of step `generation` (vertices, or a chunk's candidates) and runs
  * them, until none is left or the step is over. */
 static void run_step(worker_pool *pool, scratch *s, unsigned int generation)
@@ -1625,10 +1636,16 @@ static void run_step(worker_pool *pool, scratch *s, unsigned int generation)
         if ((uint32_t)(claim >> 32) != generation)
             return;
         uint32_t begin = (uint32_t)claim;
-        uint32_t items = atomic_load_explicit(&parameters->items, memory_order_relaxed);
+        /* (closed read first: once it is set, `items` is final) */
+        unsigned int closed = atomic_load_explicit(&parameters->closed, memory_order_acquire);
+        uint32_t items = atomic_load_explicit(&parameters->items, memory_order_acquire);
         uint32_t block = atomic_load_explicit(&parameters->block, memory_order_relaxed);
-        if (begin >= items)
-            return;
+        if (begin >= items) {
+            if (closed)
+                return;
+            spin_pause(); /* an open step: the caller is listing more */
+            continue;
+        }
         uint32_t end = items - begin > block ? begin + block : items;
         if (!atomic_compare_exchange_weak_explicit(&pool->claim, &claim,
                                                    (uint64_t)generation << 32 | end,
@@ -1636,18 +1653,11 @@ static void run_step(worker_pool *pool, scratch *s, unsigned int generation)
             continue;
         /* claimed: the step cannot end, nor its parameters change, before these are done */
         vertex_step step = atomic_load_explicit(&parameters->step, memory_order_relaxed);
+        s->step_items = items;
         for (uint32_t i = begin; i < end; i++)
             run_item(pool->e, step, i, s);
         atomic_fetch_add_explicit(&pool->done, end - begin, memory_order_release);
     }
-}
-
-/* A short wait in a spin loop. */
-static void spin_pause(void)
-{
-#if defined(__x86_64__) || defined(__i386__)
-    __builtin_ia32_pause();
-#endif
 }
 
 static void *worker_main(void *arg)
@@ -1695,6 +1705,7 @@ static void pool_start(worker_pool *pool, engine *e, unsigned int threads)
         atomic_init(&pool->parameters[k].step, 0);
         atomic_init(&pool->parameters[k].items, 0);
         atomic_init(&pool->parameters[k].block, 1);
+        atomic_init(&pool->parameters[k].closed, 1);
     }
     if (threads > MAX_THREADS)
         threads = MAX_THREADS;
@@ -1709,9 +1720,9 @@ static void pool_start(worker_pool *pool, engine *e, unsigned int threads)
     }
 }
 
-/* Runs one step over its items on the pool's threads and the caller's; returns when all are
- * done. */
-static void run_on_pool(engine *e, vertex_step step, uint32_t items, uint32_t block)
+/* Publishes a step of `items` items (the first of them, where it is open) to the pool's
+ * threads. */
+static void pool_open(engine *e, vertex_step step, uint32_t items, uint32_t block, int open)
 {
     worker_pool *pool = e->pool;
     unsigned int generation = atomic_load_explicit(&pool->generation, memory_order_relaxed) + 1;
@@ -1719,6 +1730,7 @@ static void run_on_pool(engine *e, vertex_step step, uint32_t items, uint32_t bl
     atomic_store_explicit(&parameters->step, step, memory_order_relaxed);
     atomic_store_explicit(&parameters->items, items, memory_order_relaxed);
     atomic_store_explicit(&parameters->block, block, memory_order_relaxed);
+    atomic_store_explicit(&parameters->closed, !open, memory_order_relaxed);
     atomic_store_explicit(&pool->done, 0, memory_order_relaxed);
     atomic_store_explicit(&pool->claim, (uint64_t)generation << 32, memory_order_release);
     atomic_store_explicit(&pool->generation, generation, memory_order_release);
@@ -1726,6 +1738,25 @@ static void run_on_pool(engine *e, vertex_step step, uint32_t items, uint32_t bl
     if (pool->sleepers)
         pthread_cond_broadcast(&pool->wake);
     pthread_mutex_unlock(&pool->lock);
+}
+
+/* The open step's items now number `items` (what they read written before this). */
+static void pool_publish(engine *e, uint32_t items)
+{
+    worker_pool *pool = e->pool;
+    unsigned int generation = atomic_load_explicit(&pool->generation, memory_order_relaxed);
+    atomic_store_explicit(&pool->parameters[generation & 1].items, items, memory_order_release);
+}
+
+/* The step's items, `items` in all, run on the pool's threads and the caller's (the open step
+ * closed); returns when all are done. */
+static void pool_close(engine *e, uint32_t items)
+{
+    worker_pool *pool = e->pool;
+    unsigned int generation = atomic_load_explicit(&pool->generation, memory_order_relaxed);
+    step_parameters *parameters = &pool->parameters[generation & 1];
+    atomic_store_explicit(&parameters->items, items, memory_order_release);
+    atomic_store_explicit(&parameters->closed, 1, memory_order_release);
     run_step(pool, &pool->scratch[0], generation);
     for (unsigned int spins = 0;
          atomic_load_explicit(&pool->done, memory_order_acquire) < items; spins++)
@@ -1733,6 +1764,14 @@ static void run_on_pool(engine *e, vertex_step step, uint32_t items, uint32_t bl
             spin_pause();
         else
             sched_yield(); /* a worker holding a block is off its core: let it run */
+}
+
+/* Runs one step over its items on the pool's threads and the caller's; returns when all are
+ * done. */
+static void run_on_pool(engine *e, vertex_step step, uint32_t items, uint32_t block)
+{
+    pool_open(e, step, items, block, 0);
+    pool_close(e, items);
 }
 
 static void pool_stop(worker_pool *pool)
@@ -2370,11 +2409,11 @@ static void prefetch_judging(const engine *e, uint32_t item)
     }
 }
 
-/* For the collapse PREFETCH_AHEAD accepted ones on: the quadrics it merges, v1's records it
- * writes and v0's triangles it moves. */
-static void prefetch_taking(const engine *e, uint32_t item)
+/* For the collapse PREFETCH_AHEAD accepted ones on, where it is listed yet (`listed`): the
+ * quadrics it merges, v1's records it writes and v0's triangles it moves. */
+static void prefetch_taking(const engine *e, uint32_t item, uint32_t listed)
 {
-    if (item + PREFETCH_AHEAD >= e->accepted_count)
+    if (item + PREFETCH_AHEAD >= listed)
         return;
     const judgement *j = &e->judgements[e->accepted[item + PREFETCH_AHEAD]];
     if (e->quadric) { /* 80 bytes each: two cache lines */
@@ -2401,7 +2440,7 @@ static void judge_item(engine *e, uint32_t item, scratch *s)
 
 static void apply_item(engine *e, uint32_t item, scratch *s)
 {
-    prefetch_taking(e, item);
+    prefetch_taking(e, item, s->step_items);
     take(e, &e->judgements[e->accepted[item]], s);
 }
 
@@ -2502,11 +2541,14 @@ static rank_key wait_pop(engine *e)
  * pass goes on to the first it can take (a guard: the pass's first candidate is checked, costs
  * no more than the limit and, nothing being taken yet, is legal as checked). The accepted ones
  * write disjoint triangles and vertices (apply_collapse: v0's triangles, v0's ring's flags, v1's
- * quadric) and are taken side by side. Every collapse taken is legal on the mesh it is applied
- * to, and which ones are taken depends only on the ranking and the chunks, never on the
- * threads: the same bytes on any number of them. Against the strict order, a deferred
- * candidate may come after costlier ones of its chunk (a relaxed order, as a relaxed priority
- * queue's). Returns the collapses taken. */
+ * quadric) and are taken side by side, while the acceptance goes on: the pool's threads take
+ * them as they are listed (pool_open, pool_publish), a block at a time. The acceptance reads the
+ * mesh only to gather a long ring (mark_writes), and that of a v0 no accepted collapse wrote: one
+ * that moves a triangle at v0 marks v0, and the candidate waits. Every collapse taken is legal on
+ * the mesh it is applied to, and which ones are taken depends only on the ranking and the
+ * chunks, never on the threads: the same bytes on any number of them. Against the strict order,
+ * a deferred candidate may come after costlier ones of its chunk (a relaxed order, as a relaxed
+ * priority queue's). Returns the collapses taken. */
 static uint32_t take_in_chunks(engine *e, const rank_key *keys, size_t count, float cost_limit,
                                scratch *s)
 {
@@ -2550,8 +2592,12 @@ static uint32_t take_in_chunks(engine *e, const rank_key *keys, size_t count, fl
             }
             if (j->verdict != VERDICT_LEGAL)
                 continue;
-            e->accepted[accepted++] = i;
             mark_writes(e, j, s);
+            e->accepted[accepted++] = i;
+            if (accepted == 1)
+                pool_open(e, STEP_APPLY, 1, APPLY_BLOCK, 1);
+            else if (accepted % APPLY_BLOCK == 0)
+                pool_publish(e, accepted);
             e->alive = e->alive > j->removes ? e->alive - j->removes : 0;
             taken++;
             if (e->alive <= e->o->target_vertices) {
@@ -2559,9 +2605,8 @@ static uint32_t take_in_chunks(engine *e, const rank_key *keys, size_t count, fl
                 break;
             }
         }
-        e->accepted_count = accepted;
         if (accepted)
-            run_on_pool(e, STEP_APPLY, accepted, APPLY_BLOCK);
+            pool_close(e, accepted);
         next_chunk_mark(e);
     }
     return taken;
