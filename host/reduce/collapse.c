@@ -78,7 +78,7 @@ typedef enum vertex_step {
     STEP_COUNT_CORNERS, /* per range of vertices (build_adjacency) */
     STEP_FILL_CORNERS,
     STEP_WEIGH_FACES, /* per triangle (importance_floor) */
-    STEP_FIRST_RINGS, /* per vertex: its ring, then its quadric (engine_init) */
+    STEP_QUADRICS,    /* per range of vertices (engine_init) */
     STEP_RINGS,       /* per vertex */
     STEP_SCORES,
     STEP_COUNT_CANDIDATES, /* per range of vertices (rank_candidates) */
@@ -996,7 +996,7 @@ static void start_attribute_quadrics(engine *e)
 }
 
 /* Where importance_floor's step writes triangle t's area and its area x importance: the pass's
- * ring records, which the first rings step writes only after (room for 3 t + n records of 16
+ * ring records, which the first adjacency writes only after (room for 3 t + n records of 16
  * bytes, 16 bytes per triangle taken). */
 static double *face_weights(const engine *e, uint32_t t) { return (double *)&e->rings[t]; }
 
@@ -1032,23 +1032,55 @@ static double importance_floor(engine *e)
     return mean > 0 && isfinite(mean) ? FLOOR_SHARE * mean : 1.0;
 }
 
-/* The plane quadric of v (and, COMBINED with attributes, the attribute quadrics of its corner
- * ids) from its triangles, in triangle order: QUADRIC, each face's plane weighted by its area
- * (OpenMesh's ModQuadricT); COMBINED, weighted by area x (importance + floor), with the plane
- * across each open edge of the face at v. Each vertex sums its own, so the vertices may go to any
- * thread; every sum is taken in the order a loop over the triangles would take it. */
-static void build_quadric(engine *e, uint32_t v)
+/* COMBINED: the planes across the open edges of face t at v (n the face's unit normal), each
+ * weighted by its length squared x the face's importance, into v's quadric q. */
+static void add_open_edge_planes(const engine *e, uint32_t t, uint32_t v, const double n[3],
+                                 double face_importance, double *q)
 {
-    int combined = e->o->method == DECIMATE_COMBINED;
-    double quadric[10] = {0}; /* summed here, stored once: e->quadric is not zeroed */
-    fan f = pass_fan(e, v);
     ring r = ring_of(e, v);
     int open = 0; /* whether v has an open edge: most have none, and skip the search for them */
-    for (uint32_t i = 0; i < r.size && combined; i++)
+    for (uint32_t i = 0; i < r.size; i++)
         open |= r.entry[i].count == 1;
-    for (uint32_t i = 0; i < f.count; i++) {
-        uint32_t t = f.triangle[i];
+    const uint32_t *c = corners(e, t);
+    for (int k = 0; k < 3 && open; k++) {
+        uint32_t a = c[k], b = c[(k + 1) % 3];
+        if ((a != v && b != v) || ring_count(&r, a == v ? b : a) != 1)
+            continue; /* not an edge at v, or not open */
+        double edge[3], across[3];
+        difference(position(e, b), position(e, a), edge);
+        cross(edge, n, across);
+        double length = sqrt(dot(across, across));
+        if (!(length > 0))
+            continue;
+        for (int m = 0; m < 3; m++)
+            across[m] /= length;
+        const float *pa = position(e, a);
+        double da = -(across[0] * pa[0] + across[1] * pa[1] + across[2] * pa[2]);
+        quadric_add_plane(q, across, da, BOUNDARY_WEIGHT * dot(edge, edge) * face_importance);
+    }
+}
+
+/* The plane quadrics of one range of vertices (and, COMBINED with attributes, the attribute
+ * quadrics of their corner ids), from their triangles: QUADRIC, each face's plane weighted by its
+ * area (OpenMesh's ModQuadricT); COMBINED, weighted by area x (importance + floor), with the
+ * plane across each open edge of the face at the vertex (the rings built). One sweep over the
+ * live triangles in list order computes each face's terms once, for the range's corners of it
+ * (a face across two ranges is computed in both): each vertex's sums are taken in the order of
+ * its triangles, as a loop over its own would take them, on any number of threads. */
+static void sum_quadrics(engine *e, uint32_t range)
+{
+    int combined = e->o->method == DECIMATE_COMBINED;
+    uint32_t first, end;
+    vertex_range(e, range, &first, &end);
+    memset(&e->quadric[10 * (size_t)first], 0, sizeof(double) * 10 * (end - first));
+    for (uint32_t i = 0; i < e->live_count; i++) {
+        uint32_t t = e->live[i];
         const uint32_t *c = corners(e, t);
+        int mine[3], any = 0;
+        for (int k = 0; k < 3; k++)
+            any |= mine[k] = c[k] - first < end - first;
+        if (!any)
+            continue;
         const float *p[3];
         double face_importance = 1.0, n[3]; /* QUADRIC: the planes unweighted by importance */
         if (combined)
@@ -1063,37 +1095,32 @@ static void build_quadric(engine *e, uint32_t v)
             n[k] /= twice_area;
         double d = -(n[0] * p[0][0] + n[1] * p[0][1] + n[2] * p[0][2]);
         double weight = 0.5 * twice_area * face_importance;
-        quadric_add_plane(quadric, n, d, weight);
-        if (!combined)
-            continue;
-        for (int k = 0; k < 3 && open; k++) {
-            uint32_t a = c[k], b = c[(k + 1) % 3];
-            if ((a != v && b != v) || ring_count(&r, a == v ? b : a) != 1)
-                continue; /* not an edge at v, or not open */
-            double edge[3], across[3];
-            difference(position(e, b), position(e, a), edge);
-            cross(edge, n, across);
-            double length = sqrt(dot(across, across));
-            if (!(length > 0))
-                continue;
-            for (int m = 0; m < 3; m++)
-                across[m] /= length;
-            const float *pa = position(e, a);
-            double da = -(across[0] * pa[0] + across[1] * pa[1] + across[2] * pa[2]);
-            quadric_add_plane(quadric, across, da,
-                              BOUNDARY_WEIGHT * dot(edge, edge) * face_importance);
-        }
+        double plane[10] = {0};
+        quadric_add_plane(plane, n, d, weight); /* (0 + each term: as a sum from zero) */
         double face[6 + 3 * MAX_CHANNELS + 1 + 3 + MAX_CHANNELS + 1];
-        if (e->attributes_weighted &&
-            attribute_face_terms(e, p, &e->m->corner_ids[3 * (size_t)t], weight, face)) {
-            int stride = attribute_stride(e->channels);
-            double *q = &e->attribute_terms[(size_t)id_at(e, t, v) * stride];
-            for (int m = 0; m < stride; m++)
-                q[m] += face[m];
+        int attribute_terms = e->attributes_weighted &&
+                              attribute_face_terms(e, p, &e->m->corner_ids[3 * (size_t)t], weight,
+                                                   face);
+        for (int corner = 0; corner < 3; corner++) {
+            if (!mine[corner])
+                continue;
+            uint32_t v = c[corner];
+            double *q = &e->quadric[10 * (size_t)v];
+            for (int m = 0; m < 10; m++)
+                q[m] += plane[m];
+            if (combined)
+                add_open_edge_planes(e, t, v, n, face_importance, q);
+            if (attribute_terms) {
+                int stride = attribute_stride(e->channels);
+                double *terms = &e->attribute_terms[(size_t)e->m->corner_ids[3 * (size_t)t + corner] *
+                                                    stride];
+                for (int m = 0; m < stride; m++)
+                    terms[m] += face[m];
+            }
         }
     }
-    memcpy(&e->quadric[10 * (size_t)v], quadric, sizeof quadric);
-    e->self_error[v] = quadric_error(quadric, position(e, v));
+    for (uint32_t v = first; v < end; v++)
+        e->self_error[v] = quadric_error(&e->quadric[10 * (size_t)v], position(e, v));
 }
 
 /* ---- the rules ---- */
@@ -1592,10 +1619,8 @@ static void run_item(engine *e, vertex_step step, uint32_t i, scratch *s)
     case STEP_RINGS:
         build_ring(e, i, s);
         break;
-    case STEP_FIRST_RINGS:
-        build_ring(e, i, s);
-        if (e->quadric)
-            build_quadric(e, i); /* from v's own ring, built just now */
+    case STEP_QUADRICS:
+        sum_quadrics(e, i);
         break;
     case STEP_SCORES:
         settle_vertex(e, i, s);
@@ -2769,10 +2794,7 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     if (m->importance)
         memcpy(e->importance, m->importance, sizeof(double) * e->n);
     if (o->method != DECIMATE_IMPORTANCE) {
-        /* Written, not summed into, by the first rings step (build_quadric): summed into
-         * calloc's fresh pages, read before they were written, that step took 0.12 s on the
-         * dragon with two threads, 0.04 s once the pages were in. */
-        e->quadric = large_array(e, sizeof(double) * 10 * n);
+        e->quadric = large_array(e, sizeof(double) * 10 * n); /* (zeroed by sum_quadrics) */
         e->self_error = xmalloc(sizeof(double) * n);
     }
     for (uint32_t v = 0; v < e->n; v++) {
@@ -2796,7 +2818,9 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     build_adjacency(e);
     if (e->quadric && o->method == DECIMATE_COMBINED)
         start_attribute_quadrics(e);
-    for_each_vertex(e, STEP_FIRST_RINGS); /* and the quadrics */
+    for_each_vertex(e, STEP_RINGS);
+    if (e->quadric)
+        run_on_pool(e, STEP_QUADRICS, e->threads, 1); /* (the open edges read the rings) */
     scratch s;
     memset(&s, 0, sizeof s);
     for (uint32_t v = 0; v < e->n; v++)
