@@ -6,6 +6,10 @@
  *              normal limit), a boundary vertex into an inner one, a tetrahedron (the two
  *              joined valence-3 vertices), a locked vertex, the boundary lock, a fan of 100
  *              triangles (its centre's ring)
+ *   fans       collapse_one_fan on hand-drawn corners (a closed and an open fan in any order,
+ *              two fans, a directed edge twice), and the engine given fans it must check: it
+ *              stops before any collapse on two tetrahedra sharing a vertex, and takes the
+ *              same collapses as with fans checked on the bunny
  *   threads    the dragon (res 2) decimated on 1, 2 and 7 threads, with and without normals:
  *              the same bytes
  *   reference  the bunny to 10 % by engine and reference, quadric and combined: the mean
@@ -20,6 +24,7 @@
 
 #include "decimate_common.h"
 #include "reduce/collapse.h"
+#include "reduce/weld.h"
 
 /* ---- hand-drawn meshes ---- */
 
@@ -194,6 +199,99 @@ static void test_tetrahedron(void **state)
     assert_int_equal(r.vertices_after, 4);
 }
 
+/* ---- fans ---- */
+
+/* collapse_one_fan, each case worked out by hand: the centre's corners (next, previous) of the
+ * flat fan's six triangles (1..6 closed around it), in and out of order; the fan opened (one
+ * triangle fewer); two closed fans (a second ring 11..13 around the same vertex); two open fans
+ * (a bowtie); an edge wound the same way twice (one next repeated); one triangle. */
+static void test_one_fan(void **state)
+{
+    collapse_half_edge closed[6], shuffled[6];
+    for (uint32_t k = 0; k < 6; k++)
+        closed[k] = (collapse_half_edge){1 + k, 1 + (k + 1) % 6};
+    static const int order[6] = {3, 0, 5, 1, 4, 2};
+    for (int k = 0; k < 6; k++)
+        shuffled[k] = closed[order[k]];
+    assert_true(collapse_one_fan(closed, 6));
+    assert_true(collapse_one_fan(shuffled, 6));
+    assert_true(collapse_one_fan(closed, 5)); /* (1,2) .. (5,6): open from 1 to 6 */
+    assert_true(collapse_one_fan(shuffled + 1, 5));
+    collapse_half_edge two_closed[9];
+    memcpy(two_closed, closed, sizeof closed);
+    for (uint32_t k = 0; k < 3; k++)
+        two_closed[6 + k] = (collapse_half_edge){11 + k, 11 + (k + 1) % 3};
+    assert_false(collapse_one_fan(two_closed, 9));
+    collapse_half_edge bowtie[2] = {{1, 2}, {3, 4}};
+    assert_false(collapse_one_fan(bowtie, 2));
+    collapse_half_edge twice[3] = {{1, 2}, {2, 3}, {1, 4}};
+    assert_false(collapse_one_fan(twice, 3));
+    assert_true(collapse_one_fan(bowtie, 1));
+}
+
+/* The engine given fans to check (collapse_mesh.fans_unchecked): two tetrahedra sharing vertex 0
+ * (two closed fans there) stop it before any collapse, with that one vertex counted; a manifold
+ * mesh (the bunny, welded as decimate_mesh welds it) is reduced exactly as with its fans
+ * checked. */
+static void test_fans_unchecked(void **state)
+{
+    float positions[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, -1, 0, 0, 0, -1, 0, 0, 0, -1};
+    uint32_t triangles[] = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3,
+                            0, 5, 4, 0, 4, 6, 0, 6, 5, 4, 5, 6};
+    collapse_mesh m;
+    memset(&m, 0, sizeof m);
+    m.vertex_count = 7;
+    m.positions = positions;
+    m.triangle_count = 8;
+    m.triangles = triangles;
+    m.fans_unchecked = 1;
+    collapse_options o = options_of(DECIMATE_QUADRIC);
+    o.target_vertices = 4;
+    uint32_t history[7];
+    collapse_result r = {.collapsed_into = history};
+    assert_int_equal(collapse_run(&m, &o, &r), 0);
+    assert_int_equal(r.non_manifold_vertices, 1);
+    assert_int_equal(r.collapses, 0);
+    assert_int_equal(r.vertices_after, 7);
+    for (uint32_t v = 0; v < 7; v++)
+        assert_int_equal(history[v], v);
+
+    model_fixture bunny;
+    model_open(&bunny, "bunny.ply", 0);
+    weld_result welded[2];
+    collapse_result result[2];
+    for (int unchecked = 0; unchecked < 2; unchecked++) {
+        weld_result *w = &welded[unchecked];
+        assert_int_equal(weld_flat(&bunny.in, 1, w), 0);
+        assert_int_equal(w->non_manifold_vertices, 0);
+        collapse_mesh b;
+        memset(&b, 0, sizeof b);
+        b.vertex_count = w->vertex_count;
+        b.positions = w->positions;
+        b.triangle_count = w->triangle_count;
+        b.triangles = w->triangles;
+        b.fans_unchecked = unchecked;
+        collapse_options bo = options_of(DECIMATE_QUADRIC);
+        bo.target_vertices = w->vertices_counted / 10;
+        bo.threads = 2;
+        result[unchecked].collapsed_into = xmalloc(sizeof(uint32_t) * w->vertex_count);
+        assert_int_equal(collapse_run(&b, &bo, &result[unchecked]), 0);
+        assert_int_equal(result[unchecked].non_manifold_vertices, 0);
+        assert_int_equal(result[unchecked].vertices_before, w->vertices_counted);
+    }
+    assert_int_equal(result[0].collapses, result[1].collapses);
+    assert_true(result[0].collapses > 0);
+    assert_memory_equal(welded[0].triangles, welded[1].triangles,
+                        3 * sizeof(uint32_t) * welded[0].triangle_count);
+    assert_memory_equal(result[0].collapsed_into, result[1].collapsed_into,
+                        sizeof(uint32_t) * welded[0].vertex_count);
+    for (int k = 0; k < 2; k++) {
+        free(result[k].collapsed_into);
+        weld_result_free(&welded[k]);
+    }
+    model_close(&bunny);
+}
+
 /* ---- thread counts ---- */
 
 static void decimate_with_threads(model_fixture *f, unsigned int threads, decimate_method method,
@@ -359,6 +457,8 @@ int main(void)
         cmocka_unit_test(test_spike),
         cmocka_unit_test(test_wide_fan),
         cmocka_unit_test(test_tetrahedron),
+        cmocka_unit_test(test_one_fan),
+        cmocka_unit_test(test_fans_unchecked),
         cmocka_unit_test(test_same_result_on_any_thread_count),
         cmocka_unit_test(test_quadric_against_reference),
         cmocka_unit_test(test_combined_against_reference),

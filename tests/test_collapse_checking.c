@@ -26,10 +26,12 @@
 #define collapse_run collapse_run_fixed
 #define collapse_memory collapse_memory_fixed
 #define collapse_evaluate collapse_evaluate_fixed
+#define collapse_one_fan collapse_one_fan_fixed
 #include "reduce/collapse.c"
 #undef collapse_run
 #undef collapse_memory
 #undef collapse_evaluate
+#undef collapse_one_fan
 
 /* One reduction of `mesh` to a tenth: by the engine (fixed < 0) or by the copy whose scoring
  * applies the rules up to `fixed`. Its triangles, history and counts. */

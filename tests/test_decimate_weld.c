@@ -193,7 +193,7 @@ static void test_non_manifold_seam(void **state)
 static uint32_t non_manifold(const mesh_data *m, weld_result *w)
 {
     decimate_input in = input_of("flat", m, NULL, 0);
-    assert_int_equal(weld_flat(&in, w), 0);
+    assert_int_equal(weld_flat(&in, 1, w), 0);
     return w->non_manifold_vertices;
 }
 

@@ -78,6 +78,7 @@ typedef enum vertex_step {
     STEP_COUNT_CORNERS, /* per range of vertices (build_adjacency) */
     STEP_FILL_CORNERS,
     STEP_WEIGH_FACES, /* per triangle (importance_floor) */
+    STEP_FIRST_RINGS, /* per vertex: its ring, its fan checked (engine_init) */
     STEP_QUADRICS,    /* per range of vertices (engine_init) */
     STEP_RINGS,       /* per vertex */
     STEP_SCORES,
@@ -98,11 +99,6 @@ typedef struct ring_entry {
     uint32_t vertex, left, right;
     uint32_t count;
 } ring_entry;
-
-/* A corner of a triangle at a vertex v: the triangle's corners after and before v. */
-typedef struct half_edge {
-    uint32_t next, previous;
-} half_edge;
 
 /* A vertex's one-ring: a view into ring records (the pass's or a scratch's). */
 typedef struct ring {
@@ -132,11 +128,12 @@ typedef struct scratch {
     struct target_key *targets;
     struct edge_sides *sides; /* per target: the sides of the edge to it (ring_sides) */
     size_t targets_capacity;
-    struct half_edge *half_edges; /* a copy of a vertex's half-edges (build_ring) */
+    collapse_half_edge *half_edges; /* a copy of a vertex's half-edges (build_ring) */
     size_t half_edges_capacity;
     struct rank_key *moved; /* the keys of the candidates that moved in a check (check_vertex) */
     size_t moved_count, moved_capacity;
     uint32_t step_items; /* the items of the running step published when its block was claimed */
+    uint32_t not_one_fan; /* vertices whose triangles the first rings found not one fan */
 } scratch;
 
 /* One candidate target of a vertex, for ordering them. */
@@ -207,6 +204,7 @@ typedef struct engine {
     vertex_flags *flags;
     uint32_t *adjacency_start, *adjacency;
     uint32_t *live, live_count; /* the triangles live at the last adjacency, in order */
+    uint32_t not_one_fan; /* the caller's fans unchecked: the vertices found not one fan */
     /* the rings of this pass: v's from slot adjacency_start[v] + v on (room for one neighbour
      * more than its triangles, as many as a vertex of one fan has), ring_size[v] long */
     ring_entry *rings;
@@ -518,7 +516,7 @@ static void fill_corners(engine *e, uint32_t range)
             if (c[k] - first < end - first) {
                 uint32_t slot = --start[c[k]];
                 e->adjacency[slot] = t;
-                half_edge h = {c[(k + 1) % 3], c[(k + 2) % 3]};
+                collapse_half_edge h = {c[(k + 1) % 3], c[(k + 2) % 3]};
                 memcpy(&e->rings[(size_t)slot + c[k]], &h, sizeof h);
             }
     }
@@ -612,7 +610,7 @@ ring_add(ring_entry *r, uint32_t *size, uint32_t capacity, ring_index *index, ui
 /* Adds a triangle of the vertex whose ring is being written (its corners after and before the
  * vertex: h) to the ring (as ring_add). */
 static inline __attribute__((always_inline)) void
-ring_add_triangle(ring_entry *r, uint32_t *size, uint32_t capacity, ring_index *index, half_edge h)
+ring_add_triangle(ring_entry *r, uint32_t *size, uint32_t capacity, ring_index *index, collapse_half_edge h)
 {
     r[ring_add(r, size, capacity, index, h.next)].left = h.previous;
     r[ring_add(r, size, capacity, index, h.previous)].right = h.next;
@@ -629,24 +627,62 @@ static uint32_t fill_ring(const engine *e, uint32_t v, fan f, ring_entry *r, uin
         uint32_t t = f.triangle[i];
         const uint32_t *c = corners(e, t);
         int k = corner_at(e, t, v);
-        half_edge h = {c[(k + 1) % 3], c[(k + 2) % 3]};
+        collapse_half_edge h = {c[(k + 1) % 3], c[(k + 2) % 3]};
         ring_add_triangle(r, &size, capacity, &index, h);
     }
     return size;
 }
 
-/* The same from v's half-edges, one in the first bytes of each of r[0 .. count) (its triangles'
- * corners after and before v, in fan order): they are copied out first. */
-static uint32_t fill_ring_from_half_edges(uint32_t count, ring_entry *r, uint32_t capacity,
-                                          scratch *s)
+int collapse_one_fan(const collapse_half_edge *corners, uint32_t count)
 {
-    half_edge local[HALF_EDGES_AT_HAND], *copy = local;
+    uint32_t open_ends = 0, start = 0;
+    for (uint32_t i = 0; i < count; i++) {
+        int preceded = 0;
+        for (uint32_t j = 0; j < count; j++) {
+            if (j != i && (corners[j].next == corners[i].next ||
+                           corners[j].previous == corners[i].previous))
+                return 0; /* a directed edge from the vertex twice */
+            preceded |= corners[j].previous == corners[i].next;
+        }
+        if (!preceded) {
+            open_ends++;
+            start = i;
+        }
+    }
+    if (open_ends > 1)
+        return 0;
+    uint32_t at = start, steps = 1;
+    for (; steps < count; steps++) {
+        uint32_t following = count;
+        for (uint32_t j = 0; j < count; j++)
+            if (corners[j].next == corners[at].previous) {
+                following = j;
+                break;
+            }
+        if (following == count || following == start)
+            break;
+        at = following;
+    }
+    return steps == count;
+}
+
+/* The same from v's half-edges, one in the first bytes of each of r[0 .. count) (its triangles'
+ * corners after and before v, in fan order): they are copied out first, and where one_fan is
+ * not NULL, it gets whether they are one fan (collapse_one_fan). */
+static uint32_t fill_ring_from_half_edges(uint32_t count, ring_entry *r, uint32_t capacity,
+                                          scratch *s, int *one_fan)
+{
+    collapse_half_edge local[HALF_EDGES_AT_HAND], *copy = local;
+    if (count == 0)
+        return 0;
     if (count > HALF_EDGES_AT_HAND) {
-        reserve((void **)&s->half_edges, &s->half_edges_capacity, count, sizeof(half_edge));
+        reserve((void **)&s->half_edges, &s->half_edges_capacity, count, sizeof(collapse_half_edge));
         copy = s->half_edges;
     }
     for (uint32_t i = 0; i < count; i++)
-        memcpy(&copy[i], &r[i], sizeof(half_edge));
+        memcpy(&copy[i], &r[i], sizeof(collapse_half_edge));
+    if (one_fan)
+        *one_fan = collapse_one_fan(copy, count);
     uint32_t size = 0;
     ring_index index;
     index.summary = 0;
@@ -664,12 +700,16 @@ static ring_entry *pass_ring_entries(const engine *e, uint32_t v)
 /* Builds v's one-ring from its pass-start triangles into the pass's ring records, from the
  * half-edges the adjacency left there (fill_corners). From the triangles, read again at random,
  * the rings of the dragon's run took 0.16 s on one thread; from the half-edges 0.09 s, for 0.04 s
- * more in the adjacency, which writes them. */
-static void build_ring(engine *e, uint32_t v, scratch *s)
+ * more in the adjacency, which writes them. With check_fan, a vertex with triangles that are not
+ * one fan is counted in the scratch (the caller's fans unchecked). */
+static void build_ring(engine *e, uint32_t v, scratch *s, int check_fan)
 {
     uint32_t degree = e->adjacency_start[v + 1] - e->adjacency_start[v];
     ring_entry *r = pass_ring_entries(e, v);
-    e->ring_size[v] = fill_ring_from_half_edges(degree, r, degree + 1, s);
+    int one_fan = 1;
+    e->ring_size[v] =
+        fill_ring_from_half_edges(degree, r, degree + 1, s, check_fan && degree ? &one_fan : NULL);
+    s->not_one_fan += !one_fan;
 }
 
 /* v's one-ring now, into slot `slot` of the scratch (its fan too). */
@@ -1616,8 +1656,11 @@ static void run_item(engine *e, vertex_step step, uint32_t i, scratch *s)
     case STEP_WEIGH_FACES:
         weigh_face(e, i);
         break;
+    case STEP_FIRST_RINGS:
+        build_ring(e, i, s, e->m->fans_unchecked);
+        break;
     case STEP_RINGS:
-        build_ring(e, i, s);
+        build_ring(e, i, s, 0);
         break;
     case STEP_QUADRICS:
         sum_quadrics(e, i);
@@ -2818,15 +2861,19 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     build_adjacency(e);
     if (e->quadric && o->method == DECIMATE_COMBINED)
         start_attribute_quadrics(e);
-    for_each_vertex(e, STEP_RINGS);
-    if (e->quadric)
-        run_on_pool(e, STEP_QUADRICS, e->threads, 1); /* (the open edges read the rings) */
+    for_each_vertex(e, STEP_FIRST_RINGS);
+    for (unsigned int i = 0; i <= e->pool->count; i++)
+        e->not_one_fan += e->pool->scratch[i].not_one_fan;
     scratch s;
     memset(&s, 0, sizeof s);
     for (uint32_t v = 0; v < e->n; v++)
         if (e->adjacency_start[v] < e->adjacency_start[v + 1])
             e->alive += current_wedges(e, v, &s);
     scratch_free(&s);
+    if (e->not_one_fan)
+        return 0; /* (collapse_run stops there: the caller rebuilds the mesh) */
+    if (e->quadric)
+        run_on_pool(e, STEP_QUADRICS, e->threads, 1); /* (the open edges read the rings) */
     e->rings_current = 1;
     return 0;
 }
@@ -2857,9 +2904,14 @@ int collapse_run(collapse_mesh *m, const collapse_options *o, collapse_result *r
         return -1;
     for (uint32_t v = 0; v < e.n; v++)
         result->collapsed_into[v] = v;
-    result->vertices_before = e.alive;
+    result->vertices_before = result->vertices_after = e.alive;
     result->collapses = 0;
     result->passes = 0;
+    result->non_manifold_vertices = e.not_one_fan;
+    if (e.not_one_fan) {
+        engine_free(&e);
+        return 0;
+    }
     e.keys = xmalloc(sizeof(rank_key) * ((size_t)e.n + 1));
     e.spare_keys = xmalloc(sizeof(rank_key) * ((size_t)e.n + 1));
     e.history = result->collapsed_into;

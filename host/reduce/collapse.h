@@ -99,6 +99,10 @@ typedef struct collapse_mesh {
     const uint8_t *locked;   /* per vertex, or NULL: locked vertices never move */
     const double *importance; /* per vertex; IMPORTANCE and COMBINED */
     const uint32_t *distance; /* per vertex, or NULL: remap distance, for ties (decimate.h) */
+    int fans_unchecked; /* the caller has not checked that each vertex's triangles are one fan
+                           (collapse_one_fan): the engine checks it while it sets up, and where a
+                           vertex's are not, stops before any collapse and says how many
+                           (collapse_result.non_manifold_vertices) */
 } collapse_mesh;
 
 typedef struct collapse_options {
@@ -117,7 +121,19 @@ typedef struct collapse_result {
     uint64_t vertices_before, vertices_after; /* counted once per wedge */
     uint32_t collapses;
     uint32_t passes;
+    uint32_t non_manifold_vertices; /* fans_unchecked: the vertices whose triangles are not one
+                                       fan (nothing collapsed where there are any) */
 } collapse_result;
+
+/* A triangle at a vertex, as its corners after and before the vertex (counter-clockwise). */
+typedef struct collapse_half_edge {
+    uint32_t next, previous;
+} collapse_half_edge;
+
+/* Whether a vertex's triangles (corners[0 .. count), in any order) are one fan, closed or open,
+ * with every directed edge from the vertex once: each next and each previous distinct, and one
+ * walk from the open end (or anywhere, when closed) across the shared edges meets them all. */
+int collapse_one_fan(const collapse_half_edge *corners, uint32_t count);
 
 /* Reduces the mesh in place. Returns 0, or -1 with the error set (no memory, bad input). */
 int collapse_run(collapse_mesh *mesh, const collapse_options *options, collapse_result *result);

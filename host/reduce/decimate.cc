@@ -108,11 +108,13 @@ void flatten(Mesh &mesh, const AttributeTable &attributes, const std::vector<dou
 // The welded mesh the engine starts from: the flat weld where the surface is manifold (its
 // welding figures into out), else the OpenMesh rebuild of the flat weld's repaired triangles
 // (which fills them itself; weld.h), with the flat weld's turns and twins carried over to its
-// faces. out takes welded_of either way.
-void prepare(const decimate_input *in, weld_result *flat, decimate_output *out)
+// faces. out takes welded_of either way. Unchecked: the flat weld as it is, whose fans the
+// engine checks (collapse_mesh.fans_unchecked), and out->vertices_welded is left to the engine's
+// count.
+void prepare(const decimate_input *in, bool unchecked, weld_result *flat, decimate_output *out)
 {
-    weld_flat(in, flat);
-    if (flat->non_manifold_vertices == 0) {
+    weld_flat(in, !unchecked, flat);
+    if (unchecked || flat->non_manifold_vertices == 0) {
         out->welded_of = flat->welded_of;
         flat->welded_of = nullptr;
         out->vertices_welded = flat->vertices_counted;
@@ -269,12 +271,11 @@ void write_output(const weld_result &flat, decimate_output *out)
     copy_attribute_values(flat.uv_floats, flat.normal_floats, flat.attributes, id_of, m);
 }
 
-// decimate_mesh() without the exception boundary.
-int decimate_welded(const decimate_input *in, decimate_method method, decimate_output *out)
+// The engine on the welded mesh `flat` (prepare's; its fans unchecked or not), into out's
+// history; its seconds into out. Returns 0, or -1 with the error set.
+int collapse_welded(const decimate_input *in, decimate_method method, weld_result &flat,
+                    bool unchecked, decimate_output *out, collapse_result *result)
 {
-    double start = monotonic_seconds();
-    weld_result flat;
-    prepare(in, &flat, out); // an OpenMesh mesh is freed before the engine runs
     size_t n = flat.vertex_count;
     std::vector<uint32_t> distance = welded_distances(in, out, n);
     collapse_mesh cm;
@@ -291,13 +292,15 @@ int decimate_welded(const decimate_input *in, decimate_method method, decimate_o
     cm.locked = flat.locked;
     cm.importance = in->vertex_importance ? flat.importance : nullptr;
     cm.distance = distance.empty() ? nullptr : distance.data();
+    cm.fans_unchecked = unchecked;
 
     collapse_options options;
     std::memset(&options, 0, sizeof options);
     options.method = method;
     // The target counts all vertices (once per wedge), the locked copies of loose faces
-    // included: the collapsible surface gets what remains after them.
-    options.target_vertices = std::min<uint64_t>(in->target_vertices, out->vertices_welded);
+    // included: the collapsible surface gets what remains after them. (Above the welded count,
+    // the engine stops before its first pass.)
+    options.target_vertices = in->target_vertices;
     options.max_normal_angle = in->max_normal_angle > 0 ? in->max_normal_angle : 60.0;
     options.boundary_tolerance =
         in->boundary_tolerance > 0 ? in->boundary_tolerance : DECIMATE_BOUNDARY_TOLERANCE;
@@ -308,18 +311,44 @@ int decimate_welded(const decimate_input *in, decimate_method method, decimate_o
 
     out->history_count = (uint32_t)n;
     out->collapsed_into = (uint32_t *)xmalloc(sizeof(uint32_t) * (n + 1));
-    collapse_result result;
-    std::memset(&result, 0, sizeof result);
-    result.collapsed_into = out->collapsed_into;
-    out->seconds_weld = monotonic_seconds() - start;
-    start = monotonic_seconds();
-    if (collapse_run(&cm, &options, &result)) {
+    std::memset(result, 0, sizeof *result);
+    result->collapsed_into = out->collapsed_into;
+    double start = monotonic_seconds();
+    if (collapse_run(&cm, &options, result)) {
         error_prefix("mesh '%s'", in->name);
+        return -1;
+    }
+    out->seconds_collapse += monotonic_seconds() - start;
+    return 0;
+}
+
+// decimate_mesh() without the exception boundary. The flat weld goes to the engine unchecked;
+// where the engine finds a vertex whose triangles are not one fan, before any collapse, the mesh
+// is welded again with the check and its repairs (or rebuilt), and the engine starts anew.
+int decimate_welded(const decimate_input *in, decimate_method method, decimate_output *out)
+{
+    double start = monotonic_seconds();
+    weld_result flat;
+    prepare(in, true, &flat, out);
+    out->seconds_weld = monotonic_seconds() - start;
+    collapse_result result;
+    int failed = collapse_welded(in, method, flat, true, out, &result);
+    if (!failed && result.non_manifold_vertices) {
+        start = monotonic_seconds();
+        std::free(out->collapsed_into);
+        std::free(out->welded_of);
+        out->collapsed_into = out->welded_of = nullptr;
+        weld_result_free(&flat);
+        prepare(in, false, &flat, out); // an OpenMesh mesh is freed before the engine runs
+        out->seconds_weld += monotonic_seconds() - start;
+        failed = collapse_welded(in, method, flat, false, out, &result);
+    } else if (!failed)
+        out->vertices_welded = (uint32_t)result.vertices_before;
+    if (failed) {
         weld_result_free(&flat);
         decimate_output_free(out);
         return -1;
     }
-    out->seconds_collapse = monotonic_seconds() - start;
     out->collapses = result.collapses;
     out->passes = result.passes;
     start = monotonic_seconds();
@@ -344,7 +373,7 @@ extern "C" int decimate_measure(const decimate_input *in, uint32_t *vertices,
     std::memset(&out, 0, sizeof out);
     try {
         weld_result flat;
-        prepare(in, &flat, &out);
+        prepare(in, false, &flat, &out);
         weld_result_free(&flat);
     } catch (const std::exception &e) {
         decimate_output_free(&out);

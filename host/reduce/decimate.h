@@ -147,8 +147,9 @@ typedef struct decimate_output {
     uint32_t faces_dropped;          /* faces that welded into zero area */
     uint32_t collapses;
     uint32_t passes; /* the engine's passes (0 for the reference) */
-    /* Where decimate_mesh's time went (0 for the reference): welding (and the OpenMesh rebuild
-     * where the flat weld found the surface non-manifold), the engine, the output. */
+    /* Where decimate_mesh's time went (0 for the reference): welding (and, where the engine
+     * found the surface non-manifold, welding again with the check and the OpenMesh rebuild),
+     * the engine (its stopped first setup included), the output. */
     double seconds_weld, seconds_collapse, seconds_output;
     /* The collapse history, over the decimater's history_count vertices (the welded ones, the
      * copies of patched and loose faces, and positions left without faces, which are removed

@@ -219,7 +219,7 @@ void build_repaired(const decimate_input *in, Mesh &mesh, decimate_output *out,
                     OpenMesh::FPropHandleT<FaceRepairs> &repairs)
 {
     weld_result flat;
-    weld_flat(in, &flat);
+    weld_flat(in, 1, &flat);
     std::vector<uint32_t> indices = repaired_indices(in, flat);
     decimate_input repaired = *in;
     repaired.indices = indices.data();

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "core/error.h"
+#include "reduce/collapse.h"
 
 #define EMPTY 0xffffffffu
 #define MAX_ATTRIBUTE_FLOATS 5
@@ -151,41 +152,6 @@ static void keep_triangles(const decimate_input *in, const uint32_t *id_of, weld
     out->triangle_count = kept;
 }
 
-/* Whether v's triangles (their corners after v: next[i], before v: previous[i]) are one fan with
- * every directed edge from v once: each next and each previous distinct, and one walk from the
- * open end (or anywhere, when closed) meets them all. */
-static int one_fan(const uint32_t *next, const uint32_t *previous, uint32_t count)
-{
-    uint32_t open_ends = 0, start = 0;
-    for (uint32_t i = 0; i < count; i++) {
-        int preceded = 0;
-        for (uint32_t j = 0; j < count; j++) {
-            if (j != i && (next[j] == next[i] || previous[j] == previous[i]))
-                return 0;
-            preceded |= previous[j] == next[i];
-        }
-        if (!preceded) {
-            open_ends++;
-            start = i;
-        }
-    }
-    if (open_ends > 1)
-        return 0;
-    uint32_t at = start, steps = 1;
-    for (; steps < count; steps++) {
-        uint32_t following = count;
-        for (uint32_t j = 0; j < count; j++)
-            if (next[j] == previous[at]) {
-                following = j;
-                break;
-            }
-        if (following == count || following == start)
-            break;
-        at = following;
-    }
-    return steps == count;
-}
-
 /* Per vertex its corners (c = 3 t + k), as a counting sort of the triangle list: vertex v's are
  * corner_of[start[v] .. start[v + 1]); *largest gets the most any vertex has. */
 typedef struct vertex_corners {
@@ -237,8 +203,7 @@ static void *check_range(void *arg)
     const weld_result *out = r->out;
     const uint32_t *start = r->vc->start, *corner_of = r->vc->corner_of;
     uint32_t largest = r->vc->largest;
-    uint32_t *next = xmalloc(sizeof(uint32_t) * (2 * (size_t)largest + 1));
-    uint32_t *previous = next + largest;
+    collapse_half_edge *fan = xmalloc(sizeof(collapse_half_edge) * ((size_t)largest + 1));
     for (uint32_t v = r->first; v < r->end; v++) {
         uint32_t count = start[v + 1] - start[v];
         if (!count)
@@ -246,8 +211,8 @@ static void *check_range(void *arg)
         uint32_t wedges = 0;
         for (uint32_t i = 0; i < count; i++) {
             uint32_t c = corner_of[start[v] + i], t = c / 3, k = c % 3;
-            next[i] = out->triangles[3 * t + (k + 1) % 3];
-            previous[i] = out->triangles[3 * t + (k + 2) % 3];
+            fan[i].next = out->triangles[3 * t + (k + 1) % 3];
+            fan[i].previous = out->triangles[3 * t + (k + 2) % 3];
             if (out->corner_ids) {
                 uint32_t id = out->corner_ids[c], seen = 0;
                 for (uint32_t j = 0; j < i && !seen; j++)
@@ -256,10 +221,10 @@ static void *check_range(void *arg)
             }
         }
         r->counted += out->corner_ids ? wedges : 1;
-        if (!one_fan(next, previous, count))
+        if (!collapse_one_fan(fan, count))
             r->non_manifold++;
     }
-    free(next);
+    free(fan);
     return NULL;
 }
 
@@ -453,13 +418,15 @@ static void orient(weld_result *out)
     vertex_corners_free(&vc);
 }
 
-int weld_flat(const decimate_input *in, weld_result *out)
+int weld_flat(const decimate_input *in, int check, weld_result *out)
 {
     memset(out, 0, sizeof *out);
     weld_positions(in, out);
     uint32_t *id_of = number_attributes(in, out);
     keep_triangles(in, id_of, out);
     free(id_of);
+    if (!check)
+        return 0;
     check_manifold(out, in->threads);
     if (out->non_manifold_vertices) {
         set_aside_twins(out);

@@ -4,12 +4,15 @@
  * appearance, keeps the largest importance of the vertices welded into one, numbers the attribute
  * sets per welded vertex (bit-identical uv and normal share an id) and drops the triangles whose
  * corners weld into fewer than three vertices: exactly what the OpenMesh rebuild
- * (decimate_weld.cc) does before it attaches faces. Then it checks that the welded triangles form
- * a manifold: every directed edge in one triangle at most (so an edge has at most two, oriented
- * against each other) and every vertex's triangles one fan, closed or open. Where that holds,
- * OpenMesh would attach every face and patch nothing, and the flat arrays are what the engine
- * takes; where it does not, decimate_mesh() builds the OpenMesh rebuild instead, which splits the
- * non-manifold parts (decimate.h, "Non-manifold input").
+ * (decimate_weld.cc) does before it attaches faces. Then, when asked, it checks that the welded
+ * triangles form a manifold: every directed edge in one triangle at most (so an edge has at most
+ * two, oriented against each other) and every vertex's triangles one fan, closed or open
+ * (collapse_one_fan). Where that holds, OpenMesh would attach every face and patch nothing, and
+ * the flat arrays are what the engine takes; where it does not, decimate_mesh() builds the
+ * OpenMesh rebuild instead, which splits the non-manifold parts (decimate.h, "Non-manifold
+ * input"). decimate_mesh() welds without the check first and has the engine check the fans as it
+ * sets up (collapse_mesh.fans_unchecked); only where the engine finds a vertex that is not one fan
+ * does it weld again with the check.
  *
  * Two causes of a failed check are repaired first, because the rebuild answers both with copies
  * of whole layers (a double-sided sheet of 169 vertices became 338, and its reduction more
@@ -59,8 +62,8 @@ typedef struct weld_result {
     int uv_floats, normal_floats;
     uint8_t *locked;           /* per welded vertex, or NULL: never moved (decimate.cc fills it
                                   for the OpenMesh rebuild's loose copies) */
-    uint32_t non_manifold_vertices; /* vertices where the check failed (0: manifold) */
-    uint32_t vertices_counted; /* vertices with triangles, once per wedge */
+    uint32_t non_manifold_vertices; /* vertices where the check failed (0: manifold or unchecked) */
+    uint32_t vertices_counted; /* vertices with triangles, once per wedge (0: unchecked) */
     uint32_t *kept_from;       /* per kept triangle: its input triangle */
     uint8_t *turned;           /* per kept triangle: wound the other way for the engine (corners
                                   1 and 2 swapped, their ids too); NULL when none is */
@@ -69,9 +72,12 @@ typedef struct weld_result {
     uint32_t twin_count;
 } weld_result;
 
-/* Welds `in` and checks the result (see above). Returns 0 (allocation failure exits, as xmalloc
+/* Welds `in` and, with `check`, checks the result (see above). Without it, the weld stops before
+ * the check (and the repairs): the caller has the engine check the fans while it sets up
+ * (collapse_mesh.fans_unchecked), as it builds the same vertex -> triangle adjacency anyway, and
+ * welds again with the check where they fail. Returns 0 (allocation failure exits, as xmalloc
  * does). */
-int weld_flat(const decimate_input *in, weld_result *out);
+int weld_flat(const decimate_input *in, int check, weld_result *out);
 /* Frees every array of the result (welded_of too, unless the caller took it and set it NULL). */
 void weld_result_free(weld_result *out);
 
