@@ -7,7 +7,8 @@
  *              joined valence-3 vertices), a locked vertex, the boundary lock, a fan of 100
  *              triangles (its centre's ring)
  *   fans       collapse_one_fan on hand-drawn corners (a closed and an open fan in any order,
- *              two fans, a directed edge twice), and the engine given fans it must check: it
+ *              two fans, a directed edge twice) and against its definition on random ones, and
+ *              the engine given fans it must check: it
  *              stops before any collapse on two tetrahedra sharing a vertex, and takes the
  *              same collapses as with fans checked on the bunny
  *   threads    the dragon (res 2) decimated on 1, 2 and 7 threads, with and without normals:
@@ -227,6 +228,81 @@ static void test_one_fan(void **state)
     collapse_half_edge twice[3] = {{1, 2}, {2, 3}, {1, 4}};
     assert_false(collapse_one_fan(twice, 3));
     assert_true(collapse_one_fan(bowtie, 1));
+}
+
+/* collapse_one_fan's definition, plainly: distinct nexts and previouses, at most one corner
+ * whose next no corner has as its previous, and a walk from it (or from the first, when none)
+ * that meets every corner. */
+static int one_fan_by_definition(const collapse_half_edge *c, uint32_t count)
+{
+    uint32_t open_ends = 0, start = 0;
+    for (uint32_t i = 0; i < count; i++) {
+        int preceded = 0;
+        for (uint32_t j = 0; j < count; j++) {
+            if (j != i && (c[j].next == c[i].next || c[j].previous == c[i].previous))
+                return 0;
+            preceded |= c[j].previous == c[i].next;
+        }
+        if (!preceded)
+            open_ends++, start = i;
+    }
+    if (open_ends > 1)
+        return 0;
+    uint32_t at = start, steps = 1;
+    for (; steps < count; steps++) {
+        uint32_t following = count;
+        for (uint32_t j = 0; j < count && following == count; j++)
+            if (c[j].next == c[at].previous)
+                following = j;
+        if (following == count || following == start)
+            break;
+        at = following;
+    }
+    return steps == count;
+}
+
+/* collapse_one_fan (which indexes the corners by hashed bits) against its definition on 200,000
+ * random corner sets: real fans, closed and open, shuffled and with one corner changed, up to
+ * 70 corners (beyond the index's 64 bits), and arbitrary ones from a few values (many
+ * repeats). */
+static void test_one_fan_random(void **state)
+{
+    srand(31);
+    collapse_half_edge c[70];
+    uint32_t fans = 0;
+    for (int round = 0; round < 200000; round++) {
+        uint32_t n = 1 + (uint32_t)rand() % (round % 10 == 0 ? 70 : 9);
+        int kind = rand() % 3;
+        if (kind == 0)
+            for (uint32_t i = 0; i < n; i++)
+                c[i] = (collapse_half_edge){(uint32_t)rand() % (n + 2), (uint32_t)rand() % (n + 2)};
+        else {
+            uint32_t base = (uint32_t)rand(), step = 1 + (uint32_t)rand() % 100000;
+            int closed = rand() % 2;
+            for (uint32_t i = 0; i < n; i++)
+                c[i] = (collapse_half_edge){base + step * i,
+                                            base + step * (closed ? (i + 1) % n : i + 1)};
+            for (uint32_t i = n - 1; i > 0; i--) {
+                uint32_t j = (uint32_t)rand() % (i + 1);
+                collapse_half_edge swap = c[i];
+                c[i] = c[j];
+                c[j] = swap;
+            }
+            if (kind == 2) {
+                uint32_t k = (uint32_t)rand() % n;
+                if (rand() % 2)
+                    c[k].next = c[(uint32_t)rand() % n].next;
+                else
+                    c[k].previous = base + step * ((uint32_t)rand() % (n + 1));
+            }
+        }
+        int expected = one_fan_by_definition(c, n);
+        fans += expected;
+        if (collapse_one_fan(c, n) != expected)
+            fail_msg("round %d, %u corners: expected %d", round, n, expected);
+    }
+    print_message("  200000 corner sets, %u of them one fan: as defined\n", fans);
+    assert_true(fans > 50000 && fans < 150000);
 }
 
 /* The engine given fans to check (collapse_mesh.fans_unchecked): two tetrahedra sharing vertex 0
@@ -458,6 +534,7 @@ int main(void)
         cmocka_unit_test(test_wide_fan),
         cmocka_unit_test(test_tetrahedron),
         cmocka_unit_test(test_one_fan),
+        cmocka_unit_test(test_one_fan_random),
         cmocka_unit_test(test_fans_unchecked),
         cmocka_unit_test(test_same_result_on_any_thread_count),
         cmocka_unit_test(test_quadric_against_reference),

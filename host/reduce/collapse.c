@@ -633,32 +633,69 @@ static uint32_t fill_ring(const engine *e, uint32_t v, fan f, ring_entry *r, uin
     return size;
 }
 
+/* collapse_one_fan's index of a fan's corners by one field (next or previous): a bit per value
+ * (summary_bit) and, per bit, the first corner that set it. A lookup reads the corner its value's
+ * bit names, and searches them all only where another value has the bit. */
+typedef struct corner_index {
+    uint64_t summary;
+    uint32_t first[64];
+} corner_index;
+
+static uint32_t corner_field(const collapse_half_edge *corner, int previous)
+{
+    return previous ? corner->previous : corner->next;
+}
+
+/* The corner of corners[0 .. count) whose field is w, or count. */
+static uint32_t corner_lookup(const corner_index *index, const collapse_half_edge *corners,
+                              uint32_t count, int previous, uint32_t w)
+{
+    uint32_t b = summary_bit(w);
+    if (!(index->summary >> b & 1))
+        return count;
+    uint32_t j = index->first[b];
+    if (corner_field(&corners[j], previous) == w)
+        return j;
+    for (j = 0; j < count && corner_field(&corners[j], previous) != w;)
+        j++;
+    return j;
+}
+
+/* Indexes corners[0 .. count) by one field; 0 where two share a value. */
+static int index_corners(corner_index *index, const collapse_half_edge *corners, uint32_t count,
+                         int previous)
+{
+    index->summary = 0;
+    for (uint32_t i = 0; i < count; i++) {
+        uint32_t w = corner_field(&corners[i], previous), b = summary_bit(w);
+        if (index->summary >> b & 1) {
+            if (corner_lookup(index, corners, i, previous, w) < i)
+                return 0;
+            continue;
+        }
+        index->summary |= (uint64_t)1 << b;
+        index->first[b] = i;
+    }
+    return 1;
+}
+
 int collapse_one_fan(const collapse_half_edge *corners, uint32_t count)
 {
+    corner_index by_next, by_previous;
+    if (!index_corners(&by_next, corners, count, 0) ||
+        !index_corners(&by_previous, corners, count, 1))
+        return 0; /* a directed edge from the vertex twice */
     uint32_t open_ends = 0, start = 0;
-    for (uint32_t i = 0; i < count; i++) {
-        int preceded = 0;
-        for (uint32_t j = 0; j < count; j++) {
-            if (j != i && (corners[j].next == corners[i].next ||
-                           corners[j].previous == corners[i].previous))
-                return 0; /* a directed edge from the vertex twice */
-            preceded |= corners[j].previous == corners[i].next;
-        }
-        if (!preceded) {
-            open_ends++;
+    for (uint32_t i = 0; i < count; i++)
+        if (corner_lookup(&by_previous, corners, count, 1, corners[i].next) == count) {
+            open_ends++; /* no triangle before it around the vertex */
             start = i;
         }
-    }
     if (open_ends > 1)
         return 0;
     uint32_t at = start, steps = 1;
     for (; steps < count; steps++) {
-        uint32_t following = count;
-        for (uint32_t j = 0; j < count; j++)
-            if (corners[j].next == corners[at].previous) {
-                following = j;
-                break;
-            }
+        uint32_t following = corner_lookup(&by_next, corners, count, 0, corners[at].previous);
         if (following == count || following == start)
             break;
         at = following;
