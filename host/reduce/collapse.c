@@ -205,6 +205,8 @@ typedef struct engine {
     uint32_t *adjacency_start, *adjacency;
     uint32_t *live, live_count; /* the triangles live at the last adjacency, in order */
     uint32_t not_one_fan; /* the caller's fans unchecked: the vertices found not one fan */
+    uint8_t *open_at; /* COMBINED's setup: per vertex, whether it has an open edge (its first
+                         ring; for sum_quadrics, which reads the ring only there) */
     /* the rings of this pass: v's from slot adjacency_start[v] + v on (room for one neighbour
      * more than its triangles, as many as a vertex of one fan has), ring_size[v] long */
     ring_entry *rings;
@@ -744,9 +746,15 @@ static void build_ring(engine *e, uint32_t v, scratch *s, int check_fan)
     uint32_t degree = e->adjacency_start[v + 1] - e->adjacency_start[v];
     ring_entry *r = pass_ring_entries(e, v);
     int one_fan = 1;
-    e->ring_size[v] =
+    uint32_t size = e->ring_size[v] =
         fill_ring_from_half_edges(degree, r, degree + 1, s, check_fan && degree ? &one_fan : NULL);
     s->not_one_fan += !one_fan;
+    if (e->open_at) {
+        int open = 0;
+        for (uint32_t i = 0; i < size; i++)
+            open |= r[i].count == 1;
+        e->open_at[v] = (uint8_t)open;
+    }
 }
 
 /* v's one-ring now, into slot `slot` of the scratch (its fan too). */
@@ -1110,16 +1118,14 @@ static double importance_floor(engine *e)
 }
 
 /* COMBINED: the planes across the open edges of face t at v (n the face's unit normal), each
- * weighted by its length squared x the face's importance, into v's quadric q. */
+ * weighted by its length squared x the face's importance, into v's quadric q (v with an open
+ * edge: open_at). */
 static void add_open_edge_planes(const engine *e, uint32_t t, uint32_t v, const double n[3],
                                  double face_importance, double *q)
 {
     ring r = ring_of(e, v);
-    int open = 0; /* whether v has an open edge: most have none, and skip the search for them */
-    for (uint32_t i = 0; i < r.size; i++)
-        open |= r.entry[i].count == 1;
     const uint32_t *c = corners(e, t);
-    for (int k = 0; k < 3 && open; k++) {
+    for (int k = 0; k < 3; k++) {
         uint32_t a = c[k], b = c[(k + 1) % 3];
         if ((a != v && b != v) || ring_count(&r, a == v ? b : a) != 1)
             continue; /* not an edge at v, or not open */
@@ -1185,7 +1191,7 @@ static void sum_quadrics(engine *e, uint32_t range)
             double *q = &e->quadric[10 * (size_t)v];
             for (int m = 0; m < 10; m++)
                 q[m] += plane[m];
-            if (combined)
+            if (combined && e->open_at[v])
                 add_open_edge_planes(e, t, v, n, face_importance, q);
             if (attribute_terms) {
                 int stride = attribute_stride(e->channels);
@@ -2782,6 +2788,7 @@ static void engine_free(engine *e)
     free(e->adjacency_start);
     free(e->adjacency);
     free(e->live);
+    free(e->open_at);
     free(e->rings);
     free(e->ring_size);
     free(e->quadric);
@@ -2896,8 +2903,10 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     if (e->quadric && o->method == DECIMATE_COMBINED)
         e->importance_floor = importance_floor(e); /* before the adjacency: on its ring records */
     build_adjacency(e);
-    if (e->quadric && o->method == DECIMATE_COMBINED)
+    if (e->quadric && o->method == DECIMATE_COMBINED) {
         start_attribute_quadrics(e);
+        e->open_at = xmalloc(n);
+    }
     for_each_vertex(e, STEP_FIRST_RINGS);
     for (unsigned int i = 0; i <= e->pool->count; i++)
         e->not_one_fan += e->pool->scratch[i].not_one_fan;
@@ -2911,6 +2920,8 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
         return 0; /* (collapse_run stops there: the caller rebuilds the mesh) */
     if (e->quadric)
         run_on_pool(e, STEP_QUADRICS, e->threads, 1); /* (the open edges read the rings) */
+    free(e->open_at);
+    e->open_at = NULL;
     e->rings_current = 1;
     return 0;
 }
