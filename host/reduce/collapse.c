@@ -612,7 +612,8 @@ ring_add(ring_entry *r, uint32_t *size, uint32_t capacity, ring_index *index, ui
 /* Adds a triangle of the vertex whose ring is being written (its corners after and before the
  * vertex: h) to the ring (as ring_add). */
 static inline __attribute__((always_inline)) void
-ring_add_triangle(ring_entry *r, uint32_t *size, uint32_t capacity, ring_index *index, collapse_half_edge h)
+ring_add_triangle(ring_entry *r, uint32_t *size, uint32_t capacity, ring_index *index,
+                  collapse_half_edge h)
 {
     r[ring_add(r, size, capacity, index, h.next)].left = h.previous;
     r[ring_add(r, size, capacity, index, h.previous)].right = h.next;
@@ -715,7 +716,8 @@ static uint32_t fill_ring_from_half_edges(uint32_t count, ring_entry *r, uint32_
     if (count == 0)
         return 0;
     if (count > HALF_EDGES_AT_HAND) {
-        reserve((void **)&s->half_edges, &s->half_edges_capacity, count, sizeof(collapse_half_edge));
+        reserve((void **)&s->half_edges, &s->half_edges_capacity, count,
+                sizeof(collapse_half_edge));
         copy = s->half_edges;
     }
     for (uint32_t i = 0; i < count; i++)
@@ -1195,8 +1197,8 @@ static void sum_quadrics(engine *e, uint32_t range)
                 add_open_edge_planes(e, t, v, n, face_importance, q);
             if (attribute_terms) {
                 int stride = attribute_stride(e->channels);
-                double *terms = &e->attribute_terms[(size_t)e->m->corner_ids[3 * (size_t)t + corner] *
-                                                    stride];
+                uint32_t id = e->m->corner_ids[3 * (size_t)t + corner];
+                double *terms = &e->attribute_terms[(size_t)id * stride];
                 for (int m = 0; m < stride; m++)
                     terms[m] += face[m];
             }
