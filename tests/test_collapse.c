@@ -48,14 +48,22 @@ static void make_fan(float centre_height)
     }
 }
 
-static collapse_mesh fan_mesh(const double *importance, const uint8_t *locked)
+/* A mesh of these vertices and triangles, nothing else set. */
+static collapse_mesh mesh_of(uint32_t vertex_count, const float *positions,
+                             uint32_t triangle_count, uint32_t *triangles)
 {
     collapse_mesh m;
     memset(&m, 0, sizeof m);
-    m.vertex_count = 7;
-    m.positions = fan_positions;
-    m.triangle_count = 6;
-    m.triangles = fan_triangles;
+    m.vertex_count = vertex_count;
+    m.positions = positions;
+    m.triangle_count = triangle_count;
+    m.triangles = triangles;
+    return m;
+}
+
+static collapse_mesh fan_mesh(const double *importance, const uint8_t *locked)
+{
+    collapse_mesh m = mesh_of(7, fan_positions, 6, fan_triangles);
     m.importance = importance;
     m.locked = locked;
     return m;
@@ -165,12 +173,7 @@ static void test_wide_fan(void **state)
         triangles[3 * k + 1] = 1 + k;
         triangles[3 * k + 2] = 1 + (k + 1) % WIDE_RIM;
     }
-    collapse_mesh m;
-    memset(&m, 0, sizeof m);
-    m.vertex_count = WIDE_RIM + 1;
-    m.positions = positions;
-    m.triangle_count = WIDE_RIM;
-    m.triangles = triangles;
+    collapse_mesh m = mesh_of(WIDE_RIM + 1, positions, WIDE_RIM, triangles);
     m.importance = importance;
     assert_true(expect(&m, DECIMATE_IMPORTANCE, 0, 1, 1, NULL) ==
                 (WIDE_RIM + 1) * (WIDE_RIM + 2) / 2.0);
@@ -184,12 +187,7 @@ static void test_tetrahedron(void **state)
 {
     float positions[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
     uint32_t triangles[] = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
-    collapse_mesh m;
-    memset(&m, 0, sizeof m);
-    m.vertex_count = 4;
-    m.positions = positions;
-    m.triangle_count = 4;
-    m.triangles = triangles;
+    collapse_mesh m = mesh_of(4, positions, 4, triangles);
     expect(&m, DECIMATE_QUADRIC, 0, 1, 0, "two joined valence-3 vertices");
     /* The engine takes none of them: the mesh stays whole. */
     collapse_options o = options_of(DECIMATE_QUADRIC);
@@ -314,12 +312,7 @@ static void test_fans_unchecked(void **state)
     float positions[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, -1, 0, 0, 0, -1, 0, 0, 0, -1};
     uint32_t triangles[] = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3,
                             0, 5, 4, 0, 4, 6, 0, 6, 5, 4, 5, 6};
-    collapse_mesh m;
-    memset(&m, 0, sizeof m);
-    m.vertex_count = 7;
-    m.positions = positions;
-    m.triangle_count = 8;
-    m.triangles = triangles;
+    collapse_mesh m = mesh_of(7, positions, 8, triangles);
     m.fans_unchecked = 1;
     collapse_options o = options_of(DECIMATE_QUADRIC);
     o.target_vertices = 4;
@@ -340,12 +333,7 @@ static void test_fans_unchecked(void **state)
         weld_result *w = &welded[unchecked];
         assert_int_equal(weld_flat(&bunny.in, 1, w), 0);
         assert_int_equal(w->non_manifold_vertices, 0);
-        collapse_mesh b;
-        memset(&b, 0, sizeof b);
-        b.vertex_count = w->vertex_count;
-        b.positions = w->positions;
-        b.triangle_count = w->triangle_count;
-        b.triangles = w->triangles;
+        collapse_mesh b = mesh_of(w->vertex_count, w->positions, w->triangle_count, w->triangles);
         b.fans_unchecked = unchecked;
         collapse_options bo = options_of(DECIMATE_QUADRIC);
         bo.target_vertices = w->vertices_counted / 10;

@@ -298,9 +298,11 @@ int collapse_welded(const decimate_input *in, decimate_method method, weld_resul
     std::memset(&options, 0, sizeof options);
     options.method = method;
     // The target counts all vertices (once per wedge), the locked copies of loose faces
-    // included: the collapsible surface gets what remains after them. (Above the welded count,
-    // the engine stops before its first pass.)
-    options.target_vertices = in->target_vertices;
+    // included: the collapsible surface gets what remains after them. (Unchecked, the welded
+    // count is the engine's own: above it, the engine stops before its first pass.)
+    options.target_vertices = unchecked ? in->target_vertices
+                                        : std::min<uint64_t>(in->target_vertices,
+                                                             out->vertices_welded);
     options.max_normal_angle = in->max_normal_angle > 0 ? in->max_normal_angle : 60.0;
     options.boundary_tolerance =
         in->boundary_tolerance > 0 ? in->boundary_tolerance : DECIMATE_BOUNDARY_TOLERANCE;
