@@ -636,27 +636,21 @@ static uint32_t fill_ring(const engine *e, uint32_t v, fan f, ring_entry *r, uin
     return size;
 }
 
-/* collapse_one_fan's index of a fan's corners by one field (next or previous): a bit per value
- * (summary_bit) and, per bit, the first corner that set it. A lookup reads the corner its value's
- * bit names, and searches them all only where another value has the bit. */
-typedef struct corner_index {
-    uint64_t summary;
-    uint32_t first[64];
-} corner_index;
-
 static uint32_t corner_field(const collapse_half_edge *corner, int previous)
 {
     return previous ? corner->previous : corner->next;
 }
 
-/* The corner of corners[0 .. count) whose field is w, or count. */
-static uint32_t corner_lookup(const corner_index *index, const collapse_half_edge *corners,
+/* The corner of corners[0 .. count) whose field is w, or count, through an index of them by that
+ * field (a ring_index: per summary bit, the first corner whose value has it). The lookup reads
+ * the corner its value's bit names, and searches them all only where another value has the bit. */
+static uint32_t corner_lookup(const ring_index *index, const collapse_half_edge *corners,
                               uint32_t count, int previous, uint32_t w)
 {
     uint32_t b = summary_bit(w);
     if (!(index->summary >> b & 1))
         return count;
-    uint32_t j = index->first[b];
+    uint32_t j = index->slot[b];
     if (corner_field(&corners[j], previous) == w)
         return j;
     for (j = 0; j < count && corner_field(&corners[j], previous) != w;)
@@ -665,7 +659,7 @@ static uint32_t corner_lookup(const corner_index *index, const collapse_half_edg
 }
 
 /* Indexes corners[0 .. count) by one field; 0 where two share a value. */
-static int index_corners(corner_index *index, const collapse_half_edge *corners, uint32_t count,
+static int index_corners(ring_index *index, const collapse_half_edge *corners, uint32_t count,
                          int previous)
 {
     index->summary = 0;
@@ -677,14 +671,14 @@ static int index_corners(corner_index *index, const collapse_half_edge *corners,
             continue;
         }
         index->summary |= (uint64_t)1 << b;
-        index->first[b] = i;
+        index->slot[b] = i;
     }
     return 1;
 }
 
 int collapse_one_fan(const collapse_half_edge *corners, uint32_t count)
 {
-    corner_index by_next, by_previous;
+    ring_index by_next, by_previous;
     if (!index_corners(&by_next, corners, count, 0) ||
         !index_corners(&by_previous, corners, count, 1))
         return 0; /* a directed edge from the vertex twice */
@@ -749,7 +743,7 @@ static void build_ring(engine *e, uint32_t v, scratch *s, int check_fan)
     ring_entry *r = pass_ring_entries(e, v);
     int one_fan = 1;
     uint32_t size = e->ring_size[v] =
-        fill_ring_from_half_edges(degree, r, degree + 1, s, check_fan && degree ? &one_fan : NULL);
+        fill_ring_from_half_edges(degree, r, degree + 1, s, check_fan ? &one_fan : NULL);
     s->not_one_fan += !one_fan;
     if (e->open_at) {
         int open = 0;
