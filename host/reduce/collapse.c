@@ -65,6 +65,9 @@ typedef uint8_t vertex_flags;
 #define JUDGE_AHEAD 8    /* candidates ahead whose reads are asked for while one is judged */
 #define SPIN_LIMIT 4000 /* pauses (about 0.1 ms) a thread spins before it sleeps or yields */
 #define FRESH_ARRAYS 4  /* the engine's large arrays: adjacency, rings, scores, quadrics */
+#define ADJACENCY_PARTS 5 /* at most, parts of the live triangles build_adjacency counts apart:
+                             its counters are adjacency_start and the ranking's two key arrays
+                             (two counters in each) */
 #define HALF_EDGES_AT_HAND 64 /* a vertex's half-edges build_ring copies onto the stack */
 #define TOUCHES_KNOWN 255 /* a vertex's touch count (vertex_marks) is exact below this */
 
@@ -74,9 +77,12 @@ typedef struct worker_pool worker_pool;
  * chunk's candidates). Each item's step writes only that item's records, so the items may go to
  * any thread and the result does not depend on which. */
 typedef enum vertex_step {
-    STEP_FIRST_TOUCH,   /* per 2 MiB page of the large arrays (engine_init) */
-    STEP_COUNT_CORNERS, /* per range of vertices (build_adjacency) */
-    STEP_FILL_CORNERS,
+    STEP_START_VERTICES, /* per range of vertices (engine_init) */
+    STEP_FIRST_TOUCH,   /* per 2 MiB page of the large arrays */
+    STEP_COUNT_CORNERS, /* per part of the live triangles (build_adjacency) */
+    STEP_SUM_CORNERS,   /* per range of vertices */
+    STEP_PLACE_CORNERS, /* per range of vertices */
+    STEP_FILL_CORNERS,  /* per part of the live triangles */
     STEP_WEIGH_FACES, /* per triangle (importance_floor) */
     STEP_FIRST_RINGS, /* per vertex: its ring, its fan checked (engine_init) */
     STEP_QUADRICS,    /* per range of vertices (engine_init) */
@@ -204,6 +210,11 @@ typedef struct engine {
     vertex_flags *flags;
     uint32_t *adjacency_start, *adjacency;
     uint32_t *live, live_count; /* the triangles live at the last adjacency, in order */
+    int live_all; /* the list not yet written: every triangle, in order (the first adjacency) */
+    /* the adjacency's parts of the live triangles (build_adjacency): where each starts in the
+     * list (parts + 1 of them), its live triangles, and its counters per vertex */
+    uint32_t parts, part_first[ADJACENCY_PARTS + 1], part_live[ADJACENCY_PARTS];
+    uint32_t *part_counts[ADJACENCY_PARTS];
     uint32_t not_one_fan; /* the caller's fans unchecked: the vertices found not one fan */
     uint8_t *open_at; /* COMBINED's setup: per vertex, whether it has an open edge (its first
                          ring; for sum_quadrics, which reads the ring only there) */
@@ -232,7 +243,8 @@ typedef struct engine {
     /* the ranking (rank_candidates): per range of vertices the offset of its candidates; the
      * keys sorted, `ranked` of them (and their spare) */
     uint32_t range_offset[MAX_THREADS + 1];
-    /* the adjacency (build_adjacency): per range of vertices its corners, and where they start */
+    /* the adjacency (build_adjacency): per range of vertices its corners, and where they start
+     * (ranges > 1) */
     uint32_t range_corners[MAX_THREADS], corner_offset[MAX_THREADS + 1];
     uint32_t range_no_legal[MAX_THREADS]; /* per range: its vertices with no legal collapse */
     size_t no_legal;                      /* theirs summed: counted last in the pass's quarter */
@@ -427,30 +439,46 @@ static inline __attribute__((always_inline)) double quadric_error(const double *
  * way, the corners of every triangle a collapse of the last pass touched are marked stale: a
  * vertex's score depends on its triangles, its neighbours' triangles, quadrics and importance,
  * so the touched vertices and their neighbours are scored again and the rest keep their scores
- * (the scoring step clears the marks: settle_vertex). The counting and the filling run on the
- * pool, one range of vertices each (count_corners, fill_corners): each range sweeps the whole
- * list and writes only its own vertices' counts, marks, starts and slots, so each vertex's
- * triangles come in list order on any number of threads; between the two, only the ranges'
- * totals are summed, one after the other. The filling also leaves each vertex's half-edges in
- * its ring records, from which the ring step builds its ring (build_ring): the triangles are
+ * (the scoring step clears the marks: settle_vertex). The list is split into parts, one per
+ * thread (at most ADJACENCY_PARTS): each part drops its dead triangles and counts its corners
+ * per vertex (count_corners), the parts' places in the list are closed up, each range of
+ * vertices gets its slots, part 0's corners first, then part 1's and so on (sum_corners,
+ * place_corners), and each part fills its own slots (fill_corners), so each vertex's triangles
+ * come in list order on any number of threads. The filling also leaves each vertex's half-edges
+ * in its ring records, from which the ring step builds its ring (build_ring): the triangles are
  * read here in list order, not again at random for each of their corners. */
 static void run_on_pool(engine *e, vertex_step step, uint32_t items, uint32_t block);
 
 static void build_adjacency(engine *e)
 {
-    uint32_t live = 0;
-    for (uint32_t i = 0; i < e->live_count; i++) {
-        uint32_t t = e->live[i];
-        if (corners(e, t)[0] != COLLAPSE_NONE)
-            e->live[live++] = t;
+    uint32_t parts = e->threads < ADJACENCY_PARTS ? e->threads : ADJACENCY_PARTS;
+    e->parts = parts;
+    for (uint32_t p = 0; p <= parts; p++)
+        e->part_first[p] = (uint32_t)((uint64_t)e->live_count * p / parts);
+    e->part_counts[0] = e->adjacency_start;
+    for (uint32_t p = 1; p < parts; p++) /* (the keys are free until the pass ranks) */
+        e->part_counts[p] = (uint32_t *)(p <= 2 ? e->keys : e->spare_keys) +
+                            (p % 2 ? 0 : (size_t)e->n + 1);
+    run_on_pool(e, STEP_COUNT_CORNERS, parts, 1);
+    uint32_t live = 0; /* each part's live triangles moved down behind the last part's */
+    for (uint32_t p = 0; p < parts; p++) {
+        if (live != e->part_first[p])
+            memmove(&e->live[live], &e->live[e->part_first[p]],
+                    sizeof(uint32_t) * e->part_live[p]);
+        e->part_first[p] = live;
+        live += e->part_live[p];
     }
-    e->live_count = live;
-    run_on_pool(e, STEP_COUNT_CORNERS, e->threads, 1);
+    e->part_first[parts] = e->live_count = live;
+    e->live_all = 0;
     e->corner_offset[0] = 0;
-    for (uint32_t r = 0; r < e->threads; r++)
-        e->corner_offset[r + 1] = e->corner_offset[r] + e->range_corners[r];
-    e->adjacency_start[e->n] = e->corner_offset[e->threads];
-    run_on_pool(e, STEP_FILL_CORNERS, e->threads, 1);
+    if (e->threads > 1) {
+        run_on_pool(e, STEP_SUM_CORNERS, e->threads, 1);
+        for (uint32_t r = 0; r < e->threads; r++)
+            e->corner_offset[r + 1] = e->corner_offset[r] + e->range_corners[r];
+    }
+    e->adjacency_start[e->n] = 3 * live;
+    run_on_pool(e, STEP_PLACE_CORNERS, e->threads, 1);
+    run_on_pool(e, STEP_FILL_CORNERS, parts, 1);
 }
 
 /* The vertices of range `range` of as many as the pool has threads: [*first, *end). */
@@ -461,66 +489,108 @@ static void vertex_range(const engine *e, uint32_t range, uint32_t *first, uint3
     *end = (uint32_t)((uint64_t)e->n * (range + 1) / ranges);
 }
 
-/* A vertex's flags while the ranges mark their own vertices stale side by side: a range reads
- * the touched bit of other ranges' vertices, whose stale bit their range may be setting. */
-static vertex_flags shared_flags(const engine *e, uint32_t v)
+/* The per-vertex records of one range of vertices as the passes start from them: each vertex
+ * stale, no donor, no candidate, nothing marked, no ring yet; its lock and its importance the
+ * caller's. Written on the pool, so that the threads take the fresh pages' faults side by
+ * side. */
+static void start_vertices(engine *e, uint32_t range)
 {
-    return __atomic_load_n(&e->flags[v], __ATOMIC_RELAXED);
+    const collapse_mesh *m = e->m;
+    uint32_t first, end;
+    vertex_range(e, range, &first, &end);
+    for (uint32_t v = first; v < end; v++) {
+        e->donor[v] = COLLAPSE_NONE;
+        e->best_target[v] = COLLAPSE_NONE;
+        e->flags[v] = FLAG_STALE | (m->locked && m->locked[v] ? FLAG_LOCKED : 0);
+        e->ring_size[v] = 0;
+        e->marks[v] = (vertex_marks){0, 0};
+        e->importance[v] = m->importance ? m->importance[v] : 0;
+    }
 }
 
-/* build_adjacency's count for one range of vertices: into adjacency_start[v], the live
- * triangles at v, and into range_corners[range] their sum; the corners of touched triangles
- * marked stale. */
-static void count_corners(engine *e, uint32_t range)
+/* build_adjacency's count for one part of the live list: its live triangles moved to the
+ * front of its place in the list (part_live[part] of them), their corners counted per vertex
+ * (part_counts[part]), and the corners of touched triangles marked stale (by any part: each
+ * writes the same bit only). */
+static void count_corners(engine *e, uint32_t part)
 {
-    uint32_t first, end, *start = e->adjacency_start, corners_in_range = 0;
-    vertex_range(e, range, &first, &end);
-    memset(&start[first], 0, sizeof(uint32_t) * (end - first));
-    for (uint32_t i = 0; i < e->live_count; i++) {
-        const uint32_t *c = corners(e, e->live[i]);
-        int mine[3], any = 0;
-        for (int k = 0; k < 3; k++)
-            any |= mine[k] = c[k] - first < end - first;
-        if (!any)
+    const uint32_t *triangles = e->m->triangles;
+    uint32_t *live = e->live, *count = e->part_counts[part];
+    uint32_t first = e->part_first[part], end = e->part_first[part + 1], kept = first;
+    vertex_flags *flags = e->flags;
+    int live_all = e->live_all;
+    memset(count, 0, sizeof(uint32_t) * e->n);
+    for (uint32_t i = first; i < end; i++) {
+        uint32_t t = live_all ? i : live[i];
+        const uint32_t *c = &triangles[3 * (size_t)t];
+        if (c[0] == COLLAPSE_NONE)
             continue;
-        int touched =
-            (shared_flags(e, c[0]) | shared_flags(e, c[1]) | shared_flags(e, c[2])) & FLAG_TOUCHED;
+        live[kept++] = t;
+        vertex_flags f[3];
+        for (int k = 0; k < 3; k++)
+            f[k] = __atomic_load_n(&flags[c[k]], __ATOMIC_RELAXED); /* (parts mark side by side) */
+        int touched = (f[0] | f[1] | f[2]) & FLAG_TOUCHED;
         for (int k = 0; k < 3; k++) {
-            if (!mine[k])
-                continue;
-            start[c[k]]++;
-            corners_in_range++;
-            if (touched)
-                __atomic_store_n(&e->flags[c[k]], (vertex_flags)(e->flags[c[k]] | FLAG_STALE),
+            count[c[k]]++;
+            if (touched && !(f[k] & FLAG_STALE))
+                __atomic_store_n(&flags[c[k]], (vertex_flags)(f[k] | FLAG_STALE),
                                  __ATOMIC_RELAXED);
         }
     }
-    e->range_corners[range] = corners_in_range;
+    e->part_live[part] = kept - first;
 }
 
-/* build_adjacency's fill for one range of vertices (adjacency_start[v] v's count): each
- * vertex's count made the end of its slots (the range's corners start at corner_offset[range]),
- * then each live triangle, from the last of the list to the first, into the last free slot of
- * each of its corners in the range, which leaves adjacency_start[v] the first of v's slots.
- * The corner's half-edge goes into the first bytes of ring record slot + v: v's ring records
- * (pass_ring_entries) start at adjacency_start[v] + v, so v's i-th triangle leaves its half-edge
- * in v's i-th record. */
-static void fill_corners(engine *e, uint32_t range)
+/* build_adjacency's corners of one range of vertices, every part's counted, into
+ * range_corners[range]. */
+static void sum_corners(engine *e, uint32_t range)
 {
-    uint32_t first, end, *start = e->adjacency_start, slots_end = e->corner_offset[range];
+    uint32_t first, end, sum = 0;
     vertex_range(e, range, &first, &end);
-    for (uint32_t v = first; v < end; v++)
-        start[v] = slots_end += start[v];
-    for (uint32_t i = e->live_count; i-- > 0;) {
-        uint32_t t = e->live[i];
-        const uint32_t *c = corners(e, t);
-        for (int k = 0; k < 3; k++)
-            if (c[k] - first < end - first) {
-                uint32_t slot = --start[c[k]];
-                e->adjacency[slot] = t;
-                collapse_half_edge h = {c[(k + 1) % 3], c[(k + 2) % 3]};
-                memcpy(&e->rings[(size_t)slot + c[k]], &h, sizeof h);
-            }
+    for (uint32_t p = 0; p < e->parts; p++)
+        for (uint32_t v = first; v < end; v++)
+            sum += e->part_counts[p][v];
+    e->range_corners[range] = sum;
+}
+
+/* build_adjacency's slots of one range of vertices (the range's first at corner_offset[range]):
+ * a vertex's slots are part 0's corners at it, then part 1's and so on. adjacency_start[v] (part
+ * 0's count) is made the end of part 0's slots, which fill_corners fills from the end; another
+ * part's count is made the first of its slots, which it fills from the first. */
+static void place_corners(engine *e, uint32_t range)
+{
+    uint32_t first, end, slot = e->corner_offset[range];
+    vertex_range(e, range, &first, &end);
+    for (uint32_t v = first; v < end; v++) {
+        e->adjacency_start[v] = slot += e->adjacency_start[v];
+        for (uint32_t p = 1; p < e->parts; p++) {
+            uint32_t count = e->part_counts[p][v];
+            e->part_counts[p][v] = slot;
+            slot += count;
+        }
+    }
+}
+
+/* build_adjacency's fill for one part of the live list (its place in the list moved, its slots
+ * placed): part 0 from the last of its triangles to the first, into the last free slot of each
+ * corner, which leaves adjacency_start[v] the first of v's slots; another part from the first,
+ * into the first free slot. A corner's half-edge goes into the first bytes of ring record
+ * slot + v: v's ring records (pass_ring_entries) start at adjacency_start[v] + v, so v's i-th
+ * triangle leaves its half-edge in v's i-th record. */
+static void fill_corners(engine *e, uint32_t part)
+{
+    const uint32_t *live = e->live, *triangles = e->m->triangles;
+    uint32_t first = e->part_first[part], end = e->part_first[part + 1], *adjacency = e->adjacency;
+    uint32_t *next = e->part_counts[part]; /* part 0: adjacency_start, the ends of its slots */
+    ring_entry *rings = e->rings;
+    for (uint32_t i = first; i < end; i++) {
+        uint32_t t = part == 0 ? live[first + end - 1 - i] : live[i];
+        const uint32_t *c = &triangles[3 * (size_t)t];
+        for (int k = 0; k < 3; k++) {
+            uint32_t slot = part == 0 ? --next[c[k]] : next[c[k]]++;
+            adjacency[slot] = t;
+            collapse_half_edge h = {c[(k + 1) % 3], c[(k + 2) % 3]};
+            memcpy(&rings[(size_t)slot + c[k]], &h, sizeof h);
+        }
     }
 }
 
@@ -1082,11 +1152,13 @@ static void start_attribute_quadrics(engine *e)
 static double *face_weights(const engine *e, uint32_t t) { return (double *)&e->rings[t]; }
 
 /* Triangle t's area and its area x importance (the mean of its vertices'), for
- * importance_floor; nothing for a dead one. */
+ * importance_floor; zeros for a dead one. */
 static void weigh_face(engine *e, uint32_t t)
 {
-    if (corners(e, t)[0] == COLLAPSE_NONE)
+    if (corners(e, t)[0] == COLLAPSE_NONE) {
+        face_weights(e, t)[0] = face_weights(e, t)[1] = 0;
         return;
+    }
     const float *p[3];
     double face_importance = triangle_points(e, t, p), n[3];
     normal_of(p, n);
@@ -1103,9 +1175,7 @@ static double importance_floor(engine *e)
 {
     run_on_pool(e, STEP_WEIGH_FACES, e->t, SCORE_BLOCK);
     double weighted = 0, area = 0;
-    for (uint32_t t = 0; t < e->t; t++) {
-        if (corners(e, t)[0] == COLLAPSE_NONE)
-            continue;
+    for (uint32_t t = 0; t < e->t; t++) { /* (a dead face adds zeros: the same sums) */
         weighted += face_weights(e, t)[1];
         area += face_weights(e, t)[0];
     }
@@ -1683,11 +1753,20 @@ static void apply_item(engine *e, uint32_t item, scratch *s);
 static void run_item(engine *e, vertex_step step, uint32_t i, scratch *s)
 {
     switch (step) {
+    case STEP_START_VERTICES:
+        start_vertices(e, i);
+        break;
     case STEP_FIRST_TOUCH:
         first_touch(e, i);
         break;
     case STEP_COUNT_CORNERS:
         count_corners(e, i);
+        break;
+    case STEP_SUM_CORNERS:
+        sum_corners(e, i);
+        break;
+    case STEP_PLACE_CORNERS:
+        place_corners(e, i);
         break;
     case STEP_FILL_CORNERS:
         fill_corners(e, i);
@@ -2857,39 +2936,36 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     e->boundary_tolerance =
         o->boundary_tolerance > 0 ? o->boundary_tolerance : DECIMATE_BOUNDARY_TOLERANCE;
     size_t n = (size_t)e->n + 1;
-    e->flags = xcalloc(n, sizeof(vertex_flags));
+    e->flags = xmalloc(n * sizeof(vertex_flags));
     e->adjacency_start = xmalloc(sizeof(uint32_t) * (n + 1));
     e->adjacency = large_array(e, sizeof(uint32_t) * (3 * (size_t)e->t + 1));
     e->live = xmalloc(sizeof(uint32_t) * ((size_t)e->t + 1));
-    for (uint32_t t = 0; t < e->t; t++)
-        e->live[t] = t;
     e->live_count = e->t;
+    e->live_all = 1;
     size_t ring_slots = 3 * (size_t)e->t + n;
     e->rings = large_array(e, sizeof(ring_entry) * ring_slots);
-    e->ring_size = xcalloc(n, sizeof(uint32_t));
+    e->ring_size = xmalloc(sizeof(uint32_t) * n);
     e->donor = xmalloc(sizeof(uint32_t) * n);
-    e->marks = xcalloc(n, sizeof(vertex_marks));
+    e->marks = xmalloc(sizeof(vertex_marks) * n);
     e->due = xcalloc(n / 64 + 2, sizeof(uint64_t));
     e->chunk_mark = 1;
     e->best_target = xmalloc(sizeof(uint32_t) * n);
     e->best = large_array(e, sizeof(candidate) * n);
-    e->importance = xcalloc(n, sizeof(double));
-    if (m->importance)
-        memcpy(e->importance, m->importance, sizeof(double) * e->n);
+    e->importance = xmalloc(sizeof(double) * n);
+    e->keys = xmalloc(sizeof(rank_key) * n); /* (build_adjacency's counters till the ranking) */
+    e->spare_keys = xmalloc(sizeof(rank_key) * n);
     if (o->method != DECIMATE_IMPORTANCE) {
         e->quadric = large_array(e, sizeof(double) * 10 * n); /* (zeroed by sum_quadrics) */
         e->self_error = xmalloc(sizeof(double) * n);
     }
-    for (uint32_t v = 0; v < e->n; v++) {
-        e->donor[v] = COLLAPSE_NONE;
-        e->best_target[v] = COLLAPSE_NONE;
-        e->flags[v] = FLAG_STALE;
-        if (m->locked && m->locked[v])
-            e->flags[v] |= FLAG_LOCKED;
-    }
+    e->flags[e->n] = 0; /* (the records one past the last vertex) */
+    e->ring_size[e->n] = 0;
+    e->marks[e->n] = (vertex_marks){0, 0};
+    e->importance[e->n] = 0;
     e->pool = xmalloc(sizeof *e->pool);
     pool_start(e->pool, e, o->threads ? o->threads : 1);
     e->threads = e->pool->count + 1;
+    run_on_pool(e, STEP_START_VERTICES, e->threads, 1);
     if (e->threads > 1) {
         size_t pages = 0;
         for (size_t a = 0; a < e->fresh_count; a++)
@@ -2956,8 +3032,6 @@ int collapse_run(collapse_mesh *m, const collapse_options *o, collapse_result *r
         engine_free(&e);
         return 0;
     }
-    e.keys = xmalloc(sizeof(rank_key) * ((size_t)e.n + 1));
-    e.spare_keys = xmalloc(sizeof(rank_key) * ((size_t)e.n + 1));
     e.history = result->collapsed_into;
     e.score_rules_up_to = score_rules_bound(0); /* the first pass checks its ranking alone */
     e.judgements = xmalloc(sizeof(judgement) * CHUNK);
