@@ -59,7 +59,7 @@ typedef uint8_t vertex_flags;
 #define SCORE_BLOCK 512 /* vertices a thread takes at a time */
 #define MAX_THREADS 64
 #define CHUNK 1024 /* candidates judged at a time when taking collapses */
-#define JUDGE_BLOCK 8  /* candidates a thread judges at a time */
+#define JUDGE_BLOCK 32 /* candidates a thread judges at a time (fewer claims to share a chunk) */
 #define APPLY_BLOCK 16 /* collapses a thread takes at a time */
 #define PREFETCH_AHEAD 4 /* collapses ahead whose reads are asked for while one is taken */
 #define JUDGE_AHEAD 8    /* candidates ahead whose reads are asked for while one is judged */
