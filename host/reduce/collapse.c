@@ -63,6 +63,8 @@ typedef uint8_t vertex_flags;
 #define APPLY_BLOCK 16 /* collapses a thread takes at a time */
 #define PREFETCH_AHEAD 4 /* collapses ahead whose reads are asked for while one is taken */
 #define JUDGE_AHEAD 8    /* candidates ahead whose reads are asked for while one is judged */
+#define ACCEPT_AHEAD 8   /* judged candidates ahead whose marks are asked for while one is
+                            accepted */
 #define SPIN_LIMIT 4000 /* pauses (about 0.1 ms) a thread spins before it sleeps or yields */
 #define FRESH_ARRAYS 4  /* the engine's large arrays: adjacency, rings, scores, quadrics */
 #define ADJACENCY_PARTS 5 /* at most, parts of the live triangles build_adjacency counts apart:
@@ -2617,6 +2619,21 @@ static void prefetch_taking(const engine *e, uint32_t item, uint32_t listed)
         __builtin_prefetch(corners(e, f0.triangle[i]), 1);
 }
 
+/* The acceptance of a chunk's candidates reads the marks of each judged candidate's ends and
+ * writes those of its ring, at random vertices: those of the one ACCEPT_AHEAD ahead are asked
+ * for (on the dragon, the acceptance took 0.020 s on one thread without, 0.015 s with). */
+static void prefetch_acceptance(const engine *e, uint32_t item)
+{
+    if (item + ACCEPT_AHEAD >= e->chunk_size)
+        return;
+    const judgement *j = &e->judgements[item + ACCEPT_AHEAD];
+    __builtin_prefetch(&e->marks[j->v0], 1);
+    __builtin_prefetch(&e->marks[j->v1]);
+    if (j->write_count <= WRITES_MAX)
+        for (uint32_t i = 1; i < j->write_count; i++) /* (writes[0] is v0) */
+            __builtin_prefetch(&e->marks[j->writes[i]], 1);
+}
+
 static void judge_item(engine *e, uint32_t item, scratch *s)
 {
     prefetch_judging(e, item);
@@ -2759,6 +2776,7 @@ static uint32_t take_in_chunks(engine *e, const rank_key *keys, size_t count, fl
         uint32_t accepted = 0;
         for (uint32_t i = 0; i < n; i++) {
             const judgement *j = &e->judgements[i];
+            prefetch_acceptance(e, i);
             if (key_cost(&items[i]) > cost_limit && taken > 0) {
                 stop = 1;
                 break;
