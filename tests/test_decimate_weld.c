@@ -8,6 +8,8 @@
  *   flat weld    the bunny and the dragon at resolution 4 welded flat: the bunny is manifold
  *                (the fast path), the fin, the two tetrahedra and a bowtie are not (each found
  *                at the vertex where it fails), and the flat weld's counts are decimate_measure's
+ *   threads      the bunny with a triangle that welds into two vertices after every 1,000th,
+ *                with normals, welded on 1, 2, 3 and 5 threads: the same arrays byte for byte
  *
  *   dragon       the dragon at resolution 2 (100,250 vertices, not manifold everywhere), decimated
  *                to 10 %
@@ -272,6 +274,71 @@ static void test_flat_weld(void **state)
     weld_result_free(&w);
 }
 
+/* Whether two welds kept the same triangles, in the same order, with the same ids. */
+static int same_triangles(const weld_result *a, const weld_result *b)
+{
+    size_t corners = 3 * sizeof(uint32_t) * a->triangle_count;
+    return a->triangle_count == b->triangle_count &&
+           a->triangles_dropped == b->triangles_dropped &&
+           memcmp(a->triangles, b->triangles, corners) == 0 &&
+           memcmp(a->corner_ids, b->corner_ids, corners) == 0 &&
+           memcmp(a->kept_from, b->kept_from, sizeof(uint32_t) * a->triangle_count) == 0;
+}
+
+/* The triangles are welded in parts, one per thread, each part's kept ones moved up behind the
+ * last part's (weld.c, keep_triangles): the bunny (69,451 triangles, so up to 4 parts of at
+ * least 16,384) with a triangle on two vertices after every 1,000th, which every part has to
+ * drop, and with normals (the corner ids moved too), welds the same on 1, 2, 3 and 5 threads,
+ * and drops exactly the triangles added. */
+static void test_weld_threads(void **state)
+{
+    (void)state;
+    mesh_data bunny;
+    read_model("bunny.ply", &bunny);
+    uint32_t added = bunny.triangle_count / 1000, count = bunny.triangle_count + added;
+    uint32_t *indices = malloc(3 * sizeof(uint32_t) * count);
+    uint32_t *kept_input = malloc(sizeof(uint32_t) * bunny.triangle_count);
+    uint32_t t = 0, kept = 0;
+    for (uint32_t u = 0; u < bunny.triangle_count; u++) {
+        memcpy(&indices[3 * (size_t)t], &bunny.indices[3 * (size_t)u], 3 * sizeof(uint32_t));
+        kept_input[kept++] = t++;
+        if (u % 1000 == 999) { /* (a, a, b): two vertices */
+            uint32_t *c = &indices[3 * (size_t)t++];
+            c[0] = c[1] = bunny.indices[3 * (size_t)u];
+            c[2] = bunny.indices[3 * (size_t)u + 1];
+        }
+    }
+    float *normals = malloc(3 * sizeof(float) * bunny.vertex_count);
+    for (uint32_t v = 0; v < bunny.vertex_count; v++)
+        for (int k = 0; k < 3; k++) /* (two values: vertices share ids only where welded) */
+            normals[3 * (size_t)v + k] = k == 2 ? 1.0f : (float)(v % 2);
+    mesh_data with = bunny;
+    with.indices = indices;
+    with.triangle_count = count;
+    decimate_input in = input_of("bunny with dropped triangles", &with, NULL, 0);
+    in.normals = normals;
+    weld_result one, several;
+    in.threads = 1;
+    assert_int_equal(weld_flat(&in, 0, &one), 0);
+    assert_int_equal(one.triangles_dropped, added);
+    assert_int_equal(one.triangle_count, bunny.triangle_count);
+    assert_memory_equal(one.kept_from, kept_input, sizeof(uint32_t) * kept);
+    assert_non_null(one.corner_ids);
+    static const unsigned int thread_counts[] = {2, 3, 5};
+    for (size_t i = 0; i < sizeof thread_counts / sizeof thread_counts[0]; i++) {
+        in.threads = thread_counts[i];
+        assert_int_equal(weld_flat(&in, 0, &several), 0);
+        if (!same_triangles(&one, &several))
+            fail_msg("the weld on %u threads differs from the weld on one", in.threads);
+        weld_result_free(&several);
+    }
+    weld_result_free(&one);
+    free(normals);
+    free(kept_input);
+    free(indices);
+    mesh_data_free(&bunny);
+}
+
 /* The corners of output triangle t of m and of input triangle u of `in` are at the same
  * positions, in the same order (the same winding). */
 static int same_triangle(const mesh_data *m, uint32_t t, const mesh_data *in, uint32_t u)
@@ -418,6 +485,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_flat_weld),
+        cmocka_unit_test(test_weld_threads),
         cmocka_unit_test(test_non_manifold_dragon),
         cmocka_unit_test(test_non_manifold_fin),
         cmocka_unit_test(test_non_manifold_tetrahedra),

@@ -14,8 +14,8 @@
 
 #define EMPTY 0xffffffffu
 #define MAX_ATTRIBUTE_FLOATS 5
-#define WELD_THREADS 64   /* the most the manifold check starts */
-#define WELD_BLOCK 16384  /* vertices a thread of the manifold check takes at the least */
+#define WELD_THREADS 64   /* the most the triangles' weld and the manifold check start */
+#define WELD_BLOCK 16384  /* triangles or vertices a thread of theirs takes at the least */
 
 static uint32_t mix(uint32_t h, uint32_t word)
 {
@@ -39,6 +39,37 @@ static void position_bits(const float *p, uint32_t bits[3])
     for (int k = 0; k < 3; k++) {
         float folded = p[k] + 0.0f;
         memcpy(&bits[k], &folded, sizeof bits[k]);
+    }
+}
+
+/* How many threads share `count` items: `threads` (at least 1), at most WELD_THREADS, and no
+ * more than blocks of WELD_BLOCK items (a few items are done sooner than a thread starts). */
+static unsigned int weld_threads(unsigned int threads, size_t count)
+{
+    if (threads < 1)
+        threads = 1;
+    if (threads > WELD_THREADS)
+        threads = WELD_THREADS;
+    while (threads > 1 && (size_t)(threads - 1) * WELD_BLOCK >= count)
+        threads--;
+    return threads;
+}
+
+/* run(part) for each of `count` parts (parts: an array of `size`-byte records), part 0 on the
+ * calling thread and the others on threads of their own; where a thread cannot be started, the
+ * caller runs its part. */
+static void run_parts(void *(*run)(void *), void *parts, size_t size, unsigned int count)
+{
+    pthread_t thread[WELD_THREADS];
+    int started[WELD_THREADS] = {0};
+    for (unsigned int i = 1; i < count; i++)
+        started[i] = pthread_create(&thread[i], NULL, run, (char *)parts + i * size) == 0;
+    run(parts);
+    for (unsigned int i = 1; i < count; i++) {
+        if (started[i])
+            pthread_join(thread[i], NULL);
+        else
+            run((char *)parts + i * size);
     }
 }
 
@@ -127,20 +158,27 @@ static uint32_t *number_attributes(const decimate_input *in, weld_result *out)
     return id_of;
 }
 
-static void keep_triangles(const decimate_input *in, const uint32_t *id_of, weld_result *out)
+/* The input triangles [first, end) welded (keep_triangles): the kept ones written from place
+ * `first` of the kept arrays on, in order; `kept` of them. */
+typedef struct triangle_part {
+    const decimate_input *in;
+    const uint32_t *id_of;
+    weld_result *out;
+    uint32_t first, end, kept;
+} triangle_part;
+
+static void *keep_part(void *arg)
 {
-    out->kept_from = xmalloc(sizeof(uint32_t) * ((size_t)in->triangle_count + 1));
-    out->triangles = xmalloc(3 * sizeof(uint32_t) * ((size_t)in->triangle_count + 1));
-    if (id_of)
-        out->corner_ids = xmalloc(3 * sizeof(uint32_t) * ((size_t)in->triangle_count + 1));
-    uint32_t kept = 0;
-    for (uint32_t t = 0; t < in->triangle_count; t++) {
+    triangle_part *part = arg;
+    const decimate_input *in = part->in;
+    const uint32_t *id_of = part->id_of;
+    weld_result *out = part->out;
+    uint32_t kept = part->first;
+    for (uint32_t t = part->first; t < part->end; t++) {
         const uint32_t *ix = &in->indices[3 * (size_t)t];
         uint32_t a = out->welded_of[ix[0]], b = out->welded_of[ix[1]], c = out->welded_of[ix[2]];
-        if (a == b || b == c || a == c) {
-            out->triangles_dropped++;
+        if (a == b || b == c || a == c)
             continue;
-        }
         uint32_t *corner = &out->triangles[3 * (size_t)kept];
         corner[0] = a, corner[1] = b, corner[2] = c;
         if (id_of)
@@ -149,7 +187,42 @@ static void keep_triangles(const decimate_input *in, const uint32_t *id_of, weld
         out->kept_from[kept] = t;
         kept++;
     }
+    part->kept = kept - part->first;
+    return NULL;
+}
+
+/* The input triangles welded, those that weld into fewer than three vertices dropped: the
+ * triangles cut into one part per thread (weld_threads), each part's kept ones moved up behind
+ * the last part's, so the result is the same for any number of threads. */
+static void keep_triangles(const decimate_input *in, const uint32_t *id_of, weld_result *out)
+{
+    out->kept_from = xmalloc(sizeof(uint32_t) * ((size_t)in->triangle_count + 1));
+    out->triangles = xmalloc(3 * sizeof(uint32_t) * ((size_t)in->triangle_count + 1));
+    if (id_of)
+        out->corner_ids = xmalloc(3 * sizeof(uint32_t) * ((size_t)in->triangle_count + 1));
+    unsigned int threads = weld_threads(in->threads, in->triangle_count);
+    triangle_part part[WELD_THREADS];
+    for (unsigned int i = 0; i < threads; i++)
+        part[i] = (triangle_part){in, id_of, out,
+                                  (uint32_t)((uint64_t)in->triangle_count * i / threads),
+                                  (uint32_t)((uint64_t)in->triangle_count * (i + 1) / threads), 0};
+    run_parts(keep_part, part, sizeof part[0], threads);
+    uint32_t kept = 0;
+    for (unsigned int i = 0; i < threads; i++) {
+        if (kept != part[i].first) {
+            memmove(&out->triangles[3 * (size_t)kept], &out->triangles[3 * (size_t)part[i].first],
+                    3 * sizeof(uint32_t) * part[i].kept);
+            memmove(&out->kept_from[kept], &out->kept_from[part[i].first],
+                    sizeof(uint32_t) * part[i].kept);
+            if (id_of)
+                memmove(&out->corner_ids[3 * (size_t)kept],
+                        &out->corner_ids[3 * (size_t)part[i].first],
+                        3 * sizeof(uint32_t) * part[i].kept);
+        }
+        kept += part[i].kept;
+    }
     out->triangle_count = kept;
+    out->triangles_dropped = in->triangle_count - kept;
 }
 
 /* Per vertex its corners (c = 3 t + k), as a counting sort of the triangle list: vertex v's are
@@ -228,37 +301,21 @@ static void *check_range(void *arg)
     return NULL;
 }
 
-/* The manifold check and the wedge count, the vertices cut into one range per thread (at most
- * WELD_THREADS, and no more than blocks of WELD_BLOCK vertices; where a thread cannot be
- * started, the caller checks its range). */
+/* The manifold check and the wedge count, the vertices cut into one range per thread
+ * (weld_threads, run_parts). */
 static void check_manifold(weld_result *out, unsigned int threads)
 {
     vertex_corners vc;
     vertex_corners_build(out, &vc);
-    if (threads < 1)
-        threads = 1;
-    if (threads > WELD_THREADS)
-        threads = WELD_THREADS;
-    while (threads > 1 && (size_t)(threads - 1) * WELD_BLOCK >= out->vertex_count)
-        threads--; /* a small mesh is checked sooner than a thread starts */
+    threads = weld_threads(threads, out->vertex_count);
     manifold_range range[WELD_THREADS];
-    pthread_t thread[WELD_THREADS];
-    int started[WELD_THREADS] = {0};
-    for (unsigned int i = 0; i < threads; i++) {
+    for (unsigned int i = 0; i < threads; i++)
         range[i] = (manifold_range){out, &vc, (uint32_t)((uint64_t)out->vertex_count * i / threads),
                                     (uint32_t)((uint64_t)out->vertex_count * (i + 1) / threads),
                                     0, 0};
-        if (i > 0)
-            started[i] = pthread_create(&thread[i], NULL, check_range, &range[i]) == 0;
-    }
-    check_range(&range[0]);
-    out->non_manifold_vertices = range[0].non_manifold;
-    out->vertices_counted = range[0].counted;
-    for (unsigned int i = 1; i < threads; i++) {
-        if (started[i])
-            pthread_join(thread[i], NULL);
-        else
-            check_range(&range[i]);
+    run_parts(check_range, range, sizeof range[0], threads);
+    out->non_manifold_vertices = out->vertices_counted = 0;
+    for (unsigned int i = 0; i < threads; i++) {
         out->non_manifold_vertices += range[i].non_manifold;
         out->vertices_counted += range[i].counted;
     }

@@ -27,8 +27,9 @@
  *                turns them back, so every triangle keeps the winding it had (its front side)
  * What still fails the check after that goes to the rebuild, twins and turns included.
  *
- * No per-element allocation: open-addressing tables and a counting sort. The manifold check runs
- * on in->threads threads, each over a range of the vertices; the result is the same for any. */
+ * No per-element allocation: open-addressing tables and a counting sort. The triangles are welded
+ * on in->threads threads, each over a part of them, and the manifold check runs on as many, each
+ * over a range of the vertices; the result is the same for any. */
 #ifndef IDMR_WELD_H
 #define IDMR_WELD_H
 
