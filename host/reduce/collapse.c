@@ -19,11 +19,13 @@
  * touched vertex are its pass-start ones plus its donor's (current_fan); a vertex receives at
  * most once in a pass, as an end of a taken collapse is not taken again.
  *
- * Threads: one pool per run (worker_pool) takes the steps (vertex_step): the per-vertex rings,
- * quadrics, scores and checks (check_ranking), the ranking's listing by ranges, and the chunks'
- * judging and taking (take_in_chunks); each writes only its own vertex's, range's or collapse's
- * records (and a check its thread's list of moved candidates, whose order does not matter), so
- * the result is the same on any number of threads. */
+ * Threads: one pool per run (worker_pool) takes the steps (vertex_step): the adjacency by parts
+ * of the triangle list (build_adjacency), the per-vertex rings, quadrics, scores and checks
+ * (check_ranking), the ranking's listing by ranges, and the chunks' judging and taking
+ * (take_in_chunks); each writes only its own vertex's, range's, part's or collapse's records (and
+ * a check its thread's list of moved candidates, whose order does not matter; a part of the
+ * adjacency the stale bit of any vertex, which every part sets alike), so the result is the same
+ * on any number of threads. */
 #include "reduce/collapse.h"
 
 #include <float.h>
@@ -3048,12 +3050,12 @@ size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_
 {
     /* flags, the acceptance's marks, adjacency_start, ring_size, donor, best_target, best,
      * importance, the ranking's keys (and their spare), at most the lists of candidates that
-     * moved when checked (check_ranking: the threads' keys, their new and old costs), the
-     * quadric and its own error; a ring slot (its ring_entry); the due bits
-     * (check_candidates_up_to); per triangle its place in the live list */
+     * moved when checked (check_ranking: the threads' keys, their new and old costs, and the
+     * room to sort the costs), the quadric and its own error; a ring slot (its ring_entry); the
+     * due bits (check_candidates_up_to); per triangle its place in the live list */
     size_t per_vertex = sizeof(vertex_flags) + sizeof(vertex_marks) + 4 + 4 + 4 + 4 +
                         sizeof(candidate) + sizeof(double) + 3 * sizeof(rank_key) +
-                        2 * sizeof(uint32_t) +
+                        3 * sizeof(uint32_t) +
                         (method != DECIMATE_IMPORTANCE ? 11 * sizeof(double) : 0);
     size_t ring_slot = sizeof(ring_entry);
     /* per corner: the adjacency and a ring slot */
