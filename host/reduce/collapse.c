@@ -2149,10 +2149,9 @@ static int key_moved(const engine *e, rank_key key)
     return (e->flags[key.vertex] & FLAG_MOVED) != 0;
 }
 
-/* Sorts the costs' bits values[0 .. count) (a cost's sign bit is 0) into increasing order: a
- * radix sort, 11 bits a digit from the lowest, through e->sort_spare (in the time of qsort's
- * comparisons alone, the lists of moved candidates took 0.005 s of serial work a run on the
- * dragon). */
+/* Sorts the costs' bits values[0 .. count) into increasing order, as unsigned numbers: a radix
+ * sort, three digits of 11 bits (all 32) from the lowest, through e->sort_spare (with qsort's
+ * comparisons, the lists of moved candidates took 0.005 s of serial work a run on the dragon). */
 static void sort_cost_bits(engine *e, uint32_t *values, size_t count)
 {
     enum { BITS = 11, BUCKETS = 1 << BITS, DIGITS = 3 };
