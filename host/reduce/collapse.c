@@ -21,11 +21,12 @@
  *
  * Threads: one pool per run (worker_pool) takes the steps (vertex_step): the adjacency by parts
  * of the triangle list (build_adjacency), the per-vertex rings, quadrics, scores and checks
- * (check_ranking), the ranking's listing by ranges, and the chunks' judging and taking
- * (take_in_chunks); each writes only its own vertex's, range's, part's or collapse's records (and
- * a check its thread's list of moved candidates, whose order does not matter; a part of the
- * adjacency the stale bit of any vertex, which every part sets alike), so the result is the same
- * on any number of threads. */
+ * (check_ranking), the ranking's listing by ranges and its radix sort by parts of the keys and
+ * intervals of the buckets, and the chunks' judging and taking (take_in_chunks); each writes
+ * only its own vertex's, range's, part's, interval's or collapse's records (and a check its
+ * thread's list of moved candidates, whose order does not matter; a part of the adjacency the
+ * stale bit of any vertex, which every part sets alike), so the result is the same on any
+ * number of threads. */
 #include "reduce/collapse.h"
 
 #include <float.h>
@@ -72,6 +73,9 @@ typedef uint8_t vertex_flags;
 #define ADJACENCY_PARTS 5 /* at most, parts of the live triangles build_adjacency counts apart:
                              its counters are adjacency_start and the ranking's two key arrays
                              (two counters in each) */
+#define RADIX_BUCKETS 65536 /* the ranking's radix sort: two digits of the cost's bits, 16 each */
+#define RADIX_PARTS 8 /* at most, parts of the keys the radix sort counts and moves apart (each
+                         part has its row of RADIX_BUCKETS counters) */
 #define HALF_EDGES_AT_HAND 64 /* a vertex's half-edges build_ring copies onto the stack */
 #define TOUCHES_KNOWN 255 /* a vertex's touch count (vertex_marks) is exact below this */
 
@@ -94,6 +98,10 @@ typedef enum vertex_step {
     STEP_SCORES,
     STEP_COUNT_CANDIDATES, /* per range of vertices (rank_candidates) */
     STEP_WRITE_KEYS,
+    STEP_COUNT_DIGITS,  /* per part of the keys (rank_candidates' radix sort) */
+    STEP_SUM_BUCKETS,   /* per interval of the buckets */
+    STEP_PLACE_BUCKETS, /* per interval of the buckets */
+    STEP_MOVE_KEYS,     /* per part of the keys */
     STEP_CHECK_CANDIDATES, /* per 64 vertices: the candidates due checked (check_ranking) */
     STEP_JUDGE, /* per candidate of a chunk (take_in_chunks) */
     STEP_APPLY
@@ -254,6 +262,14 @@ typedef struct engine {
     size_t no_legal;                      /* theirs summed: counted last in the pass's quarter */
     rank_key *keys, *spare_keys;
     size_t ranked;
+    /* the ranking's radix sort (rank_candidates): the digit it sorts by, its parts of the keys
+     * (as many as its intervals of the buckets), per part a row of counts per bucket, then of
+     * where the part's keys of each bucket go (with one part, rows 0 and 1: both digits'
+     * counts), and per interval of the buckets its keys, then where they start */
+    int sort_digit;
+    uint32_t sort_parts;
+    uint32_t *digit_counts;
+    uint32_t interval_start[RADIX_PARTS];
     /* taking collapses in chunks (take_in_chunks) */
     rank_key *chunk;                /* the chunk's candidates, in ranking order */
     uint32_t chunk_size;            /* its items */
@@ -1752,6 +1768,10 @@ struct worker_pool {
 
 static void count_candidates(engine *e, uint32_t range);
 static void write_keys(engine *e, uint32_t range);
+static void count_digits(engine *e, uint32_t part);
+static void sum_buckets(engine *e, uint32_t interval);
+static void place_buckets(engine *e, uint32_t interval);
+static void move_keys(engine *e, uint32_t part);
 static void check_due(engine *e, uint32_t word, scratch *s);
 static void judge_item(engine *e, uint32_t item, scratch *s);
 static void apply_item(engine *e, uint32_t item, scratch *s);
@@ -1797,6 +1817,18 @@ static void run_item(engine *e, vertex_step step, uint32_t i, scratch *s)
         break;
     case STEP_WRITE_KEYS:
         write_keys(e, i);
+        break;
+    case STEP_COUNT_DIGITS:
+        count_digits(e, i);
+        break;
+    case STEP_SUM_BUCKETS:
+        sum_buckets(e, i);
+        break;
+    case STEP_PLACE_BUCKETS:
+        place_buckets(e, i);
+        break;
+    case STEP_MOVE_KEYS:
+        move_keys(e, i);
         break;
     case STEP_CHECK_CANDIDATES:
         check_due(e, i, s);
@@ -2053,12 +2085,103 @@ static void sort_ties(const engine *e, rank_key *keys, rank_key *spare, size_t c
     }
 }
 
+/* The ranking's radix sort: stable, by the cost's bits, the low digit first (keys -> spare_keys),
+ * then the high (back). Each digit's round: the keys of each part counted per bucket
+ * (count_digits), the counts summed per interval of the buckets (sum_buckets) and the intervals'
+ * starts summed from those, then each part's place per bucket written (place_buckets: the
+ * buckets in order, in each the parts in order), then each part's keys moved there in their
+ * order (move_keys). That order is the one a sort on one thread gives, on any number of parts.
+ * With one part, the first count counts both digits. */
+
+/* The digit `digit` (0: low, 1: high) of a key's cost bits. */
+static uint32_t key_digit(rank_key key, int digit) { return key.cost_bits >> (16 * digit) & 0xffff; }
+
+/* Part `part` of the keys being sorted: its first key and the one past its last. */
+static void sort_part(const engine *e, uint32_t part, size_t *first, size_t *end)
+{
+    *first = e->ranked * part / e->sort_parts;
+    *end = e->ranked * (part + 1) / e->sort_parts;
+}
+
+/* The row of counts of part `part` for the digit sorted by. */
+static uint32_t *digit_row(const engine *e, uint32_t part)
+{
+    return &e->digit_counts[(size_t)(e->sort_parts > 1 ? part : (uint32_t)e->sort_digit) *
+                            RADIX_BUCKETS];
+}
+
+static void count_digits(engine *e, uint32_t part)
+{
+    size_t first, end;
+    sort_part(e, part, &first, &end);
+    const rank_key *from = e->sort_digit ? e->spare_keys : e->keys;
+    uint32_t *row = digit_row(e, part);
+    if (e->sort_parts == 1) { /* (rows 0 and 1) */
+        memset(row, 0, 2 * RADIX_BUCKETS * sizeof *row);
+        for (size_t i = first; i < end; i++) {
+            row[key_digit(from[i], 0)]++;
+            row[RADIX_BUCKETS + key_digit(from[i], 1)]++;
+        }
+        return;
+    }
+    int digit = e->sort_digit;
+    memset(row, 0, RADIX_BUCKETS * sizeof *row);
+    for (size_t i = first; i < end; i++)
+        row[key_digit(from[i], digit)]++;
+}
+
+/* Interval `interval` of the buckets: its first bucket and the one past its last. */
+static void bucket_interval(const engine *e, uint32_t interval, uint32_t *first, uint32_t *end)
+{
+    *first = RADIX_BUCKETS / e->sort_parts * interval;
+    *end = interval + 1 == e->sort_parts ? RADIX_BUCKETS : *first + RADIX_BUCKETS / e->sort_parts;
+}
+
+static void sum_buckets(engine *e, uint32_t interval)
+{
+    uint32_t first, end, keys = 0;
+    bucket_interval(e, interval, &first, &end);
+    for (uint32_t part = 0; part < e->sort_parts; part++) {
+        const uint32_t *row = digit_row(e, part);
+        for (uint32_t b = first; b < end; b++)
+            keys += row[b];
+    }
+    e->interval_start[interval] = keys;
+}
+
+static void place_buckets(engine *e, uint32_t interval)
+{
+    uint32_t first, end, place = e->interval_start[interval];
+    bucket_interval(e, interval, &first, &end);
+    uint32_t *rows[RADIX_PARTS];
+    for (uint32_t part = 0; part < e->sort_parts; part++)
+        rows[part] = digit_row(e, part);
+    for (uint32_t b = first; b < end; b++)
+        for (uint32_t part = 0; part < e->sort_parts; part++) {
+            uint32_t keys = rows[part][b];
+            rows[part][b] = place;
+            place += keys;
+        }
+}
+
+static void move_keys(engine *e, uint32_t part)
+{
+    size_t first, end;
+    sort_part(e, part, &first, &end);
+    int digit = e->sort_digit;
+    const rank_key *from = digit ? e->spare_keys : e->keys;
+    rank_key *to = digit ? e->keys : e->spare_keys;
+    uint32_t *place = digit_row(e, part);
+    for (size_t i = first; i < end; i++)
+        to[place[key_digit(from[i], digit)]++] = from[i];
+}
+
 /* Ranks the candidates into e->keys (e->ranked of them): their keys (the cost's bits and the
- * vertex) listed in vertex order, a radix sort on the cost's bits (costs are not negative, so
- * their bits order as the costs do), stable, so equal costs stay in vertex order; then runs of
- * equal cost sorted by the full order where the ties have keys beyond the vertex. The ranking
- * is of keys alone: the judging reads a candidate's vertex and the taking its cost, both in its
- * key, so the records are not gathered into the ranked order. */
+ * vertex) listed in vertex order, the radix sort above on the cost's bits (costs are not
+ * negative, so their bits order as the costs do), stable, so equal costs stay in vertex order;
+ * then runs of equal cost sorted by the full order where the ties have keys beyond the vertex.
+ * The ranking is of keys alone: the judging reads a candidate's vertex and the taking its cost,
+ * both in its key, so the records are not gathered into the ranked order. */
 static void rank_candidates(engine *e, int full_ties)
 {
     uint32_t ranges = e->threads;
@@ -2074,24 +2197,23 @@ static void rank_candidates(engine *e, int full_ties)
     if (!count)
         return;
     run_on_pool(e, STEP_WRITE_KEYS, ranges, 1);
-    uint32_t histogram[2][65536];
-    memset(histogram, 0, sizeof histogram);
-    for (size_t i = 0; i < count; i++) {
-        histogram[0][e->keys[i].cost_bits & 0xffff]++;
-        histogram[1][e->keys[i].cost_bits >> 16]++;
-    }
+    uint32_t parts = e->sort_parts;
     for (int digit = 0; digit < 2; digit++) {
-        uint32_t sum = 0;
-        for (size_t b = 0; b < 65536; b++) {
-            uint32_t c = histogram[digit][b];
-            histogram[digit][b] = sum;
-            sum += c;
+        e->sort_digit = digit;
+        if (digit == 0 || parts > 1)
+            run_on_pool(e, STEP_COUNT_DIGITS, parts, 1);
+        e->interval_start[0] = 0;
+        if (parts > 1) {
+            run_on_pool(e, STEP_SUM_BUCKETS, parts, 1);
+            uint32_t start = 0;
+            for (uint32_t interval = 0; interval < parts; interval++) {
+                uint32_t keys = e->interval_start[interval];
+                e->interval_start[interval] = start;
+                start += keys;
+            }
         }
-        rank_key *from = digit ? e->spare_keys : e->keys, *to = digit ? e->keys : e->spare_keys;
-        for (size_t i = 0; i < count; i++) {
-            uint32_t bucket = digit ? from[i].cost_bits >> 16 : from[i].cost_bits & 0xffff;
-            to[histogram[digit][bucket]++] = from[i];
-        }
+        run_on_pool(e, STEP_PLACE_BUCKETS, parts, 1);
+        run_on_pool(e, STEP_MOVE_KEYS, parts, 1);
     }
     if (!full_ties)
         return;
@@ -2920,6 +3042,7 @@ static void engine_free(engine *e)
     free(e->best);
     free(e->attribute_terms);
     free(e->keys);
+    free(e->digit_counts);
     free(e->moved_costs);
     free(e->moved_from);
     free(e->sort_spare);
@@ -3012,6 +3135,9 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     e->pool = xmalloc(sizeof *e->pool);
     pool_start(e->pool, e, o->threads ? o->threads : 1);
     e->threads = e->pool->count + 1;
+    e->sort_parts = e->threads < RADIX_PARTS ? e->threads : RADIX_PARTS;
+    e->digit_counts = xmalloc(sizeof(uint32_t) * RADIX_BUCKETS *
+                              (e->sort_parts > 1 ? e->sort_parts : 2));
     run_on_pool(e, STEP_START_VERTICES, e->threads, 1);
     if (e->threads > 1) {
         size_t pages = 0;
@@ -3051,7 +3177,8 @@ size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_
      * importance, the ranking's keys (and their spare), at most the lists of candidates that
      * moved when checked (check_ranking: the threads' keys, their new and old costs, and the
      * room to sort the costs), the quadric and its own error; a ring slot (its ring_entry); the
-     * due bits (check_candidates_up_to); per triangle its place in the live list */
+     * due bits (check_candidates_up_to); per triangle its place in the live list; and the
+     * ranking's radix sort's counts, at most RADIX_PARTS rows (2 MiB, on any number of threads) */
     size_t per_vertex = sizeof(vertex_flags) + sizeof(vertex_marks) + 4 + 4 + 4 + 4 +
                         sizeof(candidate) + sizeof(double) + 3 * sizeof(rank_key) +
                         3 * sizeof(uint32_t) +
@@ -3060,7 +3187,8 @@ size_t collapse_memory(uint32_t vertex_count, uint32_t triangle_count, decimate_
     /* per corner: the adjacency and a ring slot */
     size_t per_corner = sizeof(uint32_t) + ring_slot;
     size_t due_bits = ((size_t)vertex_count / 64 + 2) * sizeof(uint64_t);
-    return (per_vertex + ring_slot) * ((size_t)vertex_count + 1) + due_bits +
+    size_t digit_counts = sizeof(uint32_t) * RADIX_BUCKETS * RADIX_PARTS;
+    return (per_vertex + ring_slot) * ((size_t)vertex_count + 1) + due_bits + digit_counts +
            (3 * per_corner + sizeof(uint32_t)) * (size_t)triangle_count;
 }
 

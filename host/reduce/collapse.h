@@ -64,8 +64,9 @@
  * Memory: collapse_memory() says it (per vertex: flags, the quadric and its own error, the
  * importance, the scores, the ranking's keys, the donor, room for the candidates that move when
  * checked, the acceptance's marks; per triangle corner: the adjacency and a ring slot of 16
- * bytes; per triangle: its place in the live list), 319 bytes per vertex of the dragon with the
- * quadric methods, 231 with IMPORTANCE; COMBINED adds its attribute quadrics per attribute set.
+ * bytes; per triangle: its place in the live list; the ranking's radix sort's counts, at most
+ * 2 MiB), 323 bytes per vertex of the dragon with the quadric methods, 235 with IMPORTANCE;
+ * COMBINED adds its attribute quadrics per attribute set.
  * The caller's arrays are used in place: the triangles and corner ids are rewritten, nothing
  * else. */
 #ifndef IDMR_COLLAPSE_H
