@@ -265,10 +265,10 @@ typedef struct engine {
     size_t no_legal;                      /* theirs summed: counted last in the pass's quarter */
     rank_key *keys, *spare_keys;
     size_t ranked;
-    /* the ranking's radix sort (rank_candidates): the digit it sorts by, its parts of the keys
-     * (as many as its intervals of the buckets), per part a row of counts per bucket, then of
-     * where the part's keys of each bucket go (with one part, rows 0 and 1: both digits'
-     * counts), and per interval of the buckets its keys, then where they start */
+    /* the ranking's radix sort (rank_candidates): the digit it sorts by, this pass's parts of
+     * the keys (as many as its intervals of the buckets), per part a row of counts per bucket,
+     * then of where the part's keys of each bucket go (with one part, rows 0 and 1: both
+     * digits' counts), and per interval of the buckets its keys, then where they start */
     int sort_digit;
     uint32_t sort_parts;
     uint32_t *digit_counts;
