@@ -239,6 +239,12 @@ typedef struct engine {
      * more than its triangles, as many as a vertex of one fan has), ring_size[v] long */
     ring_entry *rings;
     uint32_t *ring_size;
+    /* with attributes, for collapse_removes: per vertex, whether its live triangles are of one
+     * corner id at it (from its pass-start ones, build_ring: a collapse only removes triangles
+     * of a vertex other than its kept end, and does not change its corner ids), and how many
+     * it has (the pass-start count, less those the collapses taken removed) */
+    uint8_t *one_wedge;
+    uint32_t *live_degree;
     int rings_current; /* the adjacency and rings are the mesh's as it is (after engine_init) */
     double *quadric;
     double *self_error; /* per vertex: its quadric at its own position (the quadric methods; set
@@ -603,10 +609,11 @@ static void place_corners(engine *e, uint32_t range)
  * corner, which leaves adjacency_start[v] the first of v's slots; another part from the first,
  * into the first free slot. A corner's half-edge goes into the first bytes of ring record
  * slot + v: v's ring records (pass_ring_entries) start at adjacency_start[v] + v, so v's i-th
- * triangle leaves its half-edge in v's i-th record. */
+ * triangle leaves its half-edge in v's i-th record, and with attributes its corner id at v
+ * after it (build_ring). */
 static void fill_corners(engine *e, uint32_t part)
 {
-    const uint32_t *live = e->live, *triangles = e->m->triangles;
+    const uint32_t *live = e->live, *triangles = e->m->triangles, *ids = e->m->corner_ids;
     uint32_t first = e->part_first[part], end = e->part_first[part + 1], *adjacency = e->adjacency;
     uint32_t *next = e->part_counts[part]; /* part 0: adjacency_start, the ends of its slots */
     ring_entry *rings = e->rings;
@@ -618,6 +625,9 @@ static void fill_corners(engine *e, uint32_t part)
             adjacency[slot] = t;
             collapse_half_edge h = {c[(k + 1) % 3], c[(k + 2) % 3]};
             memcpy(&rings[(size_t)slot + c[k]], &h, sizeof h);
+            if (ids)
+                memcpy((char *)&rings[(size_t)slot + c[k]] + sizeof h, &ids[3 * (size_t)t + k],
+                       sizeof(uint32_t));
         }
     }
 }
@@ -830,6 +840,20 @@ static ring_entry *pass_ring_entries(const engine *e, uint32_t v)
     return &e->rings[(size_t)e->adjacency_start[v] + v];
 }
 
+/* Whether the first `count` ring records hold one corner id after their half-edges
+ * (fill_corners). */
+static int records_of_one_id(const ring_entry *r, uint32_t count)
+{
+    uint32_t first, id;
+    memcpy(&first, (const char *)&r[0] + sizeof(collapse_half_edge), sizeof first);
+    for (uint32_t i = 1; i < count; i++) {
+        memcpy(&id, (const char *)&r[i] + sizeof(collapse_half_edge), sizeof id);
+        if (id != first)
+            return 0;
+    }
+    return 1;
+}
+
 /* Builds v's one-ring from its pass-start triangles into the pass's ring records, from the
  * half-edges the adjacency left there (fill_corners). From the triangles, read again at random,
  * the rings of the dragon's run took 0.16 s on one thread; from the half-edges 0.09 s, for 0.04 s
@@ -839,6 +863,10 @@ static void build_ring(engine *e, uint32_t v, scratch *s, int check_fan)
 {
     uint32_t degree = e->adjacency_start[v + 1] - e->adjacency_start[v];
     ring_entry *r = pass_ring_entries(e, v);
+    if (e->one_wedge) { /* (the records' corner ids, before the ring overwrites them) */
+        e->one_wedge[v] = degree > 0 && records_of_one_id(r, degree);
+        e->live_degree[v] = degree;
+    }
     int one_fan = 1;
     uint32_t size = e->ring_size[v] =
         fill_ring_from_half_edges(degree, r, degree + 1, s, check_fan ? &one_fan : NULL);
@@ -2543,6 +2571,42 @@ static uint64_t current_wedges_and_ids(const engine *e, uint32_t v, uint32_t wit
     return before ? before : 1;
 }
 
+/* Whether w's live triangles are of one corner id at it and live_degree[w] counts them: where
+ * its pass-start triangles were of one (one_wedge) and no collapse taken in this pass had w as
+ * an end (the kept end receives triangles and corner ids; a collapse's other vertices only
+ * lose triangles, counted in live_degree, or see v0 replaced by v1 in theirs). */
+static int one_wedge_now(const engine *e, uint32_t w)
+{
+    return !(e->flags[w] & (FLAG_TAKEN | FLAG_REMOVED)) && e->one_wedge[w];
+}
+
+/* What collapse_removes' sweeps count where v0, v1 and the edge's sides (other vertices) are
+ * each of one wedge (one_wedge_now), without reading their triangles: v0's wedge, and each kept
+ * vertex's where it keeps no triangle (the edge's triangles are v0's, v1's and one side's, or
+ * both where vl is vr; v1 keeps a wedge while it or v0 keeps a triangle, as v0's go to v1). 0
+ * where that does not hold. The dragon with normals: 69 % of the legal collapses judged are
+ * counted here, and the judging took 0.54-0.56 s on one thread against 0.81-0.86 s with the
+ * sweeps for all. */
+static uint64_t removes_of_one_wedges(const engine *e, uint32_t v0, uint32_t v1,
+                                      const edge_sides *sides)
+{
+    uint32_t side[2] = {sides->vl, sides->vr};
+    if (!one_wedge_now(e, v0) || !one_wedge_now(e, v1))
+        return 0;
+    for (int k = 0; k < 2; k++)
+        if (side[k] != COLLAPSE_NONE &&
+            (side[k] == v0 || side[k] == v1 || !one_wedge_now(e, side[k])))
+            return 0;
+    uint32_t edge_triangles = (sides->fl != COLLAPSE_NONE) + (sides->fr != COLLAPSE_NONE);
+    uint64_t removes = 1;
+    if (e->live_degree[v1] == edge_triangles && e->live_degree[v0] == edge_triangles)
+        removes++;
+    for (int k = 0; k < 2; k++)
+        if (side[k] != COLLAPSE_NONE && e->live_degree[side[k]] == 1u + (side[0] == side[1]))
+            removes++;
+    return removes;
+}
+
 /* The vertices (counted once per wedge) that taking v0 -> v1 would remove, the mesh as it is:
  * v0's wedges, and those that v1, vl and vr lose with the two triangles of the edge (v0's
  * corners go into wedges v1 has). Without attributes, 1. */
@@ -2551,6 +2615,9 @@ static uint64_t collapse_removes(const engine *e, fan f0, uint32_t v0, uint32_t 
     if (!e->m->corner_ids)
         return 1;
     edge_sides sides = sides_of(e, f0, v0, v1);
+    uint64_t found = removes_of_one_wedges(e, v0, v1, &sides);
+    if (found)
+        return found;
     mapping map = mapping_of(e, v0, v1, &sides);
     uint64_t removed = current_wedges(e, v0, s);
     uint32_t kept[3] = {v1, sides.vl, sides.vr};
@@ -2602,6 +2669,8 @@ static void apply_collapse(engine *e, fan f0, uint32_t v0, uint32_t v1, uint32_t
             flag(e, c[k], FLAG_TOUCHED);
         if (t == sides.fl || t == sides.fr) {
             c[0] = c[1] = c[2] = COLLAPSE_NONE;
+            if (e->live_degree) /* (a side is written by no other collapse taken beside this) */
+                e->live_degree[t == sides.fl ? sides.vl : sides.vr]--;
             continue;
         }
         int k = corner_at(e, t, v0);
@@ -3072,6 +3141,8 @@ static void engine_free(engine *e)
     free(e->open_at);
     free(e->rings);
     free(e->ring_size);
+    free(e->one_wedge);
+    free(e->live_degree);
     free(e->quadric);
     free(e->self_error);
     free(e->importance);
@@ -3153,6 +3224,12 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     size_t ring_slots = 3 * (size_t)e->t + n;
     e->rings = large_array(e, sizeof(ring_entry) * ring_slots);
     e->ring_size = xmalloc(sizeof(uint32_t) * n);
+    if (m->corner_ids) {
+        e->one_wedge = xmalloc(n);
+        e->one_wedge[e->n] = 0;
+        e->live_degree = xmalloc(sizeof(uint32_t) * n);
+        e->live_degree[e->n] = 0;
+    }
     e->donor = xmalloc(sizeof(uint32_t) * n);
     e->marks = xmalloc(sizeof(vertex_marks) * n);
     e->due = xcalloc(n / 64 + 2, sizeof(uint64_t));
