@@ -12,7 +12,13 @@
  * ranking, and those whose cheapest collapse breaks a rule move). Both must give the engine's
  * own result, triangle for triangle and collapse for collapse, on the bunny and the dragon (res
  * 2, non-manifold), with quadric and combined, and combined again with a normal per vertex (the
- * attribute quadrics). */
+ * attribute quadrics) and with seams (the triangles on one side of a plane given their own ids
+ * of the same normals).
+ *
+ * The copy also does in full what the engine shortcuts (COLLAPSE_WITHOUT_SHORTCUTS): it counts
+ * the wedges a collapse removes from the triangles every time, and evaluates every attribute
+ * quadric afresh, so the same comparison checks the engine's per-vertex wedge counts and its
+ * per-id attribute errors. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -23,6 +29,7 @@
 #include "reduce/collapse.h"
 
 #define COLLAPSE_SCORE_RULES_FIXED 1
+#define COLLAPSE_WITHOUT_SHORTCUTS 1
 #define collapse_run collapse_run_fixed
 #define collapse_memory collapse_memory_fixed
 #define collapse_evaluate collapse_evaluate_fixed
@@ -33,15 +40,38 @@
 #undef collapse_evaluate
 #undef collapse_one_fan
 
+/* The middle of the mesh's x extent (seams). */
+static float middle_x(const mesh_data *mesh)
+{
+    float low = INFINITY, high = -INFINITY;
+    for (uint32_t v = 0; v < mesh->vertex_count; v++) {
+        low = fminf(low, mesh->positions[3 * (size_t)v]);
+        high = fmaxf(high, mesh->positions[3 * (size_t)v]);
+    }
+    return 0.5f * (low + high);
+}
+
+/* Whether triangle t's centroid lies past x = middle. */
+static int past_middle(const mesh_data *mesh, uint32_t t, float middle)
+{
+    float centroid = 0;
+    for (int k = 0; k < 3; k++)
+        centroid += mesh->positions[3 * (size_t)mesh->indices[3 * (size_t)t + k]] / 3;
+    return centroid > middle;
+}
+
 /* One reduction of `mesh` to a tenth: by the engine (fixed < 0) or by the copy whose scoring
- * applies the rules up to `fixed`. Its triangles, history and counts. */
+ * applies the rules up to `fixed`. With normals, one attribute set per vertex (its normal); with
+ * seams as well, normals holds them twice and the triangles past the middle take the second
+ * copy's ids, so the vertices where the two halves meet have two. Its triangles, history and
+ * counts. */
 typedef struct reduction {
     uint32_t *triangles, *history;
     collapse_result result;
 } reduction;
 
 static void reduce_once(const mesh_data *mesh, const double *importance, const float *normals,
-                        decimate_method method, float fixed, reduction *out)
+                        int seams, decimate_method method, float fixed, reduction *out)
 {
     size_t corners = 3 * (size_t)mesh->triangle_count;
     out->triangles = malloc(sizeof(uint32_t) * corners + 1);
@@ -52,12 +82,17 @@ static void reduce_once(const mesh_data *mesh, const double *importance, const f
                        .triangle_count = mesh->triangle_count,
                        .triangles = out->triangles,
                        .importance = importance};
-    if (normals) { /* one attribute set per vertex: its normal */
+    if (normals) {
         ids = malloc(sizeof(uint32_t) * corners + 1);
         memcpy(ids, mesh->indices, sizeof(uint32_t) * corners);
+        float middle = seams ? middle_x(mesh) : 0;
+        for (uint32_t t = 0; seams && t < mesh->triangle_count; t++)
+            if (past_middle(mesh, t, middle))
+                for (int k = 0; k < 3; k++)
+                    ids[3 * (size_t)t + k] += mesh->vertex_count;
         m.corner_ids = ids;
         m.attributes = normals;
-        m.attribute_count = mesh->vertex_count;
+        m.attribute_count = (seams ? 2 : 1) * mesh->vertex_count;
         m.normal_floats = 3;
     }
     collapse_options o = {.method = method,
@@ -88,16 +123,22 @@ static void same_as_engine(const char *file)
     read_model(file, &mesh);
     double *importance = random_importance(mesh.vertex_count, 7);
     float *normals = smooth_normals(&mesh);
-    const decimate_method methods[3] = {DECIMATE_QUADRIC, DECIMATE_COMBINED, DECIMATE_COMBINED};
+    size_t normal_floats = 3 * (size_t)mesh.vertex_count;
+    float *twice = malloc(2 * sizeof(float) * normal_floats);
+    memcpy(twice, normals, sizeof(float) * normal_floats);
+    memcpy(twice + normal_floats, normals, sizeof(float) * normal_floats);
+    const decimate_method methods[4] = {DECIMATE_QUADRIC, DECIMATE_COMBINED, DECIMATE_COMBINED,
+                                        DECIMATE_COMBINED};
     const float fixed[2] = {INFINITY, 0};
-    for (int i = 0; i < 3; i++) {
-        const float *with = i == 2 ? normals : NULL;
+    for (int i = 0; i < 4; i++) {
+        int seams = i == 3;
+        const float *with = i == 2 ? normals : seams ? twice : NULL;
         reduction own;
-        reduce_once(&mesh, importance, with, methods[i], -1, &own);
+        reduce_once(&mesh, importance, with, seams, methods[i], -1, &own);
         assert_true(own.result.collapses > 0);
         for (int k = 0; k < 2; k++) {
             reduction copy;
-            reduce_once(&mesh, importance, with, methods[i], fixed[k], &copy);
+            reduce_once(&mesh, importance, with, seams, methods[i], fixed[k], &copy);
             assert_int_equal(copy.result.collapses, own.result.collapses);
             assert_int_equal(copy.result.passes, own.result.passes);
             assert_int_equal(copy.result.vertices_after, own.result.vertices_after);
@@ -109,10 +150,12 @@ static void same_as_engine(const char *file)
         }
         print_message("  %s, %s%s: %u collapses in %u passes, the same with the rules applied "
                       "while scoring and with none\n",
-                      file, i == 0 ? "quadric" : "combined", with ? " with normals" : "",
+                      file, i == 0 ? "quadric" : "combined",
+                      seams ? " with normals and seams" : with ? " with normals" : "",
                       own.result.collapses, own.result.passes);
         reduction_free(&own);
     }
+    free(twice);
     free(normals);
     free(importance);
     mesh_data_free(&mesh);
