@@ -5,7 +5,8 @@
  *              a flat fan (the centre's collapse costs 0, its ring sum is known), a spike (the
  *              normal limit), a boundary vertex into an inner one, a tetrahedron (the two
  *              joined valence-3 vertices), a locked vertex, the boundary lock, a fan of 100
- *              triangles (its centre's ring)
+ *              triangles (its centre's ring), a seam that ends at the centre; a triangle
+ *              naming a vertex twice refused
  *   fans       collapse_one_fan on hand-drawn corners (a closed and an open fan in any order,
  *              two fans, a directed edge twice) and against its definition on random ones, and
  *              the engine given fans it must check: it
@@ -196,6 +197,48 @@ static void test_tetrahedron(void **state)
     assert_int_equal(collapse_run(&m, &o, &r), 0);
     assert_int_equal(r.collapses, 0);
     assert_int_equal(r.vertices_after, 4);
+}
+
+/* The seam rule where a seam ends: the flat fan with texture coordinates, the centre's corners
+ * all of one id (0), each rim vertex k's of id k, except rim vertex 1's corner in triangle
+ * (0, 6, 1), which has id 7 (other coordinates): a seam along the edge 0-1 that ends at the
+ * centre. The centre may go into rim vertex 2 (both triangles of the edge have id 2 there) but
+ * not into rim vertex 1 (the edge's triangles have ids 1 and 7 there: the seam's end would
+ * move). */
+static void test_seam_end(void **state)
+{
+    make_fan(0);
+    uint32_t ids[6 * 3];
+    float uv[8 * 2] = {0, 0};
+    for (uint32_t k = 0; k < 6; k++) {
+        ids[3 * k] = 0;
+        ids[3 * k + 1] = 1 + k;
+        ids[3 * k + 2] = 1 + (k + 1) % 6;
+        uv[2 * (1 + k)] = fan_positions[3 * (1 + k)];
+        uv[2 * (1 + k) + 1] = fan_positions[3 * (1 + k) + 1];
+    }
+    ids[3 * 5 + 2] = 7; /* rim vertex 1 in triangle (0, 6, 1) */
+    uv[2 * 7] = uv[2 * 7 + 1] = 5;
+    collapse_mesh m = mesh_of(7, fan_positions, 6, fan_triangles);
+    m.corner_ids = ids;
+    m.attributes = uv;
+    m.attribute_count = 8;
+    m.uv_floats = 2;
+    expect(&m, DECIMATE_QUADRIC, 0, 2, 1, NULL);
+    expect(&m, DECIMATE_QUADRIC, 0, 1, 0, "seam");
+}
+
+/* A triangle that names one vertex twice (which the weld drops) is refused, by name. */
+static void test_triangle_with_a_vertex_twice(void **state)
+{
+    float positions[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+    uint32_t triangles[] = {0, 2, 1, 0, 1, 3, 3, 2, 3};
+    collapse_mesh m = mesh_of(4, positions, 3, triangles);
+    collapse_options o = options_of(DECIMATE_QUADRIC);
+    uint32_t history[4];
+    collapse_result r = {.collapsed_into = history};
+    assert_int_equal(collapse_run(&m, &o, &r), -1);
+    assert_non_null(strstr(error_message(), "triangle 2 names a vertex twice"));
 }
 
 /* ---- fans ---- */
@@ -521,6 +564,8 @@ int main(void)
         cmocka_unit_test(test_spike),
         cmocka_unit_test(test_wide_fan),
         cmocka_unit_test(test_tetrahedron),
+        cmocka_unit_test(test_seam_end),
+        cmocka_unit_test(test_triangle_with_a_vertex_twice),
         cmocka_unit_test(test_one_fan),
         cmocka_unit_test(test_one_fan_random),
         cmocka_unit_test(test_fans_unchecked),

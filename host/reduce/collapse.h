@@ -88,8 +88,9 @@ typedef struct collapse_mesh {
     uint32_t vertex_count;
     const float *positions; /* 3 per vertex */
     uint32_t triangle_count;
-    uint32_t *triangles;    /* 3 vertex indices per triangle, counter-clockwise; the engine
-                               rewrites them: a removed triangle gets COLLAPSE_NONE in all three */
+    uint32_t *triangles;    /* 3 distinct vertex indices per triangle, counter-clockwise; the
+                               engine rewrites them: a removed triangle gets COLLAPSE_NONE in
+                               all three */
     uint32_t *corner_ids;   /* attribute id per corner (3 per triangle), rewritten with the
                                triangles; NULL: no attributes. An id belongs to one vertex: the
                                corners of one vertex only (collapse_run refuses other input) */
