@@ -3295,16 +3295,17 @@ static int engine_init(engine *e, collapse_mesh *m, const collapse_options *o)
     if (m->corner_ids && (m->uv_floats + m->normal_floats <= 0 ||
                           m->uv_floats + m->normal_floats > MAX_CHANNELS || !m->attributes))
         return error_set(IDMR_EXIT_FAILURE, "collapse: corner ids without an attribute table");
-    for (size_t i = 0; i < 3 * (size_t)m->triangle_count; i++)
-        if (m->triangles[i] != COLLAPSE_NONE &&
-            (m->triangles[i] >= m->vertex_count ||
-             (m->corner_ids && m->corner_ids[i] >= m->attribute_count)))
-            return error_set(IDMR_EXIT_FAILURE,
-                             "collapse: triangle %zu names vertex %u or attribute id %u, out of "
-                             "range",
-                             i / 3, m->triangles[i], m->corner_ids ? m->corner_ids[i] : 0);
-    for (size_t t = 0; t < m->triangle_count; t++) { /* (the weld drops such triangles) */
+    for (size_t t = 0; t < m->triangle_count; t++) {
         const uint32_t *c = &m->triangles[3 * t];
+        for (size_t i = 3 * t; i < 3 * t + 3; i++)
+            if (m->triangles[i] != COLLAPSE_NONE &&
+                (m->triangles[i] >= m->vertex_count ||
+                 (m->corner_ids && m->corner_ids[i] >= m->attribute_count)))
+                return error_set(IDMR_EXIT_FAILURE,
+                                 "collapse: triangle %zu names vertex %u or attribute id %u, out "
+                                 "of range",
+                                 t, m->triangles[i], m->corner_ids ? m->corner_ids[i] : 0);
+        /* (the weld drops such triangles; the rings and the edges' sides assume none) */
         if (c[0] != COLLAPSE_NONE && (c[0] == c[1] || c[1] == c[2] || c[2] == c[0]))
             return error_set(IDMR_EXIT_FAILURE, "collapse: triangle %zu names a vertex twice", t);
     }
