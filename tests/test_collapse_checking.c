@@ -12,13 +12,15 @@
  * ranking, and those whose cheapest collapse breaks a rule move). Both must give the engine's
  * own result, triangle for triangle and collapse for collapse, on the bunny and the dragon (res
  * 2, non-manifold), with quadric and combined, and combined again with a normal per vertex (the
- * attribute quadrics) and with seams (the triangles on one side of a plane given their own ids
- * of the same normals).
+ * attribute quadrics), with seams (the triangles on one side of a plane given their own ids of
+ * the same normals), and with locked vertices and remap distances (the ties of a later pass;
+ * with importance, in four levels, ties everywhere).
  *
  * The copy also does in full what the engine shortcuts (COLLAPSE_WITHOUT_SHORTCUTS): it counts
- * the wedges a collapse removes from the triangles every time, and evaluates every attribute
- * quadric afresh, so the same comparison checks the engine's per-vertex wedge counts and its
- * per-id attribute errors. */
+ * the wedges a collapse removes from the triangles every time, evaluates every attribute quadric
+ * afresh, and never compacts the mesh between passes, so the same comparison checks the
+ * engine's per-vertex wedge counts, its per-id attribute errors and its compaction (the
+ * importance method too, whose scoring the fixed cost does not change). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -63,17 +65,28 @@ static int past_middle(const mesh_data *mesh, uint32_t t, float middle)
 /* One reduction of `mesh` to a tenth: by the engine (fixed < 0) or by the copy whose scoring
  * applies the rules up to `fixed`. With normals, one attribute set per vertex (its normal); with
  * seams as well, normals holds them twice and the triangles past the middle take the second
- * copy's ids, so the vertices where the two halves meet have two. Its triangles, history and
- * counts. */
+ * copy's ids, so the vertices where the two halves meet have two. With constraints, every 29th
+ * vertex locked and each a remap distance of 0 to 3. Its triangles, history and counts. */
 typedef struct reduction {
     uint32_t *triangles, *history;
     collapse_result result;
 } reduction;
 
 static void reduce_once(const mesh_data *mesh, const double *importance, const float *normals,
-                        int seams, decimate_method method, float fixed, reduction *out)
+                        int seams, int constraints, decimate_method method, float fixed,
+                        reduction *out)
 {
     size_t corners = 3 * (size_t)mesh->triangle_count;
+    uint8_t *locked = NULL;
+    uint32_t *distance = NULL;
+    if (constraints) {
+        locked = malloc(mesh->vertex_count + 1);
+        distance = malloc(sizeof(uint32_t) * mesh->vertex_count + 1);
+        for (uint32_t v = 0; v < mesh->vertex_count; v++) {
+            locked[v] = v % 29 == 0;
+            distance[v] = (v * 2654435761u) >> 30;
+        }
+    }
     out->triangles = malloc(sizeof(uint32_t) * corners + 1);
     memcpy(out->triangles, mesh->indices, sizeof(uint32_t) * corners);
     uint32_t *ids = NULL;
@@ -81,7 +94,9 @@ static void reduce_once(const mesh_data *mesh, const double *importance, const f
                        .positions = mesh->positions,
                        .triangle_count = mesh->triangle_count,
                        .triangles = out->triangles,
-                       .importance = importance};
+                       .importance = importance,
+                       .locked = locked,
+                       .distance = distance};
     if (normals) {
         ids = malloc(sizeof(uint32_t) * corners + 1);
         memcpy(ids, mesh->indices, sizeof(uint32_t) * corners);
@@ -109,6 +124,8 @@ static void reduce_once(const mesh_data *mesh, const double *importance, const f
                            : collapse_run_fixed(&m, &o, &out->result);
     assert_int_equal(status, 0);
     free(ids);
+    free(locked);
+    free(distance);
 }
 
 static void reduction_free(reduction *r)
@@ -117,28 +134,48 @@ static void reduction_free(reduction *r)
     free(r->history);
 }
 
+/* The cases compared: a method, and what the mesh carries beside its positions. */
+typedef struct checked_case {
+    decimate_method method;
+    int normals, seams, constraints;
+    int tied; /* the importance in four levels: ties everywhere, broken by the distances */
+    const char *name;
+} checked_case;
+
+static const checked_case checked_cases[] = {
+    {DECIMATE_QUADRIC, 0, 0, 0, 0, "quadric"},
+    {DECIMATE_COMBINED, 0, 0, 0, 0, "combined"},
+    {DECIMATE_COMBINED, 1, 0, 0, 0, "combined with normals"},
+    {DECIMATE_COMBINED, 1, 1, 0, 0, "combined with normals and seams"},
+    {DECIMATE_IMPORTANCE, 0, 0, 0, 0, "importance"},
+    {DECIMATE_COMBINED, 0, 0, 1, 0, "combined with locks and distances"},
+    {DECIMATE_IMPORTANCE, 0, 0, 1, 1, "importance in four levels, with locks and distances"},
+};
+
 static void same_as_engine(const char *file)
 {
     mesh_data mesh;
     read_model(file, &mesh);
     double *importance = random_importance(mesh.vertex_count, 7);
+    double *levels = malloc(sizeof(double) * (mesh.vertex_count + 1));
+    for (uint32_t v = 0; v < mesh.vertex_count; v++)
+        levels[v] = floor(4 * importance[v]);
     float *normals = smooth_normals(&mesh);
     size_t normal_floats = 3 * (size_t)mesh.vertex_count;
     float *twice = malloc(2 * sizeof(float) * normal_floats);
     memcpy(twice, normals, sizeof(float) * normal_floats);
     memcpy(twice + normal_floats, normals, sizeof(float) * normal_floats);
-    const decimate_method methods[4] = {DECIMATE_QUADRIC, DECIMATE_COMBINED, DECIMATE_COMBINED,
-                                        DECIMATE_COMBINED};
     const float fixed[2] = {INFINITY, 0};
-    for (int i = 0; i < 4; i++) {
-        int seams = i == 3;
-        const float *with = i == 2 ? normals : seams ? twice : NULL;
+    for (size_t i = 0; i < sizeof checked_cases / sizeof *checked_cases; i++) {
+        const checked_case *c = &checked_cases[i];
+        const float *with = c->seams ? twice : c->normals ? normals : NULL;
+        const double *by = c->tied ? levels : importance;
         reduction own;
-        reduce_once(&mesh, importance, with, seams, methods[i], -1, &own);
+        reduce_once(&mesh, by, with, c->seams, c->constraints, c->method, -1, &own);
         assert_true(own.result.collapses > 0);
         for (int k = 0; k < 2; k++) {
             reduction copy;
-            reduce_once(&mesh, importance, with, seams, methods[i], fixed[k], &copy);
+            reduce_once(&mesh, by, with, c->seams, c->constraints, c->method, fixed[k], &copy);
             assert_int_equal(copy.result.collapses, own.result.collapses);
             assert_int_equal(copy.result.passes, own.result.passes);
             assert_int_equal(copy.result.vertices_after, own.result.vertices_after);
@@ -148,15 +185,14 @@ static void same_as_engine(const char *file)
                                 sizeof(uint32_t) * mesh.vertex_count);
             reduction_free(&copy);
         }
-        print_message("  %s, %s%s: %u collapses in %u passes, the same with the rules applied "
+        print_message("  %s, %s: %u collapses in %u passes, the same with the rules applied "
                       "while scoring and with none\n",
-                      file, i == 0 ? "quadric" : "combined",
-                      seams ? " with normals and seams" : with ? " with normals" : "",
-                      own.result.collapses, own.result.passes);
+                      file, c->name, own.result.collapses, own.result.passes);
         reduction_free(&own);
     }
     free(twice);
     free(normals);
+    free(levels);
     free(importance);
     mesh_data_free(&mesh);
 }

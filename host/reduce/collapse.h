@@ -40,7 +40,11 @@
  *                  expensive one, as the reference's heap would not). The target only stops
  *                  passes, it does not shape them: reducing to one vertex fewer takes the same
  *                  collapses and one more.
- * Passes repeat until the target is met or no vertex has a legal collapse.
+ * Passes repeat until the target is met or no vertex has a legal collapse. Once the collapses
+ * taken leave fewer than half of the vertices, the next pass starts on the mesh made compact:
+ * the live triangles at the front of the triangle list and their vertices numbered anew, both in
+ * their order, so that nothing compared changes (the same collapses, byte for byte) while the
+ * late passes read fewer cache lines.
  *
  * The rules (each is collapse_legal's, on the current mesh; v0 is removed into its neighbour v1;
  * fl, fr the triangles on the edge with vl, vr their third vertices):
@@ -64,11 +68,13 @@
  * Memory: collapse_memory() says it (per vertex: flags, the quadric and its own error, the
  * importance, the scores, the ranking's keys, the donor, room for the candidates that move when
  * checked, the acceptance's marks; per triangle corner: the adjacency and a ring slot of 16
- * bytes; per triangle: its place in the live list; the ranking's radix sort's counts, at most
- * 2 MiB), 323 bytes per vertex of the dragon with the quadric methods, 235 with IMPORTANCE;
+ * bytes; per triangle: its place in the live list and, compacted, the caller's number; the
+ * ranking's radix sort's counts, at most 2 MiB; per vertex the compacted mesh keeps, at most half
+ * of them, its position and the caller's number), 342 bytes per vertex of the dragon with the
+ * quadric methods, 254 with IMPORTANCE;
  * COMBINED adds its attribute quadrics per attribute set.
  * The caller's arrays are used in place: the triangles and corner ids are rewritten, nothing
- * else. */
+ * else (a removed triangle's corner ids are left as they fall). */
 #ifndef IDMR_COLLAPSE_H
 #define IDMR_COLLAPSE_H
 
