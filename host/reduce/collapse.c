@@ -3244,7 +3244,8 @@ static void predict_limit(engine *e, float limit)
  * triangle list and the vertices they use numbered anew from 0, both in the order they had, and
  * every record the engine keeps across passes moved with its vertex. Late passes otherwise read
  * a few live vertices per cache line, spread over the whole of the first pass's arrays: on the
- * dragon, the quadric method on one thread took 1.04-1.15 s without, 0.97-1.04 s with.
+ * dragon (make bench, eight runs), `quadric` on one thread took 1.01-1.05 s without, 0.93-1.02 s
+ * with.
  *
  * The order is kept, so every comparison of vertex or triangle numbers (the ties, the ranking,
  * the adjacency's order, and so the rings') comes out as before: the same collapses, byte for
