@@ -3244,7 +3244,7 @@ static void predict_limit(engine *e, float limit)
  * triangle list and the vertices they use numbered anew from 0, both in the order they had, and
  * every record the engine keeps across passes moved with its vertex. Late passes otherwise read
  * a few live vertices per cache line, spread over the whole of the first pass's arrays: on the
- * dragon (make bench, eight runs), `quadric` on one thread took 1.01-1.05 s without, 0.93-1.02 s
+ * dragon (make bench, twelve runs), `quadric` on one thread took 0.98-1.05 s without, 0.91-1.02 s
  * with.
  *
  * The order is kept, so every comparison of vertex or triangle numbers (the ties, the ranking,
